@@ -1,0 +1,1 @@
+"""The ``pymotoros`` command line."""

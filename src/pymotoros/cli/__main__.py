@@ -1,0 +1,5 @@
+"""``python -m pymotoros.cli``."""
+
+from pymotoros.cli.main import main
+
+main()

@@ -1,0 +1,88 @@
+"""The ``pymotoros`` command: one click group, subcommands loaded on demand.
+
+Each subcommand lives in its own module and is imported only when it runs, so
+``pymotoros status`` does not pay for the simulator's web framework and
+``pymotoros sim`` does not import the motion planner. This module is the only
+place that configures logging.
+"""
+
+from __future__ import annotations
+
+import importlib
+import logging
+from typing import Final
+
+import click
+
+from pymotoros import __version__
+
+# name -> ("module:attribute" of a click.Command, one-line help for the listing)
+_COMMANDS: Final[dict[str, tuple[str, str]]] = {
+    "sim": ("pymotoros.cli.sim:sim", "Run the virtual controller (MotoROS on 50240/50241/50242)."),
+    "interpolate": (
+        "pymotoros.cli.interpolate:interpolate",
+        "Turn a trajectory CSV into the pulse increments MotoROS would queue.",
+    ),
+    "status": ("pymotoros.cli.robot:status", "Show the robot's state."),
+    "enable": ("pymotoros.cli.robot:enable", "Enter trajectory mode (START_TRAJ_MODE)."),
+    "disable": ("pymotoros.cli.robot:disable", "Leave trajectory mode (STOP_TRAJ_MODE)."),
+    "move": ("pymotoros.cli.robot:move", "Move to joint positions or a named pose."),
+    "stop": ("pymotoros.cli.robot:stop", "Stop motion at once (STOP_MOTION)."),
+    "io": ("pymotoros.cli.robot:io", "Read or write an IO bit or group."),
+    "mreg": ("pymotoros.cli.robot:mreg", "Read or write an M-register."),
+    "tool": ("pymotoros.cli.robot:tool", "Select the tool file a group moves with."),
+}
+
+
+class _LazyGroup(click.Group):
+    """A group whose subcommands are imported when first used."""
+
+    def list_commands(self, ctx: click.Context) -> list[str]:
+        return sorted(_COMMANDS)
+
+    def get_command(self, ctx: click.Context, cmd_name: str) -> click.Command | None:
+        entry = _COMMANDS.get(cmd_name)
+        if entry is None:
+            return None
+        target = entry[0]
+        module_name, attr = target.split(":")
+        command = getattr(importlib.import_module(module_name), attr)
+        if not isinstance(command, click.Command):
+            raise TypeError(f"{target} is not a click command")
+        return command
+
+    def format_commands(self, ctx: click.Context, formatter: click.HelpFormatter) -> None:
+        # Listed from the table, so that --help imports no subcommand module.
+        with formatter.section("Commands"):
+            formatter.write_dl([(name, entry[1]) for name, entry in sorted(_COMMANDS.items())])
+
+
+def configure_logging(verbose: int, quiet: bool) -> None:
+    """Log to stderr; -v for INFO, -vv for DEBUG, -q for errors only."""
+    if quiet:
+        level = logging.ERROR
+    elif verbose >= 2:
+        level = logging.DEBUG
+    elif verbose == 1:
+        level = logging.INFO
+    else:
+        level = logging.WARNING
+    logging.basicConfig(
+        level=level,
+        format="%(asctime)s %(levelname)-7s %(name)s: %(message)s",
+        force=True,
+    )
+
+
+@click.group(cls=_LazyGroup, context_settings={"help_option_names": ["-h", "--help"]})
+@click.version_option(__version__, prog_name="pymotoros")
+@click.option("-v", "--verbose", count=True, help="More log output (-v info, -vv debug).")
+@click.option("-q", "--quiet", is_flag=True, help="Only log errors.")
+def cli(verbose: int, quiet: bool) -> None:
+    """A virtual Yaskawa Motoman controller running MotoROS, and a client for real robots."""
+    configure_logging(verbose, quiet)
+
+
+def main() -> None:
+    """Console-script entry point."""
+    cli()

@@ -1,0 +1,271 @@
+"""What the network layer may ask of the virtual controller, as types.
+
+The servers (``pymotoros.runtime``) translate wire messages into these calls and
+the results back into wire replies; the controller never sees bytes. Expected
+refusals are values (:class:`Outcome` with a NOT_READY or INVALID result), never
+exceptions.
+
+Some MotoROS commands take controller time (START_TRAJ_MODE polls every 50 ms for
+up to 5 s; START_SERVOS waits for servo power). Those return a :class:`Pending`
+that the controller completes during a later :meth:`MotoRosController.tick`; the
+caller either keeps ticking (tests, plain loop) or awaits a future resolved by a
+done-callback (servers). Nothing here knows about asyncio or the wall clock.
+"""
+
+from __future__ import annotations
+
+import enum
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+from typing import Protocol
+
+from pymotoros.protocol.constants import IoResultCode, ResultCode
+
+
+@dataclass(frozen=True, slots=True)
+class Outcome:
+    """The controller's answer to one motion-port request."""
+
+    result: ResultCode
+    subcode: int = 0
+    group_no: int | None = None
+    """Group to put in the reply when it is not the request's (FULL_EX: the last group
+    processed, §3.5); None means echo the request."""
+    close_connection: bool = False
+    """DISCONNECT succeeded, or GET_DH_PARAMETERS failed: close without replying (§3.1, §5.9)."""
+    detail: str = ""
+    """Human explanation with the numbers behind a refusal (point, axis, requested vs
+    allowed, the subcode's meaning). Logged by the server; never on the wire."""
+
+    @property
+    def ok(self) -> bool:
+        return self.result == ResultCode.SUCCESS
+
+
+class Pending:
+    """A motion-port request that completes after some controller ticks.
+
+    ``add_done_callback`` callbacks run synchronously inside the tick that completes
+    the request (or at once if it is already done).
+    """
+
+    __slots__ = ("_callbacks", "_outcome", "description")
+
+    def __init__(self, description: str) -> None:
+        self.description = description
+        self._outcome: Outcome | None = None
+        self._callbacks: list[Callable[[Outcome], None]] = []
+
+    @property
+    def done(self) -> bool:
+        return self._outcome is not None
+
+    @property
+    def outcome(self) -> Outcome:
+        if self._outcome is None:
+            raise RuntimeError(f"{self.description} has not completed yet")
+        return self._outcome
+
+    def complete(self, outcome: Outcome) -> None:
+        """Called by the controller, once."""
+        if self._outcome is not None:
+            raise RuntimeError(f"{self.description} completed twice")
+        self._outcome = outcome
+        callbacks, self._callbacks = self._callbacks, []
+        for callback in callbacks:
+            callback(outcome)
+
+    def add_done_callback(self, callback: Callable[[Outcome], None]) -> None:
+        if self._outcome is not None:
+            callback(self._outcome)
+        else:
+            self._callbacks.append(callback)
+
+
+@dataclass(frozen=True, slots=True)
+class PointData:
+    """One group's part of a trajectory point, as received (values already float32).
+
+    ``pos``/``vel``/``acc`` hold the wire's 10 slots in ROS order.
+    """
+
+    group_no: int
+    valid_fields: int
+    time: float
+    pos: tuple[float, ...]
+    vel: tuple[float, ...]
+    acc: tuple[float, ...]
+
+
+@dataclass(frozen=True, slots=True)
+class IoRead:
+    """Value and result code of an IO or M-register read."""
+
+    value: int
+    result_code: IoResultCode
+
+
+@dataclass(frozen=True, slots=True)
+class FeedbackData:
+    """What one JOINT_FEEDBACK carries (§2.4): ROS order, 10 slots, rad and rad/s."""
+
+    group_no: int
+    valid_fields: int
+    pos: tuple[float, ...]
+    vel: tuple[float, ...]
+
+
+@dataclass(frozen=True, slots=True)
+class StatusData:
+    """The seven ROBOT_STATUS fields (§2.6)."""
+
+    drives_powered: int
+    e_stopped: int
+    error_code: int
+    in_error: int
+    in_motion: int
+    mode: int
+    motion_possible: int
+
+
+class PendantMode(enum.Enum):
+    TEACH = "teach"
+    PLAY = "play"
+
+
+@dataclass(frozen=True, slots=True)
+class AlarmInfo:
+    code: int
+    subcode: int
+    text: str
+
+
+@dataclass(frozen=True, slots=True)
+class GroupSnapshot:
+    name: str
+    joint_names: tuple[str, ...]
+    command_rad: tuple[float, ...]
+    feedback_rad: tuple[float, ...]
+    command_pulse: tuple[int, ...]
+    queue: int
+    tool: int
+
+
+@dataclass(frozen=True, slots=True)
+class ControllerSnapshot:
+    """An immutable picture of the controller for observers (HTTP API, pendant, tests)."""
+
+    time_ms: int
+    tick_count: int
+    mode: PendantMode
+    remote: bool
+    servo: bool
+    estop: bool
+    hold: bool
+    alarms: tuple[AlarmInfo, ...]
+    motion_ready: bool
+    groups: tuple[GroupSnapshot, ...]
+    errors: tuple[AlarmInfo, ...] = field(default=())
+
+
+class MotoRosController(Protocol):
+    """The controller as the servers see it. ``VirtualController`` implements it."""
+
+    @property
+    def period_ms(self) -> int:
+        """The interpolation period (ms)."""
+        ...
+
+    @property
+    def num_groups(self) -> int: ...
+
+    def tick(self) -> None:
+        """Advance controller time by exactly one interpolation period."""
+        ...
+
+    # --- motion port
+    def motion_ctrl(self, group_no: int, command: int) -> Outcome | Pending: ...
+
+    def trajectory_point(self, sequence: int, point: PointData) -> Outcome | Pending: ...
+
+    def trajectory_point_ex(
+        self, sequence: int, points: Sequence[PointData]
+    ) -> Outcome | Pending: ...
+
+    def select_tool(self, group_no: int, tool: int) -> Outcome: ...
+
+    def dh_parameters(self) -> tuple[tuple[tuple[float, float, float, float], ...], ...] | None:
+        """4 groups × 8 links × (theta, d, a, alpha); None if the library read fails."""
+        ...
+
+    # --- IO port (bit and group also on the motion port)
+    def read_io_bit(self, address: int) -> IoRead: ...
+
+    def write_io_bit(self, address: int, value: int) -> IoResultCode: ...
+
+    def read_io_group(self, address: int) -> IoRead: ...
+
+    def write_io_group(self, address: int, value: int) -> IoResultCode: ...
+
+    def read_mregister(self, number: int) -> IoRead: ...
+
+    def write_mregister(self, number: int, value: int) -> IoResultCode: ...
+
+    # --- connections (the servers report them; MotoROS mirrors them on OT#893..895)
+    def motion_connected(self) -> None: ...
+
+    def motion_disconnected(self) -> None:
+        """Clears the queues: our documented improvement over MotoROS (§2.2)."""
+        ...
+
+    def state_clients_changed(self, count: int) -> None: ...
+
+    def io_connected(self) -> None: ...
+
+    def has_queued_motion(self) -> bool:
+        """Any group queue holds increments: decides the connection-replacement rule (§2.2)."""
+        ...
+
+    # --- state server
+    def joint_feedback(self, group_no: int) -> FeedbackData: ...
+
+    def robot_status(self) -> StatusData: ...
+
+    def snapshot(self) -> ControllerSnapshot: ...
+
+
+class OperatorPanel(Protocol):
+    """The operator's hands: pendant keys, E-stop button, mode switch, forced IO.
+
+    Used by the HTTP control API and by tests. Invalid arguments raise ``ValueError``
+    with a message that says what was wrong (e.g. an address outside every IO range);
+    legal actions never raise, whatever the state (pressing E-stop twice is fine).
+    """
+
+    def press_estop(self, pressed: bool) -> None:
+        """Pendant E-stop: cuts servo power and stops the job; raises no alarm."""
+        ...
+
+    def set_hold(self, on: bool) -> None: ...
+
+    def set_mode(self, mode: PendantMode) -> None: ...
+
+    def set_remote(self, on: bool) -> None: ...
+
+    def set_servo(self, on: bool) -> None:
+        """Servo power request as from the pendant (refused silently while E-stopped)."""
+        ...
+
+    def raise_alarm(self, code: int, subcode: int, text: str) -> None: ...
+
+    def reset(self) -> None:
+        """The pendant's RESET key: clears alarms and errors whose cause is gone."""
+        ...
+
+    def force_io(self, address: int, value: int) -> None:
+        """Force any bit address to 0/1, or an M-register (address 1000000 + n) to 0..65535.
+
+        Unlike a client's write, any readable area may be forced (inputs, specific
+        outputs, control status …): this is the operator simulating the cell.
+        """
+        ...

@@ -1,0 +1,81 @@
+"""The one exception tree of pymotoros.
+
+::
+
+    PymotorosError
+     +-- ProtocolError                  (abstract)
+     |    +-- LocalProtocolError        we tried to build or send something illegal
+     |    +-- RemoteProtocolError       the peer sent bytes we cannot accept
+     +-- ConfigError                    a cell file, model name or option is wrong (ValueError)
+     +-- JobError                       an INFORM job cannot be loaded (ValueError)
+     +-- TrajectoryRejectedError             the offline engine refuses a point as MotoROS would
+     +-- ClientError                    (defined in pymotoros.client.errors, subclasses below it)
+
+Expected refusals of the virtual controller (NOT_READY, INVALID …) are *values*
+returned by the domain, not exceptions; these classes are for what must stop the
+caller. Exceptions also inherit the matching builtin (``ValueError`` …) so plain
+``except ValueError`` keeps working.
+"""
+
+from __future__ import annotations
+
+
+class PymotorosError(Exception):
+    """Root of every exception raised on purpose by pymotoros."""
+
+
+class ProtocolError(PymotorosError):
+    """Bytes and messages that break the Simple Message rules. Abstract: use a subclass."""
+
+    def __new__(cls, *args: object, **kwargs: object) -> ProtocolError:
+        if cls is ProtocolError:
+            raise TypeError("ProtocolError is abstract; raise Local- or RemoteProtocolError")
+        return super().__new__(cls, *args, **kwargs)
+
+
+class LocalProtocolError(ProtocolError, ValueError):
+    """We were asked to build or send a message that is not legal on the wire."""
+
+
+class RemoteProtocolError(ProtocolError):
+    """The peer sent something we cannot decode (bad length, short body, bad value)."""
+
+    def __init__(self, message: str, *, data: bytes = b"") -> None:
+        super().__init__(message)
+        self.data = data
+        """The offending bytes (possibly truncated), for logs and bug reports."""
+
+
+class ConfigError(PymotorosError, ValueError):
+    """A cell configuration, model name or command-line option is wrong.
+
+    The message names the key (``groups[0].robot``) and says what is wrong with it.
+    """
+
+
+class JobError(PymotorosError, ValueError):
+    """An INFORM job cannot be loaded; the message names the file and line."""
+
+
+class TrajectoryRejectedError(PymotorosError, ValueError):
+    """A trajectory point MotoROS would refuse (offline engine, ``pymotoros interpolate``).
+
+    Carries the point index, the axis, the offending value, the limit and the subcode.
+    """
+
+    def __init__(
+        self,
+        message: str,
+        *,
+        point: int,
+        subcode: int,
+        axis: int | None = None,
+        value: float | None = None,
+        limit: float | None = None,
+    ) -> None:
+        super().__init__(message)
+        self.point = point
+        self.subcode = subcode
+        self.axis = axis
+        self.value = value
+        self.limit = limit

@@ -1,0 +1,266 @@
+"""Every code that travels on the wire, and the protocol's fixed sizes.
+
+This is the leaf module of the package: the controller, the motion engine, the
+servers and the client all speak this vocabulary. Names follow MotoROS's
+``SimpleMessage.h`` with the C prefix (``ROS_MSG_``, ``ROS_RESULT_`` …) dropped,
+so the C header and these enums can be compared line by line. Values and
+meanings come from our behavioural notes on MotoROS 1.9.12
+(``shared/reference/motoros-1.9.12.md``, §1.2, §1.3 and §1.7).
+
+Every member carries a one-line human meaning in ``.meaning``; error messages
+and logs use it so that nobody has to look up what 5006 means.
+"""
+
+from __future__ import annotations
+
+import enum
+from typing import Final, Self
+
+
+class _Described(enum.IntEnum):
+    """An ``IntEnum`` whose members carry a short human meaning.
+
+    Declared as ``NAME = value, "meaning"``.
+    """
+
+    meaning: str
+
+    def __new__(cls, value: int, meaning: str = "") -> Self:
+        member = int.__new__(cls, value)
+        member._value_ = value
+        member.meaning = meaning
+        return member
+
+    @classmethod
+    def describe(cls, value: int) -> str:
+        """``"NAME (value): meaning"`` for a known value, a clear text for an unknown one."""
+        try:
+            member = cls(value)
+        except ValueError:
+            return f"unknown {cls.__name__} value {value}"
+        return f"{member.name} ({int(member)}): {member.meaning}"
+
+
+# --------------------------------------------------------------------------- sizes
+
+MAX_JOINTS: Final = 10
+"""ROS_MAX_JOINT: joint slots in every position/velocity/acceleration array on the wire."""
+
+MAX_PULSE_AXES: Final = 8
+"""MP_GRP_AXES_NUM: axes a controller group can have; slots 8 and 9 are never used (§1.4)."""
+
+MAX_GROUPS: Final = 4
+"""MOT_MAX_GR: group slots in JOINT_TRAJ_PT_FULL_EX / JOINT_FEEDBACK_EX and the DH reply."""
+
+MAX_DH_LINKS: Final = 8
+"""Links per group in the GET_DH_PARAMETERS reply (4 groups × 8 links × 4 floats = 512 bytes)."""
+
+PREFIX_SIZE: Final = 4
+"""The int32 length prefix; its value counts the bytes after it (header + body)."""
+
+HEADER_SIZE: Final = 12
+"""msg_type, comm_type, reply_type: three int32."""
+
+MAX_MESSAGE_SIZE: Final = 552
+"""Largest struct MotoROS receives: prefix + header + 4-group JOINT_TRAJ_PT_FULL_EX (§1.1)."""
+
+MAX_WIRE_MESSAGE_SIZE: Final = 552
+"""Largest message either side sends: also 552 (the DH reply is 528, FEEDBACK_EX 548)."""
+
+MAX_LENGTH_PREFIX: Final = MAX_WIRE_MESSAGE_SIZE - PREFIX_SIZE
+"""Largest sane value of the length prefix (548)."""
+
+# --------------------------------------------------------------------------- byte order and ports
+
+
+class ByteOrder(enum.StrEnum):
+    """Wire byte order; the value is the ``struct`` prefix.
+
+    MotoROS never swaps bytes: little-endian on DX100, DX200, YRC1000 and
+    YRC1000micro (x86), big-endian on FS100 (PowerPC) (§1.1).
+    """
+
+    LITTLE = "<"
+    BIG = ">"
+
+
+class Port(enum.Enum):
+    """Which MotoROS server a message travels on; decoding of a few types depends on it.
+
+    Type 2002 is a MOTO_MOTION_REPLY on the motion port but the IO error reply
+    (result at body offset 0) on the IO port (§1.6).
+    """
+
+    MOTION = "motion"
+    STATE = "state"
+    IO = "io"
+
+
+TCP_PORT_MOTION: Final = 50240
+"""Motion server: one client (MotoROS Controller.h)."""
+
+TCP_PORT_STATE: Final = 50241
+"""State server: up to four clients."""
+
+TCP_PORT_IO: Final = 50242
+"""IO server: one client (since MotoROS 1.6.0)."""
+
+
+# --------------------------------------------------------------------------- header codes
+
+
+@enum.unique
+class MsgType(_Described):
+    """Message types MotoROS 1.9.12 defines (§1.3). 2014, 2015 and 2019 do not exist."""
+
+    PING = 1, "ping; answered with an empty PING reply"
+    GET_VERSION = 2, "version request; defined but never handled (answered INVALID/3003)"
+    ROBOT_STATUS = 13, "controller status (state port)"
+    JOINT_TRAJ_PT_FULL = 14, "one trajectory point for one group"
+    JOINT_FEEDBACK = 15, "joint feedback for one group (state port)"
+    MOTO_MOTION_CTRL = 2001, "motion control command"
+    MOTO_MOTION_REPLY = 2002, "reply to a motion request"
+    MOTO_READ_IO_BIT = 2003, "read one IO bit"
+    MOTO_READ_IO_BIT_REPLY = 2004, "value of one IO bit"
+    MOTO_WRITE_IO_BIT = 2005, "write one IO bit"
+    MOTO_WRITE_IO_BIT_REPLY = 2006, "result of an IO bit write"
+    MOTO_READ_IO_GROUP = 2007, "read one IO byte (group)"
+    MOTO_READ_IO_GROUP_REPLY = 2008, "value of one IO byte"
+    MOTO_WRITE_IO_GROUP = 2009, "write one IO byte (group)"
+    MOTO_WRITE_IO_GROUP_REPLY = 2010, "result of an IO byte write"
+    MOTO_IOCTRL_REPLY = 2011, "IO control reply; defined but never sent"
+    MOTO_READ_MREGISTER = 2012, "read an M-register; its reply reuses type 2012 (IO port only)"
+    MOTO_WRITE_MREGISTER = 2013, "write an M-register; its reply reuses type 2013 (IO port only)"
+    MOTO_JOINT_TRAJ_PT_FULL_EX = 2016, "one trajectory point for several groups"
+    MOTO_JOINT_FEEDBACK_EX = 2017, "joint feedback of every group (state port, ≥ 2 groups)"
+    MOTO_SELECT_TOOL = 2018, "select the tool file a group moves with"
+    MOTO_GET_DH_PARAMETERS = 2020, "request the DH parameters; the reply reuses type 2020"
+
+
+@enum.unique
+class CommType(_Described):
+    """Second header field (§1.2)."""
+
+    INVALID = 0, "invalid"
+    TOPIC = 1, "topic: a message nobody answers (state stream)"
+    SERVICE_REQUEST = 2, "service request: the client expects a reply"
+    SERVICE_REPLY = 3, "service reply"
+
+
+@enum.unique
+class ReplyType(_Described):
+    """Third header field (§1.2). Motion replies always say SUCCESS; the outcome is in the body."""
+
+    INVALID = 0, "not a reply (topics and requests)"
+    SUCCESS = 1, "success"
+    FAILURE = 2, "failure"
+
+
+# --------------------------------------------------------------------------- body codes
+
+
+@enum.unique
+class MotionCommand(_Described):
+    """MOTO_MOTION_CTRL commands (§1.7). No others exist in MotoROS v1."""
+
+    CHECK_MOTION_READY = 200101, "is the controller ready to accept trajectory points?"
+    CHECK_QUEUE_CNT = 200102, "number of increments queued for a group (returned in subcode)"
+    STOP_MOTION = 200111, "stop at once and clear every queue"
+    START_SERVOS = 200112, "switch servo power on"
+    STOP_SERVOS = 200113, "stop motion and switch servo power off"
+    RESET_ALARM = 200114, "reset alarms and cancel errors"
+    START_TRAJ_MODE = 200121, "enter trajectory mode: servo on, start INIT_ROS, wait for ready"
+    STOP_TRAJ_MODE = 200122, "leave trajectory mode: release INIT_ROS (OT#890)"
+    DISCONNECT = 200130, "leave trajectory mode and close the motion connection"
+
+
+class ResultCode(_Described):
+    """``result`` of a MOTO_MOTION_REPLY (§1.7).
+
+    Not unique on purpose: SimpleMessage.h aliases TRUE to SUCCESS and FALSE to
+    FAILURE (CHECK_MOTION_READY answers TRUE/FALSE).
+    """
+
+    SUCCESS = 0, "success"
+    TRUE = 0, "true"
+    BUSY = 1, "busy: the previous point is still being processed, send it again"
+    FAILURE = 2, "failure"
+    FALSE = 2, "false"
+    INVALID = 3, "invalid: the message or its data was refused (see subcode)"
+    ALARM = 4, "alarm (defined, never sent by MotoROS 1.9.12)"
+    NOT_READY = 5, "the controller is not ready for motion (see subcode)"
+    MP_FAILURE = 6, "MotoPlus API failure (defined, never sent by MotoROS 1.9.12)"
+
+
+@enum.unique
+class InvalidSubcode(_Described):
+    """Subcodes that go with ``ResultCode.INVALID`` (§1.7)."""
+
+    UNSPECIFIED = 3000, "unspecified (never sent)"
+    MSGSIZE = 3001, "message shorter than its type requires"
+    MSGHEADER = 3002, "bad header (never sent)"
+    MSGTYPE = 3003, "unknown or unsupported message type"
+    GROUPNO = 3004, "group number out of range"
+    SEQUENCE = 3005, "negative sequence number"
+    COMMAND = 3006, "unknown motion command"
+    DATA = 3010, "invalid data (never sent)"
+    DATA_START_POS = 3011, "first point is more than 30 pulses from the commanded position"
+    DATA_POSITION = 3012, "position out of range (never sent: MotoROS checks no limits)"
+    DATA_SPEED = 3013, "velocity above the axis maximum"
+    DATA_ACCEL = 3014, "acceleration out of range (never sent)"
+    DATA_INSUFFICIENT = 3015, "time, position and velocity must all be valid"
+    DATA_TIME = 3016, "point time at or beyond 4 hours (14400 s)"
+    DATA_TOOLNO = 3017, "tool number outside 0..63"
+
+
+@enum.unique
+class NotReadySubcode(_Described):
+    """Subcodes that go with ``ResultCode.NOT_READY`` (§1.7, §4.2)."""
+
+    UNSPECIFIED = 5000, "not ready for an unspecified reason"
+    ALARM = 5001, "an alarm is active"
+    ERROR = 5002, "an operator error is active"
+    ESTOP = 5003, "emergency stop is pressed"
+    NOT_PLAY = 5004, "the pendant is not in PLAY mode"
+    NOT_REMOTE = 5005, "the controller is not in REMOTE mode"
+    SERVO_OFF = 5006, "servo power is off (or eco mode is on)"
+    HOLD = 5007, "HOLD is on"
+    NOT_STARTED = 5008, "the INIT_ROS job is not running"
+    WAITING_ROS = 5009, "the INIT_ROS job has not raised OT#889 yet"
+    SKILLSEND = 5010, "motion-ready still false (DX100 SKILLSND, job-ready edge or stop pending)"
+    PFL_ACTIVE = 5011, "a PFL (power and force limiting) event stopped the robot"
+    INC_MOVE_ERROR = 5012, "the controller rejected an increment; restart trajectory mode"
+
+
+@enum.unique
+class IoResultCode(_Described):
+    """``resultCode`` in IO reply bodies (§1.7, §6.1). Never a MOTION_REPLY subcode."""
+
+    OK = 0, "ok"
+    READ_ADDRESS_INVALID = 1001, "address not readable on this controller"
+    WRITE_ADDRESS_INVALID = 1002, "address not writable on this controller"
+    WRITE_VALUE_INVALID = 1003, "value out of range for this address"
+    READ_API_ERROR = 1004, "the controller's IO read failed"
+    WRITE_API_ERROR = 1005, "the controller's IO write failed"
+
+
+class ValidFields(enum.IntFlag):
+    """Bit mask of the optional fields of a trajectory point or feedback record."""
+
+    TIME = 1
+    POSITION = 2
+    VELOCITY = 4
+    ACCELERATION = 8
+
+
+REQUIRED_POINT_FIELDS: Final = ValidFields.TIME | ValidFields.POSITION | ValidFields.VELOCITY
+"""MotoROS refuses a point without all three (3015); acceleration is never used (§3.4)."""
+
+
+def subcode_meaning(result: int, subcode: int) -> str:
+    """Human text for a (result, subcode) pair as a MOTO_MOTION_REPLY carries it."""
+    if result == ResultCode.INVALID:
+        return InvalidSubcode.describe(subcode)
+    if result == ResultCode.NOT_READY:
+        return NotReadySubcode.describe(subcode)
+    return ResultCode.describe(result) if subcode == 0 else f"subcode {subcode}"

@@ -1,0 +1,59 @@
+"""The import rules of docs/architecture.md, checked on the source tree."""
+
+from __future__ import annotations
+
+import ast
+from pathlib import Path
+
+import pytest
+
+SRC = Path(__file__).resolve().parents[1] / "src" / "pymotoros"
+
+# layer -> layers it must never import
+FORBIDDEN: dict[str, tuple[str, ...]] = {
+    "protocol": ("models", "motion", "controller", "runtime", "client", "cli", "web"),
+    "models": ("motion", "controller", "runtime", "client", "cli", "web"),
+    "motion": (
+        "controller",
+        "runtime",
+        "client",
+        "cli",
+        "web",
+        "protocol.messages",
+        "protocol.framing",
+    ),
+    "controller": ("runtime", "client", "cli", "web", "protocol.messages", "protocol.framing"),
+    "runtime": ("client", "cli", "web"),
+    "client": ("controller", "runtime", "motion", "cli", "web"),
+}
+
+
+def _imports(path: Path) -> set[str]:
+    tree = ast.parse(path.read_text(encoding="utf-8"))
+    found: set[str] = set()
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Import):
+            found.update(alias.name for alias in node.names)
+        elif isinstance(node, ast.ImportFrom) and node.module and node.level == 0:
+            found.add(node.module)
+    return found
+
+
+def _modules(layer: str) -> list[Path]:
+    return sorted((SRC / layer).rglob("*.py"))
+
+
+@pytest.mark.parametrize("layer", sorted(FORBIDDEN))
+def test_layer_imports_only_what_it_may(layer: str) -> None:
+    violations = []
+    for path in _modules(layer):
+        for name in _imports(path):
+            for banned in FORBIDDEN[layer]:
+                if name == f"pymotoros.{banned}" or name.startswith(f"pymotoros.{banned}."):
+                    violations.append(f"{path.relative_to(SRC)} imports {name}")
+    assert not violations, "\n".join(violations)
+
+
+def test_every_layer_has_modules() -> None:
+    for layer in FORBIDDEN:
+        assert _modules(layer), f"no modules in {layer}"
