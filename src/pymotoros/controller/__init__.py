@@ -1,1 +1,61 @@
-"""pymotoros.controller"""
+"""The virtual controller: a Yaskawa controller running MotoROS 1.9.12, in virtual time.
+
+Front door::
+
+    from pymotoros.controller import VirtualController, default_cell, load_cell
+
+    vc = VirtualController(load_cell("cell.toml"))   # or VirtualController() for HC10/YRC1000
+    vc.tick()                                        # one interpolation period
+
+The contract with the servers is :mod:`pymotoros.controller.api`.
+"""
+
+from pymotoros.controller.api import (
+    AlarmInfo,
+    ControllerSnapshot,
+    FeedbackData,
+    GroupSnapshot,
+    IoRead,
+    MotoRosController,
+    OperatorPanel,
+    Outcome,
+    PendantMode,
+    Pending,
+    PointData,
+    StatusData,
+)
+from pymotoros.controller.cell import (
+    CellConfig,
+    InitialState,
+    ServoConfig,
+    ToolConfig,
+    cell_from_dict,
+    default_cell,
+    load_cell,
+)
+from pymotoros.controller.controller import VirtualController
+from pymotoros.controller.machine import EstopSource
+
+__all__ = [
+    "AlarmInfo",
+    "CellConfig",
+    "ControllerSnapshot",
+    "EstopSource",
+    "FeedbackData",
+    "GroupSnapshot",
+    "InitialState",
+    "IoRead",
+    "MotoRosController",
+    "OperatorPanel",
+    "Outcome",
+    "PendantMode",
+    "Pending",
+    "PointData",
+    "ServoConfig",
+    "StatusData",
+    "ToolConfig",
+    "VirtualController",
+    "cell_from_dict",
+    "default_cell",
+    "load_cell",
+]

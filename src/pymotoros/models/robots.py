@@ -4,10 +4,12 @@ Joint names, limits and datasheet speeds come from the ROS-Industrial support
 packages as summarised in ``shared/reference/robot-models.md`` §1. Yaskawa does not
 publish pulse ratios or the maximum-increment parameters of these arms
 (robot-models.md §3.3 and §6), so those are *chosen*: pulses per degree inside the
-450–2000 band users measured on DX200 arms, and the maximum pulse rate equal to
-the datasheet joint speed, so that MotoROS's speed limit (derived from the maximum
-increment per tick, §5.5) lands on the datasheet speed. Each choice is commented
-where it is made.
+450–2000 band users measured on DX200 arms, falling from the base to the wrist as on
+every measured arm, and the maximum pulse rate (a whole number of pulses/s, as the
+controller parameter is) equal to the datasheet joint speed. Each ratio is picked so
+that speed × ratio is a whole number of pulses per 4 ms tick: then MotoROS's speed
+limit (derived from the maximum increment per tick, §5.5) is the datasheet speed to
+the pulse. Each choice is commented where it is made.
 """
 
 from __future__ import annotations
@@ -46,9 +48,9 @@ class AxisModel:
     linear: bool = False
 
     @property
-    def max_pulse_rate(self) -> float:
-        """The axis's maximum speed in pulses/s, as the controller parameter holds it."""
-        return self.max_velocity * self.pulses_per_unit
+    def max_pulse_rate(self) -> int:
+        """The axis's maximum speed in whole pulses/s, as the controller parameter holds it."""
+        return round(self.max_velocity * self.pulses_per_unit)
 
     def max_increment(self, period_ms: int) -> int:
         """Maximum pulses per interpolation tick: trunc(rate × period × 0.001) (§5.5)."""
@@ -126,19 +128,109 @@ def _six_axis_slots() -> tuple[int, ...]:
     return (0, 1, 2, 3, 4, 5)
 
 
+SEVEN_AXIS_SLOTS: Final = (0, 1, 6, 2, 3, 4, 5)
+"""ROS S,L,E,U,R,B,T → controller S,L,U,R,B,T,E: E lives in controller slot 6 (§5.7)."""
+
+# Accelerations and jerks: Yaskawa publishes none (chosen). A cobot gets 2.5 s⁻¹ × its
+# joint speed, an industrial arm 4 s⁻¹ × its joint speed; jerk is 10 s⁻¹ × acceleration.
+_COBOT_ACCEL_PER_SPEED: Final = 2.5
+_INDUSTRIAL_ACCEL_PER_SPEED: Final = 4.0
+_JERK_PER_ACCEL: Final = 10.0
+
+
+def _axis(
+    name: str,
+    lower_deg: float,
+    upper_deg: float,
+    speed_deg: float,
+    pulses_per_degree: float,
+    accel_per_speed: float = _INDUSTRIAL_ACCEL_PER_SPEED,
+) -> AxisModel:
+    """A rotary axis from the degree figures of the tables in robot-models.md."""
+    velocity = _deg(speed_deg)
+    accel = round(accel_per_speed * velocity, 2)
+    return AxisModel(
+        name,
+        _deg(lower_deg),
+        _deg(upper_deg),
+        velocity,
+        _ppr(pulses_per_degree),
+        accel,
+        round(_JERK_PER_ACCEL * accel, 1),
+    )
+
+
 # HC10 (A0) and HC10DT (A1): limits and speeds from robot-models.md §1.2 (manuals HW1483896,
-# HW1485083). Pulses/degree chosen (no public value): 1435 for the big S/L axes (the MA1440
-# S-axis figure measured by users, robot-models.md §3.3), smaller ratios towards the wrist
-# as on every measured Motoman arm. Accelerations/jerks chosen conservatively for a cobot:
-# about 2.5× the joint speed per second, jerk 10× the acceleration per second.
+# HW1485083). Pulses/degree chosen (no public value): about the MA1440 S-axis figure users
+# measured (1435, robot-models.md §3.3) for the big S/L axes, rounded so that speed × ratio
+# is whole pulses per tick (1425, 1250, 925, 910, 650), smaller towards the wrist.
+# Accelerations/jerks chosen conservatively for a cobot: about 2.5× the joint speed per
+# second, jerk 10× the acceleration per second.
 _HC10_AXES: Final = (
-    AxisModel("joint_1_s", -math.pi, math.pi, _deg(130), _ppr(1435.0), 5.5, 55.0),
-    AxisModel("joint_2_l", -math.pi, math.pi, _deg(130), _ppr(1435.0), 5.5, 55.0),
+    AxisModel("joint_1_s", -math.pi, math.pi, _deg(130), _ppr(1425.0), 5.5, 55.0),
+    AxisModel("joint_2_l", -math.pi, math.pi, _deg(130), _ppr(1425.0), 5.5, 55.0),
     AxisModel("joint_3_u", _deg(-5), _deg(355), _deg(180), _ppr(1250.0), 7.5, 75.0),
-    AxisModel("joint_4_r", -math.pi, math.pi, _deg(180), _ppr(910.0), 7.5, 75.0),
+    AxisModel("joint_4_r", -math.pi, math.pi, _deg(180), _ppr(925.0), 7.5, 75.0),
     AxisModel("joint_5_b", -math.pi, math.pi, _deg(250), _ppr(910.0), 10.5, 105.0),
     AxisModel("joint_6_t", -math.pi, math.pi, _deg(250), _ppr(650.0), 10.5, 105.0),
 )
+
+
+def _dh_6axis(
+    d1: float, a1: float, a2: float, a3: float, d4: float, d6: float
+) -> tuple[DhLink, ...]:
+    """Standard DH of a Motoman 6-axis arm from its URDF origins (derived, not sourced):
+    S height d1 and offset a1, upper arm a2, elbow offset a3, forearm d4, flange d6."""
+    half = math.pi / 2
+    return (
+        DhLink(0.0, d1, a1, -half),
+        DhLink(-half, 0.0, a2, 0.0),
+        DhLink(0.0, 0.0, a3, -half),
+        DhLink(0.0, d4, 0.0, half),
+        DhLink(0.0, 0.0, 0.0, -half),
+        DhLink(0.0, d6, 0.0, 0.0),
+    )
+
+
+def _dh_7axis(base: float, upper: float, fore: float, flange: float) -> tuple[DhLink, ...]:
+    """Standard DH of a Motoman 7-axis arm (S-L-E-U-R-B-T, physical order) from its URDF
+    origins (derived): S height, L→U and U→B lengths along the arm, B→flange."""
+    half = math.pi / 2
+    return (
+        DhLink(0.0, base, 0.0, -half),
+        DhLink(0.0, 0.0, 0.0, half),
+        DhLink(0.0, upper, 0.0, -half),
+        DhLink(0.0, 0.0, 0.0, half),
+        DhLink(0.0, fore, 0.0, -half),
+        DhLink(0.0, 0.0, 0.0, half),
+        DhLink(0.0, flange, 0.0, 0.0),
+    )
+
+
+def _hc10_dh(flange: float) -> tuple[DhLink, ...]:
+    # Standard DH read off the URDF origins of robot-models.md §1.2 (derived):
+    # S at 0.275 m, L→U 0.700 m, U→B 0.500 m, B→flange offset 0.162 m, then the flange.
+    return (
+        DhLink(0.0, 0.275, 0.0, -math.pi / 2),
+        DhLink(-math.pi / 2, 0.0, 0.700, 0.0),
+        DhLink(0.0, 0.0, 0.0, math.pi / 2),
+        DhLink(0.0, 0.500, 0.0, -math.pi / 2),
+        DhLink(0.0, 0.162, 0.0, math.pi / 2),
+        DhLink(0.0, flange, 0.0, 0.0),
+    )
+
+
+def _single_arm(
+    name: str,
+    description: str,
+    axes: tuple[AxisModel, ...],
+    dh: tuple[DhLink, ...],
+    controllers: frozenset[str],
+) -> RobotModel:
+    slots = SEVEN_AXIS_SLOTS if len(axes) == 7 else _six_axis_slots()
+    group = GroupModel("R1", GroupKind.ROBOT, axes, slots, (0.0,) * len(axes), dh)
+    return RobotModel(name, description, (group,), controllers)
+
 
 HC10: Final = RobotModel(
     name="hc10",
@@ -150,22 +242,173 @@ HC10: Final = RobotModel(
             axes=_HC10_AXES,
             moto_slots=_six_axis_slots(),
             home=(0.0,) * 6,
-            # Standard DH read off the URDF origins of robot-models.md §1.2 (derived):
-            # S at 0.275 m, L→U 0.700 m, U→B 0.500 m, B→flange offset 0.162 m, flange 0.130 m.
-            dh=(
-                DhLink(0.0, 0.275, 0.0, -math.pi / 2),
-                DhLink(-math.pi / 2, 0.0, 0.700, 0.0),
-                DhLink(0.0, 0.0, 0.0, math.pi / 2),
-                DhLink(0.0, 0.500, 0.0, -math.pi / 2),
-                DhLink(0.0, 0.162, 0.0, math.pi / 2),
-                DhLink(0.0, 0.130, 0.0, 0.0),
-            ),
+            dh=_hc10_dh(0.130),
         ),
     ),
+    # Sourced: HC10 on YRC1000 (motoros2#293) and YRC1000micro (motoman#284), §2.
     controllers=frozenset({"yrc1000", "yrc1000micro"}),
 )
 
-ROBOTS: Final[dict[str, RobotModel]] = {HC10.name: HC10}
+# HC10DT (A1): the same kinematics, limits and speeds as the HC10 (robot-models.md §1.2);
+# only the flange is longer (tool0 at 0.170 m instead of 0.130 m).
+HC10DT: Final = _single_arm(
+    "hc10dt",
+    "Yaskawa HC10DT (A1) collaborative robot, dust/drip-proof, 10 kg, 6 axes",
+    _HC10_AXES,
+    _hc10_dh(0.170),
+    # Sourced for the HC10 family: YRC1000 and YRC1000micro (§2).
+    frozenset({"yrc1000", "yrc1000micro"}),
+)
+
+# GP7 / GP8 / GP12: limits and speeds from robot-models.md §1.3 (datasheets; manuals
+# HW1486547, HW1484060; GP8 L 385°/s from the manual, the ROS1 URDF's 6.7495 rad/s is
+# 386.7°/s). Pulses/degree chosen: whole pulses per tick at the datasheet speed.
+GP7: Final = _single_arm(
+    "gp7",
+    "Yaskawa GP7 industrial robot, 7 kg, 6 axes",
+    (
+        _axis("joint_1_s", -170, 170, 375, 1400),
+        _axis("joint_2_l", -65, 145, 315, 1400),
+        _axis("joint_3_u", -70, 190, 410, 1200),
+        _axis("joint_4_r", -190, 190, 550, 800),
+        _axis("joint_5_b", -135, 135, 550, 800),
+        _axis("joint_6_t", -360, 360, 1000, 480),
+    ),
+    # OPW geometry of robot-models.md §1.3: c1 0.330, a1 0.040, c2 0.445, a2 0.040,
+    # c3 0.440, c4 0.080.
+    _dh_6axis(0.330, 0.040, 0.445, 0.040, 0.440, 0.080),
+    # Not in the stored sources: the GP7 is sold with the YRC1000micro (and YRC1000).
+    frozenset({"yrc1000micro", "yrc1000"}),
+)
+
+GP8: Final = _single_arm(
+    "gp8",
+    "Yaskawa GP8 industrial robot, 8 kg, 6 axes",
+    (
+        _axis("joint_1_s", -170, 170, 455, 1150),
+        _axis("joint_2_l", -65, 145, 385, 1150),
+        _axis("joint_3_u", -70, 190, 520, 1000),
+        _axis("joint_4_r", -190, 190, 550, 800),
+        _axis("joint_5_b", -135, 135, 550, 800),
+        _axis("joint_6_t", -360, 360, 1000, 480),
+    ),
+    _dh_6axis(0.330, 0.040, 0.345, 0.040, 0.340, 0.080),
+    # Not in the stored sources: the GP8 is sold with the YRC1000micro (and YRC1000).
+    frozenset({"yrc1000micro", "yrc1000"}),
+)
+
+GP12: Final = _single_arm(
+    "gp12",
+    "Yaskawa GP12 industrial robot, 12 kg, 6 axes",
+    (
+        _axis("joint_1_s", -170, 170, 260, 1600),
+        _axis("joint_2_l", -90, 155, 230, 1700),
+        _axis("joint_3_u", -85, 150, 260, 1450),
+        _axis("joint_4_r", -200, 200, 470, 975),
+        _axis("joint_5_b", -150, 150, 470, 975),
+        _axis("joint_6_t", -455, 455, 700, 650),
+    ),
+    _dh_6axis(0.450, 0.155, 0.614, 0.200, 0.640, 0.100),
+    # Not in the stored sources: the GP12 is a YRC1000 robot.
+    frozenset({"yrc1000"}),
+)
+
+# MH5: joint names of the ROS1 package (older joint_s naming); limits and speeds of the
+# ROS2 package, which rebuilt them from the Yaskawa manuals (robot-models.md §1.4). The
+# ROS1 URDF's 2.96–6.97 rad/s come from an old datasheet and are half the manual's.
+MH5: Final = _single_arm(
+    "mh5",
+    "Yaskawa MH5 industrial robot, 5 kg, 6 axes",
+    (
+        _axis("joint_s", -170, 170, 376, 1250),
+        _axis("joint_l", -65, 150, 350, 1250),
+        _axis("joint_u", -70, 190, 400, 1100),
+        _axis("joint_r", -190, 190, 450, 700),
+        _axis("joint_b", -135, 135, 450, 700),
+        _axis("joint_t", -360, 360, 720, 475),
+    ),
+    # ROS2 origins: S z 0.330, L x 0.088, U z 0.310, R z 0.040, B x 0.305, T x 0.080.
+    _dh_6axis(0.330, 0.088, 0.310, 0.040, 0.305, 0.080),
+    # Partly sourced: the ROS1 package's U limits were measured on an MH5F, the FS100
+    # variant (§1.4); DX100 and DX200 are the MH5's controllers of its time (not sourced).
+    frozenset({"dx100", "dx200", "fs100"}),
+)
+
+# SIA20D: 7 axes, ROS order S-L-E-U-R-B-T, limits and speeds from robot-models.md §1.5
+# (manual HW0485536). Pulses/degree chosen.
+SIA20D: Final = _single_arm(
+    "sia20d",
+    "Yaskawa SIA20D 7-axis robot, 20 kg",
+    (
+        _axis("joint_s", -180, 180, 130, 1525),
+        _axis("joint_l", -110, 110, 130, 1525),
+        _axis("joint_e", -170, 170, 170, 1225),
+        _axis("joint_u", -130, 130, 170, 1225),
+        _axis("joint_r", -180, 180, 200, 900),
+        _axis("joint_b", -110, 110, 200, 900),
+        _axis("joint_t", -180, 180, 400, 600),
+    ),
+    _dh_7axis(0.41, 0.49, 0.42, 0.18),
+    # Not in the stored sources: the "D" suffix is the DX100 generation (SIA20F: FS100).
+    frozenset({"dx100"}),
+)
+
+
+def _sda10f_arm(side: str) -> tuple[AxisModel, ...]:
+    # robot-models.md §1.6 (manual HW0485584): the same limits and speeds for both arms.
+    p = f"arm_{side}_"
+    return (
+        _axis(p + "joint_1_s", -180, 180, 170, 1225),
+        _axis(p + "joint_2_l", -110, 110, 170, 1225),
+        _axis(p + "joint_3_e", -170, 170, 170, 1225),
+        _axis(p + "joint_4_u", -135, 135, 170, 1225),
+        _axis(p + "joint_5_r", -180, 180, 200, 900),
+        _axis(p + "joint_6_b", -110, 110, 200, 900),
+        _axis(p + "joint_7_t", -180, 180, 400, 600),
+    )
+
+
+def _torso(name: str) -> GroupModel:
+    # torso_joint_b1 and _b2 are one physical axis (URDF mimic), ±170°, 130°/s (§1.6).
+    # DH (derived): the torso base sits 1.2 m above base_link.
+    axis = _axis(name, -170, 170, 130, 1525)
+    group = "B1" if name.endswith("b1") else "B2"
+    return GroupModel(group, GroupKind.BASE, (axis,), (0,), (0.0,), (DhLink(0.0, 1.2, 0.0, 0.0),))
+
+
+# SDA10F: dual arm + torso in four groups, R1 left arm, R2 right arm, B1/B2 the torso
+# (robot-models.md §1.6; Yaskawa says B1 and B2 must get the same data, motoman#343).
+SDA10F: Final = RobotModel(
+    name="sda10f",
+    description="Yaskawa SDA10F dual-arm robot: two 7-axis arms (R1, R2) and a torso (B1, B2)",
+    groups=(
+        GroupModel(
+            "R1",
+            GroupKind.ROBOT,
+            _sda10f_arm("left"),
+            SEVEN_AXIS_SLOTS,
+            (0.0,) * 7,
+            _dh_7axis(0.0, 0.36, 0.36, 0.155),
+        ),
+        GroupModel(
+            "R2",
+            GroupKind.ROBOT,
+            _sda10f_arm("right"),
+            SEVEN_AXIS_SLOTS,
+            (0.0,) * 7,
+            _dh_7axis(0.0, 0.36, 0.36, 0.155),
+        ),
+        _torso("torso_joint_b1"),
+        _torso("torso_joint_b2"),
+    ),
+    # Sourced: model YR-SDA010F-A00 is an FS100 robot (§1.6). MotoROS's SDA job folder also
+    # covers DX200 and YRC1000 SDA cells, but not necessarily this model.
+    controllers=frozenset({"fs100"}),
+)
+
+ROBOTS: Final[dict[str, RobotModel]] = {
+    r.name: r for r in (HC10, HC10DT, GP7, GP8, GP12, MH5, SIA20D, SDA10F)
+}
 """Every built-in robot, by lower-case name."""
 
 DEFAULT_ROBOT: Final = "hc10"

@@ -1,0 +1,127 @@
+"""``pymotoros sim``: run a virtual controller with MotoROS on the network.
+
+Prints exactly one line on stdout once every listener is up::
+
+    pymotoros sim ready motion=50240 state=50241 io=50242 http=8080
+
+and runs until Ctrl-C or SIGTERM, which stop it cleanly with exit code 0. Logs go
+to stderr (``pymotoros -v sim`` for more).
+"""
+
+from __future__ import annotations
+
+import asyncio
+import contextlib
+import logging
+import signal
+import sys
+from pathlib import Path
+
+import click
+
+from pymotoros.controller import VirtualController
+from pymotoros.controller.cell import CellConfig, default_cell, load_cell
+from pymotoros.errors import ConfigError
+from pymotoros.protocol.constants import TCP_PORT_IO, TCP_PORT_MOTION, TCP_PORT_STATE
+from pymotoros.runtime.app import DEFAULT_HTTP_PORT, SimulatorApp, SimulatorConfig
+
+logger = logging.getLogger(__name__)
+
+_PORT = click.IntRange(0, 65535)
+
+
+def ready_line(motion: int, state: int, io: int, http: int | None) -> str:
+    """The line ``pymotoros sim`` prints when it is ready (an external contract)."""
+    return f"pymotoros sim ready motion={motion} state={state} io={io} http={http}"
+
+
+async def run_simulator(app: SimulatorApp) -> None:
+    """Serve until SIGINT/SIGTERM; print the ready line once listening."""
+    loop = asyncio.get_running_loop()
+    handled: list[signal.Signals] = []
+    for sig in (signal.SIGINT, signal.SIGTERM):
+        with contextlib.suppress(NotImplementedError, RuntimeError):
+            loop.add_signal_handler(sig, app.request_stop)
+            handled.append(sig)
+    try:
+        async with app:
+            ports = app.ports
+            sys.stdout.write(ready_line(ports.motion, ports.state, ports.io, ports.http) + "\n")
+            sys.stdout.flush()
+            await app.wait_stopped()
+    finally:
+        for sig in handled:
+            loop.remove_signal_handler(sig)
+
+
+def _cell(
+    ctx: click.Context, controller_name: str, robot_name: str, config_path: Path | None
+) -> CellConfig:
+    if config_path is None:
+        return default_cell(controller_name, robot_name)
+    for option in ("controller_name", "robot_name"):
+        if ctx.get_parameter_source(option) is click.core.ParameterSource.COMMANDLINE:
+            logger.warning(
+                "--%s is ignored: the cell file %s names the models",
+                option.removesuffix("_name"),
+                config_path,
+            )
+    return load_cell(config_path)
+
+
+@click.command()
+@click.option("--host", default="127.0.0.1", show_default=True, help="Address to listen on.")
+@click.option("--motion-port", type=_PORT, default=TCP_PORT_MOTION, show_default=True)
+@click.option("--state-port", type=_PORT, default=TCP_PORT_STATE, show_default=True)
+@click.option("--io-port", type=_PORT, default=TCP_PORT_IO, show_default=True)
+@click.option(
+    "--http-port",
+    type=_PORT,
+    default=DEFAULT_HTTP_PORT,
+    show_default=True,
+    help="Control API port.",
+)
+@click.option("--controller", "controller_name", default="yrc1000", show_default=True)
+@click.option("--robot", "robot_name", default="hc10", show_default=True)
+@click.option(
+    "--config",
+    "config_path",
+    type=click.Path(exists=True, dir_okay=False, path_type=Path),
+    default=None,
+    metavar="CELL.toml",
+    help="Cell file (controller, robots, tools, boot state); replaces --controller/--robot.",
+)
+@click.pass_context
+def sim(
+    ctx: click.Context,
+    host: str,
+    motion_port: int,
+    state_port: int,
+    io_port: int,
+    http_port: int,
+    controller_name: str,
+    robot_name: str,
+    config_path: Path | None,
+) -> None:
+    """Run the virtual controller (MotoROS on 50240/50241/50242, control API on --http-port).
+
+    Port 0 lets the OS choose; the ready line tells which ports were taken.
+    """
+    try:
+        cell = _cell(ctx, controller_name, robot_name, config_path)
+        controller = VirtualController(cell)
+    except ConfigError as exc:
+        raise click.UsageError(str(exc)) from exc
+    order = cell.controller.byte_order  # FS100 speaks big-endian (reference §1.1)
+    config = SimulatorConfig(
+        host=host,
+        motion_port=motion_port,
+        state_port=state_port,
+        io_port=io_port,
+        http_port=http_port,
+        byte_order=order,
+    )
+    try:
+        asyncio.run(run_simulator(SimulatorApp(controller, config)))
+    except OSError as exc:  # e.g. a port already in use
+        raise click.ClickException(f"cannot listen on {host}: {exc}") from exc

@@ -1,0 +1,300 @@
+"""One TCP connection speaking Simple Message, over asyncio streams.
+
+A reader task feeds a :class:`FrameDecoder` and hands each decoded message either
+to the request waiting for it (motion and IO ports: strict request/reply, one
+request in flight behind a lock, the echo checked) or to a topic callback (state
+port). When the socket closes or breaks, the reader fails the waiting request and
+every later one with :class:`ConnectionLostError` at once, and sets :attr:`closed`.
+
+Every wait has a timeout (``asyncio.timeout``).
+"""
+
+from __future__ import annotations
+
+import asyncio
+import contextlib
+import logging
+import socket
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Final
+
+from pymotoros.client.errors import ConnectError, ConnectionLostError, RequestTimeoutError
+from pymotoros.errors import RemoteProtocolError
+from pymotoros.protocol.constants import (
+    TCP_PORT_IO,
+    TCP_PORT_MOTION,
+    TCP_PORT_STATE,
+    ByteOrder,
+    CommType,
+    MsgType,
+    Port,
+)
+from pymotoros.protocol.framing import FrameDecoder, decode_reply, encode
+from pymotoros.protocol.messages import (
+    IoErrorReply,
+    JointTrajPtFull,
+    MotoJointTrajPtFullEx,
+    MotoMotionCtrl,
+    MotoMotionReply,
+    MotoSelectTool,
+    UnknownMessage,
+    WireMessage,
+)
+
+logger = logging.getLogger(__name__)
+wire_logger = logging.getLogger("pymotoros.client.wire")
+
+READ_CHUNK: Final = 4096
+DEFAULT_CONNECT_TIMEOUT_S: Final = 5.0
+DEFAULT_REQUEST_TIMEOUT_S: Final = 5.0
+
+_PORT_HINT: Final[dict[Port, str]] = {
+    Port.MOTION: "--motion-port",
+    Port.STATE: "--state-port",
+    Port.IO: "--io-port",
+}
+
+
+@dataclass(frozen=True, slots=True)
+class Ports:
+    """The three MotoROS TCP ports (defaults: 50240, 50241, 50242)."""
+
+    motion: int = TCP_PORT_MOTION
+    state: int = TCP_PORT_STATE
+    io: int = TCP_PORT_IO
+
+    def of(self, kind: Port) -> int:
+        return {Port.MOTION: self.motion, Port.STATE: self.state, Port.IO: self.io}[kind]
+
+
+def expected_echo(request: WireMessage) -> tuple[int, int] | None:
+    """(command, sequence) a MOTO_MOTION_REPLY must echo for ``request`` (§1.6), if any."""
+    if isinstance(request, MotoMotionCtrl):
+        return request.command, request.sequence
+    if isinstance(request, JointTrajPtFull):
+        return int(MsgType.JOINT_TRAJ_PT_FULL), request.sequence
+    if isinstance(request, MotoJointTrajPtFullEx):
+        return int(MsgType.MOTO_JOINT_TRAJ_PT_FULL_EX), request.sequence
+    if isinstance(request, MotoSelectTool):
+        return int(MsgType.MOTO_SELECT_TOOL), request.sequence
+    return None
+
+
+def reply_matches(request: WireMessage, reply: WireMessage, expected: type | None) -> bool:
+    """Is ``reply`` the answer to ``request``?
+
+    A MOTION_REPLY must echo the command and sequence. A request the controller
+    does not know is answered with a MOTION_REPLY echoing its message type with
+    sequence -1 (3003), on the IO port with the IO error reply (§1.6).
+    """
+    if isinstance(reply, MotoMotionReply):
+        echo = expected_echo(request)
+        if echo is not None:
+            return (reply.command, reply.sequence) == echo
+        req_type = request.msg_type if isinstance(request, UnknownMessage) else request.MSG_TYPE
+        return reply.command == req_type
+    if isinstance(reply, IoErrorReply):
+        return True
+    return expected is not None and isinstance(reply, expected)
+
+
+class FrameConnection:
+    """A Simple Message connection to one MotoROS port."""
+
+    def __init__(
+        self,
+        reader: asyncio.StreamReader,
+        writer: asyncio.StreamWriter,
+        *,
+        kind: Port,
+        host: str,
+        port: int,
+        order: ByteOrder,
+        on_topic: Callable[[WireMessage], None] | None = None,
+        on_lost: Callable[[ConnectionLostError], None] | None = None,
+    ) -> None:
+        self.kind = kind
+        self.host = host
+        self.port = port
+        self.order = order
+        self._reader = reader
+        self._writer = writer
+        self._decoder = FrameDecoder(order)
+        self._on_topic = on_topic
+        self._on_lost = on_lost
+        self._lock = asyncio.Lock()
+        self._pending: tuple[asyncio.Future[WireMessage], WireMessage, type | None] | None = None
+        self._error: ConnectionLostError | None = None
+        self._closing = False
+        self.closed = asyncio.Event()
+        """Set once the connection is gone, for whatever reason."""
+        self._task = asyncio.create_task(self._read_loop(), name=f"pymotoros-client-{self}")
+
+    def __str__(self) -> str:
+        return f"{self.kind.value} connection to {self.host}:{self.port}"
+
+    @classmethod
+    async def open(
+        cls,
+        host: str,
+        port: int,
+        kind: Port,
+        order: ByteOrder,
+        *,
+        timeout_s: float = DEFAULT_CONNECT_TIMEOUT_S,
+        on_topic: Callable[[WireMessage], None] | None = None,
+        on_lost: Callable[[ConnectionLostError], None] | None = None,
+    ) -> FrameConnection:
+        """Connect, or raise :class:`ConnectError` naming host:port and what to check."""
+        what = f"the MotoROS {kind.value} port {host}:{port}"
+        try:
+            async with asyncio.timeout(timeout_s):
+                reader, writer = await asyncio.open_connection(host, port)
+        except TimeoutError:
+            raise ConnectError(
+                f"cannot connect to {what}: no answer within {timeout_s:g} s; check the "
+                "controller's IP address and the network (ping it)",
+                host=host,
+                port=port,
+            ) from None
+        except ConnectionRefusedError:
+            raise ConnectError(
+                f"cannot connect to {what}: connection refused; check that MotoROS is "
+                f"running (OT#891 INIT_DONE on the pendant), the host, and "
+                f"{_PORT_HINT[kind]}",
+                host=host,
+                port=port,
+            ) from None
+        except OSError as exc:
+            raise ConnectError(
+                f"cannot connect to {what}: {exc.strerror or exc}; check the host and network",
+                host=host,
+                port=port,
+            ) from exc
+        sock = writer.get_extra_info("socket")
+        if sock is not None:
+            with contextlib.suppress(OSError):
+                sock.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
+        logger.debug("connected to %s", what)
+        return cls(
+            reader,
+            writer,
+            kind=kind,
+            host=host,
+            port=port,
+            order=order,
+            on_topic=on_topic,
+            on_lost=on_lost,
+        )
+
+    @property
+    def error(self) -> ConnectionLostError | None:
+        """Why the connection is gone, or None while it is up."""
+        return self._error
+
+    def _lost(self, reason: str) -> ConnectionLostError:
+        return ConnectionLostError(f"{self} lost: {reason}")
+
+    async def _read_loop(self) -> None:
+        reason = "closed by the controller"
+        try:
+            while True:
+                data = await self._reader.read(READ_CHUNK)
+                if not data:
+                    break
+                self._decoder.feed(data)
+                while (frame := self._decoder.next_frame()) is not None:
+                    if wire_logger.isEnabledFor(logging.DEBUG):
+                        wire_logger.debug(
+                            "%s <- type %d %s", self, frame.msg_type, frame.body.hex()
+                        )
+                    message = decode_reply(frame, self.order, self.kind)
+                    if frame.comm_type == CommType.TOPIC:
+                        if self._on_topic is not None:
+                            self._on_topic(message)
+                    else:
+                        self._deliver(message)
+        except asyncio.CancelledError:
+            reason = "closed by the client"
+            raise
+        except RemoteProtocolError as exc:
+            reason = f"undecodable data from the controller ({exc})"
+            logger.error("%s: %s; data %s", self, exc, exc.data[:64].hex())
+        except OSError as exc:
+            reason = f"socket error ({exc.strerror or exc})"
+        finally:
+            if self._closing:
+                reason = "closed by the client"
+            self._fail(self._lost(reason))
+
+    def _deliver(self, message: WireMessage) -> None:
+        pending = self._pending
+        if pending is None or pending[0].done():
+            logger.warning("%s: unexpected reply %r dropped", self, message)
+            return
+        future, request, expected = pending
+        if reply_matches(request, message, expected):
+            future.set_result(message)
+        else:
+            logger.warning("%s: reply %r does not answer %r; dropped", self, message, request)
+
+    def _fail(self, error: ConnectionLostError) -> None:
+        if self._error is not None:
+            return
+        self._error = error
+        if self._pending is not None and not self._pending[0].done():
+            self._pending[0].set_exception(error)
+        self.closed.set()
+        if not self._closing:
+            logger.warning("%s", error)
+        if self._on_lost is not None:
+            self._on_lost(error)
+
+    async def request(
+        self, message: WireMessage, expected: type | None, *, timeout_s: float
+    ) -> WireMessage:
+        """Send ``message`` and return its reply (a ``expected`` instance, or an error reply).
+
+        One request is in flight at a time; others wait for the lock (within the
+        same timeout).
+        """
+        try:
+            async with asyncio.timeout(timeout_s):
+                async with self._lock:
+                    if self._error is not None:
+                        raise ConnectionLostError(str(self._error))
+                    future: asyncio.Future[WireMessage] = asyncio.get_running_loop().create_future()
+                    self._pending = (future, message, expected)
+                    try:
+                        data = encode(message, self.order)
+                        if wire_logger.isEnabledFor(logging.DEBUG):
+                            wire_logger.debug("%s -> %s", self, data.hex())
+                        self._writer.write(data)
+                        await self._writer.drain()
+                        return await future
+                    except ConnectionLostError:
+                        raise
+                    except OSError as exc:
+                        self._fail(self._lost(f"send failed ({exc})"))
+                        raise ConnectionLostError(str(self._error)) from exc
+                    finally:
+                        self._pending = None
+                        if not future.done():
+                            future.cancel()
+        except TimeoutError:
+            raise RequestTimeoutError(
+                f"no reply to {type(message).__name__} from {self} within {timeout_s:g} s"
+            ) from None
+
+    async def close(self) -> None:
+        """Close the socket and wait for the reader to finish. Idempotent."""
+        self._closing = True
+        if not self._task.done():
+            self._task.cancel()
+        with contextlib.suppress(asyncio.CancelledError):
+            await self._task
+        self._fail(self._lost("closed by the client"))
+        self._writer.close()
+        with contextlib.suppress(OSError, ConnectionError):
+            await self._writer.wait_closed()

@@ -1,0 +1,390 @@
+"""Typed errors of the client: what the robot said, the numbers behind it, and what to do.
+
+::
+
+    PymotorosError
+     +-- ClientError
+          +-- ConnectError              (ConnectionError) a port could not be opened
+          +-- ConnectionLostError       (ConnectionError) the peer closed or the socket broke
+          +-- RequestTimeoutError       (TimeoutError) no reply / no state within the timeout
+          +-- MotionTimeoutError        (TimeoutError) the robot did not finish a move in time
+          +-- MotionIncompleteError     the robot came to rest away from the goal
+          +-- ReplyError                the controller refused a request (.result, .subcode)
+          |    +-- NotReadyError        result 5 (or FALSE to CHECK_MOTION_READY), .reason
+          |    +-- InvalidRequestError  result 3
+          |    |    +-- StartPositionError  3011, per-axis deviation in pulses and rad
+          |    |    +-- SpeedLimitError     3013, per-axis velocity against the limit
+          |    +-- CommandFailedError   result 2 (FAILURE)
+          |    +-- BusyTimeoutError     result 1 for longer than the BUSY budget (TimeoutError)
+          +-- IoError                   an IO reply with a non-zero result code (.result_code)
+               +-- IoAddressError       refused before sending (ValueError): address out of range
+
+One table, :data:`REPLY_ERRORS`, maps every ``(result, subcode)`` MotoROS 1.9.12 can
+send to the class raised and a remedy sentence; :func:`reply_error` builds the
+exception. Codes and their meanings come from ``pymotoros.protocol.constants``
+(reference §1.7, §4.2).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+from typing import Final
+
+from pymotoros.errors import PymotorosError
+from pymotoros.protocol.constants import (
+    InvalidSubcode,
+    IoResultCode,
+    MotionCommand,
+    MsgType,
+    NotReadySubcode,
+    ResultCode,
+    subcode_meaning,
+)
+
+START_TOLERANCE_PULSES: Final = 30
+"""MotoROS refuses a first point further than this from the commanded position (§3.4, §5.1)."""
+
+
+class ClientError(PymotorosError):
+    """Root of the errors the client raises."""
+
+
+class ConnectError(ClientError, ConnectionError):
+    """A TCP connection to the controller could not be opened."""
+
+    def __init__(self, message: str, *, host: str, port: int) -> None:
+        super().__init__(message)
+        self.host = host
+        self.port = port
+
+
+class ConnectionLostError(ClientError, ConnectionError):
+    """The connection closed while the client was using it; every waiter gets this at once."""
+
+
+class RequestTimeoutError(ClientError, TimeoutError):
+    """No reply (or no state message) arrived within the timeout."""
+
+
+class MotionTimeoutError(ClientError, TimeoutError):
+    """A move did not finish (queue empty, at rest, at the goal) within its time budget."""
+
+
+class MotionIncompleteError(ClientError):
+    """The robot stopped moving before it reached the goal (and nothing says why)."""
+
+
+@dataclass(frozen=True, slots=True)
+class AxisDeviation:
+    """How far one axis of a refused point is from what the controller accepts."""
+
+    axis: int
+    """Index in ROS order (0-based)."""
+    name: str
+    value: float
+    """The requested position (rad/m) or velocity (rad/s, m/s)."""
+    reference: float
+    """The commanded position (for 3011) or the speed limit (for 3013), same unit."""
+    pulses: int | None = None
+    """For 3011: |requested − commanded| in pulses, as MotoROS measures it."""
+
+    @property
+    def difference(self) -> float:
+        return self.value - self.reference
+
+
+class ReplyError(ClientError):
+    """The controller answered a request with something other than SUCCESS."""
+
+    def __init__(
+        self,
+        message: str,
+        *,
+        result: int,
+        subcode: int,
+        command: int,
+        remedy: str,
+        point: int | None = None,
+    ) -> None:
+        super().__init__(message)
+        self.result = result
+        self.subcode = subcode
+        self.command = command
+        """The echoed command code (MOTO_MOTION_CTRL) or message type (14, 2016, 2018)."""
+        self.meaning = describe_reply(result, subcode)
+        self.remedy = remedy
+        self.point = point
+        """Index of the trajectory point that was refused, when a point was refused."""
+
+
+class NotReadyError(ReplyError):
+    """The controller is not ready for motion; :attr:`reason` says why."""
+
+    @property
+    def reason(self) -> NotReadySubcode | None:
+        try:
+            return NotReadySubcode(self.subcode)
+        except ValueError:
+            return None
+
+
+class InvalidRequestError(ReplyError):
+    """The controller refused the request or its data (result INVALID)."""
+
+
+class StartPositionError(InvalidRequestError):
+    """3011: the first point is more than 30 pulses from the commanded position.
+
+    :attr:`deviations` lists every axis beyond the tolerance (pulses and rad);
+    the client computes them from the robot model and the latest feedback.
+    """
+
+    def __init__(
+        self, message: str, *, deviations: Sequence[AxisDeviation] = (), **kwargs: object
+    ) -> None:
+        super().__init__(message, **kwargs)  # type: ignore[arg-type]
+        self.deviations = tuple(deviations)
+        self.tolerance_pulses = START_TOLERANCE_PULSES
+
+
+class SpeedLimitError(InvalidRequestError):
+    """3013: a point's velocity is above an axis's maximum; :attr:`deviations` says which."""
+
+    def __init__(
+        self, message: str, *, deviations: Sequence[AxisDeviation] = (), **kwargs: object
+    ) -> None:
+        super().__init__(message, **kwargs)  # type: ignore[arg-type]
+        self.deviations = tuple(deviations)
+
+
+class CommandFailedError(ReplyError):
+    """The controller tried and failed (result FAILURE)."""
+
+
+class BusyTimeoutError(ReplyError, TimeoutError):
+    """The controller kept answering BUSY for longer than the retry budget."""
+
+
+class IoError(ClientError):
+    """An IO or M-register request came back with a non-zero result code."""
+
+    def __init__(self, message: str, *, address: int, result_code: int, remedy: str) -> None:
+        super().__init__(message)
+        self.address = address
+        self.result_code = result_code
+        self.remedy = remedy
+
+
+class IoAddressError(IoError, ValueError):
+    """An IO address or value the controller would refuse; raised before anything is sent."""
+
+
+# --------------------------------------------------------------------------- the table
+
+_ENABLE = "then enable trajectory mode again (`pymotoros enable`, RobotClient.enable())"
+
+NOT_READY_REMEDIES: Final[Mapping[NotReadySubcode, str]] = {
+    NotReadySubcode.UNSPECIFIED: f"look at the pendant for the reason, {_ENABLE}",
+    NotReadySubcode.ALARM: (
+        f"read the alarm on the pendant and remove its cause, reset it (reset_alarm()), {_ENABLE}"
+    ),
+    NotReadySubcode.ERROR: f"clear the operator error shown on the pendant, {_ENABLE}",
+    NotReadySubcode.ESTOP: (
+        "release every emergency stop (pendant, controller, external), reset, "
+        f"{_ENABLE}; enabling switches servo power on"
+    ),
+    NotReadySubcode.NOT_PLAY: f"turn the pendant's mode key to REMOTE (play), {_ENABLE}",
+    NotReadySubcode.NOT_REMOTE: f"turn the pendant's mode key to REMOTE, {_ENABLE}",
+    NotReadySubcode.SERVO_OFF: (
+        "switch servo power on: enabling trajectory mode does it (and wakes eco mode), "
+        "or start_servos()"
+    ),
+    NotReadySubcode.HOLD: f"release HOLD (pendant button or external hold input), {_ENABLE}",
+    NotReadySubcode.NOT_STARTED: f"trajectory mode is off: {_ENABLE.removeprefix('then ')}",
+    NotReadySubcode.WAITING_ROS: (
+        "INIT_ROS runs but has not raised OT#889 yet: retry in a moment; if it persists, "
+        "check the INIT_ROS job on the controller"
+    ),
+    NotReadySubcode.SKILLSEND: (
+        "the job runs but motion is still not possible (DX100 SKILLSND, or a stop is in "
+        f"progress): {_ENABLE.removeprefix('then ')}"
+    ),
+    NotReadySubcode.PFL_ACTIVE: (
+        "a PFL (contact) event stopped the robot: move it to a safe place, press resume on "
+        f"the arm or pendant, {_ENABLE}"
+    ),
+    NotReadySubcode.INC_MOVE_ERROR: (
+        "the controller rejected a motion increment: disable, then enable trajectory mode "
+        "again; check the pendant for an alarm"
+    ),
+}
+
+INVALID_REMEDIES: Final[Mapping[InvalidSubcode, str]] = {
+    InvalidSubcode.UNSPECIFIED: "report this: MotoROS 1.9.12 never sends it",
+    InvalidSubcode.MSGSIZE: (
+        "the controller read a short message: check --controller (byte order) and that "
+        "nothing else talks on this port"
+    ),
+    InvalidSubcode.MSGHEADER: "report this: MotoROS 1.9.12 never sends it",
+    InvalidSubcode.MSGTYPE: (
+        "this MotoROS does not know the message: M-registers need the IO port and "
+        "MotoROS ≥ 1.9.2, tools ≥ 1.9.0; update MotoROS"
+    ),
+    InvalidSubcode.GROUPNO: "the group number does not exist on this controller: check --robot",
+    InvalidSubcode.SEQUENCE: "sequence numbers must be 0 or positive",
+    InvalidSubcode.COMMAND: "the motion command is unknown to MotoROS",
+    InvalidSubcode.DATA: "report this: MotoROS 1.9.12 never sends it",
+    InvalidSubcode.DATA_START_POS: (
+        "start the trajectory where the robot is: wait until it is at rest and use its "
+        "settled position as point 0 (move_joints does this); after eco mode or a stop, "
+        "read the position again"
+    ),
+    InvalidSubcode.DATA_POSITION: "report this: MotoROS 1.9.12 never sends it",
+    InvalidSubcode.DATA_SPEED: (
+        "slow the trajectory down (lower speed scaling) or re-plan with the robot's "
+        "velocity limits; check that --robot matches the arm"
+    ),
+    InvalidSubcode.DATA_ACCEL: "report this: MotoROS 1.9.12 never sends it",
+    InvalidSubcode.DATA_INSUFFICIENT: "every point needs time, positions and velocities",
+    InvalidSubcode.DATA_TIME: "point times must stay below 4 hours (14400 s): split the motion",
+    InvalidSubcode.DATA_TOOLNO: "tool numbers are 0..63",
+}
+
+FAILURE_REMEDIES: Final[Mapping[int, str]] = {
+    MotionCommand.CHECK_QUEUE_CNT: "the group number does not exist: check --robot",
+    MotionCommand.STOP_MOTION: (
+        "the queues were cleared but the interpolator did not go idle in 20 ms: send stop again"
+    ),
+    MotionCommand.START_SERVOS: (
+        "servo power did not come on within 5 s: check E-stop, safety fence and the pendant"
+    ),
+    MotionCommand.STOP_SERVOS: "servo power did not go off within 5 s: check the pendant",
+    MotionCommand.RESET_ALARM: "the alarm could not be reset: remove its cause first",
+    MotionCommand.STOP_TRAJ_MODE: (
+        "motion is still queued: wait until the robot stops, or stop it (stop_motion()), "
+        "then disable again"
+    ),
+    MotionCommand.DISCONNECT: "motion is still queued: stop it first, then disconnect",
+}
+
+_DEFAULT_FAILURE_REMEDY: Final = "look at the pendant for the reason and try again"
+
+BUSY_REMEDY: Final = (
+    "the controller kept its point buffer full: check that the robot is moving (HOLD, "
+    "a safety speed limit), or allow a longer busy_timeout_s"
+)
+
+
+def describe_reply(result: int, subcode: int) -> str:
+    """``NAME (code): meaning`` of a reply's subcode (or result, when the subcode is 0).
+
+    CHECK_MOTION_READY answers FALSE with a NOT_READY subcode; it is described as one.
+    """
+    if result == ResultCode.FALSE and 5000 <= subcode <= 5999:
+        result = ResultCode.NOT_READY
+    return subcode_meaning(result, subcode)
+
+
+def _error_class(result: int, subcode: int) -> type[ReplyError]:
+    if result == ResultCode.NOT_READY:
+        return NotReadyError
+    if result == ResultCode.INVALID:
+        if subcode == InvalidSubcode.DATA_START_POS:
+            return StartPositionError
+        if subcode == InvalidSubcode.DATA_SPEED:
+            return SpeedLimitError
+        return InvalidRequestError
+    if result == ResultCode.BUSY:
+        return BusyTimeoutError
+    return CommandFailedError
+
+
+def remedy_for(result: int, subcode: int, command: int) -> str:
+    """The remedy sentence for a refusal."""
+    if result in (ResultCode.NOT_READY, ResultCode.FALSE) and subcode >= 5000:
+        try:
+            return NOT_READY_REMEDIES[NotReadySubcode(subcode)]
+        except ValueError:
+            return NOT_READY_REMEDIES[NotReadySubcode.UNSPECIFIED]
+    if result == ResultCode.INVALID:
+        try:
+            return INVALID_REMEDIES[InvalidSubcode(subcode)]
+        except ValueError:
+            return _DEFAULT_FAILURE_REMEDY
+    if result == ResultCode.BUSY:
+        return BUSY_REMEDY
+    return FAILURE_REMEDIES.get(command, _DEFAULT_FAILURE_REMEDY)
+
+
+def describe_command(command: int) -> str:
+    """``START_TRAJ_MODE`` for a motion command, ``message 14`` for a message type."""
+    try:
+        return MotionCommand(command).name
+    except ValueError:
+        pass
+    try:
+        return MsgType(command).name
+    except ValueError:
+        return f"message type {command}"
+
+
+def reply_error(
+    result: int,
+    subcode: int,
+    command: int,
+    *,
+    point: int | None = None,
+    detail: str = "",
+    deviations: Sequence[AxisDeviation] = (),
+) -> ReplyError:
+    """Build the typed exception for a refused request (the one mapping of the client)."""
+    # CHECK_MOTION_READY answers FALSE with a NOT_READY subcode: the same cause as result 5.
+    effective = (
+        ResultCode.NOT_READY if result == ResultCode.FALSE and 5000 <= subcode <= 5999 else result
+    )
+    cls = _error_class(effective, subcode)
+    remedy = remedy_for(effective, subcode, command)
+    where = describe_command(command) if point is None else f"point {point}"
+    text = f"{where} refused: {describe_reply(effective, subcode)}"
+    if detail:
+        text += f" ({detail})"
+    text += f". What to do: {remedy}"
+    kwargs: dict[str, object] = {
+        "result": result,
+        "subcode": subcode,
+        "command": command,
+        "remedy": remedy,
+        "point": point,
+    }
+    if cls in (StartPositionError, SpeedLimitError):
+        kwargs["deviations"] = deviations
+    return cls(text, **kwargs)  # type: ignore[arg-type]
+
+
+IO_REMEDIES: Final[Mapping[IoResultCode, str]] = {
+    IoResultCode.READ_ADDRESS_INVALID: (
+        "the address is not readable on this controller: check the IO map of --controller"
+    ),
+    IoResultCode.WRITE_ADDRESS_INVALID: (
+        "MotoROS writes only general outputs, network inputs, the interface panel and M000-M559"
+    ),
+    IoResultCode.WRITE_VALUE_INVALID: "bits take 0 or 1, groups 0..255, M-registers 0..65535",
+    IoResultCode.READ_API_ERROR: "the controller could not read the signal: check the pendant",
+    IoResultCode.WRITE_API_ERROR: "the controller could not write the signal: check the pendant",
+}
+
+
+def io_error(result_code: int, address: int, what: str) -> IoError:
+    """The typed exception for an IO reply whose result code is not OK."""
+    try:
+        code = IoResultCode(result_code)
+        meaning, remedy = code.meaning, IO_REMEDIES.get(code, _DEFAULT_FAILURE_REMEDY)
+    except ValueError:
+        meaning, remedy = f"unknown result code {result_code}", _DEFAULT_FAILURE_REMEDY
+    return IoError(
+        f"{what} {address} refused: {result_code} {meaning}. What to do: {remedy}",
+        address=address,
+        result_code=result_code,
+        remedy=remedy,
+    )

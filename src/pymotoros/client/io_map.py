@@ -1,0 +1,116 @@
+"""IO and M-register addresses checked on the PC, before anything is sent (reference §6).
+
+MotoROS refuses a bad address with a bare result code (1001/1002/1003); checking
+here lets the error say which range applies on the chosen controller model.
+"""
+
+from __future__ import annotations
+
+from typing import Final
+
+from pymotoros.client.errors import IoAddressError
+from pymotoros.models import ControllerModel, IoRange
+from pymotoros.models.controllers import M_REGISTER_BASE, M_REGISTER_COUNT, M_REGISTER_WRITABLE
+from pymotoros.protocol.constants import IoResultCode
+
+BIT_VALUES: Final = (0, 1)
+GROUP_MAX: Final = 0xFF
+"""An IO group is one byte (§6.1)."""
+MREGISTER_MAX: Final = 0xFFFF
+"""M-registers hold 16 bits (§6.1)."""
+
+
+def _ranges_text(ranges: tuple[IoRange, ...]) -> str:
+    return ", ".join(f"{r.area.value} {r.first}-{r.last}" for r in ranges)
+
+
+def _writable(controller: ControllerModel) -> tuple[IoRange, ...]:
+    return tuple(r for r in controller.io_ranges if r.writable)
+
+
+def _refuse(address: int, code: IoResultCode, text: str) -> IoAddressError:
+    return IoAddressError(text, address=address, result_code=int(code), remedy=text)
+
+
+def check_bit_address(controller: ControllerModel, address: int, *, write: bool) -> IoRange:
+    """The range holding a bit ``address``; raises :class:`IoAddressError` with the reason."""
+    code = IoResultCode.WRITE_ADDRESS_INVALID if write else IoResultCode.READ_ADDRESS_INVALID
+    if address < 0:
+        raise _refuse(address, code, f"IO address {address} is negative")
+    if address % 10 > 7:
+        raise _refuse(
+            address,
+            code,
+            f"IO address {address}: the last digit is the bit number and must be 0..7 "
+            f"(bits of byte {address // 10} are {address // 10 * 10}..{address // 10 * 10 + 7})",
+        )
+    rng = controller.io_range(address)
+    if rng is None:
+        raise _refuse(
+            address,
+            code,
+            f"IO address {address} is in no range of a {controller.type.value} controller; "
+            f"ranges: {_ranges_text(controller.io_ranges)}",
+        )
+    if write and not rng.writable:
+        raise _refuse(
+            address,
+            code,
+            f"IO address {address} is a {rng.area.value} ({rng.first}-{rng.last}), which "
+            f"MotoROS does not write; writable on {controller.type.value}: "
+            f"{_ranges_text(_writable(controller))}",
+        )
+    return rng
+
+
+def check_group_address(controller: ControllerModel, address: int, *, write: bool) -> IoRange:
+    """A group (byte) address n covers bits n×10..n×10+7; n×10 must be valid (§6.1)."""
+    if address < 0:
+        code = IoResultCode.WRITE_ADDRESS_INVALID if write else IoResultCode.READ_ADDRESS_INVALID
+        raise _refuse(address, code, f"IO group address {address} is negative")
+    try:
+        return check_bit_address(controller, address * 10, write=write)
+    except IoAddressError as exc:
+        text = (
+            f"IO group {address} (bits {address * 10}..{address * 10 + 7}): {exc}; a group "
+            "address is the bit address without its last digit (1001 = 10010..10017)"
+        )
+        raise _refuse(address, IoResultCode(exc.result_code), text) from None
+
+
+def check_bit_value(address: int, value: int) -> None:
+    if value not in BIT_VALUES:
+        raise _refuse(
+            address, IoResultCode.WRITE_VALUE_INVALID, f"IO bit {address}: value must be 0 or 1"
+        )
+
+
+def check_group_value(address: int, value: int) -> None:
+    if not 0 <= value <= GROUP_MAX:
+        raise _refuse(
+            address, IoResultCode.WRITE_VALUE_INVALID, f"IO group {address}: value must be 0..255"
+        )
+
+
+def normalise_mregister(number: int, *, write: bool) -> int:
+    """M-register number 0..999 (or 1000000+n, which MotoROS also accepts); returns n."""
+    n = number - M_REGISTER_BASE if number >= M_REGISTER_BASE else number
+    limit = M_REGISTER_WRITABLE if write else M_REGISTER_COUNT
+    if not 0 <= n < limit:
+        code = IoResultCode.WRITE_ADDRESS_INVALID if write else IoResultCode.READ_ADDRESS_INVALID
+        what = "written" if write else "read"
+        raise _refuse(
+            number,
+            code,
+            f"M-register {number}: MotoROS lets a client read M000-M{M_REGISTER_COUNT - 1} and "
+            f"write M000-M{M_REGISTER_WRITABLE - 1}; this one cannot be {what} "
+            "(give the plain number, e.g. 10 for M010)",
+        )
+    return n
+
+
+def check_mregister_value(number: int, value: int) -> None:
+    if not 0 <= value <= MREGISTER_MAX:
+        raise _refuse(
+            number, IoResultCode.WRITE_VALUE_INVALID, f"M-register {number}: value must be 0..65535"
+        )

@@ -1,0 +1,625 @@
+"""``RobotClient``: drive a MotoROS controller (a real one or ``pymotoros sim``) over the wire.
+
+::
+
+    async with RobotClient("192.168.1.31", robot="hc10") as robot:
+        await robot.enable()                        # START_TRAJ_MODE
+        await robot.move_joints([0, 0, 0, 0, -1.57, 0])
+        await robot.move_named("home")
+        await robot.write_io_bit(10010, 1)
+
+The client opens the motion, state and IO ports, keeps the latest state, sends
+one request at a time per port and checks each reply's echo. Refusals become typed
+exceptions (:mod:`pymotoros.client.errors`) carrying the code, its meaning and a
+remedy. It imports no part of the virtual controller: it only speaks the wire.
+"""
+
+from __future__ import annotations
+
+import itertools
+import logging
+import time
+from collections.abc import AsyncIterator, Callable, Mapping, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from types import TracebackType
+from typing import Final, Self, TypeVar
+
+from pymotoros.client import io_map, streaming
+from pymotoros.client.connection import (
+    DEFAULT_CONNECT_TIMEOUT_S,
+    DEFAULT_REQUEST_TIMEOUT_S,
+    FrameConnection,
+    Ports,
+)
+from pymotoros.client.errors import (
+    ClientError,
+    ConnectionLostError,
+    io_error,
+    reply_error,
+)
+from pymotoros.client.planning import (
+    DEFAULT_SAMPLE_PERIOD_S,
+    JointLimits,
+    JointTrajectory,
+    plan_joint_move,
+)
+from pymotoros.client.srdf import NamedPose, find_pose, parse_srdf
+from pymotoros.client.state import (
+    DEFAULT_STATE_TIMEOUT_S,
+    JointState,
+    Listener,
+    RobotState,
+    StateTracker,
+    Status,
+)
+from pymotoros.client.streaming import (
+    DEFAULT_BUSY_TIMEOUT_S,
+    DEFAULT_GOAL_TOLERANCE,
+    FollowingMonitor,
+    FollowingSample,
+    MoveResult,
+)
+from pymotoros.models import (
+    DEFAULT_CONTROLLER,
+    DEFAULT_ROBOT,
+    ControllerModel,
+    ControllerType,
+    RobotModel,
+    controller_model,
+    robot_model,
+)
+from pymotoros.protocol.constants import (
+    ByteOrder,
+    IoResultCode,
+    MotionCommand,
+    NotReadySubcode,
+    Port,
+    ResultCode,
+)
+from pymotoros.protocol.messages import (
+    DhLink,
+    IoErrorReply,
+    Message,
+    MotoGetDhParameters,
+    MotoGetDhParametersReply,
+    MotoMotionCtrl,
+    MotoMotionReply,
+    MotoReadIoBit,
+    MotoReadIoBitReply,
+    MotoReadIoGroup,
+    MotoReadIoGroupReply,
+    MotoReadMRegister,
+    MotoReadMRegisterReply,
+    MotoSelectTool,
+    MotoWriteIoBit,
+    MotoWriteIoBitReply,
+    MotoWriteIoGroup,
+    MotoWriteIoGroupReply,
+    MotoWriteMRegister,
+    MotoWriteMRegisterReply,
+    Ping,
+    PingReply,
+    WireMessage,
+)
+
+logger = logging.getLogger(__name__)
+
+SLOW_COMMAND_TIMEOUT_S: Final = 20.0
+"""START_TRAJ_MODE may wait 5 s for servo power and 5 s for the job (§3.2); servo commands
+wait up to 5 s (§3.1)."""
+
+_SLOW_COMMANDS: Final = frozenset(
+    {
+        MotionCommand.START_TRAJ_MODE,
+        MotionCommand.START_SERVOS,
+        MotionCommand.STOP_SERVOS,
+        MotionCommand.STOP_TRAJ_MODE,
+    }
+)
+
+
+@dataclass(frozen=True, slots=True)
+class Readiness:
+    """Answer to CHECK_MOTION_READY: ready, or the reason it is not, with what to do."""
+
+    ready: bool
+    subcode: int
+    reason: NotReadySubcode | None
+    meaning: str
+    remedy: str
+
+
+class RobotClient:
+    """Async client for one MotoROS controller.
+
+    ``controller`` picks the byte order (FS100 is big-endian) and the IO map used to
+    check addresses; ``robot`` gives joint names and limits for planning. Nothing is
+    sent until :meth:`connect` (or ``async with``).
+    """
+
+    def __init__(
+        self,
+        host: str = "127.0.0.1",
+        *,
+        ports: Ports | None = None,
+        motion_port: int | None = None,
+        state_port: int | None = None,
+        io_port: int | None = None,
+        controller: str | ControllerType | ControllerModel = DEFAULT_CONTROLLER,
+        robot: str | RobotModel = DEFAULT_ROBOT,
+        timeout_s: float = DEFAULT_REQUEST_TIMEOUT_S,
+        connect_timeout_s: float = DEFAULT_CONNECT_TIMEOUT_S,
+    ) -> None:
+        base = ports or Ports()
+        self.host = host
+        self.ports = Ports(
+            motion=base.motion if motion_port is None else motion_port,
+            state=base.state if state_port is None else state_port,
+            io=base.io if io_port is None else io_port,
+        )
+        self.controller = (
+            controller if isinstance(controller, ControllerModel) else controller_model(controller)
+        )
+        self.robot = robot if isinstance(robot, RobotModel) else robot_model(robot)
+        self.order: ByteOrder = self.controller.byte_order
+        self.timeout_s = timeout_s
+        self.connect_timeout_s = connect_timeout_s
+        self.tracker = StateTracker({i: g.num_axes for i, g in enumerate(self.robot.groups)})
+        self._motion: FrameConnection | None = None
+        self._state_conn: FrameConnection | None = None
+        self._io: FrameConnection | None = None
+        self._sequence = itertools.count(1)
+
+    # ------------------------------------------------------------------ connection
+
+    async def connect(self, *, motion: bool = True, state: bool = True, io: bool = True) -> Self:
+        """Open the ports asked for; on any failure close what was opened and raise."""
+        try:
+            if motion:
+                self._motion = await self._open(Port.MOTION)
+            if state:
+                self._state_conn = await self._open(
+                    Port.STATE, on_topic=self.tracker.feed, on_lost=self.tracker.lost
+                )
+            if io:
+                self._io = await self._open(Port.IO)
+        except BaseException:
+            await self.close()
+            raise
+        return self
+
+    async def _open(
+        self,
+        kind: Port,
+        *,
+        on_topic: Callable[[WireMessage], None] | None = None,
+        on_lost: Callable[[ConnectionLostError], None] | None = None,
+    ) -> FrameConnection:
+        return await FrameConnection.open(
+            self.host,
+            self.ports.of(kind),
+            kind,
+            self.order,
+            timeout_s=self.connect_timeout_s,
+            on_topic=on_topic,
+            on_lost=on_lost,
+        )
+
+    async def close(self) -> None:
+        """Close every connection (trajectory mode is left as it is). Idempotent."""
+        for conn in (self._io, self._state_conn, self._motion):
+            if conn is not None:
+                await conn.close()
+
+    async def __aenter__(self) -> Self:
+        return await self.connect()
+
+    async def __aexit__(
+        self,
+        exc_type: type[BaseException] | None,
+        exc: BaseException | None,
+        tb: TracebackType | None,
+    ) -> None:
+        await self.close()
+
+    def _need(self, conn: FrameConnection | None, kind: Port) -> FrameConnection:
+        if conn is None:
+            raise ClientError(
+                f"the {kind.value} port is not connected (connect({kind.value}=True))"
+            )
+        return conn
+
+    # ------------------------------------------------------------------ state
+
+    @property
+    def state(self) -> RobotState:
+        """The latest state snapshot (empty until the first state message)."""
+        return self.tracker.state
+
+    @property
+    def status(self) -> Status | None:
+        return self.tracker.state.status
+
+    def feedback(self, group: int = 0) -> JointState | None:
+        return self.tracker.state.joints.get(group)
+
+    def add_listener(self, listener: Listener) -> Callable[[], None]:
+        """Call ``listener(state)`` on every state message; returns the function that removes it."""
+        return self.tracker.add_listener(listener)
+
+    def states(
+        self, message_timeout_s: float = DEFAULT_STATE_TIMEOUT_S
+    ) -> AsyncIterator[RobotState]:
+        """``async for state in robot.states():`` every state message, latest wins."""
+        return self.tracker.states(message_timeout_s)
+
+    async def wait_for_state(self, timeout_s: float = DEFAULT_STATE_TIMEOUT_S) -> RobotState:
+        """Wait until a ROBOT_STATUS and every group's feedback have arrived."""
+        self._need(self._state_conn, Port.STATE)
+        groups = range(len(self.robot.groups))
+        return await self.tracker.wait_for(
+            lambda s: s.status is not None and all(g in s.joints for g in groups),
+            timeout_s,
+            what="the first status and feedback from the state port",
+        )
+
+    async def wait_until(
+        self, predicate: Callable[[RobotState], bool], timeout_s: float, what: str = "the condition"
+    ) -> RobotState:
+        """Wait until ``predicate(state)`` holds (checked on every state message)."""
+        return await self.tracker.wait_for(predicate, timeout_s, what=what)
+
+    # ------------------------------------------------------------------ motion port
+
+    async def request_motion(
+        self, message: WireMessage, *, timeout_s: float | None = None
+    ) -> MotoMotionReply:
+        """Send a motion-port request answered by a MOTO_MOTION_REPLY; returns it as is."""
+        conn = self._need(self._motion, Port.MOTION)
+        reply = await conn.request(message, MotoMotionReply, timeout_s=timeout_s or self.timeout_s)
+        if not isinstance(reply, MotoMotionReply):
+            raise ClientError(f"unexpected reply {reply!r} to {message!r}")
+        return reply
+
+    async def _command(self, command: MotionCommand, group: int = 0) -> MotoMotionReply:
+        sequence = next(self._sequence) % 2**31
+        wait = SLOW_COMMAND_TIMEOUT_S if command in _SLOW_COMMANDS else self.timeout_s
+        return await self.request_motion(
+            MotoMotionCtrl(group, sequence, int(command)), timeout_s=max(wait, self.timeout_s)
+        )
+
+    async def _command_ok(self, command: MotionCommand, group: int = 0) -> None:
+        reply = await self._command(command, group)
+        if reply.result != ResultCode.SUCCESS:
+            raise reply_error(reply.result, reply.subcode, reply.command)
+
+    async def check_motion_ready(self) -> Readiness:
+        """CHECK_MOTION_READY: ready, or the NOT_READY reason (never raises for "not ready")."""
+        reply = await self._command(MotionCommand.CHECK_MOTION_READY)
+        if reply.result == ResultCode.SUCCESS:
+            return Readiness(True, 0, None, "ready", "")
+        err = reply_error(reply.result, reply.subcode, reply.command)
+        try:
+            reason: NotReadySubcode | None = NotReadySubcode(reply.subcode)
+        except ValueError:
+            reason = None
+        return Readiness(False, reply.subcode, reason, err.meaning, err.remedy)
+
+    async def start_trajectory_mode(self) -> None:
+        """START_TRAJ_MODE: servo on, start INIT_ROS, wait until motion is possible.
+
+        Raises :class:`NotReadyError` (``.reason``) when the controller cannot get there.
+        """
+        await self._command_ok(MotionCommand.START_TRAJ_MODE)
+
+    async def stop_trajectory_mode(self) -> None:
+        """STOP_TRAJ_MODE: end the INIT_ROS job (fails while motion is queued)."""
+        await self._command_ok(MotionCommand.STOP_TRAJ_MODE)
+
+    enable = start_trajectory_mode
+    disable = stop_trajectory_mode
+
+    async def start_servos(self) -> None:
+        await self._command_ok(MotionCommand.START_SERVOS)
+
+    async def stop_servos(self) -> None:
+        await self._command_ok(MotionCommand.STOP_SERVOS)
+
+    async def reset_alarm(self) -> None:
+        """RESET_ALARM: reset alarms and cancel errors (not waited on by MotoROS)."""
+        await self._command_ok(MotionCommand.RESET_ALARM)
+
+    async def stop_motion(self) -> None:
+        """STOP_MOTION: stop at once and clear every queue (no ramp from MotoROS)."""
+        await self._command_ok(MotionCommand.STOP_MOTION)
+
+    async def queue_count(self, group: int = 0) -> int:
+        """Increments still queued for ``group`` (CHECK_QUEUE_CNT: the count is the subcode)."""
+        reply = await self._command(MotionCommand.CHECK_QUEUE_CNT, group)
+        if reply.result != ResultCode.SUCCESS:
+            raise reply_error(reply.result, reply.subcode, reply.command)
+        return reply.subcode
+
+    async def select_tool(self, tool: int, group: int = 0) -> None:
+        """MOTO_SELECT_TOOL: the tool file ``group`` moves with from its next segment on."""
+        if not 0 <= tool <= 63:
+            raise ValueError(f"tool {tool}: tool numbers are 0..63")
+        sequence = next(self._sequence) % 2**31
+        reply = await self.request_motion(MotoSelectTool(group, tool, sequence))
+        if reply.result != ResultCode.SUCCESS:
+            raise reply_error(reply.result, reply.subcode, reply.command)
+
+    async def get_dh_parameters(self) -> tuple[tuple[DhLink, ...], ...]:
+        """DH parameters (theta, d, a, alpha) of each of the robot's groups."""
+        conn = self._need(self._motion, Port.MOTION)
+        reply = await conn.request(
+            MotoGetDhParameters(), MotoGetDhParametersReply, timeout_s=self.timeout_s
+        )
+        return _expect(reply, MotoGetDhParametersReply).groups[: len(self.robot.groups)]
+
+    async def ping(self) -> float:
+        """PING on the motion port; returns the round trip in seconds."""
+        conn = self._need(self._motion, Port.MOTION)
+        start = time.perf_counter()
+        _expect(await conn.request(Ping(), PingReply, timeout_s=self.timeout_s), PingReply)
+        return time.perf_counter() - start
+
+    # ------------------------------------------------------------------ IO
+
+    async def _io_request(
+        self, message: Message, expected: type[Message], address: int, what: str, *, io_only: bool
+    ) -> WireMessage:
+        conn = self._io if self._io is not None or io_only else self._motion
+        conn = self._need(conn, Port.IO)
+        reply = await conn.request(message, expected, timeout_s=self.timeout_s)
+        if isinstance(reply, IoErrorReply):
+            raise reply_error(reply.result, reply.subcode, int(message.MSG_TYPE))
+        if isinstance(reply, MotoMotionReply):
+            raise reply_error(reply.result, reply.subcode, reply.command)
+        code = getattr(reply, "result_code", IoResultCode.OK)
+        if code != IoResultCode.OK:
+            raise io_error(code, address, what)
+        return reply
+
+    async def read_io_bit(self, address: int, *, check: bool = True) -> int:
+        """Read one IO bit (e.g. 10010 = general output OT#1)."""
+        if check:
+            io_map.check_bit_address(self.controller, address, write=False)
+        reply = await self._io_request(
+            MotoReadIoBit(address), MotoReadIoBitReply, address, "IO read", io_only=False
+        )
+        return _expect(reply, MotoReadIoBitReply).value
+
+    async def write_io_bit(self, address: int, value: int, *, check: bool = True) -> None:
+        """Write one IO bit (general outputs, network inputs, interface panel only)."""
+        if check:
+            io_map.check_bit_address(self.controller, address, write=True)
+            io_map.check_bit_value(address, value)
+        await self._io_request(
+            MotoWriteIoBit(address, value), MotoWriteIoBitReply, address, "IO write", io_only=False
+        )
+
+    async def read_io_group(self, address: int, *, check: bool = True) -> int:
+        """Read 8 bits; ``address`` is the byte number (1001 = bits 10010..10017)."""
+        if check:
+            io_map.check_group_address(self.controller, address, write=False)
+        reply = await self._io_request(
+            MotoReadIoGroup(address), MotoReadIoGroupReply, address, "IO group read", io_only=False
+        )
+        return _expect(reply, MotoReadIoGroupReply).value
+
+    async def write_io_group(self, address: int, value: int, *, check: bool = True) -> None:
+        """Write 8 bits (0..255, bit 0 first) to byte ``address``."""
+        if check:
+            io_map.check_group_address(self.controller, address, write=True)
+            io_map.check_group_value(address, value)
+        await self._io_request(
+            MotoWriteIoGroup(address, value),
+            MotoWriteIoGroupReply,
+            address,
+            "IO group write",
+            io_only=False,
+        )
+
+    async def read_mregister(self, number: int, *, check: bool = True) -> int:
+        """Read M-register ``number`` (0..999; IO port only)."""
+        n = io_map.normalise_mregister(number, write=False) if check else number
+        reply = await self._io_request(
+            MotoReadMRegister(n), MotoReadMRegisterReply, number, "M-register read", io_only=True
+        )
+        return _expect(reply, MotoReadMRegisterReply).value
+
+    async def write_mregister(self, number: int, value: int, *, check: bool = True) -> None:
+        """Write M-register ``number`` (0..559) with 0..65535 (IO port only)."""
+        n = number
+        if check:
+            n = io_map.normalise_mregister(number, write=True)
+            io_map.check_mregister_value(number, value)
+        await self._io_request(
+            MotoWriteMRegister(n, value),
+            MotoWriteMRegisterReply,
+            number,
+            "M-register write",
+            io_only=True,
+        )
+
+    # ------------------------------------------------------------------ motion
+
+    def limits(self, group: int = 0) -> JointLimits:
+        """Planning limits of ``group`` from the robot model."""
+        return JointLimits.from_group(
+            self.robot.groups[group], self.controller.interpolation_period_ms
+        )
+
+    async def current_positions(
+        self, group: int | Sequence[int] = 0, *, at_rest: bool = True, timeout_s: float = 10.0
+    ) -> tuple[float, ...]:
+        """Joint positions from feedback; with ``at_rest``, once the robot is settled."""
+        groups = _groups(group)
+        await self.wait_for_state()
+        if at_rest:
+            return await streaming.wait_until_at_rest(self, groups, timeout_s=timeout_s)
+        state = self.state
+        return tuple(v for g in groups for v in (state.positions(g) or ()))
+
+    def plan(
+        self,
+        start: Sequence[float],
+        goal: Sequence[float],
+        *,
+        groups: Sequence[int] = (0,),
+        speed_scale: float = 1.0,
+        accel_scale: float = 1.0,
+        sample_period: float = DEFAULT_SAMPLE_PERIOD_S,
+    ) -> JointTrajectory:
+        """A synchronised point-to-point move (see :func:`planning.plan_joint_move`)."""
+        limits = JointLimits.concat([self.limits(g) for g in groups])
+        return plan_joint_move(
+            start,
+            goal,
+            limits,
+            velocity_scaling=speed_scale,
+            acceleration_scaling=accel_scale,
+            sample_period=sample_period,
+        )
+
+    async def execute(
+        self,
+        trajectory: JointTrajectory,
+        *,
+        groups: Sequence[int] = (0,),
+        busy_timeout_s: float = DEFAULT_BUSY_TIMEOUT_S,
+        goal_tolerance: float = DEFAULT_GOAL_TOLERANCE,
+        timeout_s: float | None = None,
+        check_speed: bool = True,
+        on_progress: Callable[[FollowingSample], None] | None = None,
+    ) -> MoveResult:
+        """Stream ``trajectory`` and wait until the robot has settled at its last point.
+
+        The trajectory's joints are those of ``groups`` one after the other; one group
+        goes as JOINT_TRAJ_PT_FULL, several as JOINT_TRAJ_PT_FULL_EX.
+        """
+        groups = tuple(groups)
+        monitor = FollowingMonitor(trajectory, groups, on_sample=on_progress)
+        remove = self.tracker.add_listener(monitor.listen)
+        started = time.monotonic()
+
+        def accepted(index: int) -> None:
+            if index == 1:
+                monitor.start()
+
+        try:
+            stats = await streaming.send_points(
+                self,
+                trajectory,
+                groups,
+                busy_timeout_s=busy_timeout_s,
+                check_speed=check_speed,
+                on_accepted=accepted,
+            )
+            monitor.start()
+            final = await streaming.wait_for_completion(
+                self,
+                trajectory,
+                groups,
+                monitor,
+                goal_tolerance=goal_tolerance,
+                timeout_s=timeout_s,
+            )
+        finally:
+            remove()
+        return MoveResult(
+            trajectory, final, stats, monitor.report, time.monotonic() - started, groups
+        )
+
+    async def move_joints(
+        self,
+        goal: Sequence[float] | Mapping[int, Sequence[float]],
+        *,
+        group: int = 0,
+        speed_scale: float = 1.0,
+        accel_scale: float = 1.0,
+        on_progress: Callable[[FollowingSample], None] | None = None,
+        goal_tolerance: float = DEFAULT_GOAL_TOLERANCE,
+        busy_timeout_s: float = DEFAULT_BUSY_TIMEOUT_S,
+        timeout_s: float | None = None,
+    ) -> MoveResult:
+        """Move to joint positions (rad/m, ROS order) from wherever the robot rests now.
+
+        ``goal`` is a list for ``group``, or ``{group: positions}`` to move several
+        groups together. Waits for the robot to be at rest, plans with the model's
+        limits, streams, and waits until it has settled at the goal.
+        """
+        if isinstance(goal, Mapping):
+            groups = tuple(sorted(goal))
+            target = tuple(v for g in groups for v in goal[g])
+        else:
+            groups = (group,)
+            target = tuple(goal)
+        start = await self.current_positions(groups)
+        trajectory = self.plan(
+            start, target, groups=groups, speed_scale=speed_scale, accel_scale=accel_scale
+        )
+        return await self.execute(
+            trajectory,
+            groups=groups,
+            on_progress=on_progress,
+            goal_tolerance=goal_tolerance,
+            busy_timeout_s=busy_timeout_s,
+            timeout_s=timeout_s,
+        )
+
+    def named_pose(
+        self, name: str, *, srdf: str | Path | None = None, group: int = 0
+    ) -> tuple[float, ...]:
+        """Joint values of a named pose: an SRDF ``group_state`` or the built-in ``home``."""
+        poses: tuple[NamedPose, ...] = parse_srdf(srdf) if srdf is not None else ()
+        return find_pose(name, self.robot.groups[group], poses).positions_for(
+            self.robot.groups[group]
+        )
+
+    async def move_named(
+        self,
+        name: str,
+        *,
+        srdf: str | Path | None = None,
+        group: int = 0,
+        speed_scale: float = 1.0,
+        accel_scale: float = 1.0,
+        on_progress: Callable[[FollowingSample], None] | None = None,
+    ) -> MoveResult:
+        """Move to a named pose (``home``, or a ``group_state`` of ``srdf``)."""
+        goal = self.named_pose(name, srdf=srdf, group=group)
+        return await self.move_joints(
+            goal,
+            group=group,
+            speed_scale=speed_scale,
+            accel_scale=accel_scale,
+            on_progress=on_progress,
+        )
+
+
+_R = TypeVar("_R")
+
+
+def _expect(reply: WireMessage, cls: type[_R]) -> _R:
+    """``reply`` as ``cls``, or the typed error a MOTION_REPLY refusal stands for."""
+    if isinstance(reply, cls):
+        return reply
+    if isinstance(reply, MotoMotionReply):
+        raise reply_error(reply.result, reply.subcode, reply.command)
+    raise ClientError(f"unexpected reply {reply!r}, expected {cls.__name__}")
+
+
+def _groups(group: int | Sequence[int]) -> tuple[int, ...]:
+    return (group,) if isinstance(group, int) else tuple(group)
+
+
+async def connect(host: str = "127.0.0.1", **options: object) -> RobotClient:
+    """``RobotClient(host, **options)`` connected; close it (or use ``async with``)."""
+    client = RobotClient(host, **options)  # type: ignore[arg-type]
+    return await client.connect()
+
+
+__all__ = ["Readiness", "RobotClient", "connect"]

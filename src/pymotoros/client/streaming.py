@@ -1,0 +1,485 @@
+"""Streaming a trajectory to MotoROS and watching the robot follow it.
+
+* :func:`send_points`: JOINT_TRAJ_PT_FULL (one group) or JOINT_TRAJ_PT_FULL_EX (several),
+  sequence 0..N-1. BUSY (the previous point is still being turned into increments, §3.4)
+  is retried with a short, growing back-off under a per-point time budget; any other
+  refusal raises the typed error with the point index and the numbers behind it.
+* :func:`wait_until_at_rest`: ``in_motion`` false and the feedback still; its positions
+  are the "start from current" point 0.
+* :class:`FollowingMonitor`: compares feedback with the plan while the robot moves and
+  reports how far behind it runs (how a safety speed limit shows up).
+* :func:`wait_for_completion`: queue empty, ``in_motion`` false, feedback settled within
+  a tolerance of the goal; judged against progress, not only the wall clock.
+
+Every wait ends: on success, on a typed error, on a timeout, or at once with
+:class:`ConnectionLostError` when a connection drops.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import logging
+import math
+import time
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING, Final
+
+from pymotoros.client.errors import (
+    AxisDeviation,
+    MotionIncompleteError,
+    MotionTimeoutError,
+    ReplyError,
+    reply_error,
+)
+from pymotoros.client.planning import (
+    JointTrajectory,
+    TrajectoryPoint,
+    motoros_speed_limit,
+    passes_motoros_speed_check,
+)
+from pymotoros.client.state import RobotState
+from pymotoros.models import GroupModel
+from pymotoros.protocol.constants import InvalidSubcode, MotionCommand, MsgType, ResultCode
+from pymotoros.protocol.messages import (
+    JointTrajPtExData,
+    JointTrajPtFull,
+    MotoJointTrajPtFullEx,
+    MotoMotionReply,
+)
+
+if TYPE_CHECKING:
+    from pymotoros.client.robot import RobotClient
+
+logger = logging.getLogger(__name__)
+
+DEFAULT_BUSY_TIMEOUT_S: Final = 10.0
+"""How long one point may keep getting BUSY. A full queue is 0.8 s of motion (§5.1);
+a safety speed limit can stretch that, so the budget is generous."""
+
+BUSY_BACKOFF_FIRST_S: Final = 0.001
+BUSY_BACKOFF_MAX_S: Final = 0.008
+"""Retry after 1 ms, doubling up to 8 ms: about the 5 ms of the ROS driver, faster at first
+because MotoROS frees its pending slot at the next 4 ms tick."""
+
+DEFAULT_GOAL_TOLERANCE: Final = 1e-4
+"""rad (m): how close every joint must come to the goal (a few pulses on most arms)."""
+
+SETTLE_STEP: Final = 2e-5
+"""rad (m): feedback that moves less than this between two state messages is at rest."""
+
+SETTLE_SAMPLES: Final = 3
+"""Consecutive quiet state messages needed to call the robot settled (~75 ms at 40 Hz)."""
+
+DEFAULT_SETTLE_TIMEOUT_S: Final = 5.0
+"""Extra time after the planned duration for the robot to settle."""
+
+STALL_TIMEOUT_S: Final = 2.0
+"""Past the planned duration, a robot that makes no progress for this long has stopped."""
+
+LAG_WARNING_S: Final = 0.25
+"""A robot this far behind the plan is being slowed (a safety speed limit, HOLD…)."""
+
+
+@dataclass(slots=True)
+class StreamStats:
+    """What streaming one trajectory took."""
+
+    points: int = 0
+    busy_replies: int = 0
+    max_busy_wait_s: float = 0.0
+    elapsed_s: float = 0.0
+
+
+@dataclass(frozen=True, slots=True)
+class FollowingSample:
+    """One comparison of feedback with the plan."""
+
+    elapsed_s: float
+    """Since the robot was told to start."""
+    progress: float
+    """Fraction of the move done (0..1), from the feedback."""
+    lag_s: float
+    """How far behind the plan the robot is, in time (≥ 0)."""
+    error: float
+    """Largest joint difference between feedback and plan now (rad or m)."""
+
+
+@dataclass(slots=True)
+class FollowingReport:
+    """Summary of how the robot followed the plan."""
+
+    samples: int = 0
+    max_lag_s: float = 0.0
+    max_error: float = 0.0
+    slowed: bool = False
+    """True once the lag passed the warning threshold."""
+
+
+@dataclass(frozen=True, slots=True)
+class MoveResult:
+    """How a move went."""
+
+    trajectory: JointTrajectory
+    final_positions: tuple[float, ...]
+    stream: StreamStats
+    following: FollowingReport
+    elapsed_s: float
+    """From the first point sent to settled at the goal."""
+    groups: tuple[int, ...] = field(default=(0,))
+
+
+def _split(values: Sequence[float], sizes: Sequence[int]) -> list[tuple[float, ...]]:
+    out, i = [], 0
+    for n in sizes:
+        out.append(tuple(values[i : i + n]))
+        i += n
+    return out
+
+
+def _joined_positions(state: RobotState, groups: Sequence[int]) -> tuple[float, ...] | None:
+    values: list[float] = []
+    for g in groups:
+        pos = state.positions(g)
+        if pos is None:
+            return None
+        values.extend(pos)
+    return tuple(values)
+
+
+def build_message(
+    point: TrajectoryPoint, sequence: int, groups: Sequence[int], sizes: Sequence[int]
+) -> JointTrajPtFull | MotoJointTrajPtFullEx:
+    """Type 14 for one group, 2016 for several (one sequence for all, §3.5)."""
+    pos = _split(point.positions, sizes)
+    vel = _split(point.velocities, sizes)
+    acc = _split(point.accelerations, sizes) if point.accelerations else [None] * len(sizes)
+    if len(groups) == 1:
+        return JointTrajPtFull.for_joints(groups[0], sequence, point.time, pos[0], vel[0], acc[0])
+    return MotoJointTrajPtFullEx.for_groups(
+        sequence,
+        [
+            JointTrajPtExData.for_joints(g, point.time, p, v, a)
+            for g, p, v, a in zip(groups, pos, vel, acc, strict=True)
+        ],
+    )
+
+
+def start_deviations(
+    point: TrajectoryPoint, models: Sequence[GroupModel], current: Sequence[float] | None
+) -> list[AxisDeviation]:
+    """Axes of ``point`` more than 30 pulses from ``current`` (MotoROS truncates to pulses)."""
+    if current is None:
+        return []
+    axes = [a for m in models for a in m.axes]
+    out = []
+    for i, (axis, want, have) in enumerate(zip(axes, point.positions, current, strict=False)):
+        ppu = axis.pulses_per_unit
+        pulses = abs(math.trunc(want * ppu) - math.trunc(have * ppu))
+        if pulses > 30:
+            out.append(AxisDeviation(i, axis.name, want, have, pulses))
+    return out
+
+
+def speed_deviations(
+    point: TrajectoryPoint, models: Sequence[GroupModel], period_ms: int
+) -> list[AxisDeviation]:
+    """Axes of ``point`` whose velocity MotoROS's speed check refuses (§5.5)."""
+    axes = [a for m in models for a in m.axes]
+    out = []
+    for i, (axis, v) in enumerate(zip(axes, point.velocities, strict=False)):
+        limit = motoros_speed_limit(axis, period_ms)
+        if not passes_motoros_speed_check(v, limit):
+            out.append(AxisDeviation(i, axis.name, v, limit))
+    return out
+
+
+def _deviation_text(devs: Sequence[AxisDeviation], kind: str) -> str:
+    if kind == "start":
+        return "; ".join(
+            f"{d.name} {d.pulses} pulses ({d.difference:+.5f} rad) from the robot, tolerance 30"
+            for d in devs
+        )
+    return "; ".join(f"{d.name} {d.value:+.4f} > limit {d.reference:.4f}" for d in devs)
+
+
+def _refusal(
+    client: RobotClient,
+    reply: MotoMotionReply,
+    index: int,
+    point: TrajectoryPoint,
+    models: Sequence[GroupModel],
+) -> ReplyError:
+    devs: list[AxisDeviation] = []
+    detail = ""
+    if reply.result == ResultCode.INVALID and reply.subcode == InvalidSubcode.DATA_START_POS:
+        groups = [client.robot.groups.index(m) for m in models]
+        devs = start_deviations(point, models, _joined_positions(client.state, groups))
+        detail = _deviation_text(devs, "start") or "compared with the commanded position"
+    elif reply.result == ResultCode.INVALID and reply.subcode == InvalidSubcode.DATA_SPEED:
+        devs = speed_deviations(point, models, client.controller.interpolation_period_ms)
+        detail = _deviation_text(devs, "speed")
+    return reply_error(
+        reply.result, reply.subcode, reply.command, point=index, detail=detail, deviations=devs
+    )
+
+
+async def send_point(
+    client: RobotClient,
+    message: JointTrajPtFull | MotoJointTrajPtFullEx,
+    *,
+    busy_timeout_s: float,
+    stats: StreamStats,
+) -> MotoMotionReply:
+    """Send one point, retrying BUSY; returns the final (non-BUSY) reply."""
+    backoff = BUSY_BACKOFF_FIRST_S
+    first_busy: float | None = None
+    while True:
+        reply = await client.request_motion(message)
+        if reply.result != ResultCode.BUSY:
+            if first_busy is not None:
+                stats.max_busy_wait_s = max(stats.max_busy_wait_s, time.monotonic() - first_busy)
+            return reply
+        stats.busy_replies += 1
+        now = time.monotonic()
+        if first_busy is None:
+            first_busy = now
+        elif now - first_busy > busy_timeout_s:
+            stats.max_busy_wait_s = max(stats.max_busy_wait_s, now - first_busy)
+            return reply
+        await asyncio.sleep(backoff)
+        backoff = min(backoff * 2, BUSY_BACKOFF_MAX_S)
+
+
+async def send_points(
+    client: RobotClient,
+    trajectory: JointTrajectory,
+    groups: Sequence[int],
+    *,
+    busy_timeout_s: float = DEFAULT_BUSY_TIMEOUT_S,
+    check_speed: bool = True,
+    on_accepted: Callable[[int], None] | None = None,
+) -> StreamStats:
+    """Stream every point of ``trajectory`` (joints of ``groups`` concatenated, in order)."""
+    models = [client.robot.groups[g] for g in groups]
+    sizes = [m.num_axes for m in models]
+    period = client.controller.interpolation_period_ms
+    stats = StreamStats()
+    started = time.monotonic()
+    for index, point in enumerate(trajectory.points):
+        if check_speed:
+            devs = speed_deviations(point, models, period)
+            if devs:
+                raise reply_error(
+                    ResultCode.INVALID,
+                    InvalidSubcode.DATA_SPEED,
+                    _message_type(groups),
+                    point=index,
+                    detail=_deviation_text(devs, "speed") + "; checked before sending",
+                    deviations=devs,
+                )
+        message = build_message(point, index, groups, sizes)
+        reply = await send_point(client, message, busy_timeout_s=busy_timeout_s, stats=stats)
+        if reply.result == ResultCode.BUSY:
+            raise reply_error(
+                reply.result,
+                reply.subcode,
+                reply.command,
+                point=index,
+                detail=f"BUSY for {busy_timeout_s:g} s after {stats.busy_replies} retries",
+            )
+        if reply.result != ResultCode.SUCCESS:
+            raise _refusal(client, reply, index, point, models)
+        stats.points += 1
+        if on_accepted is not None:
+            on_accepted(index)
+    stats.elapsed_s = time.monotonic() - started
+    return stats
+
+
+def _message_type(groups: Sequence[int]) -> int:
+    return int(
+        MsgType.JOINT_TRAJ_PT_FULL if len(groups) == 1 else MsgType.MOTO_JOINT_TRAJ_PT_FULL_EX
+    )
+
+
+class FollowingMonitor:
+    """Compares feedback with the planned trajectory while it runs.
+
+    Call :meth:`start` when the robot is told to move; it then listens to the state
+    stream. :attr:`report` holds the worst lag and error seen; ``on_sample`` gets every
+    :class:`FollowingSample` (a progress bar, a log, a plot).
+    """
+
+    def __init__(
+        self,
+        trajectory: JointTrajectory,
+        groups: Sequence[int],
+        *,
+        warn_lag_s: float = LAG_WARNING_S,
+        on_sample: Callable[[FollowingSample], None] | None = None,
+    ) -> None:
+        self.trajectory = trajectory
+        self.groups = tuple(groups)
+        self.warn_lag_s = warn_lag_s
+        self.on_sample = on_sample
+        self.report = FollowingReport()
+        self.last: FollowingSample | None = None
+        self._t0: float | None = None
+
+    def start(self, t0: float | None = None) -> None:
+        if self._t0 is None:
+            self._t0 = time.monotonic() if t0 is None else t0
+
+    @property
+    def started(self) -> bool:
+        return self._t0 is not None
+
+    def listen(self, state: RobotState) -> None:
+        """State listener form of :meth:`update`."""
+        self.update(state)
+
+    def update(self, state: RobotState) -> FollowingSample | None:
+        if self._t0 is None:
+            return None
+        positions = _joined_positions(state, self.groups)
+        if positions is None:
+            return None
+        elapsed = time.monotonic() - self._t0
+        traj = self.trajectory
+        planned = traj.position_at(elapsed)
+        error = max((abs(a - b) for a, b in zip(positions, planned, strict=False)), default=0.0)
+        progress = min(max(traj.progress(positions), 0.0), 1.0)
+        reached = traj.time_at_progress(progress)
+        lag = max(0.0, min(elapsed, traj.duration) - reached) if progress < 1.0 else 0.0
+        sample = FollowingSample(elapsed, progress, lag, error)
+        rep = self.report
+        rep.samples += 1
+        rep.max_error = max(rep.max_error, error)
+        rep.max_lag_s = max(rep.max_lag_s, lag)
+        if lag > self.warn_lag_s and not rep.slowed:
+            rep.slowed = True
+            logger.warning(
+                "the robot runs %.2f s behind the plan at %.0f %% of the move: a safety speed "
+                "limit (FSU), a speed override or HOLD is slowing it",
+                lag,
+                progress * 100,
+            )
+        self.last = sample
+        if self.on_sample is not None:
+            self.on_sample(sample)
+        return sample
+
+
+def _quiet(prev: RobotState | None, state: RobotState, groups: Sequence[int]) -> bool:
+    """Feedback of ``groups`` moved less than SETTLE_STEP since ``prev``."""
+    if prev is None:
+        return False
+    a, b = _joined_positions(prev, groups), _joined_positions(state, groups)
+    if a is None or b is None:
+        return False
+    return all(abs(x - y) <= SETTLE_STEP for x, y in zip(a, b, strict=True))
+
+
+async def wait_until_at_rest(
+    client: RobotClient, groups: Sequence[int], *, timeout_s: float = 10.0
+) -> tuple[float, ...]:
+    """Wait until ``in_motion`` is false and the feedback is still; return its positions.
+
+    This is "start from current": MotoROS checks point 0 against the commanded position
+    with a 30-pulse tolerance, and right after a move, eco mode or a brake release the
+    feedback still moves (users meet 3011 here).
+    """
+    tracker = client.tracker
+    quiet = 0
+    prev: RobotState | None = None
+    try:
+        async with asyncio.timeout(timeout_s):
+            state = tracker.state
+            while True:
+                status = state.status
+                if status is not None and status.in_motion is False and _quiet(prev, state, groups):
+                    quiet += 1
+                    if quiet >= SETTLE_SAMPLES:
+                        pos = _joined_positions(state, groups)
+                        if pos is not None:
+                            return pos
+                elif state.count != (prev.count if prev else -1):
+                    quiet = 0
+                prev = state
+                state = await tracker.next_state()
+    except TimeoutError:
+        status = tracker.state.status
+        raise MotionTimeoutError(
+            f"the robot did not come to rest within {timeout_s:g} s "
+            f"(in_motion={None if status is None else status.in_motion})"
+        ) from None
+
+
+async def wait_for_completion(
+    client: RobotClient,
+    trajectory: JointTrajectory,
+    groups: Sequence[int],
+    monitor: FollowingMonitor,
+    *,
+    goal_tolerance: float = DEFAULT_GOAL_TOLERANCE,
+    settle_timeout_s: float = DEFAULT_SETTLE_TIMEOUT_S,
+    timeout_s: float | None = None,
+) -> tuple[float, ...]:
+    """Wait until the queue is empty, ``in_motion`` false and the feedback settled at the goal.
+
+    Past ``duration + settle_timeout_s`` the wait goes on while the robot still makes
+    progress (a safety speed limit slows it, it has not stopped) and fails when it
+    stalls for :data:`STALL_TIMEOUT_S` or passes ``timeout_s`` (default: 10 × duration +
+    30 s). A robot that stops because motion became impossible (E-stop, HOLD, alarm)
+    raises :class:`NotReadyError` with the controller's reason.
+    """
+    tracker = client.tracker
+    goal = trajectory.goal
+    start = time.monotonic()
+    soft_deadline = start + trajectory.duration + settle_timeout_s
+    hard_deadline = start + (timeout_s if timeout_s is not None else 10 * trajectory.duration + 30)
+    quiet = 0
+    prev: RobotState | None = None
+    best_progress, best_at = -1.0, start
+    state = tracker.state
+    while True:
+        now = time.monotonic()
+        positions = _joined_positions(state, groups)
+        status = state.status
+        if positions is not None and status is not None:
+            monitor.update(state)
+            err = max(abs(p - g) for p, g in zip(positions, goal, strict=True))
+            progress = trajectory.progress(positions)
+            if progress > best_progress + 1e-4:
+                best_progress, best_at = progress, now
+            at_rest = status.in_motion is False and _quiet(prev, state, groups)
+            quiet = quiet + 1 if at_rest else 0
+            if quiet >= SETTLE_SAMPLES and err <= goal_tolerance:
+                counts = [await client.queue_count(g) for g in groups]
+                if not any(counts):
+                    return positions
+            if not status.motion_possible:
+                readiness = await client.check_motion_ready()
+                if not readiness.ready and err > goal_tolerance:
+                    raise reply_error(
+                        ResultCode.FALSE,
+                        readiness.subcode,
+                        MotionCommand.CHECK_MOTION_READY,
+                        detail=f"the robot stopped {err:.4f} from the goal",
+                    )
+            past_end = now > start + trajectory.duration + 1.0
+            if quiet >= SETTLE_SAMPLES and past_end and now - best_at > STALL_TIMEOUT_S:
+                raise MotionIncompleteError(
+                    f"the robot came to rest {err:.5f} from the goal and is not moving "
+                    "(was the motion stopped?)"
+                )
+        if now > hard_deadline or (now > soft_deadline and now - best_at > STALL_TIMEOUT_S):
+            lag = monitor.report.max_lag_s
+            raise MotionTimeoutError(
+                f"the move did not finish: planned {trajectory.duration:.2f} s, waited "
+                f"{now - start:.2f} s, progress {max(best_progress, 0.0):.0%}, largest lag "
+                f"{lag:.2f} s"
+            )
+        prev = state
+        state = await tracker.next_state()

@@ -1,0 +1,166 @@
+"""Blocking facade for scripts and notebooks: the async client on an event loop in a thread.
+
+::
+
+    with SyncRobotClient("192.168.1.31", robot="hc10") as robot:
+        robot.enable()
+        robot.move_joints([0, 0, 0, 0, -1.57, 0])
+
+Every method forwards to the same :class:`RobotClient` method (there is one
+implementation); listeners run in the loop's thread. Interrupting a call (Ctrl-C)
+cancels the coroutine behind it.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import concurrent.futures
+import contextlib
+import threading
+from collections.abc import AsyncIterator, Callable, Coroutine, Iterator
+from types import TracebackType
+from typing import Any, Concatenate, Final, ParamSpec, Self, TypeVar
+
+from pymotoros.client.robot import RobotClient
+from pymotoros.client.state import DEFAULT_STATE_TIMEOUT_S, JointState, RobotState, Status
+
+_P = ParamSpec("_P")
+_R = TypeVar("_R")
+
+_THREAD_JOIN_TIMEOUT_S: Final = 5.0
+
+
+def _forward(
+    method: Callable[Concatenate[RobotClient, _P], Coroutine[Any, Any, _R]],
+) -> Callable[Concatenate[SyncRobotClient, _P], _R]:
+    """The blocking twin of an async ``RobotClient`` method."""
+
+    def blocking(self: SyncRobotClient, /, *args: _P.args, **kwargs: _P.kwargs) -> _R:
+        return self._run(method(self.client, *args, **kwargs))
+
+    blocking.__name__ = method.__name__
+    blocking.__qualname__ = f"SyncRobotClient.{method.__name__}"
+    blocking.__doc__ = method.__doc__
+    return blocking
+
+
+class SyncRobotClient:
+    """Blocking :class:`RobotClient`: same constructor arguments, same methods."""
+
+    def __init__(self, host: str = "127.0.0.1", **options: Any) -> None:
+        self._loop = asyncio.new_event_loop()
+        self._thread = threading.Thread(
+            target=self._loop.run_forever, name="pymotoros-sync-client", daemon=True
+        )
+        self._thread.start()
+        self.client = RobotClient(host, **options)
+        """The async client behind this facade (use it only from the loop's thread)."""
+
+    def _run(self, coro: Coroutine[Any, Any, _R]) -> _R:
+        future = asyncio.run_coroutine_threadsafe(coro, self._loop)
+        try:
+            return future.result()
+        except BaseException:
+            future.cancel()
+            raise
+
+    def connect(self, *, motion: bool = True, state: bool = True, io: bool = True) -> Self:
+        self._run(self.client.connect(motion=motion, state=state, io=io))
+        return self
+
+    def close(self) -> None:
+        """Close the connections and stop the loop thread. Idempotent."""
+        if self._loop.is_closed():
+            return
+        try:
+            self._run(self.client.close())
+        finally:
+            self._loop.call_soon_threadsafe(self._loop.stop)
+            self._thread.join(_THREAD_JOIN_TIMEOUT_S)
+            self._loop.close()
+
+    def __enter__(self) -> Self:
+        try:
+            return self.connect()
+        except BaseException:
+            self.close()
+            raise
+
+    def __exit__(
+        self,
+        exc_type: type[BaseException] | None,
+        exc: BaseException | None,
+        tb: TracebackType | None,
+    ) -> None:
+        self.close()
+
+    # state (read-only snapshots are safe to read from any thread)
+
+    @property
+    def state(self) -> RobotState:
+        return self.client.state
+
+    @property
+    def status(self) -> Status | None:
+        return self.client.status
+
+    def feedback(self, group: int = 0) -> JointState | None:
+        return self.client.feedback(group)
+
+    def add_listener(self, listener: Callable[[RobotState], None]) -> Callable[[], None]:
+        """``listener(state)`` on every state message, called in the loop's thread."""
+        return self.client.add_listener(listener)
+
+    def states(self, message_timeout_s: float = DEFAULT_STATE_TIMEOUT_S) -> Iterator[RobotState]:
+        """Every state message, blocking between them."""
+        iterator = self.client.states(message_timeout_s)
+        try:
+            while True:
+                try:
+                    yield self._run(_next(iterator))
+                except StopAsyncIteration:
+                    return
+        finally:
+            future = asyncio.run_coroutine_threadsafe(_aclose(iterator), self._loop)
+            with contextlib.suppress(concurrent.futures.TimeoutError, RuntimeError):
+                future.result(_THREAD_JOIN_TIMEOUT_S)
+
+    plan = RobotClient.plan
+    limits = RobotClient.limits
+    named_pose = RobotClient.named_pose
+
+    wait_for_state = _forward(RobotClient.wait_for_state)
+    wait_until = _forward(RobotClient.wait_until)
+    check_motion_ready = _forward(RobotClient.check_motion_ready)
+    start_trajectory_mode = _forward(RobotClient.start_trajectory_mode)
+    stop_trajectory_mode = _forward(RobotClient.stop_trajectory_mode)
+    enable = _forward(RobotClient.start_trajectory_mode)
+    disable = _forward(RobotClient.stop_trajectory_mode)
+    start_servos = _forward(RobotClient.start_servos)
+    stop_servos = _forward(RobotClient.stop_servos)
+    reset_alarm = _forward(RobotClient.reset_alarm)
+    stop_motion = _forward(RobotClient.stop_motion)
+    queue_count = _forward(RobotClient.queue_count)
+    select_tool = _forward(RobotClient.select_tool)
+    get_dh_parameters = _forward(RobotClient.get_dh_parameters)
+    ping = _forward(RobotClient.ping)
+    read_io_bit = _forward(RobotClient.read_io_bit)
+    write_io_bit = _forward(RobotClient.write_io_bit)
+    read_io_group = _forward(RobotClient.read_io_group)
+    write_io_group = _forward(RobotClient.write_io_group)
+    read_mregister = _forward(RobotClient.read_mregister)
+    write_mregister = _forward(RobotClient.write_mregister)
+    current_positions = _forward(RobotClient.current_positions)
+    execute = _forward(RobotClient.execute)
+    move_joints = _forward(RobotClient.move_joints)
+    move_named = _forward(RobotClient.move_named)
+
+
+async def _next(iterator: AsyncIterator[RobotState]) -> RobotState:
+    return await anext(iterator)
+
+
+async def _aclose(iterator: object) -> None:
+    aclose = getattr(iterator, "aclose", None)
+    if aclose is not None:
+        await aclose()

@@ -1,0 +1,465 @@
+"""Cell configuration: which controller, which robot(s), tools, and the state at boot.
+
+A cell is described by one TOML file (format in ``docs/cell.md``, example in
+``examples/cells/``); without a file, :func:`default_cell` gives the embedded
+HC10 on a YRC1000. Every mistake in a file raises :class:`~pymotoros.errors.ConfigError`
+whose message names the key (``groups[1].robot``, ``initial.joints.R1``) and the problem.
+
+Any robot may be combined with any controller. Combinations that are not sold are
+allowed and reported in :attr:`CellConfig.warnings` (and logged), as are groups beyond
+what MotoROS supports on that controller, which it ignores (reference §2.1).
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+import tomllib
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field, replace
+from pathlib import Path
+from typing import Final
+
+from pymotoros.controller.alarms import alarm_class
+from pymotoros.controller.api import AlarmInfo, PendantMode
+from pymotoros.controller.inform import BUILTIN_VARIANTS
+from pymotoros.errors import ConfigError
+from pymotoros.models import (
+    DEFAULT_CONTROLLER,
+    DEFAULT_ROBOT,
+    ControllerModel,
+    ControllerType,
+    GroupKind,
+    GroupModel,
+    controller_model,
+    robot_model,
+)
+
+logger = logging.getLogger(__name__)
+
+SERVO_ON_DELAY_MS: Final = 500
+"""Time from a servo-on request to 50073 (brakes released, amplifiers ready). Yaskawa
+publishes no figure; about half a second is what an operator sees on the pendant
+(modelling choice, docs/fidelity.md)."""
+FEEDBACK_LAG_TICKS: Final = 3
+"""Mean delay of the encoder feedback behind the command, in ticks (12 ms at 4 ms)."""
+MAX_NOISE_PULSES: Final = 10
+"""Noise is encoder jitter; above this it would hide the 30-pulse in_motion threshold."""
+MAX_TOOL: Final = 63
+"""Tool numbers 0..63 (§5.8)."""
+
+
+@dataclass(frozen=True, slots=True)
+class ToolConfig:
+    """A tool file: number 0..63, with the data the PFL function relies on."""
+
+    number: int
+    name: str = ""
+    mass_kg: float = 0.0
+    tcp_m: tuple[float, float, float] = (0.0, 0.0, 0.0)
+
+
+@dataclass(frozen=True, slots=True)
+class InitialState:
+    """The controller at boot. Default: PLAY, REMOTE, servo off, nothing pressed or active."""
+
+    mode: PendantMode = PendantMode.PLAY
+    remote: bool = True
+    servo: bool = False
+    estop: bool = False
+    hold: bool = False
+    eco: bool = False
+    alarms: tuple[AlarmInfo, ...] = ()
+    joints: tuple[tuple[float, ...], ...] = ()
+    """Per group, ROS order (rad, m); empty → every joint at 0."""
+    tools: tuple[int, ...] = ()
+    """Per group, the selected tool; empty → tool 0 (as after a reboot, §5.8)."""
+
+
+@dataclass(frozen=True, slots=True)
+class ServoConfig:
+    servo_on_delay_ms: int = SERVO_ON_DELAY_MS
+    lag_ticks: int = FEEDBACK_LAG_TICKS
+    noise_pulses: int = 0
+
+
+@dataclass(frozen=True, slots=True)
+class CellConfig:
+    """Everything :class:`~pymotoros.controller.VirtualController` needs to boot."""
+
+    controller: ControllerModel
+    groups: tuple[GroupModel, ...]
+    robots: tuple[str, ...]
+    """Robot model name of each group."""
+    name: str = "cell"
+    tools: tuple[ToolConfig, ...] = ()
+    initial: InitialState = field(default_factory=InitialState)
+    servo: ServoConfig = field(default_factory=ServoConfig)
+    pfl: bool = False
+    """The PFL option is enabled (HC robots on YRC1000 / YRC1000micro)."""
+    jobs: str | tuple[Path, ...] = "auto"
+    """A built-in INIT_ROS variant name, "auto", or job files/directories."""
+    warnings: tuple[str, ...] = ()
+    source: str = "<default cell>"
+
+    @property
+    def job_variant(self) -> str | None:
+        """The built-in job set to load (None when the cell names job files)."""
+        if isinstance(self.jobs, tuple):
+            return None
+        if self.jobs != "auto":
+            return self.jobs
+        multi = len(self.groups) > 1
+        if self.controller.skillsnd:
+            return "dx100_multi_group" if multi else "dx100_single_arm"
+        return "multi_group" if multi else "single_arm"
+
+
+def _is_hc(robot: str) -> bool:
+    return robot.lower().startswith("hc")
+
+
+def _rename(groups: Sequence[GroupModel]) -> tuple[GroupModel, ...]:
+    """Number groups per kind in order (R1, R2, B1 …) as the controller does."""
+    counters: dict[GroupKind, int] = {}
+    out = []
+    for g in groups:
+        counters[g.kind] = counters.get(g.kind, 0) + 1
+        out.append(replace(g, name=f"{g.kind.value}{counters[g.kind]}"))
+    return tuple(out)
+
+
+def _combine(
+    controller: ControllerModel,
+    parts: Sequence[tuple[str, GroupModel]],
+    warnings: list[str],
+) -> tuple[tuple[GroupModel, ...], tuple[str, ...]]:
+    seen: set[str] = set()
+    for robot_name, _ in parts:
+        robot = robot_model(robot_name)
+        if robot_name not in seen and controller.type.value not in robot.controllers:
+            sold = ", ".join(sorted(robot.controllers)) or "no controller"
+            warnings.append(
+                f"robot {robot.name} is not sold with a {controller.type.value} controller "
+                f"(it runs on {sold}); simulating the combination anyway"
+            )
+        seen.add(robot_name)
+    if len(parts) > controller.max_groups:
+        warnings.append(
+            f"{len(parts)} control groups, but MotoROS uses at most {controller.max_groups} "
+            f"on {controller.type.value}; groups after the {controller.max_groups}th are ignored"
+        )
+        parts = parts[: controller.max_groups]
+    groups = _rename([g for _, g in parts])
+    return groups, tuple(r for r, _ in parts)
+
+
+def default_cell(
+    controller: str | ControllerType = DEFAULT_CONTROLLER, robot: str = DEFAULT_ROBOT
+) -> CellConfig:
+    """The embedded cell: an HC10 on a YRC1000 unless other models are named."""
+    ctrl = controller_model(controller)
+    model = robot_model(robot)
+    warnings: list[str] = []
+    groups, robots = _combine(ctrl, [(model.name, g) for g in model.groups], warnings)
+    for w in warnings:
+        logger.warning("%s", w)
+    return CellConfig(
+        controller=ctrl,
+        groups=groups,
+        robots=robots,
+        name=f"{model.name} on {ctrl.type.value}",
+        pfl=ctrl.pfl_signals and _is_hc(model.name),
+        warnings=tuple(warnings),
+    )
+
+
+def load_cell(path: str | Path) -> CellConfig:
+    """Read a cell TOML file; a mistake raises ConfigError naming the key."""
+    p = Path(path)
+    try:
+        data = tomllib.loads(p.read_text(encoding="utf-8"))
+    except OSError as exc:
+        raise ConfigError(f"{p}: cannot read the cell file ({exc.strerror})") from exc
+    except tomllib.TOMLDecodeError as exc:
+        raise ConfigError(f"{p}: not valid TOML: {exc}") from exc
+    return cell_from_dict(data, source=str(p), base_dir=p.parent)
+
+
+# ------------------------------------------------------------------------------ parsing
+
+
+class _Table:
+    """A TOML table with its key path, so every error can name the key."""
+
+    def __init__(self, data: object, path: str, source: str) -> None:
+        if not isinstance(data, Mapping):
+            raise ConfigError(f"{source}: {path or 'the file'} must be a table")
+        self.data: Mapping[str, object] = data
+        self.path = path
+        self.source = source
+        self.used: set[str] = set()
+
+    def key(self, name: str) -> str:
+        return f"{self.path}.{name}" if self.path else name
+
+    def error(self, name: str, problem: str) -> ConfigError:
+        return ConfigError(f"{self.source}: {self.key(name)}: {problem}")
+
+    def get(self, name: str) -> object:
+        self.used.add(name)
+        return self.data.get(name)
+
+    def string(self, name: str, default: str) -> str:
+        v = self.get(name)
+        if v is None:
+            return default
+        if not isinstance(v, str):
+            raise self.error(name, f"must be a string, not {v!r}")
+        return v
+
+    def boolean(self, name: str, default: bool) -> bool:
+        v = self.get(name)
+        if v is None:
+            return default
+        if not isinstance(v, bool):
+            raise self.error(name, f"must be true or false, not {v!r}")
+        return v
+
+    def integer(self, name: str, default: int, lo: int, hi: int) -> int:
+        v = self.get(name)
+        if v is None:
+            return default
+        if not isinstance(v, int) or isinstance(v, bool):
+            raise self.error(name, f"must be an integer, not {v!r}")
+        if not lo <= v <= hi:
+            raise self.error(name, f"must lie in {lo}..{hi}, not {v}")
+        return v
+
+    def number(self, name: str, default: float) -> float:
+        v = self.get(name)
+        if v is None:
+            return default
+        if not isinstance(v, int | float) or isinstance(v, bool) or not math.isfinite(v):
+            raise self.error(name, f"must be a finite number, not {v!r}")
+        return float(v)
+
+    def table(self, name: str) -> _Table:
+        v = self.get(name)
+        return _Table({} if v is None else v, self.key(name), self.source)
+
+    def array(self, name: str) -> list[object]:
+        v = self.get(name)
+        if v is None:
+            return []
+        if not isinstance(v, list):
+            raise self.error(name, f"must be an array, not {v!r}")
+        return v
+
+    def finish(self) -> None:
+        unknown = sorted(set(self.data) - self.used)
+        if unknown:
+            raise self.error(unknown[0], "unknown key (misspelt?)")
+
+
+def _model(table: _Table, name: str, default: str, kind: str) -> str:
+    value = table.string(name, default)
+    try:
+        if kind == "controller":
+            controller_model(value)
+        else:
+            robot_model(value)
+    except ConfigError as exc:
+        raise table.error(name, str(exc)) from None
+    return value.lower()
+
+
+def cell_from_dict(
+    data: Mapping[str, object], *, source: str = "<cell>", base_dir: Path | None = None
+) -> CellConfig:
+    """Build a cell from parsed TOML (see ``docs/cell.md``)."""
+    top = _Table(data, "", source)
+    name = top.string("name", "cell")
+
+    ctrl_t = top.table("controller")
+    ctrl = controller_model(_model(ctrl_t, "model", DEFAULT_CONTROLLER.value, "controller"))
+    jobs_value = ctrl_t.get("jobs")
+    jobs: str | tuple[Path, ...] = "auto"
+    if isinstance(jobs_value, str) and jobs_value in ("auto", *BUILTIN_VARIANTS):
+        jobs = jobs_value
+    elif isinstance(jobs_value, str | list):
+        items = [jobs_value] if isinstance(jobs_value, str) else jobs_value
+        if not all(isinstance(i, str) for i in items):
+            raise ctrl_t.error("jobs", "must be a variant name, a path or a list of paths")
+        base = base_dir or Path.cwd()
+        jobs = tuple(base / str(i) for i in items)
+        for p in jobs:
+            if not p.exists():
+                raise ctrl_t.error("jobs", f"{p} does not exist")
+    elif jobs_value is not None:
+        raise ctrl_t.error(
+            "jobs", f"must be 'auto', one of {', '.join(BUILTIN_VARIANTS)} or job file paths"
+        )
+    servo = ServoConfig(
+        servo_on_delay_ms=ctrl_t.integer("servo_on_delay_ms", SERVO_ON_DELAY_MS, 0, 4900),
+        lag_ticks=ctrl_t.integer("feedback_lag_ticks", FEEDBACK_LAG_TICKS, 0, 50),
+        noise_pulses=ctrl_t.integer("feedback_noise_pulses", 0, 0, MAX_NOISE_PULSES),
+    )
+    pfl_value = ctrl_t.get("pfl")
+    ctrl_t.finish()
+
+    parts: list[tuple[str, GroupModel]] = []
+    if "groups" in data and "robot" in data:
+        raise top.error("groups", "give either [robot] or [[groups]], not both")
+    if "groups" in data:
+        entries = top.array("groups")
+        if not entries:
+            raise top.error("groups", "needs at least one group")
+        for i, entry in enumerate(entries):
+            g_t = _Table(entry, f"groups[{i}]", source)
+            robot_name = _model(g_t, "robot", DEFAULT_ROBOT, "robot")
+            model = robot_model(robot_name)
+            wanted = g_t.get("group")
+            if wanted is None:
+                parts.extend((model.name, g) for g in model.groups)
+            else:
+                match = [g for g in model.groups if g.name == wanted]
+                if not match:
+                    names = ", ".join(g.name for g in model.groups)
+                    raise g_t.error("group", f"{model.name} has no group {wanted!r} ({names})")
+                parts.append((model.name, match[0]))
+            g_t.finish()
+    else:
+        r_t = top.table("robot")
+        model = robot_model(_model(r_t, "model", DEFAULT_ROBOT, "robot"))
+        r_t.finish()
+        parts.extend((model.name, g) for g in model.groups)
+
+    warnings: list[str] = []
+    groups, robots = _combine(ctrl, parts, warnings)
+
+    if pfl_value is None:
+        pfl = ctrl.pfl_signals and any(_is_hc(r) for r in robots)
+    elif isinstance(pfl_value, bool):
+        pfl = pfl_value
+        if pfl and not ctrl.pfl_signals:
+            raise ConfigError(
+                f"{source}: controller.pfl: the {ctrl.type.value} build of MotoROS has no PFL "
+                "support (YRC1000 and YRC1000micro only)"
+            )
+    else:
+        raise ConfigError(f"{source}: controller.pfl: must be true or false, not {pfl_value!r}")
+
+    tools: list[ToolConfig] = []
+    for i, entry in enumerate(top.array("tools")):
+        t_t = _Table(entry, f"tools[{i}]", source)
+        number = t_t.integer("number", -1, 0, MAX_TOOL)
+        if number < 0:
+            raise t_t.error("number", "is required (0..63)")
+        tcp = t_t.array("tcp_m")
+        if tcp and (len(tcp) != 3 or not all(isinstance(x, int | float) for x in tcp)):
+            raise t_t.error("tcp_m", "must be three numbers [x, y, z] in metres")
+        tools.append(
+            ToolConfig(
+                number,
+                t_t.string("name", ""),
+                t_t.number("mass_kg", 0.0),
+                (float(tcp[0]), float(tcp[1]), float(tcp[2])) if tcp else (0.0, 0.0, 0.0),
+            )
+        )
+        t_t.finish()
+    numbers = [t.number for t in tools]
+    if len(set(numbers)) != len(numbers):
+        raise top.error("tools", "a tool number appears twice")
+
+    initial = _initial(top.table("initial"), groups, set(numbers))
+    top.finish()
+    for w in warnings:
+        logger.warning("%s: %s", source, w)
+    return CellConfig(
+        controller=ctrl,
+        groups=groups,
+        robots=robots,
+        name=name,
+        tools=tuple(tools),
+        initial=initial,
+        servo=servo,
+        pfl=pfl,
+        jobs=jobs,
+        warnings=tuple(warnings),
+        source=source,
+    )
+
+
+def _initial(t: _Table, groups: tuple[GroupModel, ...], tool_numbers: set[int]) -> InitialState:
+    mode_s = t.string("mode", "play")
+    try:
+        mode = PendantMode(mode_s.lower())
+    except ValueError:
+        raise t.error("mode", f"must be 'play' or 'teach', not {mode_s!r}") from None
+    names = [g.name for g in groups]
+
+    joints_t = t.table("joints")
+    joints: list[tuple[float, ...]] = []
+    for g in groups:
+        raw = joints_t.get(g.name)
+        if raw is None:
+            joints.append(tuple(0.0 for _ in g.axes))
+            continue
+        if not isinstance(raw, list) or not all(
+            isinstance(x, int | float) and not isinstance(x, bool) for x in raw
+        ):
+            raise joints_t.error(g.name, "must be an array of numbers (rad, or m)")
+        if len(raw) != g.num_axes:
+            raise joints_t.error(g.name, f"needs {g.num_axes} values (ROS order), got {len(raw)}")
+        for axis, value in zip(g.axes, raw, strict=True):
+            if not axis.lower <= float(value) <= axis.upper:
+                raise joints_t.error(
+                    g.name,
+                    f"{axis.name} = {value} is outside its limits {axis.lower:.4f}..{axis.upper:.4f}",
+                )
+        joints.append(tuple(float(x) for x in raw))
+    unknown = sorted(set(joints_t.data) - set(names))
+    if unknown:
+        raise joints_t.error(unknown[0], f"no such group (groups: {', '.join(names)})")
+
+    tools_t = t.table("tool")
+    tools: list[int] = []
+    for g in groups:
+        n = tools_t.integer(g.name, 0, 0, MAX_TOOL)
+        if n and g.kind is not GroupKind.ROBOT:
+            raise tools_t.error(g.name, "only robot groups take tools")
+        if n and tool_numbers and n not in tool_numbers:
+            raise tools_t.error(g.name, f"tool {n} is not defined under [[tools]]")
+        tools.append(n)
+    unknown = sorted(set(tools_t.data) - set(names))
+    if unknown:
+        raise tools_t.error(unknown[0], f"no such group (groups: {', '.join(names)})")
+
+    alarms: list[AlarmInfo] = []
+    for i, entry in enumerate(t.array("alarms")):
+        a_t = _Table(entry, f"{t.key('alarms')}[{i}]", t.source)
+        code = a_t.integer("code", -1, 0, 9999)
+        if code < 0:
+            raise a_t.error("code", "is required (0..9999)")
+        alarm_class(code)
+        alarms.append(AlarmInfo(code, a_t.integer("subcode", 0, 0, 2**31 - 1), a_t.string("text", "")))
+        a_t.finish()
+
+    state = InitialState(
+        mode=mode,
+        remote=t.boolean("remote", True),
+        servo=t.boolean("servo", False),
+        estop=t.boolean("estop", False),
+        hold=t.boolean("hold", False),
+        eco=t.boolean("eco", False),
+        alarms=tuple(alarms),
+        joints=tuple(joints),
+        tools=tuple(tools),
+    )
+    if state.servo and (state.estop or state.alarms):
+        raise t.error("servo", "cannot be on at boot with an E-stop pressed or an alarm active")
+    if state.eco and not state.servo:
+        raise t.error("eco", "eco mode needs servo power on")
+    t.finish()
+    return state

@@ -1,0 +1,512 @@
+"""The virtual controller: a Yaskawa controller running MotoROS 1.9.12, in virtual time.
+
+:class:`VirtualController` composes the pieces of this package and implements both
+protocols of :mod:`pymotoros.controller.api`: :class:`~pymotoros.controller.api.MotoRosController`
+(what the servers call) and :class:`~pymotoros.controller.api.OperatorPanel` (the
+operator's hands). It is pure and deterministic: no sockets, no clock but its own,
+randomness only from ``seed``. :meth:`VirtualController.tick` advances exactly one
+interpolation period; in one tick, in this order:
+
+1. timed operator events (servo power coming on, leaving eco mode);
+2. the INFORM job (every task as far as it goes);
+3. the MotoROS status monitor, on its 10 ms boundaries;
+4. the IncMove task (one increment per group to the servos);
+5. the AddToIncQueue tasks (interpolation into the queues);
+6. commands that were waiting (START_TRAJ_MODE polls …), whose Pending completes here.
+"""
+
+from __future__ import annotations
+
+import logging
+from collections.abc import Callable, Sequence
+from typing import Final
+
+from pymotoros.controller import signals
+from pymotoros.controller.alarms import Alarm, AlarmClass, AlarmHistory
+from pymotoros.controller.api import (
+    ControllerSnapshot,
+    FeedbackData,
+    GroupSnapshot,
+    IoRead,
+    Outcome,
+    Pending,
+    PendantMode,
+    PointData,
+    StatusData,
+)
+from pymotoros.controller.cell import CellConfig, default_cell
+from pymotoros.controller.inform import JobRunner, builtin_jobs, load_jobs
+from pymotoros.controller.io_image import IoImage
+from pymotoros.controller.machine import (
+    EstopSource,
+    Event,
+    OperatorMachine,
+    OperatorState,
+    ServoPower,
+)
+from pymotoros.controller.motoros import DhTable, MotoRos
+from pymotoros.controller.processes import ControllerClock, Scheduler
+from pymotoros.controller.servo import IN_MOTION_PULSES, ServoGroup
+from pymotoros.models.controllers import M_REGISTER_BASE
+from pymotoros.motion.axes import GroupAxes, from_pulses, to_pulses
+from pymotoros.motion.interpolator import GroupInterpolator
+from pymotoros.protocol.constants import MAX_JOINTS, IoResultCode, MotionCommand, ValidFields
+
+logger = logging.getLogger(__name__)
+
+FEEDBACK_FIELDS: Final = int(ValidFields.POSITION | ValidFields.VELOCITY)
+"""JOINT_FEEDBACK validFields: position and velocity, never time (§2.4)."""
+MODE_PLAY: Final = 2
+MODE_TEACH: Final = 1
+"""ROBOT_STATUS mode: 2 if PLAY, otherwise 1 (§2.6)."""
+MAX_ALARM_CODE: Final = 9999
+
+# Alarm numbers used when the operator forces an alarm output on (no alarm text exists).
+_FORCED_ALARM_CODE: Final = {
+    AlarmClass.MAJOR: 0,
+    AlarmClass.MINOR: 4000,
+    AlarmClass.USER: 8000,
+    AlarmClass.SYSTEM: 9000,
+}
+
+SnapshotObserver = Callable[[ControllerSnapshot], None]
+
+
+def _pad(values: Sequence[float]) -> tuple[float, ...]:
+    return tuple(values) + (0.0,) * (MAX_JOINTS - len(values))
+
+
+class VirtualController:
+    """A controller with MotoROS, for the servers (MotoRosController) and operators (OperatorPanel)."""
+
+    def __init__(self, cell: CellConfig | None = None, *, seed: int = 0) -> None:
+        self.cell = cell = cell if cell is not None else default_cell()
+        self.seed = seed
+        ctrl = cell.controller
+        self._clock = ControllerClock(ctrl.interpolation_period_ms)
+        self._io = IoImage(ctrl)
+        init = cell.initial
+        state = OperatorState(
+            mode=init.mode,
+            remote=init.remote,
+            servo=ServoPower.ON if init.servo else ServoPower.OFF,
+            estop=frozenset({EstopSource.PENDANT}) if init.estop else frozenset(),
+            hold=init.hold,
+            eco=init.eco,
+            alarms=tuple(Alarm(a.code, a.subcode, a.text, 0) for a in init.alarms),
+        )
+        self._history = AlarmHistory()
+        for alarm in state.alarms:
+            self._history.record(alarm)
+        self._machine = OperatorMachine(
+            state, self._io, servo_on_delay_ms=cell.servo.servo_on_delay_ms
+        )
+        variant = cell.job_variant
+        if variant is not None:
+            jobs = builtin_jobs(variant)
+        else:
+            assert isinstance(cell.jobs, tuple)
+            jobs = load_jobs(cell.jobs)
+        self._runner = JobRunner(jobs, self._io, on_skill=self._on_skill)
+        self._axes = tuple(GroupAxes.from_model(g, ctrl) for g in cell.groups)
+        self._interps = tuple(GroupInterpolator(a) for a in self._axes)
+        for interp, tool in zip(self._interps, init.tools, strict=False):
+            interp.tool = tool
+        self._servos = tuple(
+            ServoGroup(
+                to_pulses(init.joints[g] if init.joints else (), axes),
+                period_ms=ctrl.interpolation_period_ms,
+                lag_ticks=cell.servo.lag_ticks,
+                noise_pulses=cell.servo.noise_pulses,
+                seed=seed,
+                group_index=g,
+            )
+            for g, axes in enumerate(self._axes)
+        )
+        self._motoros = MotoRos(
+            cell,
+            self._clock,
+            self._io,
+            self._machine,
+            self._runner,
+            self._axes,
+            self._interps,
+            self._servos,
+        )
+        self._scheduler = Scheduler(self._clock)
+        self._observers: list[SnapshotObserver] = []
+        self._machine.add_observer(self._on_operator_change)
+        self._motoros.boot()
+        for warning in cell.warnings:
+            logger.warning("%s", warning)
+
+    # ================================================================== time
+
+    @property
+    def period_ms(self) -> int:
+        return self._clock.period_ms
+
+    @property
+    def time_ms(self) -> int:
+        """Controller time since boot, ms."""
+        return self._clock.time_ms
+
+    @property
+    def tick_count(self) -> int:
+        return self._clock.tick_count
+
+    @property
+    def num_groups(self) -> int:
+        return len(self._axes)
+
+    def tick(self) -> None:
+        """Advance controller time by exactly one interpolation period."""
+        now = self._clock.advance()
+        machine = self._machine
+        timer = machine.next_timer_ms
+        if timer is not None and now >= timer:
+            machine.advance(now)
+        runner = self._runner
+        if runner.running and runner.step(now):
+            machine.fire(Event.END_JOB, now)
+        motoros = self._motoros
+        motoros.monitor_tick(now)
+        if not motoros.inc_move_tick():
+            for servo in self._servos:
+                servo.idle()
+        motoros.fill_tick()
+        scheduler = self._scheduler
+        if scheduler.busy:
+            scheduler.advance()
+
+    def run_ticks(self, count: int) -> None:
+        """``count`` ticks."""
+        for _ in range(count):
+            self.tick()
+
+    def wait_for(self, result: Outcome | Pending, *, max_ticks: int = 5000) -> Outcome:
+        """Tick until ``result`` is complete and return its Outcome (plain-loop helper).
+
+        Raises ``TimeoutError`` after ``max_ticks`` ticks: a command that never completes
+        is a bug, not a refusal.
+        """
+        if isinstance(result, Outcome):
+            return result
+        for _ in range(max_ticks):
+            if result.done:
+                return result.outcome
+            self.tick()
+        if result.done:
+            return result.outcome
+        raise TimeoutError(f"{result.description} did not complete within {max_ticks} ticks")
+
+    # ================================================================== motion port
+
+    def motion_ctrl(self, group_no: int, command: int) -> Outcome | Pending:
+        return self._scheduler.run(
+            self._motoros.motion_ctrl(group_no, command),
+            MotionCommand.describe(command),
+        )
+
+    def trajectory_point(self, sequence: int, point: PointData) -> Outcome | Pending:
+        return self._scheduler.run(
+            self._motoros.trajectory_point(sequence, point),
+            f"JOINT_TRAJ_PT_FULL sequence {sequence} group {point.group_no}",
+        )
+
+    def trajectory_point_ex(self, sequence: int, points: Sequence[PointData]) -> Outcome | Pending:
+        return self._scheduler.run(
+            self._motoros.trajectory_point_ex(sequence, points),
+            f"JOINT_TRAJ_PT_FULL_EX sequence {sequence}",
+        )
+
+    def select_tool(self, group_no: int, tool: int) -> Outcome:
+        return self._motoros.select_tool(group_no, tool)
+
+    def dh_parameters(self) -> DhTable | None:
+        return self._motoros.dh_parameters()
+
+    # ================================================================== IO
+
+    def read_io_bit(self, address: int) -> IoRead:
+        return self._io.read_bit(address)
+
+    def write_io_bit(self, address: int, value: int) -> IoResultCode:
+        return self._io.write_bit(address, value)
+
+    def read_io_group(self, address: int) -> IoRead:
+        return self._io.read_group(address)
+
+    def write_io_group(self, address: int, value: int) -> IoResultCode:
+        return self._io.write_group(address, value)
+
+    def read_mregister(self, number: int) -> IoRead:
+        return self._io.read_mregister(number)
+
+    def write_mregister(self, number: int, value: int) -> IoResultCode:
+        return self._io.write_mregister(number, value)
+
+    def set_io_api_failure(self, *, reads: bool = False, writes: bool = False) -> None:
+        """Fault injection: make client IO reads (1004) and/or writes (1005) fail."""
+        self._io.fail_reads = reads
+        self._io.fail_writes = writes
+
+    # ================================================================== connections
+
+    def motion_connected(self) -> None:
+        self._motoros.motion_connected()
+
+    def motion_disconnected(self) -> None:
+        """Clears the queues: our documented improvement over MotoROS (§2.2)."""
+        self._motoros.motion_disconnected()
+
+    def state_clients_changed(self, count: int) -> None:
+        self._motoros.state_clients_changed(count)
+
+    def io_connected(self) -> None:
+        self._motoros.io_connected()
+
+    def has_queued_motion(self) -> bool:
+        return self._motoros.has_queued_motion()
+
+    # ================================================================== state server
+
+    def _check_group(self, group_no: int) -> None:
+        if not 0 <= group_no < len(self._axes):
+            raise ValueError(f"group {group_no} does not exist (0..{len(self._axes) - 1})")
+
+    def joint_feedback(self, group_no: int) -> FeedbackData:
+        """§2.4: feedback pulses → rad (m), ROS order; speed from the servo model."""
+        self._check_group(group_no)
+        axes = self._axes[group_no]
+        servo = self._servos[group_no]
+        pulses = servo.feedback(self._clock.tick_count, self._machine.state.drives_powered)
+        return FeedbackData(
+            group_no,
+            FEEDBACK_FIELDS,
+            _pad(from_pulses(pulses, axes)),
+            _pad(from_pulses(servo.speed(), axes)),
+        )
+
+    def in_motion(self) -> bool:
+        """Any queue holds increments, or |feedback − command| > 30 pulses on a valid axis."""
+        if self._motoros.has_queued_motion():
+            return True
+        powered = self._machine.state.drives_powered
+        tick = self._clock.tick_count
+        for axes, servo in zip(self._axes, self._servos, strict=True):
+            if servo.settled() and not powered:
+                continue
+            fb = servo.feedback(tick, powered)
+            cmd = servo.command
+            for slot, valid in enumerate(axes.valid):
+                if valid and abs(fb[slot] - cmd[slot]) > IN_MOTION_PULSES:
+                    return True
+        return False
+
+    def robot_status(self) -> StatusData:
+        """§2.6, from the status monitor's last reading."""
+        mr = self._motoros
+        servo, eco = mr.servo_reading
+        return StatusData(
+            drives_powered=int(servo and not eco),
+            e_stopped=int(mr.estopped),
+            error_code=mr.error_code,
+            in_error=int(mr.in_error),
+            in_motion=int(self.in_motion()),
+            mode=MODE_PLAY if mr.play_reading else MODE_TEACH,
+            motion_possible=int(mr.motion_ready),
+        )
+
+    def snapshot(self) -> ControllerSnapshot:
+        s = self._machine.state
+        tick = self._clock.tick_count
+        groups = []
+        for g, (axes, servo, interp) in enumerate(
+            zip(self._axes, self._servos, self._interps, strict=True)
+        ):
+            n = axes.num_axes
+            cmd = servo.command
+            groups.append(
+                GroupSnapshot(
+                    name=self.cell.groups[g].name,
+                    joint_names=axes.joint_names,
+                    command_rad=from_pulses(cmd, axes)[:n],
+                    feedback_rad=from_pulses(servo.feedback(tick, s.drives_powered), axes)[:n],
+                    command_pulse=tuple(cmd[axes.ros_to_slot[i]] for i in range(n)),
+                    queue=len(interp.queue),
+                    tool=interp.tool,
+                )
+            )
+        return ControllerSnapshot(
+            time_ms=self._clock.time_ms,
+            tick_count=tick,
+            mode=s.mode,
+            remote=s.remote,
+            servo=s.servo_on,
+            estop=s.estopped,
+            hold=s.hold,
+            alarms=tuple(a.info for a in s.alarms),
+            motion_ready=self._motoros.motion_ready,
+            groups=tuple(groups),
+            errors=tuple(e.info for e in s.errors),
+        )
+
+    @property
+    def operator_state(self) -> OperatorState:
+        """The pendant's view, frozen."""
+        return self._machine.state
+
+    @property
+    def motoros(self) -> MotoRos:
+        """MotoROS's flags (motion_ready, job_ready, inc_move_error …), for tests and the pendant."""
+        return self._motoros
+
+    @property
+    def io(self) -> IoImage:
+        return self._io
+
+    @property
+    def job_position(self) -> tuple[tuple[str, int], ...]:
+        """(job, line) of every running job task; empty when no job runs."""
+        return self._runner.position()
+
+    def alarm_history(self) -> tuple[Alarm, ...]:
+        return self._history.entries()
+
+    def subscribe(self, observer: SnapshotObserver) -> None:
+        """``observer(snapshot)`` after every operator-state change."""
+        self._observers.append(observer)
+
+    # ================================================================== operator panel
+
+    def _fire(self, event: Event, **kw: object) -> str | None:
+        alarm = kw.get("alarm")
+        source = kw.get("source", EstopSource.PENDANT)
+        assert alarm is None or isinstance(alarm, Alarm)
+        assert isinstance(source, EstopSource)
+        return self._machine.fire(event, self._clock.time_ms, alarm=alarm, source=source)
+
+    def press_estop(self, pressed: bool, source: EstopSource = EstopSource.PENDANT) -> None:
+        """E-stop: cuts servo power and stops the job; raises no alarm."""
+        self._fire(Event.PRESS_ESTOP if pressed else Event.RELEASE_ESTOP, source=source)
+
+    def set_hold(self, on: bool) -> None:
+        self._fire(Event.HOLD_ON if on else Event.HOLD_OFF)
+
+    def set_mode(self, mode: PendantMode) -> None:
+        if not isinstance(mode, PendantMode):
+            raise ValueError(f"mode must be a PendantMode, not {mode!r}")
+        self._fire(Event.SELECT_PLAY if mode is PendantMode.PLAY else Event.SELECT_TEACH)
+
+    def set_remote(self, on: bool) -> None:
+        self._fire(Event.REMOTE_ON if on else Event.REMOTE_OFF)
+
+    def set_servo(self, on: bool) -> None:
+        """Servo power request as from the pendant (refused silently while E-stopped or alarmed)."""
+        refused = self._fire(Event.REQUEST_SERVO_ON if on else Event.SERVO_OFF)
+        if refused:
+            logger.info("servo on refused: %s", refused)
+
+    def set_eco(self, on: bool) -> None:
+        """Enter eco mode (servo power saved; needs servo on) or leave it (servo power back)."""
+        if on:
+            refused = self._fire(Event.ENTER_ECO)
+            if refused:
+                logger.info("eco mode refused: %s", refused)
+        else:
+            self._fire(Event.WAKE_FROM_ECO)
+
+    def raise_alarm(self, code: int, subcode: int, text: str) -> None:
+        if not 0 <= code <= MAX_ALARM_CODE:
+            raise ValueError(f"alarm code {code} is outside 0..{MAX_ALARM_CODE}")
+        alarm = Alarm(code, subcode, text, self._clock.time_ms)
+        self._history.record(alarm)
+        self._fire(Event.RAISE_ALARM, alarm=alarm)
+
+    def raise_error(self, code: int, subcode: int = 0, text: str = "") -> None:
+        """An operator error (50014): refuses motion with 5002 until reset; not an alarm."""
+        if not 0 <= code <= MAX_ALARM_CODE:
+            raise ValueError(f"error code {code} is outside 0..{MAX_ALARM_CODE}")
+        error = Alarm(code, subcode, text, self._clock.time_ms)
+        self._history.record(error)
+        self._fire(Event.RAISE_ERROR, alarm=error)
+
+    def reset(self) -> None:
+        """The pendant's RESET key: clears alarms and errors (their causes are gone)."""
+        self._fire(Event.RESET_ALARMS)
+        self._fire(Event.CANCEL_ERRORS)
+
+    def force_io(self, address: int, value: int) -> None:
+        """Force a bit or an M-register (1000000 + n) as the operator simulating the cell.
+
+        Signals that belong to the operator state (E-stop inputs, mode, remote, servo,
+        hold, eco, operating, alarm and error outputs) are forced through the same
+        transition as the matching key, so the state stays consistent.
+        """
+        self._io.check_forcible(address, value)
+        if address >= M_REGISTER_BASE:
+            self._io.set_mregister(address - M_REGISTER_BASE, value)
+            return
+        on = bool(value)
+        handler = self._forced_signal_handlers().get(address)
+        if handler is not None:
+            handler(on)
+        else:
+            self._io.set(address, on)
+
+    def _forced_signal_handlers(self) -> dict[int, Callable[[bool], None]]:
+        def estop(source: EstopSource) -> Callable[[bool], None]:
+            return lambda on: self.press_estop(not on, source)
+
+        def alarm_output(cls: AlarmClass) -> Callable[[bool], None]:
+            def force(on: bool) -> None:
+                if on:
+                    code = _FORCED_ALARM_CODE[cls]
+                    self.raise_alarm(code, 0, f"{cls.name.lower()} alarm forced on {cls.address}")
+                else:
+                    self._fire(Event.RESET_ALARMS)
+
+            return force
+
+        def operating(on: bool) -> None:
+            refused = self._fire(Event.START_JOB if on else Event.STOP_JOB)
+            if refused:
+                raise ValueError(f"cannot start the job: {refused}")
+
+        handlers: dict[int, Callable[[bool], None]] = {
+            signals.ESTOP_EXTERNAL: estop(EstopSource.EXTERNAL),
+            signals.ESTOP_PENDANT: estop(EstopSource.PENDANT),
+            signals.ESTOP_CONTROLLER: estop(EstopSource.CONTROLLER),
+            signals.REMOTE: self.set_remote,
+            signals.PLAY: lambda on: self.set_mode(PendantMode.PLAY if on else PendantMode.TEACH),
+            signals.TEACH: lambda on: self.set_mode(PendantMode.TEACH if on else PendantMode.PLAY),
+            signals.HOLD: self.set_hold,
+            signals.SERVO_ON: self.set_servo,
+            signals.ECO_MODE: self.set_eco,
+            signals.OPERATING: operating,
+            signals.ERROR: lambda on: (
+                self.raise_error(0, 0, "error forced on 50014")
+                if on
+                else self._fire(Event.CANCEL_ERRORS)
+            ),
+        }
+        for cls in AlarmClass:
+            handlers[cls.address] = alarm_output(cls)
+        return handlers
+
+    # ================================================================== internals
+
+    def _on_skill(self, slave: int, text: str) -> None:
+        self._motoros.on_skill(slave, text)
+
+    def _on_operator_change(self, old: OperatorState, new: OperatorState, event: Event) -> None:
+        if new.job_running and not old.job_running:
+            self._runner.start()
+        elif old.job_running and not new.job_running:
+            self._runner.stop()
+            self._motoros.on_job_stopped()
+        if self._observers:
+            snap = self.snapshot()
+            for observer in self._observers:
+                observer(snap)

@@ -1,0 +1,188 @@
+"""The controller's IO image: every bit of every area, and the M-registers.
+
+Two kinds of access:
+
+- *internal* (:meth:`IoImage.get` / :meth:`IoImage.set`): the controller itself (operator
+  state, INFORM jobs, MotoROS) writes any signal without range checks;
+- *client* (:meth:`IoImage.read_bit` … :meth:`IoImage.write_mregister`): the rules of
+  MotoROS's IO server (reference §6.1, §6.2) with their result codes 1001..1005.
+
+A write that changes one of the signals the status monitor reads raises
+:attr:`IoImage.monitor_dirty`, so the 10 ms monitor can skip its work while nothing
+it reads has changed.
+"""
+
+from __future__ import annotations
+
+import logging
+from array import array
+from typing import Final
+
+from pymotoros.controller.api import IoRead
+from pymotoros.controller.signals import MONITORED
+from pymotoros.models import ControllerModel, IoRange
+from pymotoros.models.controllers import (
+    M_REGISTER_BASE,
+    M_REGISTER_COUNT,
+    M_REGISTER_WRITABLE,
+)
+from pymotoros.protocol.constants import IoResultCode
+
+logger = logging.getLogger(__name__)
+
+BIT_VALUES: Final = (0, 1)
+GROUP_MAX: Final = 0xFF
+"""A group (byte) write must be ≤ 0xFF (§6.1)."""
+M_REGISTER_MAX: Final = 0xFFFF
+"""M-registers hold 16 bits (§6.1)."""
+
+
+def m_register_index(number: int) -> int:
+    """MotoROS's adjustment: numbers below 1000000 get 1000000 added (§6.1); index 0..."""
+    if number < M_REGISTER_BASE:
+        number += M_REGISTER_BASE
+    return number - M_REGISTER_BASE
+
+
+class IoImage:
+    """Bits addressed as Yaskawa does (byte number × 10 + bit) and M000..M999."""
+
+    __slots__ = (
+        "_bytes",
+        "_controller",
+        "_mreg",
+        "fail_reads",
+        "fail_writes",
+        "monitor_dirty",
+        "monitored_changes",
+    )
+
+    def __init__(self, controller: ControllerModel) -> None:
+        self._controller = controller
+        highest = max(r.last for r in controller.io_ranges)
+        self._bytes = bytearray(highest // 10 + 1)
+        self._mreg = array("H", bytes(2 * M_REGISTER_COUNT))
+        self.monitor_dirty = True
+        """Set when a signal the status monitor reads changes; the monitor clears it."""
+        self.monitored_changes = 0
+        """Counts changes of monitored signals (a cheap cache key)."""
+        self.fail_reads = False
+        """Fault injection: every client read fails as if the controller's API failed (1004)."""
+        self.fail_writes = False
+        """Fault injection: every client write fails as if the controller's API failed (1005)."""
+
+    # ------------------------------------------------------------------ internal access
+
+    def get(self, address: int) -> int:
+        """Value (0/1) of any bit address; no range check."""
+        return (self._bytes[address // 10] >> (address % 10)) & 1
+
+    def set(self, address: int, value: int | bool) -> None:
+        """Set any bit address (the controller's own writes); no range check."""
+        index, bit = divmod(address, 10)
+        old = self._bytes[index]
+        new = (old | (1 << bit)) if value else (old & ~(1 << bit))
+        if new != old:
+            self._bytes[index] = new
+            if address in MONITORED:
+                self.monitor_dirty = True
+                self.monitored_changes += 1
+
+    def mregister(self, index: int) -> int:
+        return self._mreg[index]
+
+    def set_mregister(self, index: int, value: int) -> None:
+        self._mreg[index] = value
+
+    def readable_range(self, address: int) -> IoRange | None:
+        """The IO range holding ``address``, or None if no readable range holds it."""
+        return self._controller.io_range(address)
+
+    def is_writable(self, address: int) -> bool:
+        rng = self._controller.io_range(address)
+        return rng is not None and rng.writable
+
+    # ------------------------------------------------------------------ client access (§6.1)
+
+    def read_bit(self, address: int) -> IoRead:
+        if self._controller.io_range(address) is None:
+            return IoRead(0, IoResultCode.READ_ADDRESS_INVALID)
+        if self.fail_reads:
+            return IoRead(0, IoResultCode.READ_API_ERROR)
+        return IoRead(self.get(address), IoResultCode.OK)
+
+    def write_bit(self, address: int, value: int) -> IoResultCode:
+        if not self.is_writable(address):
+            return IoResultCode.WRITE_ADDRESS_INVALID
+        if value not in BIT_VALUES:
+            return IoResultCode.WRITE_VALUE_INVALID
+        if self.fail_writes:
+            return IoResultCode.WRITE_API_ERROR
+        self.set(address, value)
+        return IoResultCode.OK
+
+    def read_group(self, number: int) -> IoRead:
+        """Byte ``number``: bits number×10+0..7, bit 0 least significant (§6.1)."""
+        first = number * 10
+        if number < 0 or self._controller.io_range(first) is None:
+            return IoRead(0, IoResultCode.READ_ADDRESS_INVALID)
+        if self.fail_reads:
+            return IoRead(0, IoResultCode.READ_API_ERROR)
+        return IoRead(self._bytes[number], IoResultCode.OK)
+
+    def write_group(self, number: int, value: int) -> IoResultCode:
+        first = number * 10
+        if number < 0 or not self.is_writable(first):
+            return IoResultCode.WRITE_ADDRESS_INVALID
+        if not 0 <= value <= GROUP_MAX:
+            return IoResultCode.WRITE_VALUE_INVALID
+        if self.fail_writes:
+            return IoResultCode.WRITE_API_ERROR
+        for k in range(8):
+            self.set(first + k, (value >> k) & 1)
+        return IoResultCode.OK
+
+    def read_mregister(self, number: int) -> IoRead:
+        index = m_register_index(number)
+        if not 0 <= index < M_REGISTER_COUNT:
+            return IoRead(0, IoResultCode.READ_ADDRESS_INVALID)
+        if self.fail_reads:
+            return IoRead(0, IoResultCode.READ_API_ERROR)
+        return IoRead(self._mreg[index], IoResultCode.OK)
+
+    def write_mregister(self, number: int, value: int) -> IoResultCode:
+        index = m_register_index(number)
+        if not 0 <= index < M_REGISTER_WRITABLE:
+            return IoResultCode.WRITE_ADDRESS_INVALID
+        if not 0 <= value <= M_REGISTER_MAX:
+            return IoResultCode.WRITE_VALUE_INVALID
+        if self.fail_writes:
+            return IoResultCode.WRITE_API_ERROR
+        self._mreg[index] = value
+        return IoResultCode.OK
+
+    # ------------------------------------------------------------------ operator forcing
+
+    def check_forcible(self, address: int, value: int) -> None:
+        """Raise ``ValueError`` unless the operator may force ``address`` to ``value``.
+
+        Any readable bit address takes 0/1; ``1000000 + n`` (n = 0..999) is M-register n
+        and takes 0..65535.
+        """
+        if address >= M_REGISTER_BASE:
+            index = address - M_REGISTER_BASE
+            if not 0 <= index < M_REGISTER_COUNT:
+                raise ValueError(
+                    f"M-register address {address}: only {M_REGISTER_BASE}.."
+                    f"{M_REGISTER_BASE + M_REGISTER_COUNT - 1} (M000..M999) exist"
+                )
+            if not 0 <= value <= M_REGISTER_MAX:
+                raise ValueError(f"M{index:03d} holds 0..{M_REGISTER_MAX}, not {value}")
+            return
+        if self._controller.io_range(address) is None:
+            raise ValueError(
+                f"address {address} is in no IO range of a {self._controller.type.value} "
+                "controller (or its last digit is 8 or 9)"
+            )
+        if value not in BIT_VALUES:
+            raise ValueError(f"bit {address} takes 0 or 1, not {value}")

@@ -1,0 +1,135 @@
+"""The servo model: commanded pulses, and a feedback that follows them.
+
+Commanded position = initial position + the sum of every increment sent (the
+controller's command register, which MotoROS reads for the start-position check).
+Feedback is what the encoders report: the mean of the commanded position over the
+last ``2·lag + 1`` ticks, i.e. the command delayed by ``lag`` ticks on average and
+smoothed, so it differs from the command while moving and settles ``2·lag`` ticks
+after the last increment. Optional noise of ±``noise_pulses`` is added while the
+drives are powered; it is a pure function of (seed, group, tick, axis), so the
+values do not depend on how often anybody reads them.
+
+Feedback is computed only when asked (state server every ~25 ms): a tick costs one
+in-place addition per axis and one append of the increment to a short history.
+"""
+
+from __future__ import annotations
+
+from collections import deque
+from collections.abc import Sequence
+from operator import add
+from typing import Final
+
+from pymotoros.protocol.constants import MAX_PULSE_AXES
+
+SLOTS: Final = MAX_PULSE_AXES
+ZERO_INCREMENT: Final = (0,) * SLOTS
+IN_MOTION_PULSES: Final = 30
+"""|feedback − command| above which ROBOT_STATUS reports in_motion (§2.6)."""
+
+_MASK64: Final = (1 << 64) - 1
+
+
+def _mix(x: int) -> int:
+    """splitmix64 finaliser: a cheap, well-spread deterministic hash."""
+    x = (x + 0x9E3779B97F4A7C15) & _MASK64
+    x = ((x ^ (x >> 30)) * 0xBF58476D1CE4E5B9) & _MASK64
+    x = ((x ^ (x >> 27)) * 0x94D049BB133111EB) & _MASK64
+    return x ^ (x >> 31)
+
+
+class ServoGroup:
+    """One control group's command register and encoder feedback, controller order, 8 slots."""
+
+    __slots__ = (
+        "_history",
+        "_noise_pulses",
+        "_seed",
+        "_weights",
+        "_window",
+        "command",
+        "period_ms",
+    )
+
+    def __init__(
+        self,
+        initial: Sequence[int],
+        *,
+        period_ms: int,
+        lag_ticks: int,
+        noise_pulses: int = 0,
+        seed: int = 0,
+        group_index: int = 0,
+    ) -> None:
+        if lag_ticks < 0:
+            raise ValueError(f"lag_ticks must be ≥ 0, not {lag_ticks}")
+        if noise_pulses < 0:
+            raise ValueError(f"noise_pulses must be ≥ 0, not {noise_pulses}")
+        self.command: list[int] = [int(p) for p in initial] + [0] * (SLOTS - len(initial))
+        """Commanded pulses (controller order); replaced by :meth:`apply`."""
+        self.period_ms = period_ms
+        self._window = 2 * lag_ticks + 1
+        self._history: deque[Sequence[int]] = deque(
+            [ZERO_INCREMENT] * self._window, maxlen=self._window
+        )
+        w = self._window
+        # feedback = command − Σ_m weight[m]·inc[t−m], weight[m] = (w−1−m)/w
+        self._weights = tuple((w - 1 - m) / w for m in range(w))
+        self._noise_pulses = noise_pulses
+        self._seed = _mix(seed * 1_000_003 + group_index)
+
+    @property
+    def lag_ticks(self) -> int:
+        return (self._window - 1) // 2
+
+    def apply(self, increment: Sequence[int]) -> None:
+        """One tick with these pulse increments (8 slots)."""
+        self.command = list(map(add, self.command, increment))
+        self._history.append(increment)
+
+    def idle(self) -> None:
+        """One tick without increments."""
+        self._history.append(ZERO_INCREMENT)
+
+    def reset_to(self, pulses: Sequence[int]) -> None:
+        """Put the axis at ``pulses``, command and feedback alike (no motion)."""
+        self.command[:] = [int(p) for p in pulses] + [0] * (SLOTS - len(pulses))
+        for _ in range(self._window):
+            self._history.append(ZERO_INCREMENT)
+
+    def settled(self) -> bool:
+        """No increment in the whole feedback window: feedback equals the command."""
+        return all(inc is ZERO_INCREMENT or not any(inc) for inc in self._history)
+
+    def feedback(self, tick: int, powered: bool) -> list[int]:
+        """Encoder pulses now (controller order)."""
+        hist = self._history
+        weights = self._weights
+        out: list[int] = []
+        n = len(hist)
+        for k in range(SLOTS):
+            lag = 0.0
+            for m in range(1, n):
+                inc = hist[n - m][k]
+                if inc:
+                    lag += weights[m - 1] * inc
+            out.append(self.command[k] - int(lag))
+        if powered and self._noise_pulses:
+            span = 2 * self._noise_pulses + 1
+            base = _mix(self._seed ^ (tick * 0x100000001B3))
+            for k in range(SLOTS):
+                out[k] += _mix(base + k) % span - self._noise_pulses
+        return out
+
+    def speed(self) -> list[int]:
+        """Feedback speed in whole pulses/s (controller order), truncated as MotoROS does."""
+        hist = self._history
+        w = self._window
+        per_s = 1000.0 / self.period_ms
+        out = []
+        for k in range(SLOTS):
+            total = 0
+            for inc in hist:
+                total += inc[k]
+            out.append(int(total / w * per_s))
+        return out

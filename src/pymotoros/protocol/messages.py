@@ -1,0 +1,1075 @@
+"""One immutable class per Simple Message body, exactly as MotoROS 1.9.12 lays it out.
+
+Why classes and not dicts: a message that exists is a message that can be sent.
+Construction checks what would make the bytes impossible (an array that is not
+10 floats long, an integer outside int32/uint32), so the servers and the client
+never discover a bad field halfway through a ``send``. Decoding does *not* check
+meaning: every integer stays a plain ``int`` because MotoROS itself accepts any
+value on the wire and answers nonsense with a result code (the server must be
+able to say INVALID/3004 to group 9, which it cannot if decoding refuses it).
+
+``pack(order)`` returns the body only; the header and length prefix are the
+business of :mod:`pymotoros.protocol.framing`. ``unpack(body, order)`` wants the
+exact body size; trimming surplus bytes the MotoROS way is the job of
+:mod:`pymotoros.protocol.sizes`.
+
+Decoding is on the hot path (the state stream is 40 Hz × groups × clients, and
+the client decodes every frame), so ``unpack`` builds instances without running
+``__post_init__``: the ``struct`` format already guarantees every shape that
+validation would check. Layouts: reference §1.3 and §1.4.
+"""
+
+from __future__ import annotations
+
+import enum
+import struct
+from collections.abc import Callable, Iterable, Sequence
+from dataclasses import dataclass, field
+from typing import Any, ClassVar, Final, NamedTuple, Self, TypeAlias, TypeVar
+
+from pymotoros.errors import LocalProtocolError, RemoteProtocolError
+from pymotoros.protocol.constants import (
+    MAX_DH_LINKS,
+    MAX_GROUPS,
+    MAX_JOINTS,
+    ByteOrder,
+    MsgType,
+    ValidFields,
+)
+
+__all__ = [
+    "BODY_SIZE_DH_REPLY",
+    "BODY_SIZE_FEEDBACK_EX",
+    "BODY_SIZE_FULL_EX_HEAD",
+    "BODY_SIZE_GROUP_RECORD",
+    "BODY_SIZE_MOTION_REPLY",
+    "ZERO_JOINTS",
+    "DhLink",
+    "IoErrorReply",
+    "JointFeedback",
+    "JointTrajPtExData",
+    "JointTrajPtFull",
+    "Message",
+    "MotoGetDhParameters",
+    "MotoGetDhParametersReply",
+    "MotoJointFeedbackEx",
+    "MotoJointTrajPtFullEx",
+    "MotoMotionCtrl",
+    "MotoMotionReply",
+    "MotoReadIoBit",
+    "MotoReadIoBitReply",
+    "MotoReadIoGroup",
+    "MotoReadIoGroupReply",
+    "MotoReadMRegister",
+    "MotoReadMRegisterReply",
+    "MotoSelectTool",
+    "MotoWriteIoBit",
+    "MotoWriteIoBitReply",
+    "MotoWriteIoGroup",
+    "MotoWriteIoGroupReply",
+    "MotoWriteMRegister",
+    "MotoWriteMRegisterReply",
+    "Ping",
+    "PingReply",
+    "Role",
+    "RobotStatus",
+    "UnknownMessage",
+    "WireMessage",
+]
+
+# --------------------------------------------------------------------------- ranges and sizes
+
+INT32_MIN: Final = -(2**31)
+INT32_MAX: Final = 2**31 - 1
+UINT32_MAX: Final = 2**32 - 1
+
+BODY_SIZE_GROUP_RECORD: Final = 132
+"""groupNo, validFields, time, pos[10], vel[10], acc[10]: JOINT_FEEDBACK body and the
+per-group record of FULL_EX / FEEDBACK_EX (§1.4)."""
+
+BODY_SIZE_FULL_EX_HEAD: Final = 8
+"""numberOfValidGroups + sequence in front of the FULL_EX records (§1.4)."""
+
+BODY_SIZE_FEEDBACK_EX: Final = 4 + MAX_GROUPS * BODY_SIZE_GROUP_RECORD
+"""532: numberOfValidGroups + always four 132-byte slots (§1.3)."""
+
+BODY_SIZE_MOTION_REPLY: Final = 60
+"""groupNo, sequence, command, result, subcode, data[10] (§1.4)."""
+
+BODY_SIZE_DH_REPLY: Final = MAX_GROUPS * MAX_DH_LINKS * 4 * 4
+"""512: 4 groups × 8 links × {theta, d, a, alpha} float32 (§1.4)."""
+
+ZERO_JOINTS: Final[tuple[float, ...]] = (0.0,) * MAX_JOINTS
+"""A 10-slot float array of zeros: the unused ``data[]`` of motion messages, unused slots."""
+
+
+class Role(enum.Enum):
+    """Which way a message travels; it decides the default header (§1.2)."""
+
+    REQUEST = "request"
+    """Client → controller: comm SERVICE_REQUEST, reply INVALID."""
+    REPLY = "reply"
+    """Controller → client answer: comm SERVICE_REPLY, reply SUCCESS (or FAILURE)."""
+    TOPIC = "topic"
+    """State stream, nobody answers: comm TOPIC, reply INVALID."""
+
+
+class _Kind(enum.Enum):
+    """Wire type of one field, for construction-time checks and the generic codec."""
+
+    I32 = "i"
+    U32 = "I"
+    F32 = "f"
+    JOINTS = f"{MAX_JOINTS}f"
+
+
+_I32, _U32, _F32, _JOINTS = _Kind.I32, _Kind.U32, _Kind.F32, _Kind.JOINTS
+
+_Setter: TypeAlias = Callable[[object, object], None]
+_M = TypeVar("_M", bound="Message")
+
+
+def _structs(body_format: str) -> tuple[struct.Struct, struct.Struct]:
+    """The (little-endian, big-endian) ``Struct`` pair for one body layout."""
+    return struct.Struct(ByteOrder.LITTLE + body_format), struct.Struct(ByteOrder.BIG + body_format)
+
+
+def _pick(pair: tuple[struct.Struct, struct.Struct], order: ByteOrder) -> struct.Struct:
+    """Select the Struct for ``order`` (a plain ``==`` on the struct prefix: cheap)."""
+    return pair[1] if order == ">" else pair[0]
+
+
+def _size_error(cls: type, body: bytes, expected: int | str) -> RemoteProtocolError:
+    return RemoteProtocolError(
+        f"{cls.__name__}: body of {len(body)} bytes, expected {expected}", data=bytes(body)
+    )
+
+
+def _check_int(owner: str, name: str, value: object, kind: _Kind) -> None:
+    if not isinstance(value, int):
+        raise LocalProtocolError(f"{owner}.{name} must be an int, not {type(value).__name__}")
+    low, high = (INT32_MIN, INT32_MAX) if kind is _I32 else (0, UINT32_MAX)
+    if not low <= value <= high:
+        kind_name = "int32" if kind is _I32 else "uint32"
+        raise LocalProtocolError(f"{owner}.{name} = {value} does not fit in {kind_name}")
+
+
+def _check_float(owner: str, name: str, value: object) -> None:
+    if not isinstance(value, (int, float)) or isinstance(value, bool):
+        raise LocalProtocolError(f"{owner}.{name} must be a float, not {type(value).__name__}")
+    try:
+        struct.pack("<f", value)
+    except OverflowError:
+        raise LocalProtocolError(f"{owner}.{name} = {value} does not fit in float32") from None
+
+
+def _pad_joints(owner: str, name: str, values: Iterable[float] | None) -> tuple[float, ...]:
+    """Pad a short joint list with zeros to the 10 slots of the wire."""
+    if values is None:
+        return ZERO_JOINTS
+    padded = tuple(float(v) for v in values)
+    if len(padded) > MAX_JOINTS:
+        raise LocalProtocolError(f"{owner}: {name} has {len(padded)} values, at most {MAX_JOINTS}")
+    return padded + ZERO_JOINTS[len(padded) :]
+
+
+# --------------------------------------------------------------------------- base class
+
+
+class Message:
+    """Base of every typed message body.
+
+    Subclasses are frozen, slotted dataclasses that declare ``MSG_TYPE``, ``ROLE``
+    and ``FIELDS`` (name and wire kind of each field, in wire order). Fixed-size
+    bodies get ``pack``/``unpack`` from here; variable ones override them.
+    """
+
+    __slots__ = ()
+
+    MSG_TYPE: ClassVar[MsgType]
+    ROLE: ClassVar[Role]
+    FIELDS: ClassVar[tuple[tuple[str, _Kind], ...]] = ()
+    BODY_SIZE: ClassVar[int] = 0
+    """Body bytes for fixed layouts (the minimum for FULL_EX)."""
+    IO_RESULT: ClassVar[bool] = False
+    """True for IO replies: their header says FAILURE when ``result_code`` is non-zero."""
+
+    _STRUCTS: ClassVar[tuple[struct.Struct, struct.Struct]]
+    _SETTERS: ClassVar[tuple[_Setter, ...]] = ()
+
+    def __post_init__(self) -> None:
+        owner = type(self).__name__
+        for name, kind in self.FIELDS:
+            value = getattr(self, name)
+            if kind is _JOINTS:
+                values = tuple(value)
+                if len(values) != MAX_JOINTS:
+                    raise LocalProtocolError(
+                        f"{owner}.{name} has {len(values)} values; the wire carries exactly "
+                        f"{MAX_JOINTS} (use for_joints() to pad)"
+                    )
+                for index, item in enumerate(values):
+                    _check_float(owner, f"{name}[{index}]", item)
+                object.__setattr__(self, name, values)
+            elif kind is _F32:
+                _check_float(owner, name, value)
+            else:
+                _check_int(owner, name, value, kind)
+
+    def _flat(self) -> list[Any]:
+        flat: list[Any] = []
+        for name, kind in self.FIELDS:
+            value = getattr(self, name)
+            if kind is _JOINTS:
+                flat.extend(value)
+            else:
+                flat.append(value)
+        return flat
+
+    def pack(self, order: ByteOrder) -> bytes:
+        """The body bytes in ``order`` (no prefix, no header)."""
+        return _pick(self._STRUCTS, order).pack(*self._flat())
+
+    @classmethod
+    def unpack(cls, body: bytes, order: ByteOrder) -> Self:
+        """Decode exactly one body of this type; a wrong size is the peer's fault."""
+        layout = _pick(cls._STRUCTS, order)
+        if len(body) != layout.size:
+            raise _size_error(cls, body, layout.size)
+        raw = layout.unpack(body)
+        values: list[object] = []
+        index = 0
+        for _name, kind in cls.FIELDS:
+            if kind is _JOINTS:
+                values.append(raw[index : index + MAX_JOINTS])
+                index += MAX_JOINTS
+            else:
+                values.append(raw[index])
+                index += 1
+        return cls._trusted(values)
+
+    @classmethod
+    def _trusted(cls, values: Sequence[object]) -> Self:
+        """Build without validation: only for values that came out of ``struct``."""
+        obj = object.__new__(cls)
+        for setter, value in zip(cls._SETTERS, values, strict=True):
+            setter(obj, value)
+        return obj
+
+
+def _register(cls: type[_M]) -> type[_M]:
+    """Derive the Structs and slot setters of a fixed-layout message class."""
+    cls._STRUCTS = _structs("".join(kind.value for _name, kind in cls.FIELDS))
+    cls.BODY_SIZE = cls._STRUCTS[0].size
+    cls._SETTERS = tuple(getattr(cls, name).__set__ for name, _kind in cls.FIELDS)
+    return cls
+
+
+# --------------------------------------------------------------------------- ping
+
+
+@_register
+@dataclass(frozen=True, slots=True)
+class Ping(Message):
+    """PING request (type 1, empty body); MotoROS answers with an empty PING reply."""
+
+    MSG_TYPE: ClassVar[MsgType] = MsgType.PING
+    ROLE: ClassVar[Role] = Role.REQUEST
+
+
+@_register
+@dataclass(frozen=True, slots=True)
+class PingReply(Message):
+    """The PING reply: same type 1, comm SERVICE_REPLY, reply SUCCESS, empty body."""
+
+    MSG_TYPE: ClassVar[MsgType] = MsgType.PING
+    ROLE: ClassVar[Role] = Role.REPLY
+
+
+# --------------------------------------------------------------------------- state topics
+
+
+@_register
+@dataclass(frozen=True, slots=True)
+class RobotStatus(Message):
+    """ROBOT_STATUS (13): seven int32 status fields, sent every state cycle (§2.6).
+
+    Tri-state fields are 1/0 (-1 "unknown" only for a rare ``in_motion``);
+    ``mode`` is 1 (manual/teach) or 2 (auto/play).
+    """
+
+    MSG_TYPE: ClassVar[MsgType] = MsgType.ROBOT_STATUS
+    ROLE: ClassVar[Role] = Role.TOPIC
+    FIELDS: ClassVar[tuple[tuple[str, _Kind], ...]] = (
+        ("drives_powered", _I32),
+        ("e_stopped", _I32),
+        ("error_code", _I32),
+        ("in_error", _I32),
+        ("in_motion", _I32),
+        ("mode", _I32),
+        ("motion_possible", _I32),
+    )
+
+    drives_powered: int
+    e_stopped: int
+    error_code: int
+    in_error: int
+    in_motion: int
+    mode: int
+    motion_possible: int
+
+
+_GROUP_RECORD_FIELDS: Final[tuple[tuple[str, _Kind], ...]] = (
+    ("group_no", _I32),
+    ("valid_fields", _I32),
+    ("time", _F32),
+    ("pos", _JOINTS),
+    ("vel", _JOINTS),
+    ("acc", _JOINTS),
+)
+
+
+@_register
+@dataclass(frozen=True, slots=True)
+class JointFeedback(Message):
+    """JOINT_FEEDBACK (15): one group's feedback position (rad or m) and speed.
+
+    MotoROS sends ``valid_fields`` 6 (position + velocity), ``time`` 0.0 and ``acc``
+    zeros (§2.4). Arrays are in ROS joint order, 10 slots, slots 8 and 9 zero.
+    The same 132-byte layout is one slot of JOINT_FEEDBACK_EX.
+    """
+
+    MSG_TYPE: ClassVar[MsgType] = MsgType.JOINT_FEEDBACK
+    ROLE: ClassVar[Role] = Role.TOPIC
+    FIELDS: ClassVar[tuple[tuple[str, _Kind], ...]] = _GROUP_RECORD_FIELDS
+
+    group_no: int
+    valid_fields: int
+    time: float
+    """s; always 0.0 from MotoROS."""
+    pos: tuple[float, ...]
+    """rad (rotary) or m (linear), 10 slots."""
+    vel: tuple[float, ...]
+    """rad/s or m/s, 10 slots."""
+    acc: tuple[float, ...] = ZERO_JOINTS
+    """Always zero from MotoROS."""
+
+    @classmethod
+    def for_joints(
+        cls,
+        group_no: int,
+        pos: Iterable[float],
+        vel: Iterable[float] | None = None,
+        *,
+        time: float = 0.0,
+        acc: Iterable[float] | None = None,
+        valid_fields: int | None = None,
+    ) -> Self:
+        """Build from joint lists of any length ≤ 10 (zero-padded).
+
+        ``valid_fields`` defaults to what MotoROS sends: POSITION, plus VELOCITY
+        when ``vel`` is given.
+        """
+        if valid_fields is None:
+            valid_fields = ValidFields.POSITION | (ValidFields.VELOCITY if vel is not None else 0)
+        name = cls.__name__
+        return cls(
+            group_no,
+            int(valid_fields),
+            time,
+            _pad_joints(name, "pos", pos),
+            _pad_joints(name, "vel", vel),
+            _pad_joints(name, "acc", acc),
+        )
+
+    @classmethod
+    def unpack(cls, body: bytes, order: ByteOrder) -> Self:
+        """Hot path of the state stream: hand-unrolled, no validation (see module doc)."""
+        if len(body) != BODY_SIZE_GROUP_RECORD:
+            raise _size_error(cls, body, BODY_SIZE_GROUP_RECORD)
+        v = (_FEEDBACK_BE if order == ">" else _FEEDBACK_LE).unpack(body)
+        obj = _new(cls)
+        _fb_group_no(obj, v[0])
+        _fb_valid_fields(obj, v[1])
+        _fb_time(obj, v[2])
+        _fb_pos(obj, v[3:13])
+        _fb_vel(obj, v[13:23])
+        _fb_acc(obj, v[23:33])
+        return obj
+
+    def pack(self, order: ByteOrder) -> bytes:
+        return (_FEEDBACK_BE if order == ">" else _FEEDBACK_LE).pack(
+            self.group_no, self.valid_fields, self.time, *self.pos, *self.vel, *self.acc
+        )
+
+
+_new: Final = object.__new__
+_FEEDBACK_LE, _FEEDBACK_BE = JointFeedback._STRUCTS
+_fb_group_no: Final[_Setter] = JointFeedback._SETTERS[0]
+_fb_valid_fields: Final[_Setter] = JointFeedback._SETTERS[1]
+_fb_time: Final[_Setter] = JointFeedback._SETTERS[2]
+_fb_pos: Final[_Setter] = JointFeedback._SETTERS[3]
+_fb_vel: Final[_Setter] = JointFeedback._SETTERS[4]
+_fb_acc: Final[_Setter] = JointFeedback._SETTERS[5]
+
+
+@_register
+@dataclass(frozen=True, slots=True)
+class JointTrajPtExData(Message):
+    """One group's record inside JOINT_TRAJ_PT_FULL_EX: a point without its own sequence.
+
+    Not a message on its own (``MSG_TYPE`` is that of the carrying FULL_EX); the
+    layout is the 132-byte group record of §1.4.
+    """
+
+    MSG_TYPE: ClassVar[MsgType] = MsgType.MOTO_JOINT_TRAJ_PT_FULL_EX
+    ROLE: ClassVar[Role] = Role.REQUEST
+    FIELDS: ClassVar[tuple[tuple[str, _Kind], ...]] = _GROUP_RECORD_FIELDS
+
+    group_no: int
+    valid_fields: int
+    time: float
+    """s from trajectory start."""
+    pos: tuple[float, ...]
+    vel: tuple[float, ...]
+    acc: tuple[float, ...] = ZERO_JOINTS
+
+    @classmethod
+    def for_joints(
+        cls,
+        group_no: int,
+        time: float,
+        pos: Iterable[float],
+        vel: Iterable[float],
+        acc: Iterable[float] | None = None,
+        *,
+        valid_fields: int | None = None,
+    ) -> Self:
+        """Build from joint lists of any length ≤ 10; flags default to time+pos+vel(+acc)."""
+        if valid_fields is None:
+            valid_fields = _point_flags(acc)
+        name = cls.__name__
+        return cls(
+            group_no,
+            int(valid_fields),
+            time,
+            _pad_joints(name, "pos", pos),
+            _pad_joints(name, "vel", vel),
+            _pad_joints(name, "acc", acc),
+        )
+
+
+def _point_flags(acc: object) -> int:
+    flags = ValidFields.TIME | ValidFields.POSITION | ValidFields.VELOCITY
+    return int(flags | ValidFields.ACCELERATION if acc is not None else flags)
+
+
+# --------------------------------------------------------------------------- motion requests
+
+
+@_register
+@dataclass(frozen=True, slots=True)
+class JointTrajPtFull(Message):
+    """JOINT_TRAJ_PT_FULL (14): one trajectory point for one group (§3.4).
+
+    MotoROS needs ``valid_fields`` to contain TIME, POSITION and VELOCITY (else
+    3015) and ignores ``acc``. Arrays are in ROS joint order.
+    """
+
+    MSG_TYPE: ClassVar[MsgType] = MsgType.JOINT_TRAJ_PT_FULL
+    ROLE: ClassVar[Role] = Role.REQUEST
+    FIELDS: ClassVar[tuple[tuple[str, _Kind], ...]] = (
+        ("group_no", _I32),
+        ("sequence", _I32),
+        ("valid_fields", _I32),
+        ("time", _F32),
+        ("pos", _JOINTS),
+        ("vel", _JOINTS),
+        ("acc", _JOINTS),
+    )
+
+    group_no: int
+    sequence: int
+    valid_fields: int
+    time: float
+    """s from trajectory start."""
+    pos: tuple[float, ...]
+    """rad or m, 10 slots."""
+    vel: tuple[float, ...]
+    """rad/s or m/s, 10 slots."""
+    acc: tuple[float, ...] = ZERO_JOINTS
+    """Ignored by MotoROS."""
+
+    @classmethod
+    def for_joints(
+        cls,
+        group_no: int,
+        sequence: int,
+        time: float,
+        pos: Iterable[float],
+        vel: Iterable[float],
+        acc: Iterable[float] | None = None,
+        *,
+        valid_fields: int | None = None,
+    ) -> Self:
+        """Build from joint lists of any length ≤ 10; flags default to time+pos+vel(+acc)."""
+        if valid_fields is None:
+            valid_fields = _point_flags(acc)
+        name = cls.__name__
+        return cls(
+            group_no,
+            sequence,
+            int(valid_fields),
+            time,
+            _pad_joints(name, "pos", pos),
+            _pad_joints(name, "vel", vel),
+            _pad_joints(name, "acc", acc),
+        )
+
+    def pack(self, order: ByteOrder) -> bytes:
+        return (_POINT_BE if order == ">" else _POINT_LE).pack(
+            self.group_no,
+            self.sequence,
+            self.valid_fields,
+            self.time,
+            *self.pos,
+            *self.vel,
+            *self.acc,
+        )
+
+
+_POINT_LE, _POINT_BE = JointTrajPtFull._STRUCTS
+
+
+@_register
+@dataclass(frozen=True, slots=True)
+class MotoMotionCtrl(Message):
+    """MOTO_MOTION_CTRL (2001): a motion command (:class:`MotionCommand`) for a group.
+
+    ``data`` is ignored by MotoROS; ``command`` stays an int so that an unknown
+    code can be decoded and answered.
+    """
+
+    MSG_TYPE: ClassVar[MsgType] = MsgType.MOTO_MOTION_CTRL
+    ROLE: ClassVar[Role] = Role.REQUEST
+    FIELDS: ClassVar[tuple[tuple[str, _Kind], ...]] = (
+        ("group_no", _I32),
+        ("sequence", _I32),
+        ("command", _I32),
+        ("data", _JOINTS),
+    )
+
+    group_no: int
+    sequence: int
+    command: int
+    data: tuple[float, ...] = ZERO_JOINTS
+
+
+@_register
+@dataclass(frozen=True, slots=True)
+class MotoMotionReply(Message):
+    """MOTO_MOTION_REPLY (2002): the answer to every motion-port request.
+
+    ``command`` echoes the request's command (MOTION_CTRL) or its msg_type; the
+    outcome is ``result`` + ``subcode`` (the header always says SUCCESS, §1.2).
+    For CHECK_QUEUE_CNT the count travels in ``subcode``.
+    """
+
+    MSG_TYPE: ClassVar[MsgType] = MsgType.MOTO_MOTION_REPLY
+    ROLE: ClassVar[Role] = Role.REPLY
+    FIELDS: ClassVar[tuple[tuple[str, _Kind], ...]] = (
+        ("group_no", _I32),
+        ("sequence", _I32),
+        ("command", _I32),
+        ("result", _I32),
+        ("subcode", _I32),
+        ("data", _JOINTS),
+    )
+
+    group_no: int
+    sequence: int
+    command: int
+    result: int
+    subcode: int
+    data: tuple[float, ...] = ZERO_JOINTS
+
+
+@_register
+@dataclass(frozen=True, slots=True)
+class MotoSelectTool(Message):
+    """MOTO_SELECT_TOOL (2018). Field order on the wire is groupNo, tool, sequence."""
+
+    MSG_TYPE: ClassVar[MsgType] = MsgType.MOTO_SELECT_TOOL
+    ROLE: ClassVar[Role] = Role.REQUEST
+    FIELDS: ClassVar[tuple[tuple[str, _Kind], ...]] = (
+        ("group_no", _I32),
+        ("tool", _I32),
+        ("sequence", _I32),
+    )
+
+    group_no: int
+    tool: int
+    sequence: int
+
+
+@_register
+@dataclass(frozen=True, slots=True)
+class MotoGetDhParameters(Message):
+    """MOTO_GET_DH_PARAMETERS (2020) request: empty body."""
+
+    MSG_TYPE: ClassVar[MsgType] = MsgType.MOTO_GET_DH_PARAMETERS
+    ROLE: ClassVar[Role] = Role.REQUEST
+
+
+class DhLink(NamedTuple):
+    """Denavit–Hartenberg parameters of one link, as MotoROS reports them."""
+
+    theta: float
+    d: float
+    a: float
+    alpha: float
+
+
+_ZERO_LINK: Final = DhLink(0.0, 0.0, 0.0, 0.0)
+_FLOATS_PER_LINK: Final = 4
+
+
+@_register
+@dataclass(frozen=True, slots=True)
+class MotoGetDhParametersReply(Message):
+    """The GET_DH_PARAMETERS reply (type 2020 again): 4 groups × 8 links, always.
+
+    Groups the controller does not have are all zero (§1.4).
+    """
+
+    MSG_TYPE: ClassVar[MsgType] = MsgType.MOTO_GET_DH_PARAMETERS
+    ROLE: ClassVar[Role] = Role.REPLY
+    FIELDS: ClassVar[tuple[tuple[str, _Kind], ...]] = ()
+
+    groups: tuple[tuple[DhLink, ...], ...]
+
+    def __post_init__(self) -> None:
+        owner = type(self).__name__
+        groups = tuple(self.groups)
+        if len(groups) != MAX_GROUPS:
+            raise LocalProtocolError(
+                f"{owner}: {len(groups)} groups, the wire carries exactly {MAX_GROUPS} "
+                "(use for_groups() to pad)"
+            )
+        checked: list[tuple[DhLink, ...]] = []
+        for g, links in enumerate(groups):
+            row = tuple(DhLink(*link) for link in links)
+            if len(row) != MAX_DH_LINKS:
+                raise LocalProtocolError(
+                    f"{owner}: group {g} has {len(row)} links, exactly {MAX_DH_LINKS} expected"
+                )
+            for k, link in enumerate(row):
+                for name, value in zip(DhLink._fields, link, strict=True):
+                    _check_float(owner, f"groups[{g}][{k}].{name}", value)
+            checked.append(row)
+        object.__setattr__(self, "groups", tuple(checked))
+
+    @classmethod
+    def for_groups(cls, groups: Iterable[Iterable[Sequence[float]]]) -> Self:
+        """Pad the existing groups (each ≤ 8 links of 4 floats) with zero links and groups."""
+        rows: list[tuple[DhLink, ...]] = []
+        for links in groups:
+            row = tuple(DhLink(*link) for link in links)
+            rows.append(row + (_ZERO_LINK,) * (MAX_DH_LINKS - len(row)))
+        zero_group = (_ZERO_LINK,) * MAX_DH_LINKS
+        return cls(tuple(rows) + (zero_group,) * (MAX_GROUPS - len(rows)))
+
+    def pack(self, order: ByteOrder) -> bytes:
+        flat = [value for links in self.groups for link in links for value in link]
+        return _pick(_DH_STRUCTS, order).pack(*flat)
+
+    @classmethod
+    def unpack(cls, body: bytes, order: ByteOrder) -> Self:
+        if len(body) != BODY_SIZE_DH_REPLY:
+            raise _size_error(cls, body, BODY_SIZE_DH_REPLY)
+        raw = _pick(_DH_STRUCTS, order).unpack(body)
+        step = _FLOATS_PER_LINK
+        per_group = MAX_DH_LINKS * step
+        groups = tuple(
+            tuple(
+                DhLink(*raw[base + k * step : base + (k + 1) * step]) for k in range(MAX_DH_LINKS)
+            )
+            for base in range(0, MAX_GROUPS * per_group, per_group)
+        )
+        return cls._trusted((groups,))
+
+
+_DH_STRUCTS: Final = _structs(f"{MAX_GROUPS * MAX_DH_LINKS * _FLOATS_PER_LINK}f")
+MotoGetDhParametersReply.BODY_SIZE = BODY_SIZE_DH_REPLY
+MotoGetDhParametersReply._SETTERS = (MotoGetDhParametersReply.groups.__set__,)  # type: ignore[attr-defined]
+
+
+# --------------------------------------------------------------------------- multi-group
+
+
+def _group_count(n: int) -> int:
+    """How many 132-byte records a message with ``numberOfValidGroups = n`` carries."""
+    return min(max(n, 0), MAX_GROUPS)
+
+
+@dataclass(frozen=True, slots=True)
+class MotoJointTrajPtFullEx(Message):
+    """MOTO_JOINT_TRAJ_PT_FULL_EX (2016): one point for several groups, one sequence.
+
+    The body is 8 + 132·n bytes. ``number_of_valid_groups`` is kept as sent
+    (MotoROS answers n ≤ 0 or a bad group itself), so ``groups`` holds
+    ``clamp(n, 0, 4)`` records. Use :meth:`for_groups` to set n from the records.
+    """
+
+    MSG_TYPE: ClassVar[MsgType] = MsgType.MOTO_JOINT_TRAJ_PT_FULL_EX
+    ROLE: ClassVar[Role] = Role.REQUEST
+    BODY_SIZE: ClassVar[int] = BODY_SIZE_FULL_EX_HEAD
+
+    number_of_valid_groups: int
+    sequence: int
+    groups: tuple[JointTrajPtExData, ...]
+
+    def __post_init__(self) -> None:
+        owner = type(self).__name__
+        _check_int(owner, "number_of_valid_groups", self.number_of_valid_groups, _I32)
+        _check_int(owner, "sequence", self.sequence, _I32)
+        groups = tuple(self.groups)
+        if len(groups) != _group_count(self.number_of_valid_groups):
+            raise LocalProtocolError(
+                f"{owner}: number_of_valid_groups {self.number_of_valid_groups} needs "
+                f"{_group_count(self.number_of_valid_groups)} records, got {len(groups)}"
+            )
+        if not all(isinstance(g, JointTrajPtExData) for g in groups):
+            raise LocalProtocolError(f"{owner}.groups must hold JointTrajPtExData records")
+        object.__setattr__(self, "groups", groups)
+
+    @classmethod
+    def for_groups(cls, sequence: int, groups: Iterable[JointTrajPtExData]) -> Self:
+        """n = the number of records given (at most 4)."""
+        records = tuple(groups)
+        if len(records) > MAX_GROUPS:
+            raise LocalProtocolError(f"{cls.__name__}: {len(records)} groups, at most {MAX_GROUPS}")
+        return cls(len(records), sequence, records)
+
+    def pack(self, order: ByteOrder) -> bytes:
+        head = _pick(_EX_HEAD_STRUCTS, order).pack(self.number_of_valid_groups, self.sequence)
+        return head + b"".join(record.pack(order) for record in self.groups)
+
+    @classmethod
+    def unpack(cls, body: bytes, order: ByteOrder) -> Self:
+        """Exactly 8 + 132·clamp(n, 0, 4) bytes (sizes.py trims MotoROS's padded 552)."""
+        head = _pick(_EX_HEAD_STRUCTS, order)
+        if len(body) < head.size:
+            raise _size_error(cls, body, f"at least {head.size}")
+        n, sequence = head.unpack_from(body)
+        count = _group_count(n)
+        expected = head.size + count * BODY_SIZE_GROUP_RECORD
+        if len(body) != expected:
+            raise _size_error(cls, body, f"{expected} for numberOfValidGroups {n}")
+        records = tuple(
+            JointTrajPtExData.unpack(body[start : start + BODY_SIZE_GROUP_RECORD], order)
+            for start in range(head.size, expected, BODY_SIZE_GROUP_RECORD)
+        )
+        return cls._trusted((n, sequence, records))
+
+
+_EX_HEAD_STRUCTS: Final = _structs("ii")
+MotoJointTrajPtFullEx._SETTERS = (
+    MotoJointTrajPtFullEx.number_of_valid_groups.__set__,  # type: ignore[attr-defined]
+    MotoJointTrajPtFullEx.sequence.__set__,  # type: ignore[attr-defined]
+    MotoJointTrajPtFullEx.groups.__set__,  # type: ignore[attr-defined]
+)
+
+
+@dataclass(frozen=True, slots=True)
+class MotoJointFeedbackEx(Message):
+    """MOTO_JOINT_FEEDBACK_EX (2017): every group's feedback in one message.
+
+    Always 4 slots on the wire (532-byte body); slots past ``groups`` are zero.
+    ``groups`` holds ``clamp(n, 0, 4)`` :class:`JointFeedback` records.
+    """
+
+    MSG_TYPE: ClassVar[MsgType] = MsgType.MOTO_JOINT_FEEDBACK_EX
+    ROLE: ClassVar[Role] = Role.TOPIC
+    BODY_SIZE: ClassVar[int] = BODY_SIZE_FEEDBACK_EX
+
+    number_of_valid_groups: int
+    groups: tuple[JointFeedback, ...]
+
+    def __post_init__(self) -> None:
+        owner = type(self).__name__
+        _check_int(owner, "number_of_valid_groups", self.number_of_valid_groups, _I32)
+        groups = tuple(self.groups)
+        if len(groups) != _group_count(self.number_of_valid_groups):
+            raise LocalProtocolError(
+                f"{owner}: number_of_valid_groups {self.number_of_valid_groups} needs "
+                f"{_group_count(self.number_of_valid_groups)} records, got {len(groups)}"
+            )
+        if not all(isinstance(g, JointFeedback) for g in groups):
+            raise LocalProtocolError(f"{owner}.groups must hold JointFeedback records")
+        object.__setattr__(self, "groups", groups)
+
+    @classmethod
+    def for_groups(cls, groups: Iterable[JointFeedback]) -> Self:
+        """n = the number of records given (at most 4)."""
+        records = tuple(groups)
+        if len(records) > MAX_GROUPS:
+            raise LocalProtocolError(f"{cls.__name__}: {len(records)} groups, at most {MAX_GROUPS}")
+        return cls(len(records), records)
+
+    def pack(self, order: ByteOrder) -> bytes:
+        head = _pick(_EX_COUNT_STRUCTS, order).pack(self.number_of_valid_groups)
+        slots = b"".join(record.pack(order) for record in self.groups)
+        return head + slots + bytes(BODY_SIZE_FEEDBACK_EX - len(head) - len(slots))
+
+    @classmethod
+    def unpack(cls, body: bytes, order: ByteOrder) -> Self:
+        if len(body) != BODY_SIZE_FEEDBACK_EX:
+            raise _size_error(cls, body, BODY_SIZE_FEEDBACK_EX)
+        head = _pick(_EX_COUNT_STRUCTS, order)
+        (n,) = head.unpack_from(body)
+        records = tuple(
+            JointFeedback.unpack(body[start : start + BODY_SIZE_GROUP_RECORD], order)
+            for start in range(
+                head.size, head.size + _group_count(n) * BODY_SIZE_GROUP_RECORD, BODY_SIZE_GROUP_RECORD
+            )
+        )
+        return cls._trusted((n, records))
+
+
+_EX_COUNT_STRUCTS: Final = _structs("i")
+MotoJointFeedbackEx._SETTERS = (
+    MotoJointFeedbackEx.number_of_valid_groups.__set__,  # type: ignore[attr-defined]
+    MotoJointFeedbackEx.groups.__set__,  # type: ignore[attr-defined]
+)
+
+
+# --------------------------------------------------------------------------- IO
+
+
+@_register
+@dataclass(frozen=True, slots=True)
+class MotoReadIoBit(Message):
+    """MOTO_READ_IO_BIT (2003): read one bit at ``io_address`` (IO port, or motion port)."""
+
+    MSG_TYPE: ClassVar[MsgType] = MsgType.MOTO_READ_IO_BIT
+    ROLE: ClassVar[Role] = Role.REQUEST
+    FIELDS: ClassVar[tuple[tuple[str, _Kind], ...]] = (("io_address", _U32),)
+
+    io_address: int
+
+
+@_register
+@dataclass(frozen=True, slots=True)
+class MotoReadIoBitReply(Message):
+    """MOTO_READ_IO_BIT_REPLY (2004): ``value`` 0/1 and an :class:`IoResultCode`."""
+
+    MSG_TYPE: ClassVar[MsgType] = MsgType.MOTO_READ_IO_BIT_REPLY
+    ROLE: ClassVar[Role] = Role.REPLY
+    IO_RESULT: ClassVar[bool] = True
+    FIELDS: ClassVar[tuple[tuple[str, _Kind], ...]] = (("value", _U32), ("result_code", _U32))
+
+    value: int
+    result_code: int
+
+
+@_register
+@dataclass(frozen=True, slots=True)
+class MotoWriteIoBit(Message):
+    """MOTO_WRITE_IO_BIT (2005): write 0/1 to ``io_address``."""
+
+    MSG_TYPE: ClassVar[MsgType] = MsgType.MOTO_WRITE_IO_BIT
+    ROLE: ClassVar[Role] = Role.REQUEST
+    FIELDS: ClassVar[tuple[tuple[str, _Kind], ...]] = (("io_address", _U32), ("io_value", _U32))
+
+    io_address: int
+    io_value: int
+
+
+@_register
+@dataclass(frozen=True, slots=True)
+class MotoWriteIoBitReply(Message):
+    """MOTO_WRITE_IO_BIT_REPLY (2006): an :class:`IoResultCode`."""
+
+    MSG_TYPE: ClassVar[MsgType] = MsgType.MOTO_WRITE_IO_BIT_REPLY
+    ROLE: ClassVar[Role] = Role.REPLY
+    IO_RESULT: ClassVar[bool] = True
+    FIELDS: ClassVar[tuple[tuple[str, _Kind], ...]] = (("result_code", _U32),)
+
+    result_code: int
+
+
+@_register
+@dataclass(frozen=True, slots=True)
+class MotoReadIoGroup(Message):
+    """MOTO_READ_IO_GROUP (2007): read 8 bits; ``io_address`` is a byte number n (bits n·10+k)."""
+
+    MSG_TYPE: ClassVar[MsgType] = MsgType.MOTO_READ_IO_GROUP
+    ROLE: ClassVar[Role] = Role.REQUEST
+    FIELDS: ClassVar[tuple[tuple[str, _Kind], ...]] = (("io_address", _U32),)
+
+    io_address: int
+
+
+@_register
+@dataclass(frozen=True, slots=True)
+class MotoReadIoGroupReply(Message):
+    """MOTO_READ_IO_GROUP_REPLY (2008): ``value`` 0..255 (bit 0 = LSB) and a result code."""
+
+    MSG_TYPE: ClassVar[MsgType] = MsgType.MOTO_READ_IO_GROUP_REPLY
+    ROLE: ClassVar[Role] = Role.REPLY
+    IO_RESULT: ClassVar[bool] = True
+    FIELDS: ClassVar[tuple[tuple[str, _Kind], ...]] = (("value", _U32), ("result_code", _U32))
+
+    value: int
+    result_code: int
+
+
+@_register
+@dataclass(frozen=True, slots=True)
+class MotoWriteIoGroup(Message):
+    """MOTO_WRITE_IO_GROUP (2009): write ``io_value`` (≤ 0xFF) to byte ``io_address``."""
+
+    MSG_TYPE: ClassVar[MsgType] = MsgType.MOTO_WRITE_IO_GROUP
+    ROLE: ClassVar[Role] = Role.REQUEST
+    FIELDS: ClassVar[tuple[tuple[str, _Kind], ...]] = (("io_address", _U32), ("io_value", _U32))
+
+    io_address: int
+    io_value: int
+
+
+@_register
+@dataclass(frozen=True, slots=True)
+class MotoWriteIoGroupReply(Message):
+    """MOTO_WRITE_IO_GROUP_REPLY (2010): an :class:`IoResultCode`."""
+
+    MSG_TYPE: ClassVar[MsgType] = MsgType.MOTO_WRITE_IO_GROUP_REPLY
+    ROLE: ClassVar[Role] = Role.REPLY
+    IO_RESULT: ClassVar[bool] = True
+    FIELDS: ClassVar[tuple[tuple[str, _Kind], ...]] = (("result_code", _U32),)
+
+    result_code: int
+
+
+@_register
+@dataclass(frozen=True, slots=True)
+class MotoReadMRegister(Message):
+    """MOTO_READ_MREGISTER (2012, IO port only): ``register_number`` M000..M999 (or +1000000)."""
+
+    MSG_TYPE: ClassVar[MsgType] = MsgType.MOTO_READ_MREGISTER
+    ROLE: ClassVar[Role] = Role.REQUEST
+    FIELDS: ClassVar[tuple[tuple[str, _Kind], ...]] = (("register_number", _U32),)
+
+    register_number: int
+
+
+@_register
+@dataclass(frozen=True, slots=True)
+class MotoReadMRegisterReply(Message):
+    """Reply to READ_MREGISTER: reuses type 2012; a 16-bit ``value`` and a result code."""
+
+    MSG_TYPE: ClassVar[MsgType] = MsgType.MOTO_READ_MREGISTER
+    ROLE: ClassVar[Role] = Role.REPLY
+    IO_RESULT: ClassVar[bool] = True
+    FIELDS: ClassVar[tuple[tuple[str, _Kind], ...]] = (("value", _U32), ("result_code", _U32))
+
+    value: int
+    result_code: int
+
+
+@_register
+@dataclass(frozen=True, slots=True)
+class MotoWriteMRegister(Message):
+    """MOTO_WRITE_MREGISTER (2013, IO port only): write ``value`` (≤ 0xFFFF), M000..M559."""
+
+    MSG_TYPE: ClassVar[MsgType] = MsgType.MOTO_WRITE_MREGISTER
+    ROLE: ClassVar[Role] = Role.REQUEST
+    FIELDS: ClassVar[tuple[tuple[str, _Kind], ...]] = (
+        ("register_number", _U32),
+        ("value", _U32),
+    )
+
+    register_number: int
+    value: int
+
+
+@_register
+@dataclass(frozen=True, slots=True)
+class MotoWriteMRegisterReply(Message):
+    """Reply to WRITE_MREGISTER: reuses type 2013; an :class:`IoResultCode`."""
+
+    MSG_TYPE: ClassVar[MsgType] = MsgType.MOTO_WRITE_MREGISTER
+    ROLE: ClassVar[Role] = Role.REPLY
+    IO_RESULT: ClassVar[bool] = True
+    FIELDS: ClassVar[tuple[tuple[str, _Kind], ...]] = (("result_code", _U32),)
+
+    result_code: int
+
+
+_IO_ERROR_PADDING: Final = BODY_SIZE_MOTION_REPLY - 8
+"""Zero bytes after result and subcode in the IO error reply (60-byte body, §1.6)."""
+
+
+@_register
+@dataclass(frozen=True, slots=True)
+class IoErrorReply(Message):
+    """The IO port's answer to an unknown type (3003) or a short message (3001).
+
+    MotoROS sends it as type 2002 with the shape of a MOTION_REPLY, but with
+    ``result`` at body offset 0 and ``subcode`` at 4 and the rest zero (§1.6).
+    Only meaningful on the IO port; on the motion port type 2002 is a
+    :class:`MotoMotionReply`.
+    """
+
+    MSG_TYPE: ClassVar[MsgType] = MsgType.MOTO_MOTION_REPLY
+    ROLE: ClassVar[Role] = Role.REPLY
+    FIELDS: ClassVar[tuple[tuple[str, _Kind], ...]] = (("result", _I32), ("subcode", _I32))
+
+    result: int
+    subcode: int
+
+    def pack(self, order: ByteOrder) -> bytes:
+        return _pick(self._STRUCTS, order).pack(self.result, self.subcode) + bytes(
+            _IO_ERROR_PADDING
+        )
+
+    @classmethod
+    def unpack(cls, body: bytes, order: ByteOrder) -> Self:
+        """60 bytes; the trailing 52 are not checked (MotoROS leaves them zero)."""
+        if len(body) != BODY_SIZE_MOTION_REPLY:
+            raise _size_error(cls, body, BODY_SIZE_MOTION_REPLY)
+        return cls._trusted(_pick(cls._STRUCTS, order).unpack_from(body))
+
+
+IoErrorReply.BODY_SIZE = BODY_SIZE_MOTION_REPLY
+
+
+# --------------------------------------------------------------------------- unknown
+
+
+@dataclass(frozen=True, slots=True)
+class UnknownMessage:
+    """A frame whose type this port does not know; kept raw so a server can answer 3003.
+
+    ``encode`` sends it as a request, which is how tests and tools provoke the
+    unknown-type path (e.g. GET_VERSION, type 2).
+    """
+
+    ROLE: ClassVar[Role] = Role.REQUEST
+    IO_RESULT: ClassVar[bool] = False
+
+    msg_type: int
+    body: bytes = field(default=b"")
+
+    def __post_init__(self) -> None:
+        _check_int(type(self).__name__, "msg_type", self.msg_type, _I32)
+        object.__setattr__(self, "body", bytes(self.body))
+
+    def pack(self, order: ByteOrder) -> bytes:
+        """The raw body: it is already bytes, byte order does not apply."""
+        return self.body
+
+
+WireMessage: TypeAlias = Message | UnknownMessage
+"""Anything the decoders return and ``encode`` accepts."""
+

@@ -1,0 +1,293 @@
+"""``SimulatorApp``: one virtual controller on the network.
+
+One ``asyncio.TaskGroup`` owns every task: the interpolation loop, the state
+broadcaster, the three MotoROS servers' client handlers and the HTTP control API
+(uvicorn, served inside the same event loop from a pre-bound socket, its signal
+handlers disabled). If any of them crashes, the group cancels the rest and
+:meth:`SimulatorApp.serve` re-raises, so a broken ticker never leaves servers half
+alive.
+
+Shutdown is ordered and idempotent: stop accepting (close every listener), close
+the clients, stop the HTTP server, cancel the loops, release the sockets.
+
+::
+
+    async with SimulatorApp(controller, SimulatorConfig(motion_port=0, ...)) as app:
+        print(app.ports.motion)   # the port the OS chose
+        ...
+"""
+
+from __future__ import annotations
+
+import asyncio
+import contextlib
+import logging
+import socket
+from collections.abc import Generator
+from dataclasses import dataclass, field
+from types import TracebackType
+from typing import Final, Self
+
+import uvicorn
+
+from pymotoros.protocol.constants import (
+    TCP_PORT_IO,
+    TCP_PORT_MOTION,
+    TCP_PORT_STATE,
+    ByteOrder,
+)
+from pymotoros.runtime.clock import Clock, LoopClock
+from pymotoros.runtime.http_api import create_http_app
+from pymotoros.runtime.io_server import IoServer
+from pymotoros.runtime.motion_server import MotionServer
+from pymotoros.runtime.state_server import (
+    STATE_MESSAGE_GAP_S,
+    STATE_PERIOD_S,
+    StateServer,
+)
+from pymotoros.runtime.target import SimulatedController
+from pymotoros.runtime.tcp import bind_socket, is_loopback
+from pymotoros.runtime.ticker import Ticker, TickStats
+
+__all__ = ["DEFAULT_HTTP_PORT", "BoundPorts", "SimulatorApp", "SimulatorConfig"]
+
+logger = logging.getLogger(__name__)
+
+DEFAULT_HTTP_PORT: Final = 8080
+"""The control API's default port (``pymotoros sim --http-port``)."""
+
+HTTP_STOP_TIMEOUT_S: Final = 3.0
+"""How long the HTTP server may take to finish its requests at shutdown."""
+
+
+@dataclass(frozen=True, slots=True)
+class SimulatorConfig:
+    """Where and how the simulator listens. Port 0 lets the OS choose; ``http_port=None``
+    runs without the control API."""
+
+    host: str = "127.0.0.1"
+    motion_port: int = TCP_PORT_MOTION
+    state_port: int = TCP_PORT_STATE
+    io_port: int = TCP_PORT_IO
+    http_port: int | None = DEFAULT_HTTP_PORT
+    byte_order: ByteOrder = ByteOrder.LITTLE
+    state_period: float = STATE_PERIOD_S
+    state_message_gap: float = STATE_MESSAGE_GAP_S
+
+
+@dataclass(frozen=True, slots=True)
+class BoundPorts:
+    """The ports actually listened on (the OS's choice where 0 was asked)."""
+
+    motion: int
+    state: int
+    io: int
+    http: int | None = field(default=None)
+
+
+class SimulatorApp:
+    """The servers, the interpolation loop and the control API around one controller."""
+
+    def __init__(
+        self,
+        controller: SimulatedController,
+        config: SimulatorConfig | None = None,
+        *,
+        clock: Clock | None = None,
+    ) -> None:
+        self.controller = controller
+        self.config = config or SimulatorConfig()
+        self.clock: Clock = clock or LoopClock()
+        self.ticker = Ticker(controller.tick, controller.period_ms / 1000.0, self.clock)
+        order = self.config.byte_order
+        self.motion = MotionServer(controller, order)
+        self.state = StateServer(
+            controller,
+            order,
+            self.clock,
+            period=self.config.state_period,
+            message_gap=self.config.state_message_gap,
+        )
+        self.io = IoServer(controller, order)
+        self._ports: BoundPorts | None = None
+        self._ready = asyncio.Event()
+        self._stop = asyncio.Event()
+        self._serve_task: asyncio.Task[None] | None = None
+        self._http: _EmbeddedUvicorn | None = None
+        self._http_task: asyncio.Task[None] | None = None
+        self._loop_tasks: list[asyncio.Task[None]] = []
+        self._shutdown_done = False
+
+    # ----------------------------------------------------------- public
+
+    @property
+    def ports(self) -> BoundPorts:
+        if self._ports is None:
+            raise RuntimeError("the simulator is not listening yet")
+        return self._ports
+
+    def tick_stats(self) -> TickStats:
+        return self.ticker.stats()
+
+    @property
+    def ready(self) -> asyncio.Event:
+        """Set once every listener is up."""
+        return self._ready
+
+    def request_stop(self) -> None:
+        """Ask :meth:`serve` to shut down (safe from a signal handler; idempotent)."""
+        self._stop.set()
+
+    async def wait_stopped(self) -> None:
+        """Wait until the simulator entered with ``async with`` has shut down (after
+        :meth:`request_stop`, a signal, or a crash, which this re-raises)."""
+        if self._serve_task is None:
+            raise RuntimeError("wait_stopped() needs the simulator started with `async with`")
+        await asyncio.shield(self._serve_task)
+
+    async def serve(self) -> None:
+        """Listen and run until :meth:`request_stop` or cancellation; then shut down in order."""
+        cfg = self.config
+        if not is_loopback(cfg.host):
+            logger.warning(
+                "listening on %s: the simulator is reachable from the network and has no "
+                "authentication (the control API can press E-stop and force IO)",
+                cfg.host,
+            )
+        # Bind everything first: a port in use is a plain OSError, before any task starts.
+        socks = self._bind_all()
+        try:
+            async with asyncio.TaskGroup() as tg:
+                try:
+                    motion = await self.motion.start(tg, socks[0])
+                    state = await self.state.start(tg, socks[1])
+                    io = await self.io.start(tg, socks[2])
+                    http = await self._start_http(tg, socks[3]) if len(socks) > 3 else None
+                    self._ports = BoundPorts(motion, state, io, http)
+                    self._loop_tasks = [
+                        tg.create_task(self.ticker.run(), name="interpolation"),
+                        tg.create_task(self.state.broadcast(), name="state-broadcast"),
+                    ]
+                    logger.info(
+                        "simulator ready: motion %d, state %d, io %d, http %s (period %d ms, %s)",
+                        motion,
+                        state,
+                        io,
+                        http,
+                        self.controller.period_ms,
+                        "big-endian" if cfg.byte_order is ByteOrder.BIG else "little-endian",
+                    )
+                    self._ready.set()
+                    await self._stop.wait()
+                finally:
+                    await self._shutdown()
+        finally:
+            for sock in socks:  # already closed by their servers, unless start-up failed
+                sock.close()
+
+    def _bind_all(self) -> list[socket.socket]:
+        cfg = self.config
+        ports = [cfg.motion_port, cfg.state_port, cfg.io_port]
+        if cfg.http_port is not None:
+            ports.append(cfg.http_port)
+        socks: list[socket.socket] = []
+        try:
+            for port in ports:
+                socks.append(bind_socket(cfg.host, port))
+        except BaseException:
+            for sock in socks:
+                sock.close()
+            raise
+        return socks
+
+    async def __aenter__(self) -> Self:
+        self._serve_task = asyncio.create_task(self.serve(), name="simulator")
+        ready = asyncio.create_task(self._ready.wait(), name="simulator-ready")
+        try:
+            await asyncio.wait({self._serve_task, ready}, return_when=asyncio.FIRST_COMPLETED)
+        finally:
+            ready.cancel()
+            with contextlib.suppress(asyncio.CancelledError):
+                await ready
+        if self._serve_task.done():
+            self._serve_task.result()  # raises what stopped it
+            raise RuntimeError("the simulator stopped before it was ready")
+        return self
+
+    async def __aexit__(
+        self,
+        exc_type: type[BaseException] | None,
+        exc: BaseException | None,
+        tb: TracebackType | None,
+    ) -> None:
+        await self.stop()
+
+    async def stop(self) -> None:
+        """Shut down and wait until everything is released (idempotent)."""
+        self.request_stop()
+        task = self._serve_task
+        if task is not None and not task.done():
+            await task
+
+    # ----------------------------------------------------------- internals
+
+    async def _start_http(self, tg: asyncio.TaskGroup, sock: socket.socket) -> int:
+        bound = int(sock.getsockname()[1])
+        app = create_http_app(self.controller, self.tick_stats)
+        config = uvicorn.Config(
+            app,
+            log_level="warning",
+            lifespan="off",
+            access_log=False,
+            timeout_graceful_shutdown=1,
+        )
+        server = _EmbeddedUvicorn(config)
+        self._http = server
+        self._http_task = tg.create_task(_serve_http(server, sock), name="http-api")
+        logger.info("control API on http://%s:%d/api/state (docs: /docs)", self.config.host, bound)
+        return bound
+
+    async def _shutdown(self) -> None:
+        if self._shutdown_done:
+            return
+        self._shutdown_done = True
+        self._ready.clear()
+        logger.info("simulator stopping")
+        servers = (self.motion, self.state, self.io)
+        # 1. stop accepting
+        for server in servers:
+            server.stop_accepting()
+        if self._http is not None:
+            self._http.should_exit = True
+        # 2. close the clients
+        for server in servers:
+            await server.close_clients()
+        # 3. stop the HTTP server, cancel the loops and wait for every task
+        if self._http_task is not None:
+            with contextlib.suppress(TimeoutError, asyncio.CancelledError):
+                async with asyncio.timeout(HTTP_STOP_TIMEOUT_S):
+                    await asyncio.shield(self._http_task)
+        for task in self._loop_tasks:
+            task.cancel()
+        # 4. release the listening sockets
+        for server in servers:
+            await server.wait_closed()
+        logger.info("simulator stopped")
+
+
+async def _serve_http(server: _EmbeddedUvicorn, sock: socket.socket) -> None:
+    try:
+        await server.serve(sockets=[sock])
+    finally:
+        sock.close()
+
+
+class _EmbeddedUvicorn(uvicorn.Server):
+    """uvicorn without its signal handlers: the application owns SIGINT/SIGTERM."""
+
+    @contextlib.contextmanager
+    def capture_signals(self) -> Generator[None, None, None]:
+        yield
+
+    def install_signal_handlers(self) -> None:  # older uvicorn
+        return None

@@ -1,0 +1,307 @@
+"""The operator's hands over HTTP/JSON: state, E-stop, hold, mode, remote, servo, alarms, IO.
+
+:func:`create_http_app` builds a FastAPI application (OpenAPI schema at
+``/openapi.json``, interactive docs at ``/docs``) around an
+:class:`~pymotoros.controller.api.OperatorPanel`. Every endpoint is an ``async def``
+so it runs on the simulator's event loop, between two interpolation ticks, never in
+a worker thread: the controller is not thread-safe and does not need to be.
+
+Every error answer, unknown paths and malformed bodies included, is a 4xx with a
+JSON body ``{"error": "<what was wrong>"}``. Each POST answers with the state after
+the action, in the same shape as ``GET /api/state``.
+"""
+
+from __future__ import annotations
+
+import logging
+from collections.abc import Callable
+from typing import Literal
+
+from fastapi import FastAPI, Request
+from fastapi.exceptions import RequestValidationError
+from fastapi.responses import JSONResponse
+from pydantic import BaseModel, ConfigDict, Field
+from starlette.exceptions import HTTPException as StarletteHTTPException
+
+from pymotoros import __version__
+from pymotoros.controller.api import ControllerSnapshot, PendantMode
+from pymotoros.runtime.target import SimulatedController
+from pymotoros.runtime.ticker import TickStats
+
+__all__ = ["StateModel", "create_http_app", "state_model"]
+
+logger = logging.getLogger(__name__)
+
+_STRICT = ConfigDict(extra="forbid", strict=True, frozen=True)
+
+
+# --------------------------------------------------------------------------- bodies
+
+
+class EstopBody(BaseModel):
+    model_config = _STRICT
+    pressed: bool = Field(description="true presses the pendant E-stop, false releases it")
+
+
+class OnOffBody(BaseModel):
+    model_config = _STRICT
+    on: bool
+
+
+class ModeBody(BaseModel):
+    model_config = _STRICT
+    mode: Literal["teach", "play"]
+
+
+class AlarmBody(BaseModel):
+    model_config = _STRICT
+    code: int = Field(ge=0, le=9999, description="alarm number, e.g. 4107")
+    subcode: int = Field(default=0, ge=0, description="alarm subcode")
+    text: str = Field(default="", max_length=128, description="alarm text shown on the pendant")
+
+
+class IoBody(BaseModel):
+    model_config = _STRICT
+    address: int = Field(
+        ge=0,
+        description="bit address (e.g. 20010), or 1000000 + n for M-register n",
+    )
+    value: int = Field(ge=0, le=0xFFFF, description="0/1 for a bit, 0..65535 for an M-register")
+
+
+# --------------------------------------------------------------------------- answers
+
+
+class AlarmModel(BaseModel):
+    code: int
+    subcode: int
+    text: str
+
+
+class GroupModel(BaseModel):
+    name: str
+    joint_names: list[str]
+    command_rad: list[float]
+    feedback_rad: list[float]
+    command_pulse: list[int]
+    queue: int = Field(description="increments queued for the group")
+    tool: int
+
+
+class LatenessModel(BaseModel):
+    p50: float
+    p99: float
+    max: float
+
+
+class TickModel(BaseModel):
+    period_ms: float
+    count: int
+    overruns: int
+    lateness_ms: LatenessModel
+
+
+class StateModel(BaseModel):
+    mode: Literal["play", "teach"]
+    remote: bool
+    servo: bool
+    estop: bool
+    hold: bool
+    alarms: list[AlarmModel]
+    motion_ready: bool
+    groups: list[GroupModel]
+    tick: TickModel
+
+
+class ErrorModel(BaseModel):
+    error: str
+
+
+class IoValueModel(BaseModel):
+    address: int
+    value: int
+    result_code: int
+
+
+def state_model(snapshot: ControllerSnapshot, tick: TickStats) -> StateModel:
+    """The ``GET /api/state`` document for a controller snapshot and the loop's statistics."""
+    return StateModel(
+        mode="play" if snapshot.mode is PendantMode.PLAY else "teach",
+        remote=snapshot.remote,
+        servo=snapshot.servo,
+        estop=snapshot.estop,
+        hold=snapshot.hold,
+        alarms=[AlarmModel(code=a.code, subcode=a.subcode, text=a.text) for a in snapshot.alarms],
+        motion_ready=snapshot.motion_ready,
+        groups=[
+            GroupModel(
+                name=g.name,
+                joint_names=list(g.joint_names),
+                command_rad=list(g.command_rad),
+                feedback_rad=list(g.feedback_rad),
+                command_pulse=list(g.command_pulse),
+                queue=g.queue,
+                tool=g.tool,
+            )
+            for g in snapshot.groups
+        ],
+        tick=TickModel(
+            period_ms=tick.period_ms,
+            count=tick.count,
+            overruns=tick.overruns,
+            lateness_ms=LatenessModel(
+                p50=tick.lateness_ms.p50, p99=tick.lateness_ms.p99, max=tick.lateness_ms.max
+            ),
+        ),
+    )
+
+
+# --------------------------------------------------------------------------- errors
+
+
+def _describe_validation(exc: RequestValidationError) -> str:
+    parts = []
+    for err in exc.errors():
+        loc = [str(p) for p in err.get("loc", ()) if p != "body"]
+        where = ".".join(loc) if loc else "body"
+        kind = err.get("type", "")
+        if kind == "json_invalid":
+            parts.append(f"the body is not valid JSON ({err.get('msg', '')})")
+        elif kind == "missing" and not loc:
+            parts.append("a JSON body is required")
+        elif kind == "extra_forbidden":
+            parts.append(f"unknown field {where!r}")
+        else:
+            parts.append(f"{where}: {err.get('msg', 'invalid')}")
+    return "; ".join(parts) or "invalid request"
+
+
+async def _validation_error(request: Request, exc: Exception) -> JSONResponse:
+    detail = _describe_validation(exc) if isinstance(exc, RequestValidationError) else str(exc)
+    message = f"{request.method} {request.url.path}: {detail}"
+    logger.info("control API refused a request: %s", message)
+    return JSONResponse({"error": message}, status_code=422)
+
+
+async def _http_error(request: Request, exc: Exception) -> JSONResponse:
+    if not isinstance(exc, StarletteHTTPException):  # registered for that type only
+        return JSONResponse({"error": str(exc)}, status_code=400)
+    if exc.status_code == 404:
+        message = f"no such endpoint: {request.method} {request.url.path} (see /docs)"
+    elif exc.status_code == 405:
+        allowed = (exc.headers or {}).get("Allow", "")
+        message = f"method {request.method} not allowed on {request.url.path}"
+        if allowed:
+            message += f" (allowed: {allowed})"
+    else:
+        message = str(exc.detail)
+    status = exc.status_code if 400 <= exc.status_code < 500 else 400
+    return JSONResponse({"error": message}, status_code=status, headers=exc.headers)
+
+
+async def _value_error(request: Request, exc: Exception) -> JSONResponse:
+    message = f"{request.method} {request.url.path}: {exc}"
+    logger.info("control API refused a request: %s", message)
+    return JSONResponse({"error": message}, status_code=400)
+
+
+# --------------------------------------------------------------------------- the app
+
+_ERRORS: dict[int | str, dict[str, object]] = {
+    400: {"model": ErrorModel, "description": "the controller refused the arguments"},
+    422: {"model": ErrorModel, "description": "the body is malformed"},
+}
+
+
+def create_http_app(
+    controller: SimulatedController, tick_stats: Callable[[], TickStats]
+) -> FastAPI:
+    """The control API of one simulated controller."""
+    app = FastAPI(
+        title="pymotoros control API",
+        version=__version__,
+        description=(
+            "The operator of the virtual controller: pendant keys, E-stop, mode switch, "
+            'alarms and forced IO. Errors are 4xx with {"error": "..."}.'
+        ),
+    )
+    app.add_exception_handler(RequestValidationError, _validation_error)
+    app.add_exception_handler(StarletteHTTPException, _http_error)
+    app.add_exception_handler(ValueError, _value_error)
+
+    def state() -> StateModel:
+        return state_model(controller.snapshot(), tick_stats())
+
+    @app.get("/api/state", response_model=StateModel, tags=["state"])
+    async def get_state() -> StateModel:
+        """Operator state, alarms, groups (command/feedback positions, queue, tool), loop timing."""
+        return state()
+
+    @app.post("/api/estop", response_model=StateModel, responses=_ERRORS, tags=["operator"])
+    async def estop(body: EstopBody) -> StateModel:
+        """Press or release the pendant E-stop: cuts servo power, stops the job, no alarm."""
+        logger.info("operator: E-stop %s", "pressed" if body.pressed else "released")
+        controller.press_estop(body.pressed)
+        return state()
+
+    @app.post("/api/hold", response_model=StateModel, responses=_ERRORS, tags=["operator"])
+    async def hold(body: OnOffBody) -> StateModel:
+        """Switch HOLD on or off."""
+        logger.info("operator: hold %s", "on" if body.on else "off")
+        controller.set_hold(body.on)
+        return state()
+
+    @app.post("/api/mode", response_model=StateModel, responses=_ERRORS, tags=["operator"])
+    async def mode(body: ModeBody) -> StateModel:
+        """Turn the pendant's mode key to TEACH or PLAY."""
+        logger.info("operator: mode %s", body.mode)
+        controller.set_mode(PendantMode(body.mode))
+        return state()
+
+    @app.post("/api/remote", response_model=StateModel, responses=_ERRORS, tags=["operator"])
+    async def remote(body: OnOffBody) -> StateModel:
+        """Switch REMOTE on or off."""
+        logger.info("operator: remote %s", "on" if body.on else "off")
+        controller.set_remote(body.on)
+        return state()
+
+    @app.post("/api/servo", response_model=StateModel, responses=_ERRORS, tags=["operator"])
+    async def servo(body: OnOffBody) -> StateModel:
+        """Request servo power on or off (refused silently while E-stopped)."""
+        logger.info("operator: servo %s", "on" if body.on else "off")
+        controller.set_servo(body.on)
+        return state()
+
+    @app.post("/api/alarm", response_model=StateModel, responses=_ERRORS, tags=["operator"])
+    async def alarm(body: AlarmBody) -> StateModel:
+        """Raise an alarm."""
+        logger.info("operator: raise alarm %d/%d %r", body.code, body.subcode, body.text)
+        controller.raise_alarm(body.code, body.subcode, body.text)
+        return state()
+
+    @app.post("/api/reset", response_model=StateModel, responses=_ERRORS, tags=["operator"])
+    async def reset() -> StateModel:
+        """The pendant's RESET key: clears alarms and errors whose cause is gone."""
+        logger.info("operator: reset")
+        controller.reset()
+        return state()
+
+    @app.post("/api/io", response_model=StateModel, responses=_ERRORS, tags=["io"])
+    async def force_io(body: IoBody) -> StateModel:
+        """Force any bit (0/1) or M-register (address 1000000 + n, 0..65535)."""
+        logger.info("operator: force IO %d = %d", body.address, body.value)
+        controller.force_io(body.address, body.value)
+        return state()
+
+    @app.get("/api/io/{address}", response_model=IoValueModel, responses=_ERRORS, tags=["io"])
+    async def read_io(address: int) -> IoValueModel:
+        """Read a bit, or an M-register (address 1000000 + n), as a client would."""
+        if address >= 1_000_000:
+            read = controller.read_mregister(address)
+        else:
+            read = controller.read_io_bit(address)
+        if read.result_code != 0:
+            raise ValueError(f"address {address}: {read.result_code.meaning}")
+        return IoValueModel(address=address, value=read.value, result_code=int(read.result_code))
+
+    return app

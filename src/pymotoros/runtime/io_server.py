@@ -1,0 +1,166 @@
+"""The IO server (port 50242, one client) and the IO request handling it shares with the
+motion port (reference §6.1).
+
+Bit and group reads/writes are served on both ports; M-register messages only here.
+Protocol errors (unknown type, short message) get the IO error reply of §1.6: type
+2002 with ``result`` at body offset 0 and ``subcode`` at 4. A reply is always sent,
+whatever the request's comm_type, and the connection is always kept.
+"""
+
+from __future__ import annotations
+
+import logging
+
+from pymotoros.controller.api import MotoRosController
+from pymotoros.errors import RemoteProtocolError
+from pymotoros.protocol.constants import (
+    ByteOrder,
+    InvalidSubcode,
+    IoResultCode,
+    Port,
+    ResultCode,
+)
+from pymotoros.protocol.framing import Frame, FrameDecoder, encode
+from pymotoros.protocol.messages import (
+    IoErrorReply,
+    Message,
+    MotoReadIoBit,
+    MotoReadIoBitReply,
+    MotoReadIoGroup,
+    MotoReadIoGroupReply,
+    MotoReadMRegister,
+    MotoReadMRegisterReply,
+    MotoWriteIoBit,
+    MotoWriteIoBitReply,
+    MotoWriteIoGroup,
+    MotoWriteIoGroupReply,
+    MotoWriteMRegister,
+    MotoWriteMRegisterReply,
+    UnknownMessage,
+    WireMessage,
+)
+from pymotoros.runtime.connections import IO_CLIENTS
+from pymotoros.runtime.requests import Checked, check_request
+from pymotoros.runtime.tcp import READ_CHUNK, Connection, TcpService
+
+__all__ = ["IoServer", "handle_io_request"]
+
+logger = logging.getLogger(__name__)
+
+
+def _log_io_refusal(port: str, what: str, target: int, code: IoResultCode, value: int) -> None:
+    if code != IoResultCode.OK:
+        logger.info(
+            "%s: %s %d (value %d) refused: %s",
+            port,
+            what,
+            target,
+            value,
+            IoResultCode.describe(code),
+        )
+
+
+def handle_io_request(controller: MotoRosController, msg: WireMessage, port: str) -> Message | None:
+    """The reply to an IO request, or None if ``msg`` is not an IO request of this port.
+
+    M-register requests are only IO-port messages; the motion server never passes them.
+    """
+    if isinstance(msg, MotoReadIoBit):
+        read = controller.read_io_bit(msg.io_address)
+        _log_io_refusal(port, "read bit", msg.io_address, read.result_code, 0)
+        return MotoReadIoBitReply(read.value, int(read.result_code))
+    if isinstance(msg, MotoWriteIoBit):
+        code = controller.write_io_bit(msg.io_address, msg.io_value)
+        _log_io_refusal(port, "write bit", msg.io_address, code, msg.io_value)
+        return MotoWriteIoBitReply(int(code))
+    if isinstance(msg, MotoReadIoGroup):
+        read = controller.read_io_group(msg.io_address)
+        _log_io_refusal(port, "read group", msg.io_address, read.result_code, 0)
+        return MotoReadIoGroupReply(read.value, int(read.result_code))
+    if isinstance(msg, MotoWriteIoGroup):
+        code = controller.write_io_group(msg.io_address, msg.io_value)
+        _log_io_refusal(port, "write group", msg.io_address, code, msg.io_value)
+        return MotoWriteIoGroupReply(int(code))
+    if isinstance(msg, MotoReadMRegister):
+        read = controller.read_mregister(msg.register_number)
+        _log_io_refusal(port, "read M-register", msg.register_number, read.result_code, 0)
+        return MotoReadMRegisterReply(read.value, int(read.result_code))
+    if isinstance(msg, MotoWriteMRegister):
+        code = controller.write_mregister(msg.register_number, msg.value)
+        _log_io_refusal(port, "write M-register", msg.register_number, code, msg.value)
+        return MotoWriteMRegisterReply(int(code))
+    return None
+
+
+class IoServer(TcpService):
+    """Serves IO reads and writes to one client."""
+
+    name = "io"
+
+    def __init__(self, controller: MotoRosController, order: ByteOrder) -> None:
+        # The IO port's replacement rule tests the *motion* queues, as MotoROS does (§2.2).
+        super().__init__(IO_CLIENTS, controller.has_queued_motion)
+        self._controller = controller
+        self._order = order
+        self.requests = 0
+
+    def on_connect(self, conn: Connection) -> None:
+        self._controller.io_connected()
+
+    async def serve_connection(self, conn: Connection) -> None:
+        decoder = FrameDecoder(self._order)
+        while data := await conn.reader.read(READ_CHUNK):
+            fragmented = decoder.buffered > 0
+            decoder.feed(data)
+            while True:
+                try:
+                    frame = decoder.next_frame()
+                except RemoteProtocolError as exc:
+                    dropped = decoder.discard()
+                    logger.warning(
+                        "io: client %s: %s; %d bytes dropped, answered INVALID/3001",
+                        conn.peer,
+                        exc,
+                        len(dropped),
+                    )
+                    await self._send(conn, IoErrorReply(ResultCode.INVALID, InvalidSubcode.MSGSIZE))
+                    break
+                if frame is None:
+                    break
+                if fragmented:
+                    fragmented = False
+                    logger.debug(
+                        "io: client %s: type %d arrived in several pieces and was reassembled "
+                        "(a real controller would answer 3001)",
+                        conn.peer,
+                        frame.msg_type,
+                    )
+                await self._send(conn, self._reply(conn, frame))
+
+    def _reply(self, conn: Connection, frame: Frame) -> Message:
+        self.requests += 1
+        checked: Checked = check_request(frame, self._order, Port.IO)
+        if checked.error_subcode is not None:
+            logger.warning(
+                "io: client %s: type %d with a %d-byte body answered INVALID/%d: %s",
+                conn.peer,
+                frame.msg_type,
+                len(frame.body),
+                checked.error_subcode,
+                checked.reason,
+            )
+            return IoErrorReply(ResultCode.INVALID, checked.error_subcode)
+        msg = checked.message
+        assert msg is not None  # noqa: S101 - no error means a decoded message
+        reply = (
+            None
+            if isinstance(msg, UnknownMessage)
+            else handle_io_request(self._controller, msg, "io")
+        )
+        if reply is None:  # pragma: no cover - check_request only passes IO types here
+            return IoErrorReply(ResultCode.INVALID, InvalidSubcode.MSGTYPE)
+        return reply
+
+    async def _send(self, conn: Connection, reply: Message) -> None:
+        conn.writer.write(encode(reply, self._order))  # one write per reply (clients §1.3)
+        await conn.writer.drain()

@@ -1,0 +1,278 @@
+"""The motion server (port 50240): one client, strict request/reply (reference §1.5, §3).
+
+Requests are served one at a time in arrival order. A request the controller
+cannot answer at once (START_TRAJ_MODE, START_SERVOS …) returns a
+:class:`~pymotoros.controller.api.Pending`; the server awaits a future that the
+pending's done-callback resolves inside a later interpolation tick, and reads
+nothing else from that client meanwhile.
+
+What MotoROS does and we do the same way: unknown types get INVALID/3003 with
+group and sequence -1 and the connection is kept; types 13/15/2002/2017 close the
+connection; a successful DISCONNECT and a failed GET_DH_PARAMETERS close without a
+reply; a request sent with comm_type SERVICE_REPLY is processed but not answered;
+IO bit/group requests are served here too (M-registers are not: 3003).
+
+Two documented improvements: frames split across reads are reassembled (logged at
+DEBUG), and the queues are cleared when the client goes away
+(``controller.motion_disconnected()``).
+
+Every reply leaves in a single ``write``: common clients read one reply per
+``recv()``.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import logging
+
+from pymotoros.controller.api import MotoRosController, Outcome, Pending, PointData
+from pymotoros.errors import RemoteProtocolError
+from pymotoros.protocol.constants import (
+    ByteOrder,
+    CommType,
+    InvalidSubcode,
+    MotionCommand,
+    MsgType,
+    NotReadySubcode,
+    Port,
+    ResultCode,
+    subcode_meaning,
+)
+from pymotoros.protocol.framing import Frame, FrameDecoder, encode
+from pymotoros.protocol.messages import (
+    JointTrajPtFull,
+    Message,
+    MotoGetDhParameters,
+    MotoGetDhParametersReply,
+    MotoJointTrajPtFullEx,
+    MotoMotionCtrl,
+    MotoMotionReply,
+    MotoSelectTool,
+    Ping,
+    PingReply,
+    UnknownMessage,
+    WireMessage,
+)
+from pymotoros.runtime.connections import MOTION_CLIENTS
+from pymotoros.runtime.io_server import handle_io_request
+from pymotoros.runtime.requests import check_request
+from pymotoros.runtime.tcp import READ_CHUNK, Connection, TcpService
+
+__all__ = ["MotionServer"]
+
+logger = logging.getLogger(__name__)
+
+_QUIET_COMMANDS = frozenset({MotionCommand.CHECK_QUEUE_CNT, MotionCommand.CHECK_MOTION_READY})
+"""Queries: a FALSE answer is information, not a refusal (logged at DEBUG)."""
+
+
+def _meaning(result: int, subcode: int) -> str:
+    """Subcode text; CHECK_MOTION_READY's FALSE carries a NOT_READY subcode too (§3.1)."""
+    if result == ResultCode.FAILURE and 5000 <= subcode < 6000:
+        return NotReadySubcode.describe(subcode)
+    return subcode_meaning(result, subcode)
+
+
+def _describe_command(command: int) -> str:
+    try:
+        return MotionCommand(command).name
+    except ValueError:
+        return f"unknown command {command}"
+
+
+class _CloseConnectionError(Exception):
+    """Internal: the request closes the connection without a reply."""
+
+
+class MotionServer(TcpService):
+    """Serves MOTO_MOTION_CTRL, trajectory points, tools, DH parameters and IO to one client."""
+
+    name = "motion"
+
+    def __init__(self, controller: MotoRosController, order: ByteOrder) -> None:
+        super().__init__(MOTION_CLIENTS, controller.has_queued_motion)
+        self._controller = controller
+        self._order = order
+        self.requests = 0
+
+    def on_connect(self, conn: Connection) -> None:
+        self._controller.motion_connected()
+
+    def on_disconnect(self, conn: Connection) -> None:
+        # Our improvement over MotoROS (§2.2): nothing keeps moving for a client that left.
+        self._controller.motion_disconnected()
+
+    # ----------------------------------------------------------- reading
+
+    async def serve_connection(self, conn: Connection) -> None:
+        decoder = FrameDecoder(self._order)
+        while data := await conn.reader.read(READ_CHUNK):
+            fragmented = decoder.buffered > 0
+            decoder.feed(data)
+            while True:
+                try:
+                    frame = decoder.next_frame()
+                except RemoteProtocolError as exc:
+                    dropped = decoder.discard()
+                    logger.warning(
+                        "motion: client %s: %s; %d bytes dropped, answered INVALID/3001",
+                        conn.peer,
+                        exc,
+                        len(dropped),
+                    )
+                    await self._send(
+                        conn,
+                        MotoMotionReply(-1, -1, 0, ResultCode.INVALID, InvalidSubcode.MSGSIZE),
+                    )
+                    break
+                if frame is None:
+                    break
+                if fragmented:
+                    fragmented = False
+                    logger.debug(
+                        "motion: client %s: type %d arrived in several pieces and was "
+                        "reassembled (a real controller would answer 3001)",
+                        conn.peer,
+                        frame.msg_type,
+                    )
+                try:
+                    await self._serve_frame(conn, frame)
+                except _CloseConnectionError:
+                    return
+
+    async def _serve_frame(self, conn: Connection, frame: Frame) -> None:
+        self.requests += 1
+        checked = check_request(frame, self._order, Port.MOTION)
+        if checked.close:
+            logger.warning(
+                "motion: client %s sent %s; closing the connection as MotoROS does",
+                conn.peer,
+                checked.reason,
+            )
+            raise _CloseConnectionError
+        if checked.error_subcode is not None:
+            logger.warning(
+                "motion: client %s: answered INVALID/%d (%s): %s",
+                conn.peer,
+                checked.error_subcode,
+                InvalidSubcode.describe(checked.error_subcode),
+                checked.reason,
+            )
+            reply: Message | None = MotoMotionReply(
+                checked.reply_group,
+                checked.reply_sequence,
+                checked.reply_command,
+                ResultCode.INVALID,
+                checked.error_subcode,
+            )
+        else:
+            if checked.trimmed:
+                logger.debug(
+                    "motion: client %s: %d surplus bytes after type %d ignored",
+                    conn.peer,
+                    checked.trimmed,
+                    frame.msg_type,
+                )
+            assert checked.message is not None  # noqa: S101 - no error means decoded
+            reply = await self._process(conn, checked.message)
+        if reply is None:
+            return
+        if frame.comm_type == CommType.SERVICE_REPLY:
+            # MotoROS processes such a message but sends nothing back (§1.1).
+            logger.debug("motion: client %s: request sent as SERVICE_REPLY, no reply", conn.peer)
+            return
+        await self._send(conn, reply)
+
+    async def _send(self, conn: Connection, reply: Message) -> None:
+        conn.writer.write(encode(reply, self._order))  # one write per reply (clients §1.3)
+        await conn.writer.drain()
+
+    # ----------------------------------------------------------- requests
+
+    async def _process(self, conn: Connection, msg: WireMessage) -> Message | None:
+        c = self._controller
+        if isinstance(msg, MotoMotionCtrl):
+            outcome = await self._resolve(c.motion_ctrl(msg.group_no, msg.command))
+            what = f"{_describe_command(msg.command)} (group {msg.group_no}, seq {msg.sequence})"
+            if outcome.close_connection:
+                logger.info(
+                    "motion: client %s: %s succeeded; closing without reply", conn.peer, what
+                )
+                raise _CloseConnectionError
+            self._log_outcome(conn, what, outcome, quiet=msg.command in _QUIET_COMMANDS)
+            return self._reply(outcome, msg.group_no, msg.sequence, msg.command)
+        if isinstance(msg, JointTrajPtFull):
+            point = PointData(msg.group_no, msg.valid_fields, msg.time, msg.pos, msg.vel, msg.acc)
+            outcome = await self._resolve(c.trajectory_point(msg.sequence, point))
+            what = f"JOINT_TRAJ_PT_FULL seq {msg.sequence} (group {msg.group_no}, t {msg.time:g} s)"
+            self._log_outcome(conn, what, outcome)
+            return self._reply(outcome, msg.group_no, msg.sequence, MsgType.JOINT_TRAJ_PT_FULL)
+        if isinstance(msg, MotoJointTrajPtFullEx):
+            points = [
+                PointData(g.group_no, g.valid_fields, g.time, g.pos, g.vel, g.acc)
+                for g in msg.groups
+            ]
+            outcome = await self._resolve(c.trajectory_point_ex(msg.sequence, points))
+            groups = ",".join(str(p.group_no) for p in points)
+            what = f"JOINT_TRAJ_PT_FULL_EX seq {msg.sequence} (groups {groups or 'none'})"
+            self._log_outcome(conn, what, outcome)
+            last = points[-1].group_no if points else -1
+            return self._reply(outcome, last, msg.sequence, MsgType.MOTO_JOINT_TRAJ_PT_FULL_EX)
+        if isinstance(msg, MotoSelectTool):
+            outcome = c.select_tool(msg.group_no, msg.tool)
+            what = f"SELECT_TOOL {msg.tool} (group {msg.group_no})"
+            self._log_outcome(conn, what, outcome)
+            return self._reply(outcome, msg.group_no, msg.sequence, MsgType.MOTO_SELECT_TOOL)
+        if isinstance(msg, MotoGetDhParameters):
+            dh = c.dh_parameters()
+            if dh is None:
+                logger.warning(
+                    "motion: client %s: DH parameters unavailable; closing the connection "
+                    "as MotoROS does (§5.9)",
+                    conn.peer,
+                )
+                raise _CloseConnectionError
+            return MotoGetDhParametersReply.for_groups(dh)
+        if isinstance(msg, Ping):
+            return PingReply()
+        if isinstance(msg, UnknownMessage):  # pragma: no cover - check_request answers 3003
+            return MotoMotionReply(-1, -1, msg.msg_type, ResultCode.INVALID, InvalidSubcode.MSGTYPE)
+        return handle_io_request(c, msg, "motion")
+
+    async def _resolve(self, result: Outcome | Pending) -> Outcome:
+        if isinstance(result, Outcome):
+            return result
+        future: asyncio.Future[Outcome] = asyncio.get_running_loop().create_future()
+
+        def done(outcome: Outcome) -> None:
+            if not future.done():
+                future.set_result(outcome)
+
+        result.add_done_callback(done)
+        return await future
+
+    @staticmethod
+    def _reply(outcome: Outcome, group: int, sequence: int, command: int) -> MotoMotionReply:
+        return MotoMotionReply(
+            group if outcome.group_no is None else outcome.group_no,
+            sequence,
+            command,
+            int(outcome.result),
+            outcome.subcode,
+        )
+
+    @staticmethod
+    def _log_outcome(conn: Connection, what: str, outcome: Outcome, *, quiet: bool = False) -> None:
+        if outcome.ok:
+            return
+        level = logging.DEBUG if outcome.result == ResultCode.BUSY or quiet else logging.WARNING
+        if logger.isEnabledFor(level):
+            logger.log(
+                level,
+                "motion: client %s: %s -> %s / %s%s",
+                conn.peer,
+                what,
+                ResultCode.describe(outcome.result),
+                _meaning(outcome.result, outcome.subcode),
+                f": {outcome.detail}" if outcome.detail else "",
+            )

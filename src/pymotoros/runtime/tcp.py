@@ -1,0 +1,215 @@
+"""What the three MotoROS servers share: listening, admission, one task per client, closing.
+
+A :class:`TcpService` listens on a pre-bound socket (so port 0 works and the real
+port is known before anyone connects), applies the §2.2 admission rule through a
+:class:`~pymotoros.runtime.connections.SlotTable`, sets TCP_NODELAY and
+SO_KEEPALIVE, and runs each client in a named task of the application's
+``TaskGroup``. A crash in one client's handler is logged and closes that connection
+only; cancellation always propagates.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import contextlib
+import ipaddress
+import logging
+import socket
+from abc import ABC, abstractmethod
+from collections.abc import Callable
+from typing import Final
+
+from pymotoros.runtime.connections import (
+    AdmissionKind,
+    SlotTable,
+    configure_socket,
+    peer_name,
+)
+
+__all__ = ["Connection", "TcpService", "bind_socket", "is_loopback"]
+
+logger = logging.getLogger(__name__)
+
+CLOSE_TIMEOUT_S: Final = 1.0
+"""How long closing a client may wait for its transport to finish."""
+
+READ_CHUNK: Final = 4096
+"""Bytes asked of the socket per read (MotoROS reads at most 552)."""
+
+
+def is_loopback(host: str) -> bool:
+    """True if ``host`` names only loopback addresses (``localhost`` included)."""
+    if host == "localhost":
+        return True
+    try:
+        return ipaddress.ip_address(host).is_loopback
+    except ValueError:
+        return False
+
+
+def bind_socket(host: str, port: int) -> socket.socket:
+    """A listening TCP socket on ``host:port`` (port 0: the OS chooses)."""
+    family = socket.AF_INET6 if ":" in host else socket.AF_INET
+    sock = socket.create_server((host, port), family=family, backlog=socket.SOMAXCONN)
+    sock.setblocking(False)
+    return sock
+
+
+class Connection:
+    """One accepted client."""
+
+    __slots__ = ("peer", "reader", "writer")
+
+    def __init__(self, reader: asyncio.StreamReader, writer: asyncio.StreamWriter) -> None:
+        self.reader = reader
+        self.writer = writer
+        self.peer = peer_name(writer)
+
+    def close(self) -> None:
+        """Close the transport; a handler blocked on it wakes with EOF."""
+        if not self.writer.is_closing():
+            self.writer.close()
+
+
+class TcpService(ABC):
+    """One MotoROS server port."""
+
+    name: str = "tcp"
+
+    def __init__(self, capacity: int, motion_queued: Callable[[], bool]) -> None:
+        self._slots: SlotTable[Connection] = SlotTable(capacity)
+        self._motion_queued = motion_queued
+        self._server: asyncio.Server | None = None
+        self._tg: asyncio.TaskGroup | None = None
+        self._tasks: dict[Connection, asyncio.Task[None]] = {}
+        self.port: int = 0
+        self.accepted = 0
+        self.refused = 0
+        self.replaced = 0
+
+    # ----------------------------------------------------------- life cycle
+
+    async def start(self, tg: asyncio.TaskGroup, sock: socket.socket) -> int:
+        """Start accepting on the bound ``sock`` (it is the server's from now on); client
+        tasks will live in ``tg``. Returns the port."""
+        self._tg = tg
+        self.port = int(sock.getsockname()[1])
+        self._server = await asyncio.start_server(self._accept, sock=sock)
+        logger.info("%s server listening on port %d", self.name, self.port)
+        return self.port
+
+    def stop_accepting(self) -> None:
+        if self._server is not None:
+            self._server.close()
+
+    async def close_clients(self) -> None:
+        """Close every client and wait for its task to finish."""
+        tasks = list(self._tasks.values())
+        for conn in list(self._tasks):
+            conn.close()
+        for task in tasks:
+            task.cancel()
+        if tasks:
+            await asyncio.wait(tasks, timeout=CLOSE_TIMEOUT_S)
+
+    async def wait_closed(self) -> None:
+        if self._server is not None:
+            self._server.close()
+            await self._server.wait_closed()
+            self._server = None
+
+    @property
+    def clients(self) -> int:
+        return len(self._slots)
+
+    # ----------------------------------------------------------- accepting
+
+    def _accept(self, reader: asyncio.StreamReader, writer: asyncio.StreamWriter) -> None:
+        conn = Connection(reader, writer)
+        tg = self._tg
+        if tg is None:  # pragma: no cover - start() sets it before accepting
+            writer.close()
+            return
+        queued = self._motion_queued()
+        admission = self._slots.admit(conn, queued)
+        if admission.kind is AdmissionKind.REFUSE:
+            self.refused += 1
+            logger.warning(
+                "%s: refused %s: all %d connection slots are taken and motion is queued "
+                "(MotoROS closes the newcomer while the robot moves)",
+                self.name,
+                conn.peer,
+                self._slots.capacity,
+            )
+            writer.close()
+            return
+        if admission.kind is AdmissionKind.REPLACE and admission.evicted is not None:
+            self.replaced += 1
+            logger.warning(
+                "%s: %s replaces %s in slot 0 (all %d slots taken, no motion queued)",
+                self.name,
+                conn.peer,
+                admission.evicted.peer,
+                self._slots.capacity,
+            )
+            self._evict(admission.evicted)
+        self.accepted += 1
+        configure_socket(writer)
+        coro = self._run(conn)
+        try:
+            task = tg.create_task(coro, name=f"{self.name}:{conn.peer}")
+        except RuntimeError:  # accepted while the task group shuts down
+            coro.close()
+            self._slots.release(conn)
+            writer.close()
+            return
+        self._tasks[conn] = task
+
+    def _evict(self, conn: Connection) -> None:
+        conn.close()
+        task = self._tasks.get(conn)
+        if task is not None:
+            task.cancel()
+
+    async def _run(self, conn: Connection) -> None:
+        logger.info(
+            "%s: client %s connected (%d/%d)",
+            self.name,
+            conn.peer,
+            len(self._slots),
+            self._slots.capacity,
+        )
+        try:
+            self.on_connect(conn)
+            await self.serve_connection(conn)
+        except (ConnectionError, asyncio.IncompleteReadError) as exc:
+            logger.info("%s: client %s: connection lost (%s)", self.name, conn.peer, exc)
+        except Exception:
+            logger.exception("%s: client %s: handler failed; closing it", self.name, conn.peer)
+        finally:
+            self._tasks.pop(conn, None)
+            released = self._slots.release(conn)
+            conn.close()
+            with contextlib.suppress(Exception, asyncio.CancelledError):
+                async with asyncio.timeout(CLOSE_TIMEOUT_S):
+                    await conn.writer.wait_closed()
+            logger.info("%s: client %s disconnected", self.name, conn.peer)
+            if released:
+                try:
+                    self.on_disconnect(conn)
+                except Exception:
+                    logger.exception(
+                        "%s: client %s: disconnect handling failed", self.name, conn.peer
+                    )
+
+    # ----------------------------------------------------------- hooks
+
+    def on_connect(self, conn: Connection) -> None:  # noqa: B027 - optional hook
+        """Called when a client has taken its slot."""
+
+    def on_disconnect(self, conn: Connection) -> None:  # noqa: B027 - optional hook
+        """Called when a client that held a slot is gone."""
+
+    @abstractmethod
+    async def serve_connection(self, conn: Connection) -> None:
+        """Serve one client until EOF; return to close it."""

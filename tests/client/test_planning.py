@@ -1,0 +1,127 @@
+"""Motion generation: limits respected, near time-optimal, MotoROS-acceptable points."""
+
+from __future__ import annotations
+
+import math
+
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from pymotoros.client.planning import (
+    MIN_SAMPLE_PERIOD_S,
+    JointLimits,
+    PlanningError,
+    motoros_speed_limit,
+    passes_motoros_speed_check,
+    plan_joint_move,
+)
+from pymotoros.models import ROBOTS, robot_model
+
+HC10 = robot_model("hc10").groups[0]
+LIMITS = JointLimits.from_group(HC10)
+EPS = 1e-9
+
+
+def _positions(limits: JointLimits) -> st.SearchStrategy[tuple[float, ...]]:
+    return st.tuples(
+        *(
+            st.floats(lo, hi, allow_nan=False, allow_infinity=False)
+            for lo, hi in zip(limits.lower, limits.upper, strict=True)
+        )
+    )
+
+
+scaling = st.floats(0.05, 1.0)
+
+
+@settings(max_examples=60, deadline=None)
+@given(
+    start=_positions(LIMITS),
+    goal=_positions(LIMITS),
+    vs=scaling,
+    acc=scaling,
+    period=st.sampled_from([0.004, 0.01, 0.02, 0.05]),
+)
+def test_moves_respect_limits_and_are_near_optimal(
+    start: tuple[float, ...], goal: tuple[float, ...], vs: float, acc: float, period: float
+) -> None:
+    traj = plan_joint_move(
+        start, goal, LIMITS, velocity_scaling=vs, acceleration_scaling=acc, sample_period=period
+    )
+    pts = traj.points
+    assert pts[0].time == 0.0 and pts[0].positions == pytest.approx(start)
+    assert pts[-1].positions == goal
+    assert all(v == 0.0 for v in pts[-1].velocities)
+    assert traj.duration <= 1.1 * traj.optimal_duration + EPS
+    for a, b in zip(pts, pts[1:], strict=False):
+        assert b.time - a.time >= MIN_SAMPLE_PERIOD_S - EPS
+        assert b.time - a.time <= period + EPS
+    for p in pts:
+        for i, axis in enumerate(HC10.axes):
+            lo, hi = min(start[i], goal[i]), max(start[i], goal[i])
+            assert lo - 1e-9 <= p.positions[i] <= hi + 1e-9
+            assert LIMITS.lower[i] - EPS <= p.positions[i] <= LIMITS.upper[i] + EPS
+            assert abs(p.velocities[i]) <= LIMITS.max_velocity[i] * vs * (1 + 1e-9)
+            assert abs(p.velocities[i]) <= axis.max_velocity
+            assert passes_motoros_speed_check(
+                p.velocities[i], motoros_speed_limit(axis, 4)
+            )
+            if p.accelerations:
+                assert abs(p.accelerations[i]) <= axis.max_acceleration * acc * (1 + 1e-6)
+
+
+@settings(max_examples=20, deadline=None)
+@given(goal=_positions(LIMITS))
+def test_duration_grows_as_speed_scaling_falls(goal: tuple[float, ...]) -> None:
+    start = HC10.home
+    fast = plan_joint_move(start, goal, LIMITS)
+    slow = plan_joint_move(start, goal, LIMITS, velocity_scaling=0.25, acceleration_scaling=0.25)
+    assert slow.duration >= fast.duration - EPS
+
+
+def test_every_model_has_limits_motoros_accepts() -> None:
+    for model in ROBOTS.values():
+        for group in model.groups:
+            limits = JointLimits.from_group(group)
+            for axis, v in zip(group.axes, limits.max_velocity, strict=True):
+                assert 0 < v <= axis.max_velocity
+                assert passes_motoros_speed_check(v, motoros_speed_limit(axis, 4))
+
+
+def test_same_start_and_goal_is_one_point() -> None:
+    traj = plan_joint_move(HC10.home, HC10.home, LIMITS)
+    assert len(traj.points) == 1 and traj.duration == 0.0
+
+
+def test_goal_outside_limits_is_refused() -> None:
+    goal = list(HC10.home)
+    goal[2] = math.radians(-10)
+    with pytest.raises(PlanningError, match="joint_3_u"):
+        plan_joint_move(HC10.home, goal, LIMITS)
+
+
+@pytest.mark.parametrize("bad", [0.0, -0.1, 1.5, math.nan])
+def test_scaling_must_be_a_fraction(bad: float) -> None:
+    with pytest.raises(PlanningError, match="velocity_scaling"):
+        plan_joint_move(HC10.home, [0.1] * 6, LIMITS, velocity_scaling=bad)
+
+
+def test_wrong_joint_count_names_the_joints() -> None:
+    with pytest.raises(PlanningError, match="joint_1_s"):
+        plan_joint_move([0.0] * 5, [0.0] * 6, LIMITS)
+
+
+def test_position_at_and_progress_follow_the_plan() -> None:
+    traj = plan_joint_move(HC10.home, (0.5, 0, 0, 0, -1.0, 0), LIMITS)
+    assert traj.position_at(0.0) == traj.start
+    assert traj.position_at(traj.duration + 1) == traj.goal
+    mid = traj.position_at(traj.duration / 2)
+    assert traj.progress(mid) == pytest.approx(0.5, abs=0.02)
+    assert traj.time_at_progress(traj.progress(mid)) == pytest.approx(traj.duration / 2, abs=0.01)
+
+
+def test_motoros_speed_check_truncates_like_the_controller() -> None:
+    assert passes_motoros_speed_check(3.9, 3.14)
+    assert not passes_motoros_speed_check(4.0, 3.14)
+    assert not passes_motoros_speed_check(-4.0, 3.14)

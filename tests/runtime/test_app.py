@@ -1,0 +1,110 @@
+"""SimulatorApp: ports, readiness, ordered idempotent shutdown, crashes, slot rules."""
+
+from __future__ import annotations
+
+import asyncio
+from dataclasses import replace
+
+import pytest
+from conftest import LOCAL
+from fake_controller import FakeController
+from peer import Peer
+
+from pymotoros.protocol.constants import Port
+from pymotoros.protocol.messages import Ping, PingReply
+from pymotoros.runtime.app import SimulatorApp
+from pymotoros.runtime.connections import AdmissionKind, SlotTable
+from pymotoros.runtime.tcp import is_loopback
+
+
+async def test_ports_are_chosen_by_the_os_and_distinct(app: SimulatorApp) -> None:
+    ports = app.ports
+    assert len({ports.motion, ports.state, ports.io}) == 3
+    assert 0 not in (ports.motion, ports.state, ports.io)
+    assert ports.http is None
+    assert app.ready.is_set()
+
+
+async def test_stop_closes_clients_and_is_idempotent(fake: FakeController) -> None:
+    sim = SimulatorApp(fake, LOCAL)
+    async with sim:
+        motion = await Peer.connect(sim.ports.motion, Port.MOTION)
+        state = await Peer.connect(sim.ports.state, Port.STATE)
+        assert isinstance(await motion.request(Ping()), PingReply)
+        await state.frame()
+        await sim.stop()
+        await sim.stop()
+        assert await motion.is_closed_by_server()
+        async with asyncio.timeout(5.0):
+            while await state.reader.read(4096):
+                pass
+        with pytest.raises(OSError):
+            await asyncio.open_connection("127.0.0.1", sim.ports.motion)
+        await motion.close()
+        await state.close()
+    assert "motion_disconnected" in fake.events
+
+
+async def test_serve_can_be_cancelled(fake: FakeController) -> None:
+    sim = SimulatorApp(fake, LOCAL)
+    task = asyncio.create_task(sim.serve())
+    async with asyncio.timeout(5.0):
+        await sim.ready.wait()
+    peer = await Peer.connect(sim.ports.motion, Port.MOTION)
+    task.cancel()
+    with pytest.raises(asyncio.CancelledError):
+        await task
+    assert await peer.is_closed_by_server()
+    await peer.close()
+
+
+class _Broken(FakeController):
+    def tick(self) -> None:
+        super().tick()
+        if self.ticks == 3:
+            raise RuntimeError("controller bug")
+
+
+async def test_a_crashing_tick_stops_everything_and_propagates() -> None:
+    sim = SimulatorApp(_Broken(), LOCAL)
+
+    async def run() -> None:
+        async with asyncio.timeout(5.0), sim:
+            await sim.wait_stopped()
+
+    with pytest.raises(ExceptionGroup) as info:
+        await run()
+    assert info.group_contains(RuntimeError, match="controller bug")
+
+
+async def test_port_in_use_is_an_oserror(app: SimulatorApp, fake: FakeController) -> None:
+    clash = SimulatorApp(FakeController(), replace(LOCAL, motion_port=app.ports.motion))
+    with pytest.raises(OSError, match="in use"):
+        await clash.__aenter__()
+
+
+def test_slot_table_rules() -> None:
+    table: SlotTable[str] = SlotTable(2)
+    assert table.admit("a", motion_queued=True).kind is AdmissionKind.ACCEPT
+    assert table.admit("b", motion_queued=False).slot == 1
+    assert table.admit("c", motion_queued=True).kind is AdmissionKind.REFUSE
+    replace = table.admit("d", motion_queued=False)
+    assert (replace.kind, replace.slot, replace.evicted) == (AdmissionKind.REPLACE, 0, "a")
+    assert table.occupants() == ["d", "b"]
+    assert table.release("a") is False
+    assert table.release("b") is True
+    assert len(table) == 1
+
+
+@pytest.mark.parametrize(
+    ("host", "loopback"),
+    [
+        ("127.0.0.1", True),
+        ("::1", True),
+        ("localhost", True),
+        ("0.0.0.0", False),
+        ("10.1.2.3", False),
+    ],
+)
+def test_is_loopback(host: str, loopback: bool) -> None:
+    assert is_loopback(host) is loopback

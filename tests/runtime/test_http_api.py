@@ -1,0 +1,130 @@
+"""The control API: state document, operator actions, and 4xx {"error": ...} for every mistake."""
+
+from __future__ import annotations
+
+from collections.abc import AsyncIterator
+from dataclasses import replace
+
+import httpx
+import pytest
+from conftest import LOCAL
+from fake_controller import FakeController
+
+from pymotoros.runtime.app import SimulatorApp
+from pymotoros.runtime.http_api import create_http_app
+from pymotoros.runtime.ticker import LatenessStats, TickStats
+
+STATS = TickStats(4.0, 1000, 2, 0, 0, LatenessStats(0.05, 0.2, 1.5))
+
+
+@pytest.fixture
+async def api(fake: FakeController) -> AsyncIterator[httpx.AsyncClient]:
+    app = create_http_app(fake, lambda: STATS)
+    transport = httpx.ASGITransport(app=app)
+    async with httpx.AsyncClient(transport=transport, base_url="http://sim") as client:
+        yield client
+
+
+async def test_state_document_has_exactly_the_contract_keys(api: httpx.AsyncClient) -> None:
+    r = await api.get("/api/state")
+    assert r.status_code == 200
+    doc = r.json()
+    assert set(doc) == {
+        "mode", "remote", "servo", "estop", "hold", "alarms", "motion_ready", "groups", "tick",
+    }  # fmt: skip
+    assert doc["mode"] == "play"
+    assert set(doc["groups"][0]) == {
+        "name", "joint_names", "command_rad", "feedback_rad", "command_pulse", "queue", "tool",
+    }  # fmt: skip
+    assert doc["tick"] == {
+        "period_ms": 4.0,
+        "count": 1000,
+        "overruns": 2,
+        "lateness_ms": {"p50": 0.05, "p99": 0.2, "max": 1.5},
+    }
+
+
+async def test_operator_actions(api: httpx.AsyncClient, fake: FakeController) -> None:
+    fake.servo = True
+    r = await api.post("/api/estop", json={"pressed": True})
+    assert r.status_code == 200
+    assert r.json()["estop"] is True
+    assert r.json()["servo"] is False
+    assert r.json()["alarms"] == []  # E-stop raises no alarm
+    assert (await api.post("/api/estop", json={"pressed": False})).json()["estop"] is False
+    assert (await api.post("/api/hold", json={"on": True})).json()["hold"] is True
+    assert (await api.post("/api/mode", json={"mode": "teach"})).json()["mode"] == "teach"
+    assert (await api.post("/api/remote", json={"on": False})).json()["remote"] is False
+    assert (await api.post("/api/servo", json={"on": True})).json()["servo"] is True
+    r = await api.post("/api/alarm", json={"code": 4107, "subcode": 2, "text": "OUT OF RANGE"})
+    assert r.json()["alarms"] == [{"code": 4107, "subcode": 2, "text": "OUT OF RANGE"}]
+    assert (await api.post("/api/reset")).json()["alarms"] == []
+    assert (await api.post("/api/io", json={"address": 20010, "value": 1})).status_code == 200
+    assert fake.bits[20010] == 1
+    r = await api.get("/api/io/20010")
+    assert r.json() == {"address": 20010, "value": 1, "result_code": 0}
+
+
+@pytest.mark.parametrize(
+    ("method", "path", "body", "status", "fragment"),
+    [
+        ("GET", "/api/nope", None, 404, "no such endpoint: GET /api/nope"),
+        ("GET", "/", None, 404, "no such endpoint"),
+        ("GET", "/api/estop", None, 405, "method GET not allowed on /api/estop"),
+        ("POST", "/api/estop", None, 422, "a JSON body is required"),
+        ("POST", "/api/estop", {"pressed": "yes"}, 422, "pressed"),
+        ("POST", "/api/estop", {"pressed": 1}, 422, "pressed"),
+        ("POST", "/api/estop", {"pressed": True, "x": 1}, 422, "unknown field 'x'"),
+        ("POST", "/api/mode", {"mode": "auto"}, 422, "mode"),
+        ("POST", "/api/alarm", {"subcode": 1}, 422, "code: Field required"),
+        ("POST", "/api/alarm", {"code": -5}, 422, "code"),
+        ("POST", "/api/io", {"address": 20018, "value": 1}, 400, "last digit must be 0..7"),
+        ("POST", "/api/io", {"address": 20010, "value": 2}, 400, "must be 0 or 1"),
+        ("GET", "/api/io/20018", None, 400, "address 20018"),
+        ("GET", "/api/io/abc", None, 422, "address"),
+    ],
+)
+async def test_errors_are_4xx_with_a_message(
+    api: httpx.AsyncClient,
+    method: str,
+    path: str,
+    body: object,
+    status: int,
+    fragment: str,
+) -> None:
+    r = await api.request(method, path, json=body)
+    assert r.status_code == status
+    doc = r.json()
+    assert set(doc) == {"error"}
+    assert fragment in doc["error"]
+
+
+async def test_malformed_json_is_422(api: httpx.AsyncClient) -> None:
+    r = await api.post(
+        "/api/hold", content=b"{not json", headers={"content-type": "application/json"}
+    )
+    assert r.status_code == 422
+    assert "not valid JSON" in r.json()["error"]
+
+
+async def test_openapi_schema_lists_the_endpoints(api: httpx.AsyncClient) -> None:
+    schema = (await api.get("/openapi.json")).json()
+    for path in ("/api/state", "/api/estop", "/api/hold", "/api/mode", "/api/remote",
+                 "/api/servo", "/api/alarm", "/api/reset", "/api/io"):  # fmt: skip
+        assert path in schema["paths"]
+
+
+async def test_served_by_uvicorn_in_the_simulators_loop(fake: FakeController) -> None:
+    async with SimulatorApp(fake, replace(LOCAL, http_port=0)) as sim:
+        assert sim.ports.http
+        url = f"http://127.0.0.1:{sim.ports.http}"
+        async with httpx.AsyncClient(base_url=url, timeout=5.0) as client:
+            doc = (await client.get("/api/state")).json()
+            assert doc["tick"]["period_ms"] == 4.0
+            assert doc["tick"]["count"] >= 1
+            r = await client.post("/api/hold", json={"on": True})
+            assert r.json()["hold"] is True
+            r = await client.get("/missing")
+            assert r.status_code == 404
+            assert "error" in r.json()
+    assert fake.hold is True
