@@ -11,18 +11,18 @@ from __future__ import annotations
 
 import asyncio
 import contextlib
+import itertools
 import math
 import time
 from dataclasses import dataclass, field
 
+from pymotoros.client.robot import RobotClient
 from pymotoros.models import robot_model
 from pymotoros.protocol.constants import (
     ByteOrder,
-    CommType,
     InvalidSubcode,
     IoResultCode,
     MotionCommand,
-    MsgType,
     NotReadySubcode,
     Port,
     ResultCode,
@@ -142,9 +142,13 @@ class ClientPeer:
             self.ports[kind] = server.sockets[0].getsockname()[1]
         return self
 
-    def _accept(self, kind: Port, reader: asyncio.StreamReader, writer: asyncio.StreamWriter) -> None:
+    def _accept(
+        self, kind: Port, reader: asyncio.StreamReader, writer: asyncio.StreamWriter
+    ) -> None:
         self._writers.add(writer)
-        handler = self._state_loop(writer) if kind is Port.STATE else self._serve(kind, reader, writer)
+        handler = (
+            self._state_loop(writer) if kind is Port.STATE else self._serve(kind, reader, writer)
+        )
         task = asyncio.get_running_loop().create_task(handler, name=f"peer-{kind.value}")
         self._tasks.add(task)
         task.add_done_callback(self._tasks.discard)
@@ -183,7 +187,7 @@ class ClientPeer:
             if t >= pts[-1].time:
                 g.pos = list(pts[-1].pos)
                 continue
-            for a, b in zip(pts, pts[1:], strict=False):
+            for a, b in itertools.pairwise(pts):
                 if a.time <= t < b.time:
                     g.pos = _hermite(a, b, t)
                     break
@@ -208,7 +212,10 @@ class ClientPeer:
         with contextlib.suppress(ConnectionError, OSError):
             while True:
                 self._advance()
-                fbs = [JointFeedback.for_joints(i, g.pos, [0.0] * g.n) for i, g in enumerate(self.groups)]
+                fbs = [
+                    JointFeedback.for_joints(i, g.pos, [0.0] * g.n)
+                    for i, g in enumerate(self.groups)
+                ]
                 for fb in fbs:
                     writer.write(encode(fb, self.order))
                 if len(fbs) > 1:
@@ -246,8 +253,10 @@ class ClientPeer:
         return MotoMotionReply(-1, -1, mtype, result, subcode)
 
     def _answer(self, kind: Port, msg: WireMessage) -> list[WireMessage]:
-        key = msg.command if isinstance(msg, MotoMotionCtrl) else (
-            msg.msg_type if isinstance(msg, UnknownMessage) else int(msg.MSG_TYPE)
+        key = (
+            msg.command
+            if isinstance(msg, MotoMotionCtrl)
+            else (msg.msg_type if isinstance(msg, UnknownMessage) else int(msg.MSG_TYPE))
         )
         if key in self.silent:
             return []
@@ -374,4 +383,15 @@ class ClientPeer:
         return None
 
 
-__all__ = ["ClientPeer", "CommType", "MsgType"]
+def client_for(peer: ClientPeer, **options: object) -> RobotClient:
+    """A client (not connected yet) for ``peer``'s ports."""
+    return RobotClient(
+        "127.0.0.1",
+        motion_port=peer.ports[Port.MOTION],
+        state_port=peer.ports[Port.STATE],
+        io_port=peer.ports[Port.IO],
+        **options,  # type: ignore[arg-type]
+    )
+
+
+__all__ = ["ClientPeer", "client_for"]

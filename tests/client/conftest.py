@@ -5,10 +5,9 @@ from __future__ import annotations
 from collections.abc import AsyncIterator
 
 import pytest
-from client_peer import ClientPeer
+from client_peer import ClientPeer, client_for
 
 from pymotoros.client.robot import RobotClient
-from pymotoros.protocol.constants import Port
 
 
 @pytest.fixture
@@ -18,16 +17,6 @@ async def peer() -> AsyncIterator[ClientPeer]:
         yield p
     finally:
         await p.close()
-
-
-def client_for(peer: ClientPeer, **options: object) -> RobotClient:
-    return RobotClient(
-        "127.0.0.1",
-        motion_port=peer.ports[Port.MOTION],
-        state_port=peer.ports[Port.STATE],
-        io_port=peer.ports[Port.IO],
-        **options,  # type: ignore[arg-type]
-    )
 
 
 @pytest.fixture

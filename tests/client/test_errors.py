@@ -29,7 +29,8 @@ from pymotoros.protocol.constants import (
 @pytest.mark.parametrize("sub", list(NotReadySubcode))
 def test_every_not_ready_subcode(sub: NotReadySubcode) -> None:
     err = reply_error(ResultCode.NOT_READY, sub, MotionCommand.START_TRAJ_MODE)
-    assert isinstance(err, NotReadyError) and isinstance(err, PymotorosError)
+    assert isinstance(err, NotReadyError)
+    assert isinstance(err, PymotorosError)
     assert err.reason is sub
     assert sub.meaning in str(err)
     assert err.remedy == NOT_READY_REMEDIES[sub]
@@ -51,7 +52,8 @@ def test_every_invalid_subcode(sub: InvalidSubcode) -> None:
         InvalidSubcode.DATA_SPEED: SpeedLimitError,
     }.get(sub, InvalidRequestError)
     assert type(err) is expected
-    assert err.point == 3 and "point 3" in str(err)
+    assert err.point == 3
+    assert "point 3" in str(err)
     assert err.remedy == INVALID_REMEDIES[sub]
 
 
@@ -59,16 +61,20 @@ def test_busy_and_failure() -> None:
     assert isinstance(reply_error(ResultCode.BUSY, 0, 14), BusyTimeoutError)
     err = reply_error(ResultCode.FAILURE, 0, MotionCommand.STOP_TRAJ_MODE)
     assert isinstance(err, CommandFailedError)
-    assert "STOP_TRAJ_MODE" in str(err) and "queued" in err.remedy
+    assert "STOP_TRAJ_MODE" in str(err)
+    assert "queued" in err.remedy
 
 
 def test_unknown_codes_still_read_well() -> None:
     err = reply_error(ResultCode.NOT_READY, 5099, 200121)
-    assert isinstance(err, NotReadyError) and err.reason is None
+    assert isinstance(err, NotReadyError)
+    assert err.reason is None
     assert "5099" in str(err)
 
 
 @pytest.mark.parametrize("code", [c for c in IoResultCode if c])
 def test_io_codes(code: IoResultCode) -> None:
     err = io_error(code, 10010, "IO write")
-    assert err.result_code == code and str(int(code)) in str(err) and err.remedy
+    assert err.result_code == code
+    assert str(int(code)) in str(err)
+    assert err.remedy

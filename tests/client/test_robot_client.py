@@ -7,8 +7,7 @@ import math
 import socket
 
 import pytest
-from client_peer import ClientPeer
-from conftest import client_for
+from client_peer import ClientPeer, client_for
 
 from pymotoros.client import (
     BusyTimeoutError,
@@ -43,7 +42,8 @@ async def test_state_arrives_and_is_typed(client: RobotClient) -> None:
     assert status.mode is Mode.PLAY
     assert status.in_motion is False
     fb = client.feedback(0)
-    assert fb is not None and len(fb.positions) == 6
+    assert fb is not None
+    assert len(fb.positions) == 6
 
 
 async def test_states_iterator_and_listener(client: RobotClient) -> None:
@@ -79,7 +79,8 @@ async def test_enable_refused_raises_not_ready(
     err = info.value
     assert err.reason is reason
     assert str(int(reason)) in str(err)
-    assert err.remedy and err.remedy in str(err)
+    assert err.remedy
+    assert err.remedy in str(err)
     assert err.command == MotionCommand.START_TRAJ_MODE
 
 
@@ -92,10 +93,11 @@ async def test_queue_count_and_bad_group(client: RobotClient) -> None:
 async def test_tool_dh_ping(peer: ClientPeer, client: RobotClient) -> None:
     await client.select_tool(5)
     assert peer.tool == 5
-    with pytest.raises(ValueError, match="0..63"):
+    with pytest.raises(ValueError, match=r"0\.\.63"):
         await client.select_tool(64)
     dh = await client.get_dh_parameters()
-    assert len(dh) == 1 and dh[0][0].d == pytest.approx(0.1)
+    assert len(dh) == 1
+    assert dh[0][0].d == pytest.approx(0.1)
     assert await client.ping() >= 0.0
 
 
@@ -209,7 +211,7 @@ async def test_slowed_robot_is_reported(peer: ClientPeer, client: RobotClient) -
     await client.enable()
     peer.speed_scale = 0.5
     samples = []
-    result = await client.move_joints((0.0, 0.0, 0.0, 0.0, -0.5, 0.0), on_progress=samples.append)
+    result = await client.move_joints((0.0, 0.0, 0.0, 0.0, -1.5, 0.0), on_progress=samples.append)
     assert result.following.slowed
     assert result.following.max_lag_s > 0.25
     assert samples[-1].progress == pytest.approx(1.0, abs=1e-3)
@@ -219,7 +221,7 @@ async def test_request_timeout(peer: ClientPeer, client: RobotClient) -> None:
     peer.silent.add(MotionCommand.CHECK_QUEUE_CNT)
     c = client
     c.timeout_s = 0.2
-    with pytest.raises(RequestTimeoutError, match="within 0.2 s"):
+    with pytest.raises(RequestTimeoutError, match=r"within 0\.2 s"):
         await c.queue_count()
     peer.silent.clear()
     assert await c.queue_count() == 0
@@ -245,7 +247,7 @@ async def test_io_addresses_checked_before_sending(peer: ClientPeer, client: Rob
     sent = len(peer.received)
     with pytest.raises(IoAddressError, match="last digit"):
         await client.read_io_bit(10018)
-    with pytest.raises(IoAddressError, match="does not write.*general output 10010-15127"):
+    with pytest.raises(IoAddressError, match=r"does not write.*general output 10010-15127"):
         await client.write_io_bit(20010, 1)
     with pytest.raises(IoAddressError, match="0 or 1"):
         await client.write_io_bit(10010, 2)

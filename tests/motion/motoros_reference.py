@@ -145,9 +145,7 @@ def interpolate(
                 d = ar.sub(end.pos[i], start.pos[i])
                 tt = ar.mul(seg_t, seg_t)
                 first = ar.div(ar.mul(F(6), d), tt)
-                second = ar.div(
-                    ar.mul(F(2), ar.add(end.vel[i], ar.mul(F(2), start.vel[i]))), seg_t
-                )
+                second = ar.div(ar.mul(F(2), ar.add(end.vel[i], ar.mul(F(2), start.vel[i]))), seg_t)
                 a1[i] = round_f32(ar.sub(first, second))
                 third = ar.div(ar.mul(F(-12), d), ar.mul(tt, seg_t))
                 fourth = ar.div(ar.mul(F(6), ar.add(end.vel[i], start.vel[i])), tt)

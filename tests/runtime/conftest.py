@@ -1,18 +1,29 @@
-"""Fixtures of the runtime tests: a simulator on 127.0.0.1 port 0 around a controller."""
+"""Fixtures of the runtime tests: a simulator on 127.0.0.1 port 0 around a controller.
+
+``app`` runs the real ``VirtualController`` (default cell: HC10 on a YRC1000) on the
+real clock; ``vapp`` runs it on virtual time, as fast as the loop goes, for tests that
+need controller seconds (servo power-up, trajectories). ``fake`` is a stand-in used
+only where a test injects behaviour the real controller does not have (a crashing
+tick, a state stream whose every cycle differs).
+"""
 
 from __future__ import annotations
 
-import asyncio
-import contextlib
 from collections.abc import AsyncIterator
 
 import pytest
-from fake_controller import FakeController
 
-from pymotoros.runtime.app import SimulatorApp, SimulatorConfig
+from pymotoros.controller import VirtualController
+from pymotoros.runtime.app import SimulatorApp
 from pymotoros.runtime.clock import ManualClock
 
-LOCAL = SimulatorConfig(host="127.0.0.1", motion_port=0, state_port=0, io_port=0, http_port=None)
+from .fake_controller import FakeController
+from .support import LOCAL, virtual_time
+
+
+@pytest.fixture
+def controller() -> VirtualController:
+    return VirtualController()
 
 
 @pytest.fixture
@@ -21,19 +32,19 @@ def fake() -> FakeController:
 
 
 @pytest.fixture
-async def app(fake: FakeController) -> AsyncIterator[SimulatorApp]:
-    """The fake controller on the network, real clock, no HTTP."""
-    async with SimulatorApp(fake, LOCAL) as sim:
+async def app(controller: VirtualController) -> AsyncIterator[SimulatorApp]:
+    """The virtual controller on the network, real clock, no HTTP."""
+    async with SimulatorApp(controller, LOCAL) as sim:
         yield sim
 
 
-@contextlib.asynccontextmanager
-async def virtual_time(clock: ManualClock) -> AsyncIterator[None]:
-    """Run ``clock`` as fast as the loop goes for the duration of the block."""
-    driver = asyncio.create_task(clock.run_virtual_time(), name="virtual-time")
-    try:
-        yield
-    finally:
-        driver.cancel()
-        with contextlib.suppress(asyncio.CancelledError):
-            await driver
+@pytest.fixture
+def clock() -> ManualClock:
+    return ManualClock()
+
+
+@pytest.fixture
+async def vapp(controller: VirtualController, clock: ManualClock) -> AsyncIterator[SimulatorApp]:
+    """The virtual controller on virtual time (running as fast as the loop goes)."""
+    async with SimulatorApp(controller, LOCAL, clock=clock) as sim, virtual_time(clock):
+        yield sim

@@ -7,7 +7,7 @@ import contextlib
 
 from pymotoros.protocol.constants import ByteOrder, Port
 from pymotoros.protocol.framing import Frame, FrameDecoder, decode_reply, encode
-from pymotoros.protocol.messages import WireMessage
+from pymotoros.protocol.messages import MotoMotionCtrl, MotoMotionReply, WireMessage
 
 TIMEOUT = 5.0
 
@@ -66,3 +66,11 @@ class Peer:
         self.writer.close()
         with contextlib.suppress(ConnectionError):
             await self.writer.wait_closed()
+
+
+async def ctrl(peer: Peer, command: int, group: int = 0, sequence: int = 0) -> tuple[int, int]:
+    """Send a MOTO_MOTION_CTRL; (result, subcode) of the reply, whose echo is checked."""
+    reply = await peer.request(MotoMotionCtrl(group, sequence, command))
+    assert isinstance(reply, MotoMotionReply)
+    assert (reply.group_no, reply.sequence, reply.command) == (group, sequence, command)
+    return reply.result, reply.subcode

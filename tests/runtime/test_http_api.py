@@ -7,19 +7,20 @@ from dataclasses import replace
 
 import httpx
 import pytest
-from conftest import LOCAL
-from fake_controller import FakeController
 
+from pymotoros.controller import VirtualController
 from pymotoros.runtime.app import SimulatorApp
 from pymotoros.runtime.http_api import create_http_app
 from pymotoros.runtime.ticker import LatenessStats, TickStats
+
+from .support import LOCAL
 
 STATS = TickStats(4.0, 1000, 2, 0, 0, LatenessStats(0.05, 0.2, 1.5))
 
 
 @pytest.fixture
-async def api(fake: FakeController) -> AsyncIterator[httpx.AsyncClient]:
-    app = create_http_app(fake, lambda: STATS)
+async def api(controller: VirtualController) -> AsyncIterator[httpx.AsyncClient]:
+    app = create_http_app(controller, lambda: STATS)
     transport = httpx.ASGITransport(app=app)
     async with httpx.AsyncClient(transport=transport, base_url="http://sim") as client:
         yield client
@@ -44,8 +45,10 @@ async def test_state_document_has_exactly_the_contract_keys(api: httpx.AsyncClie
     }
 
 
-async def test_operator_actions(api: httpx.AsyncClient, fake: FakeController) -> None:
-    fake.servo = True
+async def test_operator_actions(api: httpx.AsyncClient, controller: VirtualController) -> None:
+    controller.set_servo(True)
+    controller.run_ticks(200)  # servo power-up takes controller time
+    assert (await api.get("/api/state")).json()["servo"] is True
     r = await api.post("/api/estop", json={"pressed": True})
     assert r.status_code == 200
     assert r.json()["estop"] is True
@@ -53,16 +56,23 @@ async def test_operator_actions(api: httpx.AsyncClient, fake: FakeController) ->
     assert r.json()["alarms"] == []  # E-stop raises no alarm
     assert (await api.post("/api/estop", json={"pressed": False})).json()["estop"] is False
     assert (await api.post("/api/hold", json={"on": True})).json()["hold"] is True
+    assert (await api.post("/api/hold", json={"on": False})).json()["hold"] is False
     assert (await api.post("/api/mode", json={"mode": "teach"})).json()["mode"] == "teach"
+    assert (await api.post("/api/mode", json={"mode": "play"})).json()["mode"] == "play"
     assert (await api.post("/api/remote", json={"on": False})).json()["remote"] is False
-    assert (await api.post("/api/servo", json={"on": True})).json()["servo"] is True
     r = await api.post("/api/alarm", json={"code": 4107, "subcode": 2, "text": "OUT OF RANGE"})
     assert r.json()["alarms"] == [{"code": 4107, "subcode": 2, "text": "OUT OF RANGE"}]
     assert (await api.post("/api/reset")).json()["alarms"] == []
     assert (await api.post("/api/io", json={"address": 20010, "value": 1})).status_code == 200
-    assert fake.bits[20010] == 1
+    assert controller.read_io_bit(20010).value == 1
     r = await api.get("/api/io/20010")
     assert r.json() == {"address": 20010, "value": 1, "result_code": 0}
+    r = await api.post("/api/io", json={"address": 1_000_007, "value": 512})
+    assert controller.read_mregister(7).value == 512
+    r = await api.post("/api/error", json={"code": 1234, "text": "operator error"})
+    assert r.status_code == 200
+    r = await api.post("/api/io/failure", json={"reads": True})
+    assert controller.read_io_bit(20010).result_code == 1004
 
 
 @pytest.mark.parametrize(
@@ -78,8 +88,10 @@ async def test_operator_actions(api: httpx.AsyncClient, fake: FakeController) ->
         ("POST", "/api/mode", {"mode": "auto"}, 422, "mode"),
         ("POST", "/api/alarm", {"subcode": 1}, 422, "code: Field required"),
         ("POST", "/api/alarm", {"code": -5}, 422, "code"),
-        ("POST", "/api/io", {"address": 20018, "value": 1}, 400, "last digit must be 0..7"),
-        ("POST", "/api/io", {"address": 20010, "value": 2}, 400, "must be 0 or 1"),
+        ("POST", "/api/io", {"address": 20018, "value": 1}, 400, "20018"),
+        ("POST", "/api/io", {"address": 20010, "value": 2}, 400, "0 or 1"),
+        ("POST", "/api/io", {"address": 1_000_999, "value": 70000}, 422, "value"),
+        ("POST", "/api/alarm", {"code": 99999}, 422, "code"),
         ("GET", "/api/io/20018", None, 400, "address 20018"),
         ("GET", "/api/io/abc", None, 422, "address"),
     ],
@@ -114,8 +126,8 @@ async def test_openapi_schema_lists_the_endpoints(api: httpx.AsyncClient) -> Non
         assert path in schema["paths"]
 
 
-async def test_served_by_uvicorn_in_the_simulators_loop(fake: FakeController) -> None:
-    async with SimulatorApp(fake, replace(LOCAL, http_port=0)) as sim:
+async def test_served_by_uvicorn_in_the_simulators_loop(controller: VirtualController) -> None:
+    async with SimulatorApp(controller, replace(LOCAL, http_port=0)) as sim:
         assert sim.ports.http
         url = f"http://127.0.0.1:{sim.ports.http}"
         async with httpx.AsyncClient(base_url=url, timeout=5.0) as client:
@@ -127,4 +139,4 @@ async def test_served_by_uvicorn_in_the_simulators_loop(fake: FakeController) ->
             r = await client.get("/missing")
             assert r.status_code == 404
             assert "error" in r.json()
-    assert fake.hold is True
+    assert controller.snapshot().hold is True

@@ -4,10 +4,8 @@ from __future__ import annotations
 
 import struct
 
-from fake_controller import FakeController
-from peer import Peer
-
-from pymotoros.protocol.constants import CommType, MsgType, Port, ReplyType
+from pymotoros.controller import VirtualController
+from pymotoros.protocol.constants import ByteOrder, CommType, MsgType, Port, ReplyType
 from pymotoros.protocol.framing import Frame, encode_frame
 from pymotoros.protocol.messages import (
     IoErrorReply,
@@ -23,6 +21,8 @@ from pymotoros.protocol.messages import (
     UnknownMessage,
 )
 from pymotoros.runtime.app import SimulatorApp
+
+from .peer import Peer
 
 
 async def io_peer(app: SimulatorApp) -> Peer:
@@ -47,13 +47,17 @@ async def test_io_error_reply_layout_for_unknown_type(app: SimulatorApp) -> None
 
 async def test_io_error_reply_for_short_message_keeps_connection(app: SimulatorApp) -> None:
     peer = await io_peer(app)
-    await peer.send_raw(encode_frame(Frame(MsgType.MOTO_WRITE_MREGISTER, 2, 0, b"\1\0\0\0"), "<"))
+    await peer.send_raw(
+        encode_frame(Frame(MsgType.MOTO_WRITE_MREGISTER, 2, 0, b"\1\0\0\0"), ByteOrder.LITTLE)
+    )
     assert await peer.message() == IoErrorReply(3, 3001)
     assert await peer.request(MotoReadIoBit(10010)) == MotoReadIoBitReply(0, 0)
     await peer.close()
 
 
-async def test_m_registers_and_result_codes(app: SimulatorApp, fake: FakeController) -> None:
+async def test_m_registers_and_result_codes(
+    app: SimulatorApp, controller: VirtualController
+) -> None:
     peer = await io_peer(app)
     assert await peer.request(MotoWriteMRegister(12, 0xBEEF)) == MotoWriteMRegisterReply(0)
     assert await peer.request(MotoReadMRegister(12)) == MotoReadMRegisterReply(0xBEEF, 0)
@@ -66,7 +70,10 @@ async def test_m_registers_and_result_codes(app: SimulatorApp, fake: FakeControl
     # a reply is sent whatever the comm_type
     reply = await peer.request(MotoReadMRegister(12), comm_type=CommType.SERVICE_REPLY)
     assert reply == MotoReadMRegisterReply(0xBEEF, 0)
-    assert fake.events.count("io_connected") == 1
+    assert controller.read_io_bit(11126).value == 1  # OT#895: an IO client has connected
+    controller.set_io_api_failure(reads=True, writes=True)
+    assert await peer.request(MotoReadMRegister(12)) == MotoReadMRegisterReply(0, 1004)
+    assert await peer.request(MotoWriteIoBit(10010, 1)) == MotoWriteIoBitReply(1005)
     await peer.close()
 
 

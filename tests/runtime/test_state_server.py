@@ -9,25 +9,22 @@ import statistics
 from collections.abc import AsyncIterator
 
 import pytest
-from conftest import LOCAL, virtual_time
-from fake_controller import FakeController
-from peer import Peer
 
+from pymotoros.controller import VirtualController, default_cell
 from pymotoros.protocol.constants import CommType, MsgType, Port, ReplyType
 from pymotoros.protocol.messages import JointFeedback, RobotStatus
 from pymotoros.runtime.app import SimulatorApp
 from pymotoros.runtime.clock import ManualClock
 from pymotoros.runtime.state_server import STATE_WRITE_HIGH_WATER
 
+from .fake_controller import FakeController
+from .peer import Peer
+from .support import LOCAL, virtual_time
+
 
 @pytest.fixture
-def clock() -> ManualClock:
-    return ManualClock()
-
-
-@pytest.fixture
-async def vapp(fake: FakeController, clock: ManualClock) -> AsyncIterator[SimulatorApp]:
-    """The simulator on virtual time (running as fast as the loop goes)."""
+async def fake_vapp(fake: FakeController, clock: ManualClock) -> AsyncIterator[SimulatorApp]:
+    """The stand-in controller (its feedback changes every tick) on virtual time."""
     async with SimulatorApp(fake, LOCAL, clock=clock) as sim, virtual_time(clock):
         yield sim
 
@@ -47,14 +44,15 @@ async def test_single_group_cycle_is_feedback_then_status(app: SimulatorApp) -> 
     await peer.close()
 
 
-async def test_two_groups_add_feedback_ex(fake: FakeController) -> None:
-    two = FakeController(num_groups=2)
-    async with SimulatorApp(two, LOCAL) as sim:
+async def test_four_groups_add_feedback_ex() -> None:
+    sda = VirtualController(default_cell("yrc1000", "sda10f"))
+    assert sda.num_groups == 4
+    async with SimulatorApp(sda, LOCAL) as sim:
         peer = await state_peer(sim)
-        frames = [await peer.frame() for _ in range(8)]
+        frames = [await peer.frame() for _ in range(12)]
         start = next(i for i, f in enumerate(frames) if f.msg_type == MsgType.JOINT_FEEDBACK)
-        sizes = [(f.msg_type, f.size) for f in frames[start : start + 4]]
-        assert sizes == [(15, 148), (15, 148), (2017, 548), (13, 44)]
+        sizes = [(f.msg_type, f.size) for f in frames[start : start + 6]]
+        assert sizes == [(15, 148)] * 4 + [(2017, 548), (13, 44)]
         await peer.close()
 
 
@@ -80,12 +78,12 @@ async def test_cycle_every_25_ms_messages_1_ms_apart(
 
 
 async def test_four_slots_then_replace_slot_0_or_refuse(
-    app: SimulatorApp, fake: FakeController
+    app: SimulatorApp, controller: VirtualController, monkeypatch: pytest.MonkeyPatch
 ) -> None:
     peers = [await state_peer(app) for _ in range(4)]
     for p in peers:
         await p.frame()
-    assert fake.state_clients == 4
+    assert controller.read_io_bit(11125).value == 1  # OT#894: state clients connected
     fifth = await state_peer(app)
     await fifth.frame()
     # slot 0 (the first client) was closed for the newcomer; its buffered frames may remain
@@ -93,7 +91,7 @@ async def test_four_slots_then_replace_slot_0_or_refuse(
         while await peers[0].reader.read(4096):
             pass
     assert app.state.replaced == 1
-    fake.queued = True
+    monkeypatch.setattr(controller, "has_queued_motion", lambda: True)  # as if moving
     sixth = await state_peer(app)
     assert await sixth.is_closed_by_server()
     assert app.state.refused == 1
@@ -102,8 +100,9 @@ async def test_four_slots_then_replace_slot_0_or_refuse(
 
 
 async def test_slow_reader_gets_latest_state_not_a_backlog(
-    vapp: SimulatorApp, fake: FakeController
+    fake_vapp: SimulatorApp, fake: FakeController
 ) -> None:
+    vapp = fake_vapp
     raw = socket.socket(socket.AF_INET, socket.SOCK_STREAM)
     raw.setsockopt(socket.SOL_SOCKET, socket.SO_RCVBUF, 4096)
     raw.setblocking(False)

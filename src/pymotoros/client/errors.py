@@ -194,11 +194,11 @@ NOT_READY_REMEDIES: Final[Mapping[NotReadySubcode, str]] = {
         "release every emergency stop (pendant, controller, external), reset, "
         f"{_ENABLE}; enabling switches servo power on"
     ),
-    NotReadySubcode.NOT_PLAY: f"turn the pendant's mode key to REMOTE (play), {_ENABLE}",
+    NotReadySubcode.NOT_PLAY: f"turn the pendant's mode key from TEACH to PLAY/REMOTE, {_ENABLE}",
     NotReadySubcode.NOT_REMOTE: f"turn the pendant's mode key to REMOTE, {_ENABLE}",
     NotReadySubcode.SERVO_OFF: (
-        "switch servo power on: enabling trajectory mode does it (and wakes eco mode), "
-        "or start_servos()"
+        "switch servo power on: enable trajectory mode (`pymotoros enable`, "
+        "RobotClient.enable()), which also wakes eco mode, or start_servos()"
     ),
     NotReadySubcode.HOLD: f"release HOLD (pendant button or external hold input), {_ENABLE}",
     NotReadySubcode.NOT_STARTED: f"trajectory mode is off: {_ENABLE.removeprefix('then ')}",

@@ -56,8 +56,8 @@ def check_bit_address(controller: ControllerModel, address: int, *, write: bool)
         raise _refuse(
             address,
             code,
-            f"IO address {address} is a {rng.area.value} ({rng.first}-{rng.last}), which "
-            f"MotoROS does not write; writable on {controller.type.value}: "
+            f"IO address {address} is in the {rng.area.value} range ({rng.first}-{rng.last}), "
+            f"which MotoROS does not write; writable on {controller.type.value}: "
             f"{_ranges_text(_writable(controller))}",
         )
     return rng

@@ -221,8 +221,10 @@ def _ruckig_plan(
 
 
 def sample_count(duration: float, sample_period: float) -> int:
-    """Number of segments: the fewest that keep points at most ``sample_period`` apart."""
-    return max(1, math.ceil(duration / sample_period - 1e-9))
+    """Number of segments: the fewest that keep points at most ``sample_period`` apart,
+    but never so many that they come closer than one tick (4 ms)."""
+    wanted = math.ceil(duration / sample_period - 1e-9)
+    return max(1, min(wanted, math.floor(duration / MIN_SAMPLE_PERIOD_S + 1e-9)))
 
 
 def plan_joint_move(
@@ -240,7 +242,8 @@ def plan_joint_move(
     ``acceleration_scaling`` its acceleration and jerk limits (as MoveIt's
     ``max_velocity_scaling_factor`` / ``max_acceleration_scaling_factor``). The first
     point is ``start`` at t = 0, the last is ``goal`` at rest; points are evenly
-    spaced, at most ``sample_period`` apart and at least 4 ms apart.
+    spaced, at most ``sample_period`` apart (8 ms for very short moves with a 4 ms
+    ``sample_period``) and at least 4 ms apart.
     """
     n = limits.dof
     if len(start) != n or len(goal) != n:

@@ -57,10 +57,11 @@ DEFAULT_BUSY_TIMEOUT_S: Final = 10.0
 """How long one point may keep getting BUSY. A full queue is 0.8 s of motion (§5.1);
 a safety speed limit can stretch that, so the budget is generous."""
 
-BUSY_BACKOFF_FIRST_S: Final = 0.001
-BUSY_BACKOFF_MAX_S: Final = 0.008
-"""Retry after 1 ms, doubling up to 8 ms: about the 5 ms of the ROS driver, faster at first
-because MotoROS frees its pending slot at the next 4 ms tick."""
+BUSY_BACKOFF_FIRST_S: Final = 0.0005
+BUSY_BACKOFF_MAX_S: Final = 0.002
+"""Retry BUSY after 0.5 ms, doubling up to 2 ms. MotoROS frees its one pending-point slot
+at an interpolation tick (4 ms, §5.3), so with points one tick apart a longer back-off
+(the ROS driver waits ~5 ms) cannot keep the 200-entry queue fed and the robot lags."""
 
 DEFAULT_GOAL_TOLERANCE: Final = 1e-4
 """rad (m): how close every joint must come to the goal (a few pulses on most arms)."""

@@ -357,14 +357,15 @@ def cell_from_dict(
         if number < 0:
             raise t_t.error("number", "is required (0..63)")
         tcp = t_t.array("tcp_m")
-        if tcp and (len(tcp) != 3 or not all(isinstance(x, int | float) for x in tcp)):
+        xyz = [float(x) for x in tcp if isinstance(x, int | float) and not isinstance(x, bool)]
+        if tcp and (len(tcp) != 3 or len(xyz) != 3):
             raise t_t.error("tcp_m", "must be three numbers [x, y, z] in metres")
         tools.append(
             ToolConfig(
                 number,
                 t_t.string("name", ""),
                 t_t.number("mass_kg", 0.0),
-                (float(tcp[0]), float(tcp[1]), float(tcp[2])) if tcp else (0.0, 0.0, 0.0),
+                (xyz[0], xyz[1], xyz[2]) if xyz else (0.0, 0.0, 0.0),
             )
         )
         t_t.finish()
@@ -416,7 +417,8 @@ def _initial(t: _Table, groups: tuple[GroupModel, ...], tool_numbers: set[int]) 
             if not axis.lower <= float(value) <= axis.upper:
                 raise joints_t.error(
                     g.name,
-                    f"{axis.name} = {value} is outside its limits {axis.lower:.4f}..{axis.upper:.4f}",
+                    f"{axis.name} = {value} is outside its limits "
+                    f"{axis.lower:.4f}..{axis.upper:.4f}",
                 )
         joints.append(tuple(float(x) for x in raw))
     unknown = sorted(set(joints_t.data) - set(names))
@@ -443,7 +445,8 @@ def _initial(t: _Table, groups: tuple[GroupModel, ...], tool_numbers: set[int]) 
         if code < 0:
             raise a_t.error("code", "is required (0..9999)")
         alarm_class(code)
-        alarms.append(AlarmInfo(code, a_t.integer("subcode", 0, 0, 2**31 - 1), a_t.string("text", "")))
+        subcode = a_t.integer("subcode", 0, 0, 2**31 - 1)
+        alarms.append(AlarmInfo(code, subcode, a_t.string("text", "")))
         a_t.finish()
 
     state = InitialState(

@@ -29,8 +29,8 @@ from pymotoros.controller.api import (
     GroupSnapshot,
     IoRead,
     Outcome,
-    Pending,
     PendantMode,
+    Pending,
     PointData,
     StatusData,
 )
@@ -48,8 +48,7 @@ from pymotoros.controller.motoros import DhTable, MotoRos
 from pymotoros.controller.processes import ControllerClock, Scheduler
 from pymotoros.controller.servo import IN_MOTION_PULSES, ServoGroup
 from pymotoros.models.controllers import M_REGISTER_BASE
-from pymotoros.motion.axes import GroupAxes, from_pulses, to_pulses
-from pymotoros.motion.interpolator import GroupInterpolator
+from pymotoros.motion import GroupAxes, GroupInterpolator, from_pulses, to_pulses
 from pymotoros.protocol.constants import MAX_JOINTS, IoResultCode, MotionCommand, ValidFields
 
 logger = logging.getLogger(__name__)
@@ -77,7 +76,7 @@ def _pad(values: Sequence[float]) -> tuple[float, ...]:
 
 
 class VirtualController:
-    """A controller with MotoROS, for the servers (MotoRosController) and operators (OperatorPanel)."""
+    """A controller running MotoROS: MotoRosController for servers, OperatorPanel for operators."""
 
     def __init__(self, cell: CellConfig | None = None, *, seed: int = 0) -> None:
         self.cell = cell = cell if cell is not None else default_cell()
@@ -105,8 +104,7 @@ class VirtualController:
         if variant is not None:
             jobs = builtin_jobs(variant)
         else:
-            assert isinstance(cell.jobs, tuple)
-            jobs = load_jobs(cell.jobs)
+            jobs = load_jobs(cell.jobs if isinstance(cell.jobs, tuple) else ())
         self._runner = JobRunner(jobs, self._io, on_skill=self._on_skill)
         self._axes = tuple(GroupAxes.from_model(g, ctrl) for g in cell.groups)
         self._interps = tuple(GroupInterpolator(a) for a in self._axes)
@@ -137,8 +135,6 @@ class VirtualController:
         self._observers: list[SnapshotObserver] = []
         self._machine.add_observer(self._on_operator_change)
         self._motoros.boot()
-        for warning in cell.warnings:
-            logger.warning("%s", warning)
 
     # ================================================================== time
 
@@ -167,10 +163,11 @@ class VirtualController:
         if timer is not None and now >= timer:
             machine.advance(now)
         runner = self._runner
-        if runner.running and runner.step(now):
+        if runner.due(now) and runner.step(now):
             machine.fire(Event.END_JOB, now)
         motoros = self._motoros
-        motoros.monitor_tick(now)
+        if now >= motoros.next_monitor_ms:
+            motoros.monitor_tick(now)
         if not motoros.inc_move_tick():
             for servo in self._servos:
                 servo.idle()
@@ -205,19 +202,19 @@ class VirtualController:
     def motion_ctrl(self, group_no: int, command: int) -> Outcome | Pending:
         return self._scheduler.run(
             self._motoros.motion_ctrl(group_no, command),
-            MotionCommand.describe(command),
+            lambda: MotionCommand.describe(command),
         )
 
     def trajectory_point(self, sequence: int, point: PointData) -> Outcome | Pending:
         return self._scheduler.run(
             self._motoros.trajectory_point(sequence, point),
-            f"JOINT_TRAJ_PT_FULL sequence {sequence} group {point.group_no}",
+            lambda: f"JOINT_TRAJ_PT_FULL sequence {sequence} group {point.group_no}",
         )
 
     def trajectory_point_ex(self, sequence: int, points: Sequence[PointData]) -> Outcome | Pending:
         return self._scheduler.run(
             self._motoros.trajectory_point_ex(sequence, points),
-            f"JOINT_TRAJ_PT_FULL_EX sequence {sequence}",
+            lambda: f"JOINT_TRAJ_PT_FULL_EX sequence {sequence}",
         )
 
     def select_tool(self, group_no: int, tool: int) -> Outcome:
@@ -359,7 +356,7 @@ class VirtualController:
 
     @property
     def motoros(self) -> MotoRos:
-        """MotoROS's flags (motion_ready, job_ready, inc_move_error …), for tests and the pendant."""
+        """MotoROS's flags (motion_ready, job_ready, inc_move_error …) for tests and pendant."""
         return self._motoros
 
     @property
@@ -380,11 +377,9 @@ class VirtualController:
 
     # ================================================================== operator panel
 
-    def _fire(self, event: Event, **kw: object) -> str | None:
-        alarm = kw.get("alarm")
-        source = kw.get("source", EstopSource.PENDANT)
-        assert alarm is None or isinstance(alarm, Alarm)
-        assert isinstance(source, EstopSource)
+    def _fire(
+        self, event: Event, *, alarm: Alarm | None = None, source: EstopSource = EstopSource.PENDANT
+    ) -> str | None:
         return self._machine.fire(event, self._clock.time_ms, alarm=alarm, source=source)
 
     def press_estop(self, pressed: bool, source: EstopSource = EstopSource.PENDANT) -> None:
@@ -485,15 +480,17 @@ class VirtualController:
             signals.SERVO_ON: self.set_servo,
             signals.ECO_MODE: self.set_eco,
             signals.OPERATING: operating,
-            signals.ERROR: lambda on: (
-                self.raise_error(0, 0, "error forced on 50014")
-                if on
-                else self._fire(Event.CANCEL_ERRORS)
-            ),
+            signals.ERROR: self._force_error,
         }
         for cls in AlarmClass:
             handlers[cls.address] = alarm_output(cls)
         return handlers
+
+    def _force_error(self, on: bool) -> None:
+        if on:
+            self.raise_error(0, 0, "error forced on 50014")
+        else:
+            self._fire(Event.CANCEL_ERRORS)
 
     # ================================================================== internals
 

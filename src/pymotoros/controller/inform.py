@@ -27,6 +27,7 @@ from typing import Final
 from pymotoros.controller.io_image import IoImage
 from pymotoros.controller.signals import universal_output
 from pymotoros.errors import JobError
+from pymotoros.models import IoArea
 
 logger = logging.getLogger(__name__)
 
@@ -254,7 +255,16 @@ SkillHandler = Callable[[int, str], None]
 class JobRunner:
     """Plays back one job set on task 0 (master) and sub-tasks SUB1, SUB2 …"""
 
-    __slots__ = ("_io", "_jobs", "_on_skill", "_tasks", "generation", "main")
+    __slots__ = (
+        "_io",
+        "_jobs",
+        "_on_skill",
+        "_tasks",
+        "generation",
+        "main",
+        "seen_changes",
+        "wake_ms",
+    )
 
     def __init__(
         self,
@@ -267,7 +277,10 @@ class JobRunner:
         check_job_set(jobs, main)
         for job in jobs.values():
             for ins in job.instructions:
-                if ins.op in (Op.DOUT, Op.WAIT) and io.readable_range(ins.address) is None:
+                if ins.op not in (Op.DOUT, Op.WAIT):
+                    continue
+                rng = io.readable_range(ins.address)
+                if rng is None or rng.area is not IoArea.GENERAL_OUTPUT:
                     raise JobError(
                         f"{job.source}, line {ins.line}: OT#({ins.output}) (address "
                         f"{ins.address}) does not exist on this controller"
@@ -279,6 +292,10 @@ class JobRunner:
         self.main = main
         self.generation = 0
         """Incremented whenever a task moves, starts or stops (a cheap cache key)."""
+        self.wake_ms = 0
+        """:meth:`step` has nothing to do before this time unless an IO bit changes."""
+        self.seen_changes = -1
+        """``IoImage.changes`` when the runner last found every task parked."""
 
     @property
     def running(self) -> bool:
@@ -303,6 +320,7 @@ class JobRunner:
         """Start the main job from its first line on the master task."""
         self._tasks = [_Task(0, self._jobs[self.main])]
         self.generation += 1
+        self.wake_ms = 0
         logger.debug("job %s started", self.main)
 
     def stop(self) -> None:
@@ -311,6 +329,25 @@ class JobRunner:
             logger.debug("job %s stopped at %s", self.main, self.position())
             self._tasks = []
         self.generation += 1
+
+    def due(self, now_ms: int) -> bool:
+        """Whether :meth:`step` may have something to do (cheap; called every tick)."""
+        return bool(self._tasks) and (
+            now_ms >= self.wake_ms or self._io.changes != self.seen_changes
+        )
+
+    def _park(self) -> None:
+        """Remember when the tasks can next move: a TIMER's end, or any IO change."""
+        wake = 1 << 62
+        for task in self._tasks:
+            if task.ended:
+                continue
+            if task.block is _Block.TIMER:
+                wake = min(wake, task.until_ms)
+            elif task.block is _Block.NONE:
+                wake = 0
+        self.wake_ms = wake
+        self.seen_changes = self._io.changes
 
     def step(self, now_ms: int) -> bool:
         """Run every task as far as it goes at ``now_ms``; True when the job just ended."""
@@ -326,13 +363,20 @@ class JobRunner:
             if block is _Block.WAIT:
                 if get(task.wait_address) != task.wait_value:
                     continue
-            elif block is _Block.TIMER:
-                if now_ms < task.until_ms:
-                    continue
+            elif block is _Block.TIMER and now_ms < task.until_ms:
+                continue
             break
         else:
+            self._park()
             return False
         self.generation += 1
+        # Every task sees the signals as they were at the start of the tick: release all
+        # satisfied WAITs before any task runs (two tasks waiting for OT#890 both pass,
+        # even if the first one clears it right after).
+        for task in tasks:
+            if task.block is _Block.WAIT and get(task.wait_address) == task.wait_value:
+                task.block = _Block.NONE
+                task.pc += 1
         budget = MAX_INSTRUCTIONS_PER_TICK
         progressed = True
         while progressed:
@@ -343,11 +387,14 @@ class JobRunner:
                     budget -= ran
                     progressed = progressed or ran > 0
             if budget <= 0:
-                raise RuntimeError(f"job {self.main} ran {MAX_INSTRUCTIONS_PER_TICK} lines in a tick")
+                raise RuntimeError(
+                    f"job {self.main} ran {MAX_INSTRUCTIONS_PER_TICK} lines in one tick"
+                )
         if all(t.ended for t in tasks):
             self._tasks = []
             logger.debug("job %s ended", self.main)
             return True
+        self._park()
         return False
 
     def _run_task(self, task: _Task, now_ms: int, budget: int) -> int:

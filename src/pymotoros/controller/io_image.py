@@ -51,6 +51,7 @@ class IoImage:
         "_bytes",
         "_controller",
         "_mreg",
+        "changes",
         "fail_reads",
         "fail_writes",
         "monitor_dirty",
@@ -64,6 +65,8 @@ class IoImage:
         self._mreg = array("H", bytes(2 * M_REGISTER_COUNT))
         self.monitor_dirty = True
         """Set when a signal the status monitor reads changes; the monitor clears it."""
+        self.changes = 0
+        """Counts every change of any bit (a cheap 'has anything changed' test)."""
         self.monitored_changes = 0
         """Counts changes of monitored signals (a cheap cache key)."""
         self.fail_reads = False
@@ -84,6 +87,7 @@ class IoImage:
         new = (old | (1 << bit)) if value else (old & ~(1 << bit))
         if new != old:
             self._bytes[index] = new
+            self.changes += 1
             if address in MONITORED:
                 self.monitor_dirty = True
                 self.monitored_changes += 1

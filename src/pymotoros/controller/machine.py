@@ -128,6 +128,8 @@ class Guard:
 class Transition:
     guards: tuple[Guard, ...]
     effect: Callable[[OperatorState, EventArgs], OperatorState]
+    outcome: str
+    """What the effect does, in words (for the generated table in docs/fidelity.md)."""
 
 
 # ------------------------------------------------------------------------------ guards
@@ -261,24 +263,30 @@ def _end_job(s: OperatorState, a: EventArgs) -> OperatorState:
 
 TRANSITIONS: Final[Mapping[Event, Transition]] = MappingProxyType(
     {
-        Event.PRESS_ESTOP: Transition((), _press_estop),
-        Event.RELEASE_ESTOP: Transition((), _release_estop),
-        Event.HOLD_ON: Transition((), _hold_on),
-        Event.HOLD_OFF: Transition((), _hold_off),
-        Event.SELECT_TEACH: Transition((), _teach),
-        Event.SELECT_PLAY: Transition((), _play),
-        Event.REMOTE_ON: Transition((), _remote(True)),
-        Event.REMOTE_OFF: Transition((), _remote(False)),
-        Event.REQUEST_SERVO_ON: Transition((NO_ESTOP, NO_ALARM), _request_servo_on),
-        Event.SERVO_POWER_READY: Transition((SWITCHING_ON, NO_ESTOP), _servo_power_ready),
-        Event.SERVO_OFF: Transition((), _servo_off_effect),
-        Event.RAISE_ALARM: Transition((), _raise_alarm),
-        Event.RESET_ALARMS: Transition((), _reset_alarms),
-        Event.RAISE_ERROR: Transition((), _raise_error),
-        Event.CANCEL_ERRORS: Transition((), _cancel_errors),
-        Event.ENTER_ECO: Transition((SERVO_ON_NO_ECO,), _enter_eco),
-        Event.WAKE_FROM_ECO: Transition((IN_ECO,), _wake_from_eco),
-        Event.ECO_WOKEN: Transition((ECO_WAKING,), _eco_woken),
+        Event.PRESS_ESTOP: Transition((), _press_estop, "servo off, job stopped; no alarm"),
+        Event.RELEASE_ESTOP: Transition((), _release_estop, "that E-stop chain released"),
+        Event.HOLD_ON: Transition((), _hold_on, "hold on, job stopped"),
+        Event.HOLD_OFF: Transition((), _hold_off, "hold off (the job stays stopped)"),
+        Event.SELECT_TEACH: Transition((), _teach, "TEACH, job stopped"),
+        Event.SELECT_PLAY: Transition((), _play, "PLAY"),
+        Event.REMOTE_ON: Transition((), _remote(True), "remote on"),
+        Event.REMOTE_OFF: Transition((), _remote(False), "remote off (the job keeps running)"),
+        Event.REQUEST_SERVO_ON: Transition(
+            (NO_ESTOP, NO_ALARM), _request_servo_on, "servo switching on (delay starts)"
+        ),
+        Event.SERVO_POWER_READY: Transition(
+            (SWITCHING_ON, NO_ESTOP), _servo_power_ready, "servo on (50073)"
+        ),
+        Event.SERVO_OFF: Transition((), _servo_off_effect, "servo off, eco off, job stopped"),
+        Event.RAISE_ALARM: Transition(
+            (), _raise_alarm, "alarm active, job stopped; major/system: servo off"
+        ),
+        Event.RESET_ALARMS: Transition((), _reset_alarms, "no alarm"),
+        Event.RAISE_ERROR: Transition((), _raise_error, "operator error shown (50014)"),
+        Event.CANCEL_ERRORS: Transition((), _cancel_errors, "no error"),
+        Event.ENTER_ECO: Transition((SERVO_ON_NO_ECO,), _enter_eco, "eco mode (50727)"),
+        Event.WAKE_FROM_ECO: Transition((IN_ECO,), _wake_from_eco, "leaving eco (delay starts)"),
+        Event.ECO_WOKEN: Transition((ECO_WAKING,), _eco_woken, "eco mode off"),
         Event.START_JOB: Transition(
             (
                 PLAY_MODE,
@@ -290,9 +298,10 @@ TRANSITIONS: Final[Mapping[Event, Transition]] = MappingProxyType(
                 JOB_NOT_RUNNING,
             ),
             _start_job,
+            "job running (50070)",
         ),
-        Event.END_JOB: Transition((), _end_job),
-        Event.STOP_JOB: Transition((), _end_job),
+        Event.END_JOB: Transition((), _end_job, "job over"),
+        Event.STOP_JOB: Transition((), _end_job, "job stopped"),
     }
 )
 """Every change of the operator state: event → (guards, effect)."""
@@ -358,7 +367,6 @@ class OperatorMachine:
             self.fire(Event.ECO_WOKEN, now_ms)
 
 
-
 def _next_timer(s: OperatorState) -> int | None:
     times = []
     if s.servo is ServoPower.SWITCHING_ON:
@@ -398,3 +406,12 @@ def _describe_change(old: OperatorState, new: OperatorState) -> str:
     if old.errors != new.errors:
         changes.append(f"errors {[a.code for a in new.errors]}")
     return ", ".join(changes) or "no change"
+
+
+def transition_table() -> str:
+    """The transition table as Markdown (docs/fidelity.md embeds it; a test keeps it in sync)."""
+    lines = ["| event | guards (all must hold) | new state |", "|---|---|---|"]
+    for event, t in TRANSITIONS.items():
+        guards = ", ".join(f"{g.name}" for g in t.guards) or "—"
+        lines.append(f"| {event.value} | {guards} | {t.outcome} |")
+    return "\n".join(lines)

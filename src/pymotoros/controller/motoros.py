@@ -28,11 +28,16 @@ from pymotoros.controller.io_image import IoImage
 from pymotoros.controller.machine import Event, OperatorMachine, OperatorState, ServoPower
 from pymotoros.controller.processes import ControllerClock, Process
 from pymotoros.controller.servo import ServoGroup
-from pymotoros.motion.axes import GroupAxes
-from pymotoros.motion.checks import Refusal, check_speed, check_start, check_time
-from pymotoros.motion.incmove import inc_move
-from pymotoros.motion.interpolator import GroupInterpolator
-from pymotoros.motion.points import TrajPoint
+from pymotoros.motion import (
+    GroupAxes,
+    GroupInterpolator,
+    Refusal,
+    TrajPoint,
+    check_speed,
+    check_start,
+    check_time,
+    inc_move,
+)
 from pymotoros.protocol.constants import (
     MAX_DH_LINKS,
     MAX_GROUPS,
@@ -58,6 +63,8 @@ ECO_REENABLE_SLEEP_MS: Final = 100
 INIT_ROS: Final = "INIT_ROS"
 SKILL_START: Final = "ROS-START"
 SKILL_STOP: Final = "ROS-STOP"
+REQUIRED_FIELDS: Final = int(REQUIRED_POINT_FIELDS)
+"""time | position | velocity (7), as a plain int (IntFlag arithmetic is slow)."""
 QUEUE_COUNT_FAILURE: Final = -1
 """CHECK_QUEUE_CNT's subcode for an invalid group (§3.1)."""
 
@@ -75,14 +82,16 @@ class IncMoveReturn(enum.Enum):
     UNDER_ENERGY_SAVING = "UNDER_ENERGY_SAVING (-20): eco mode"
 
 
-def _outcome(result: ResultCode, subcode: int = 0, detail: str = "", **kw: object) -> Outcome:
-    group_no = kw.get("group_no")
+def _outcome(
+    result: ResultCode,
+    subcode: int = 0,
+    detail: str = "",
+    *,
+    group_no: int | None = None,
+    close_connection: bool = False,
+) -> Outcome:
     return Outcome(
-        result,
-        subcode,
-        group_no=group_no if isinstance(group_no, int) else None,
-        close_connection=bool(kw.get("close_connection", False)),
-        detail=detail,
+        result, subcode, group_no=group_no, close_connection=close_connection, detail=detail
     )
 
 
@@ -118,6 +127,13 @@ class MotoRos:
         self.pfl_option = cell.pfl
         """The PFL option flag read at start-up (GP_isPflEnabled)."""
         self.jog_tool = [0] * self._num_groups
+        self._busy_replies = tuple(
+            _outcome(
+                ResultCode.BUSY,
+                detail=f"group {g}: the previous point is still being interpolated; send it again",
+            )
+            for g in range(self._num_groups)
+        )
         """The pendant's jog tool per group (SELECT_TOOL sets it, except on FS100)."""
 
         # MotoROS flags (Controller.h)
@@ -145,7 +161,8 @@ class MotoRos:
         self._ros_ready = 0
         self._eco = 0
         self._pfl: tuple[int, ...] = (0, 0, 0, 0, 0)
-        self._next_monitor_ms = 0
+        self.next_monitor_ms = 0
+        """Controller time of the status monitor's next run."""
 
         self._takes_state: OperatorState | None = None
         self._takes_gen = -1
@@ -169,10 +186,10 @@ class MotoRos:
 
     def monitor_tick(self, now_ms: int) -> None:
         """Run the 10 ms status monitor when its period boundary has passed."""
-        if now_ms < self._next_monitor_ms:
+        if now_ms < self.next_monitor_ms:
             return
-        while self._next_monitor_ms <= now_ms:
-            self._next_monitor_ms += STATUS_PERIOD_MS
+        while self.next_monitor_ms <= now_ms:
+            self.next_monitor_ms += STATUS_PERIOD_MS
         if self._io.monitor_dirty:
             self.status_update()
 
@@ -192,7 +209,11 @@ class MotoRos:
         estop_ok = tuple(get(a) for a in signals.ESTOP_BITS)
         ros_ready = get(signals.ROS_READY)
         eco = get(signals.ECO_MODE)
-        pfl = tuple(get(a) for a in signals.PFL_BITS) if self._cell.controller.pfl_signals else (0,) * 5
+        pfl = (
+            tuple(get(a) for a in signals.PFL_BITS)
+            if self._cell.controller.pfl_signals
+            else (0, 0, 0, 0, 0)
+        )
 
         cleared: list[str] = []
         # alarm edge: refresh error_code; clear when at least one alarm is on
@@ -324,12 +345,14 @@ class MotoRos:
             return NotReadySubcode.SKILLSEND
         return NotReadySubcode.UNSPECIFIED
 
-    def _not_ready(self, result: ResultCode = ResultCode.NOT_READY, **kw: object) -> Outcome:
+    def _not_ready(
+        self, result: ResultCode = ResultCode.NOT_READY, group_no: int | None = None
+    ) -> Outcome:
         sub = self.not_ready_subcode()
         detail = f"not ready for motion: {int(sub)} {sub.name}: {sub.meaning}"
         if sub is NotReadySubcode.SKILLSEND:
             detail += self._skill_detail()
-        return _outcome(result, int(sub), detail, **kw)
+        return _outcome(result, int(sub), detail, group_no=group_no)
 
     def _skill_detail(self) -> str:
         reasons = []
@@ -499,6 +522,9 @@ class MotoRos:
             else:
                 logger.info("START_TRAJ_MODE: cannot start %s: %s", INIT_ROS, refused)
         # 10. final check
+        return self._final_check()
+
+    def _final_check(self) -> Outcome:
         self.status_update()
         if self.motion_ready:
             return SUCCESS
@@ -539,7 +565,8 @@ class MotoRos:
         """§3.3: queues must be empty; StopMotion; OT#890 ON releases the job."""
         if self.has_queued_motion():
             counts = ", ".join(
-                f"{a.name}: {len(i.queue)}" for a, i in zip(self.axes, self.interpolators, strict=True)
+                f"{a.name}: {len(i.queue)}"
+                for a, i in zip(self.axes, self.interpolators, strict=True)
             )
             return _outcome(
                 ResultCode.FAILURE,
@@ -557,9 +584,12 @@ class MotoRos:
     def _to_traj(self, point: PointData) -> TrajPoint:
         return TrajPoint(point.time, tuple(point.pos[:8]), tuple(point.vel[:8]))
 
-    def _refused(self, refusal: Refusal, point_desc: str, **kw: object) -> Outcome:
+    def _refused(self, refusal: Refusal, point_desc: str, group_no: int | None = None) -> Outcome:
         return _outcome(
-            ResultCode.INVALID, int(refusal.subcode), f"{point_desc}: {refusal.message}", **kw
+            ResultCode.INVALID,
+            int(refusal.subcode),
+            f"{point_desc}: {refusal.message}",
+            group_no=group_no,
         )
 
     def trajectory_point(self, sequence: int, point: PointData) -> Process:
@@ -569,7 +599,7 @@ class MotoRos:
         g = point.group_no
         if not 0 <= g < self._num_groups:
             return self._bad_group(g)
-        if point.valid_fields & REQUIRED_POINT_FIELDS != REQUIRED_POINT_FIELDS:
+        if point.valid_fields & REQUIRED_FIELDS != REQUIRED_FIELDS:
             return self._insufficient(point)
         traj = self._to_traj(point)
         refusal = check_time(traj)
@@ -601,7 +631,7 @@ class MotoRos:
                 return self._bad_group(g, group_no=g)
             if self.interpolators[g].pending:
                 return self._busy(g, sequence, group_no=g)
-            if p.valid_fields & REQUIRED_POINT_FIELDS != REQUIRED_POINT_FIELDS:
+            if p.valid_fields & REQUIRED_FIELDS != REQUIRED_FIELDS:
                 return self._insufficient(p, group_no=g)
         last = points[-1].group_no
         for p in points:
@@ -619,58 +649,59 @@ class MotoRos:
                 return outcome
         return _outcome(ResultCode.SUCCESS, group_no=last)
 
-    def _bad_group(self, g: int, **kw: object) -> Outcome:
+    def _bad_group(self, g: int, group_no: int | None = None) -> Outcome:
         return _outcome(
             ResultCode.INVALID,
             InvalidSubcode.GROUPNO,
             f"group {g} does not exist ({self._num_groups} group(s): 0..{self._num_groups - 1})",
-            **kw,
+            group_no=group_no,
         )
 
-    def _insufficient(self, point: PointData, **kw: object) -> Outcome:
+    def _insufficient(self, point: PointData, group_no: int | None = None) -> Outcome:
         return _outcome(
             ResultCode.INVALID,
             InvalidSubcode.DATA_INSUFFICIENT,
             f"group {point.group_no}: valid_fields {point.valid_fields} lacks "
             "time (1), position (2) or velocity (4); MotoROS needs all three",
-            **kw,
+            group_no=group_no,
         )
 
-    def _bad_sequence(self, sequence: int, **kw: object) -> Outcome:
+    def _bad_sequence(self, sequence: int, group_no: int | None = None) -> Outcome:
         return _outcome(
             ResultCode.INVALID,
             InvalidSubcode.SEQUENCE,
             f"sequence {sequence} is negative; a trajectory starts at 0",
-            **kw,
+            group_no=group_no,
         )
 
-    def _busy(self, g: int, sequence: int, **kw: object) -> Outcome:
-        return _outcome(
-            ResultCode.BUSY,
-            detail=f"group {g}: the previous point is still being interpolated; "
-            f"send point {sequence} again",
-            **kw,
-        )
+    def _busy(self, g: int, sequence: int, group_no: int | None = None) -> Outcome:
+        if group_no is None:
+            return self._busy_replies[g]
+        return _outcome(ResultCode.BUSY, detail=self._busy_replies[g].detail, group_no=group_no)
 
-    def _start_group(self, g: int, traj: TrajPoint, sequence: int, **kw: object) -> Outcome:
+    def _start_group(
+        self, g: int, traj: TrajPoint, sequence: int, group_no: int | None = None
+    ) -> Outcome:
         """Sequence 0: initialise the group, then the interleaved start/speed checks."""
         interp = self.interpolators[g]
         commanded = tuple(self.servos[g].command)
         interp.start(traj, commanded)
         refusal = check_start(traj, commanded, self.axes[g])
         if refusal is not None:
-            return self._refused(refusal, f"point 0 of group {g}", **kw)
-        return _outcome(ResultCode.SUCCESS, **kw)
+            return self._refused(refusal, f"point 0 of group {g}", group_no=group_no)
+        return _outcome(ResultCode.SUCCESS, group_no=group_no)
 
-    def _queue_point(self, g: int, traj: TrajPoint, sequence: int, **kw: object) -> Outcome:
+    def _queue_point(
+        self, g: int, traj: TrajPoint, sequence: int, group_no: int | None = None
+    ) -> Outcome:
         interp = self.interpolators[g]
         if interp.pending:
-            return self._busy(g, sequence, **kw)
+            return self._busy(g, sequence, group_no=group_no)
         refusal = check_speed(traj, self.axes[g])
         if refusal is not None:
-            return self._refused(refusal, f"point {sequence} of group {g}", **kw)
+            return self._refused(refusal, f"point {sequence} of group {g}", group_no=group_no)
         interp.set_pending(traj)
-        return _outcome(ResultCode.SUCCESS, **kw)
+        return _outcome(ResultCode.SUCCESS, group_no=group_no)
 
     def _eco_reenable(self) -> Process:
         """v1.9.12: sequence 0 in eco mode runs STOP_TRAJ_MODE and START_TRAJ_MODE."""
@@ -725,24 +756,18 @@ class MotoRos:
             return self._retry_eco()
         if not self.motion_ready or self.stop_flag:
             return False
-        for interp in self.interpolators:
-            if len(interp.queue):
-                break
-        else:
-            return False
         incs = inc_move(self.interpolators)
         if incs is None:
             return False
-        pulses = tuple(i.pulses for i in incs)
         result = self._controller_takes_increments()
         if result is IncMoveReturn.OK:
-            for servo, p in zip(self.servos, pulses, strict=True):
-                servo.apply(p)
+            for servo, inc in zip(self.servos, incs, strict=True):
+                servo.apply(inc.pulses)
             return True
-        return self._inc_move_failed(result, pulses)
+        return self._inc_move_failed(result, tuple(i.pulses for i in incs))
 
     def _controller_takes_increments(self) -> IncMoveReturn:
-        """The virtual controller's answer to mpExRcsIncrementMove (cached while nothing changes)."""
+        """The controller's answer to mpExRcsIncrementMove (cached while nothing changes)."""
         s = self._machine.state
         gen = self._runner.generation
         changes = self._io.monitored_changes
@@ -793,7 +818,8 @@ class MotoRos:
         return False
 
     def _retry_eco(self) -> bool:
-        assert self._eco_retry is not None
+        if self._eco_retry is None:
+            return False
         pulses, deadline, next_try = self._eco_retry
         now = self._clock.time_ms
         if now < next_try:

@@ -11,7 +11,7 @@ it at once: if it finishes without sleeping the caller gets the Outcome; otherwi
 from __future__ import annotations
 
 import logging
-from collections.abc import Generator
+from collections.abc import Callable, Generator
 from typing import TypeAlias
 
 from pymotoros.controller.api import Outcome, Pending
@@ -50,25 +50,27 @@ class _Sleeper:
 class Scheduler:
     """Runs processes on the controller clock."""
 
-    __slots__ = ("_clock", "_sleepers")
+    __slots__ = ("_clock", "_sleepers", "busy")
 
     def __init__(self, clock: ControllerClock) -> None:
         self._clock = clock
         self._sleepers: list[_Sleeper] = []
+        self.busy = False
+        """Some process is waiting (checked every tick)."""
 
-    @property
-    def busy(self) -> bool:
-        return bool(self._sleepers)
+    def run(self, process: Process, describe: Callable[[], str]) -> Outcome | Pending:
+        """Start ``process``: its Outcome if it needs no time, else a Pending.
 
-    def run(self, process: Process, description: str) -> Outcome | Pending:
-        """Start ``process``: its Outcome if it needs no time, else a Pending."""
+        ``describe()`` names the request; it is called only when a Pending is made.
+        """
         try:
             delay = next(process)
         except StopIteration as stop:
             outcome: Outcome = stop.value
             return outcome
-        pending = Pending(description)
+        pending = Pending(describe())
         self._sleepers.append(_Sleeper(process, pending, self._clock.time_ms + delay))
+        self.busy = True
         return pending
 
     def advance(self) -> None:
@@ -83,6 +85,7 @@ class Scheduler:
                 delay = sleeper.process.send(None)
             except StopIteration as stop:
                 self._sleepers.remove(sleeper)
+                self.busy = bool(self._sleepers)
                 sleeper.pending.complete(stop.value)
                 continue
             sleeper.wake_ms = now + delay

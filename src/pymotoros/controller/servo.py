@@ -9,8 +9,8 @@ after the last increment. Optional noise of ±``noise_pulses`` is added while th
 drives are powered; it is a pure function of (seed, group, tick, axis), so the
 values do not depend on how often anybody reads them.
 
-Feedback is computed only when asked (state server every ~25 ms): a tick costs one
-in-place addition per axis and one append of the increment to a short history.
+Everything is computed only when asked (state server every ~25 ms, the start check
+of a trajectory): a tick only appends the increment to two lists.
 """
 
 from __future__ import annotations
@@ -27,6 +27,9 @@ ZERO_INCREMENT: Final = (0,) * SLOTS
 IN_MOTION_PULSES: Final = 30
 """|feedback − command| above which ROBOT_STATUS reports in_motion (§2.6)."""
 
+FOLD_EVERY: Final = 1024
+"""Increments kept unsummed at most (bounds memory when nobody reads the command)."""
+
 _MASK64: Final = (1 << 64) - 1
 
 
@@ -42,12 +45,14 @@ class ServoGroup:
     """One control group's command register and encoder feedback, controller order, 8 slots."""
 
     __slots__ = (
+        "_command",
         "_history",
         "_noise_pulses",
+        "_quiet",
         "_seed",
+        "_unfolded",
         "_weights",
         "_window",
-        "command",
         "period_ms",
     )
 
@@ -65,8 +70,9 @@ class ServoGroup:
             raise ValueError(f"lag_ticks must be ≥ 0, not {lag_ticks}")
         if noise_pulses < 0:
             raise ValueError(f"noise_pulses must be ≥ 0, not {noise_pulses}")
-        self.command: list[int] = [int(p) for p in initial] + [0] * (SLOTS - len(initial))
-        """Commanded pulses (controller order); replaced by :meth:`apply`."""
+        self._command: list[int] = [int(p) for p in initial] + [0] * (SLOTS - len(initial))
+        self._unfolded: list[Sequence[int]] = []
+        self._quiet = 0
         self.period_ms = period_ms
         self._window = 2 * lag_ticks + 1
         self._history: deque[Sequence[int]] = deque(
@@ -82,30 +88,49 @@ class ServoGroup:
     def lag_ticks(self) -> int:
         return (self._window - 1) // 2
 
+    @property
+    def command(self) -> list[int]:
+        """Commanded pulses (controller order): the initial position plus every increment."""
+        unfolded = self._unfolded
+        if unfolded:
+            totals = map(sum, zip(*unfolded, strict=True))
+            self._command = list(map(add, self._command, totals))
+            unfolded.clear()
+        return self._command
+
     def apply(self, increment: Sequence[int]) -> None:
         """One tick with these pulse increments (8 slots)."""
-        self.command = list(map(add, self.command, increment))
         self._history.append(increment)
+        unfolded = self._unfolded
+        unfolded.append(increment)
+        self._quiet = 0
+        if len(unfolded) > FOLD_EVERY:
+            self.command  # noqa: B018 - folds the increments into the command
 
     def idle(self) -> None:
         """One tick without increments."""
-        self._history.append(ZERO_INCREMENT)
+        if self._quiet < self._window:
+            self._history.append(ZERO_INCREMENT)
+            self._quiet += 1
 
     def reset_to(self, pulses: Sequence[int]) -> None:
         """Put the axis at ``pulses``, command and feedback alike (no motion)."""
-        self.command[:] = [int(p) for p in pulses] + [0] * (SLOTS - len(pulses))
+        self._unfolded.clear()
+        self._command = [int(p) for p in pulses] + [0] * (SLOTS - len(pulses))
         for _ in range(self._window):
             self._history.append(ZERO_INCREMENT)
+        self._quiet = self._window
 
     def settled(self) -> bool:
         """No increment in the whole feedback window: feedback equals the command."""
-        return all(inc is ZERO_INCREMENT or not any(inc) for inc in self._history)
+        return self._quiet >= self._window or all(not any(inc) for inc in self._history)
 
     def feedback(self, tick: int, powered: bool) -> list[int]:
         """Encoder pulses now (controller order)."""
         hist = self._history
         weights = self._weights
         out: list[int] = []
+        command = self.command
         n = len(hist)
         for k in range(SLOTS):
             lag = 0.0
@@ -113,7 +138,7 @@ class ServoGroup:
                 inc = hist[n - m][k]
                 if inc:
                     lag += weights[m - 1] * inc
-            out.append(self.command[k] - int(lag))
+            out.append(command[k] - int(lag))
         if powered and self._noise_pulses:
             span = 2 * self._noise_pulses + 1
             base = _mix(self._seed ^ (tick * 0x100000001B3))

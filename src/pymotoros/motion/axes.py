@@ -62,6 +62,13 @@ class GroupAxes:
     """ROS index of each output column; columns are the valid slots in ascending order."""
     axis_slots: tuple[int, ...] = field(init=False, repr=False)
     """The valid slots in ascending order (the columns of offline output)."""
+    identity_columns: bool = field(init=False, repr=False)
+    """True when ROS index j is the j-th valid slot (every group but a 7-axis arm)."""
+    axis_slots_array: IntpArray = field(init=False, repr=False)
+    contiguous: bool = field(init=False, repr=False)
+    """The axes occupy slots 0 … num_axes − 1 (every model we ship)."""
+    factors_ros_list: list[float] = field(init=False, repr=False)
+    columns_list: list[int] = field(init=False, repr=False)
 
     def __post_init__(self) -> None:
         n = len(self.joint_names)
@@ -74,6 +81,15 @@ class GroupAxes:
         ordered = sorted(range(n), key=lambda i: slots[i])
         object.__setattr__(self, "columns", np.array(ordered, dtype=np.intp))
         object.__setattr__(self, "axis_slots", tuple(sorted(slots)))
+        object.__setattr__(self, "identity_columns", ordered == list(range(n)))
+        object.__setattr__(self, "axis_slots_array", np.array(sorted(slots), dtype=np.intp))
+        object.__setattr__(self, "contiguous", sorted(slots) == list(range(n)))
+        object.__setattr__(self, "factors_ros_list", self.factors_ros.tolist())
+        object.__setattr__(self, "columns_list", ordered)
+
+    def take(self, pulses: Sequence[int]) -> list[int]:
+        """The valid slots of an 8-slot pulse tuple, in ascending slot order."""
+        return [pulses[s] for s in self.axis_slots]
 
     @property
     def num_axes(self) -> int:

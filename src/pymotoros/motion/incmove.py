@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from collections.abc import Sequence
+from operator import add
 
 from pymotoros.motion.interpolator import GroupInterpolator
 from pymotoros.motion.queue import ZERO_PULSES, Increment
@@ -39,7 +40,7 @@ def inc_move(groups: Sequence[GroupInterpolator]) -> tuple[Increment, ...] | Non
                 pulses = list(entry.pulses)
                 while True:
                     entries.popleft()
-                    pulses = [a + b for a, b in zip(pulses, nxt.pulses, strict=True)]
+                    pulses = list(map(add, pulses, nxt.pulses))
                     entry = Increment(nxt.time_ms, tuple(pulses), entry.tool)
                     if not entries:
                         break
@@ -53,4 +54,4 @@ def inc_move(groups: Sequence[GroupInterpolator]) -> tuple[Increment, ...] | Non
 
 def add_pulses(position: Sequence[int], increment: Sequence[int]) -> tuple[int, ...]:
     """A commanded pulse position advanced by one increment (both 8 slots)."""
-    return tuple(a + b for a, b in zip(position, increment, strict=True))
+    return tuple(map(add, position, increment))

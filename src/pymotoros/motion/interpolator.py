@@ -20,11 +20,9 @@ from __future__ import annotations
 import logging
 from collections.abc import Sequence
 
-import numpy as np
-
 from pymotoros.motion.axes import GroupAxes
-from pymotoros.motion.constants import SLOTS
-from pymotoros.motion.points import GroupPoint, TrajPoint
+from pymotoros.motion.constants import QUEUE_SIZE, SLOTS
+from pymotoros.motion.points import ORIGIN, GroupPoint, TrajPoint
 from pymotoros.motion.queue import Increment, IncrementQueue
 from pymotoros.motion.segment import Segment, compute_segment
 
@@ -56,8 +54,7 @@ class GroupInterpolator:
         """Tool for segments interpolated from now on (SELECT_TOOL sets it, §5.8)."""
         self.q_time = 0
         """Time of the last increment IncMove consumed (§5.6)."""
-        zeros = np.zeros(SLOTS, dtype=np.float32)
-        self._current = GroupPoint(0, zeros, zeros.copy())
+        self._current = ORIGIN
         self._pending: GroupPoint | None = None
         self._segment: Segment | None = None
         self._batch: list[Increment] = []
@@ -135,14 +132,17 @@ class GroupInterpolator:
         point that had not started is consumed without increments (as the real loop
         does when its condition fails at once).
         """
-        if self._segment is None:
+        segment = self._segment
+        if segment is None:
             pending = self._pending
             if pending is None:
                 return
             if not motion_ready:
                 self._pending = None
                 return
-            segment = compute_segment(self._current, pending, self._leftover, self._prev, self.axes)
+            segment = compute_segment(
+                self._current, pending, self._leftover, self._prev, self.tool, self.axes
+            )
             if segment is None:
                 logger.warning(
                     "group %s: point at %d ms is not after the current time %d ms; "
@@ -153,31 +153,32 @@ class GroupInterpolator:
                 )
                 self._pending = None
                 return
-            tool = self.tool
             self._segment = segment
-            self._batch = [
-                Increment(t, tuple(row), tool)
-                for t, row in zip(segment.times, segment.increments.tolist(), strict=True)
-            ]
+            self._batch = segment.entries
             self._next = 0
         elif not motion_ready:
-            self._abort(self._segment)
+            self._abort(segment)
             return
         batch = self._batch
-        start = self._next
-        stop = min(len(batch), start + self.queue.room)
-        if stop > start:
-            self.queue.extend(batch[start:stop])
+        done = self._next
+        entries = self.queue._entries  # the deque itself: this runs every tick
+        room = QUEUE_SIZE - len(entries)
+        if room <= 0:
+            return
+        stop = done + room
+        if stop >= len(batch):
+            entries.extend(batch[done:] if done else batch)
+            self._finish(segment)
+        else:
+            entries.extend(batch[done:stop])
             self._next = stop
-        if stop == len(batch):
-            self._finish(self._segment)
 
     # ------------------------------------------------------------------ internals
 
     def _target(self, segment: Segment, index: int) -> tuple[int, ...]:
         prev = list(self._prev)
-        for column, slot in enumerate(self.axes.axis_slots):
-            prev[slot] = int(segment.targets[index, column])
+        for slot, value in zip(self.axes.axis_slots, segment.targets[index].tolist(), strict=True):
+            prev[slot] = value
         return tuple(prev)
 
     def _finish(self, segment: Segment) -> None:

@@ -23,7 +23,9 @@ knows about float modes; everything else calls them.
 from __future__ import annotations
 
 import math
-from typing import Final
+import struct
+from collections.abc import Sequence
+from typing import Any, Final
 
 import numpy as np
 import numpy.typing as npt
@@ -33,7 +35,8 @@ from pymotoros.motion.constants import INT32_MAX, INT32_MIN
 
 F32Array = npt.NDArray[np.float32]
 I64Array = npt.NDArray[np.int64]
-AnyArray = npt.NDArray[np.generic]
+F64Array = npt.NDArray[np.float64]
+AnyArray = npt.NDArray[Any]
 
 LD: Final = np.longdouble
 """The x87 extended format (64-bit mantissa) on x86-64 Linux."""
@@ -50,10 +53,24 @@ _INT32_LOW: Final = float(INT32_MIN) - 1.0
 _INT32_HIGH: Final = float(INT32_MAX) + 1.0
 
 
+_F32: Final = struct.Struct("<f")
+
+
 def f32(value: float) -> float:
     """``value`` rounded to float32 (as a Python float). Overflow gives ±inf, as on the wire."""
-    with np.errstate(over="ignore"):
-        return float(np.float32(value))
+    try:
+        return float(_F32.unpack(_F32.pack(value))[0])
+    except OverflowError:
+        return math.copysign(math.inf, value)
+
+
+def f32_tuple(values: Sequence[float], size: int) -> tuple[float, ...]:
+    """``values`` rounded to float32 and zero-filled to ``size`` entries."""
+    padded = list(values) + [0.0] * (size - len(values))
+    try:
+        return struct.unpack(f"<{size}f", struct.pack(f"<{size}f", *padded))
+    except OverflowError:
+        return tuple(f32(v) for v in padded)
 
 
 def c_int(value: float, mode: FloatMode) -> int:
@@ -73,9 +90,9 @@ def c_int(value: float, mode: FloatMode) -> int:
 
 def c_int_array(values: npt.NDArray[np.float64], mode: FloatMode) -> I64Array:
     """:func:`c_int` over an array (float64 input holding exact values)."""
-    ok = (values > _INT32_LOW) & (values < _INT32_HIGH)
-    if ok.all():
+    if np.abs(values).max(initial=0.0) < _INT32_HIGH - 1.0:  # NaN fails this test too
         return values.astype(np.int64)
+    ok = (values > _INT32_LOW) & (values < _INT32_HIGH)
     out = np.where(ok, values, 0.0).astype(np.int64)
     bad = ~ok
     if mode is FloatMode.X87_EXTENDED:
@@ -130,51 +147,203 @@ def ms_to_seconds(ms: AnyArray, mode: FloatMode) -> F32Array:
     return ms.astype(np.float32) / _F32_1000
 
 
-def coefficients(
-    x0: F32Array, v0: F32Array, x1: F32Array, v1: F32Array, t: F32Array, mode: FloatMode
-) -> tuple[F32Array, F32Array]:
-    """The specification's a1 and a2 for a segment of length ``t`` s (t > 0), as float32.
+_COEF_CONSTANTS: dict[tuple[type, int], tuple[AnyArray, ...]] = {}
 
-    a1 = 6·Δ/T² − 2·(v1 + 2·v0)/T and a2 = −12·Δ/T³ + 6·(v1 + v0)/T², one statement
-    each. Arrays broadcast; ``t`` has shape (..., 1) for per-segment rows.
+
+def _constants(dtype: type, ndim: int) -> tuple[AnyArray, ...]:
+    """[6, −12], [2, 1], [2, 6], [−1, 1] and [½, 1] shaped to broadcast over (2, …, n)."""
+    key = (dtype, ndim)
+    found = _COEF_CONSTANTS.get(key)
+    if found is None:
+        shape = (2,) + (1,) * ndim
+        found = tuple(
+            np.array(pair, dtype=dtype).reshape(shape)
+            for pair in ((6, -12), (2, 1), (2, 6), (-1, 1), (0.5, 1))
+        )
+        _COEF_CONSTANTS[key] = found
+    return found
+
+
+def coefficients_kernel(
+    rows: AnyArray, den_a: AnyArray, den_b: AnyArray, mode: FloatMode
+) -> F32Array:
+    """a1 and a2 of the specification, stacked (2, …, n) and stored as float32 (§5.4).
+
+    ``rows`` is (4, …, n): x0, v0, x1, v1 (longdouble for x87, float32 for FS100);
+    ``den_a`` is (2, …, 1): T·T and (T·T)·T; ``den_b`` is (2, …, 1): T and T·T.
+    Both coefficients are computed at once, term by term as the specification writes
+    them: a1 = (6·Δ)/(T·T) − (2·(v1 + 2·v0))/T and
+    a2 = (−12·Δ)/((T·T)·T) + (6·(v1 + v0))/(T·T), with Δ = x1 − x0. Subtracting is
+    adding the exact negation, and 1·v0 is exact, so each element sees exactly the
+    operations of its own formula.
     """
+    c_delta, c_v0, c_sum, c_sign, _ = _constants(rows.dtype.type, rows.ndim - 1)
+    delta = rows[2] - rows[0]
+    first = (delta * c_delta) / den_a
+    second = ((rows[3] + c_v0 * rows[1]) * c_sum) / den_b
+    out: F32Array = (first + second * c_sign).astype(np.float32)
+    return out
+
+
+def coefficients_x87_scalar(
+    x0: Sequence[float], v0: Sequence[float], x1: Sequence[float], v1: Sequence[float], t: float
+) -> list[float] | None:
+    """a1 (n values) then a2 (n values) as the x87 stores them, or None if unsure.
+
+    Evaluated in float64 and checked as in :func:`positions_x87_checked`: each formula
+    has at most five roundings, so the float64 and x87 values differ by less than
+    2⁻⁴⁸ × the sum of the magnitudes of the two terms; when that is closer to a float32
+    midpoint than the float64 value is, None tells the caller to use the longdouble
+    kernel. A tick-by-tick simulation computes a segment per point; this avoids a dozen
+    numpy calls each time.
+    """
+    tt = t * t  # exact: 48 significant bits
+    ttt = tt * t
+    values: list[float] = []
+    sizes: list[float] = []
+    for p0, s0, p1, s1 in zip(x0, v0, x1, v1, strict=True):
+        d = p1 - p0
+        first = (6 * d) / tt
+        second = (2 * (s1 + 2 * s0)) / t
+        values.append(first - second)
+        sizes.append(abs(first) + abs(second))
+    for p0, s0, p1, s1 in zip(x0, v0, x1, v1, strict=True):
+        d = p1 - p0
+        third = (-12 * d) / ttt
+        fourth = (6 * (s1 + s0)) / tt
+        values.append(third + fourth)
+        sizes.append(abs(third) + abs(fourth))
+    frexp = math.frexp
+    for value, size in zip(values, sizes, strict=True):
+        if size == 0.0:
+            continue
+        low = int(frexp(value)[0] * 9007199254740992.0) & _LOW29  # the 29 bits past float32
+        distance = min(abs(low - _MID29), 1 << 27)
+        if not distance * abs(value) > RISK_FACTOR * size:
+            return None
+        if not abs(value) < 1e30:
+            return None
+    return list(f32_tuple(values, len(values)))
+
+
+def half_and_one(coef: F32Array) -> AnyArray:
+    """(a1/2, a2) in longdouble from stacked float32 coefficients (x87 positions)."""
+    return coef.astype(LD) * _constants(LD, coef.ndim - 1)[4]
+
+
+def positions_x87(
+    x0: AnyArray, v0: AnyArray, h1: AnyArray, a2: AnyArray, lt: AnyArray, lt2: AnyArray
+) -> F32Array:
+    """((x0 + v0·τ) + (a1·τ·τ)/2) + (a2·τ·τ·τ)/6 on the x87, stored as float32 (§11).
+
+    All arguments longdouble; ``h1`` = a1/2, ``lt`` = τ and ``lt2`` = τ·τ, shaped
+    (K, 1) against (n,) coefficients or (N, 1) against (N, n) rows. a1·τ and τ·τ are
+    exact (48 bits), so (a1·τ·τ)/2 is one rounding of a1·τ²/2, computed as
+    (a1/2)·(τ·τ); a2·τ·τ·τ keeps its two roundings as (a2·(τ·τ))·τ.
+    """
+    s = x0 + v0 * lt
+    s += h1 * lt2
+    s += ((a2 * lt2) * lt) / 6
+    out: F32Array = s.astype(np.float32)
+    return out
+
+
+_LOW29: Final = (1 << 29) - 1
+_MID29: Final = 1 << 28
+RISK_FACTOR: Final = 33.0
+"""Safety factor of :func:`positions_x87_checked` (2⁵ from the error analysis, plus slack)."""
+
+
+def position_bound(
+    x0: F64Array, v0: F64Array, h1: F64Array, a2: F64Array, t: float | F64Array
+) -> F64Array:
+    """RISK_FACTOR × (|x0| + |v0|·T + |a1/2|·T² + |a2|·T³/6): bounds the terms of every
+    position of a segment of length T; −1 where all are 0 (then the position is exact)."""
+    tt = t * t
+    m = np.abs(x0) + np.abs(v0) * t + np.abs(h1) * tt + np.abs(a2) * (tt * t) / 6
+    out: F64Array = np.where(m > 0, m * RISK_FACTOR, -1.0)
+    return out
+
+
+def positions_x87_checked(
+    x0: F64Array, v0: F64Array, h1: F64Array, a2: F64Array, tau: F64Array, bound: F64Array
+) -> F32Array:
+    """:func:`positions_x87`, computed in float64 and checked, as float32.
+
+    All inputs hold float32 values; ``h1`` = a1/2, ``tau`` is (K, 1) or (N, 1), ``bound``
+    comes from :func:`position_bound`. The float64 result F and the x87 result X differ
+    by less than 2⁻⁴⁸·M, M the sum of the magnitudes of the terms (at most six roundings
+    of 2⁻⁵³ + 2⁻⁶⁴ each). float32 rounding only changes at the midpoint between two
+    float32 values, where the 29 bits float64 has beyond float32 read 1000…0; when F is
+    farther than that bound from it, float32(F) = float32(X). The rare elements that
+    are not are recomputed in longdouble, exactly as the x87 does.
+    """
+    tau2 = tau * tau  # exact: 48 bits
+    f = x0 + v0 * tau
+    f += h1 * tau2
+    f += ((a2 * tau2) * tau) / 6
+    out = f.astype(np.float32)
+    dist = np.minimum(np.abs((f.view(np.int64) & _LOW29) - _MID29), 1 << 27)
+    size = np.abs(f)
+    risky = (dist * size <= bound) | ~(size < 1e30)
+    if risky.any():
+        where = np.nonzero(risky)
+        shape = risky.shape
+        lt = np.broadcast_to(tau, shape)[where].astype(LD)
+        out[where] = positions_x87(
+            np.broadcast_to(x0, shape)[where].astype(LD),
+            np.broadcast_to(v0, shape)[where].astype(LD),
+            np.broadcast_to(h1, shape)[where].astype(LD),
+            np.broadcast_to(a2, shape)[where].astype(LD),
+            lt,
+            lt * lt,
+        )
+    return out
+
+
+def positions_single(
+    x0: F32Array, v0: F32Array, a1: F32Array, a2: F32Array, tau: F32Array
+) -> F32Array:
+    """The same position on the FS100: every operation rounded to float32."""
+    p = x0 + v0 * tau
+    p = p + ((a1 * tau) * tau) / 2
+    p = p + (((a2 * tau) * tau) * tau) / 6
+    return p.astype(np.float32)
+
+
+def coefficients(
+    x0: F32Array, v0: F32Array, x1: F32Array, v1: F32Array, t: float, mode: FloatMode
+) -> tuple[F32Array, F32Array]:
+    """a1, a2 for one segment of length ``t`` (float32 s, > 0): :func:`coefficients_kernel`."""
+    if mode is FloatMode.X87_EXTENDED:
+        rows = np.array([x0, v0, x1, v1], dtype=LD)
+        et = LD(t)
+        tt = et * et
+        den_a = np.array([[tt], [tt * et]], dtype=LD)
+        den_b = np.array([[et], [tt]], dtype=LD)
+    else:
+        rows = np.array([x0, v0, x1, v1], dtype=np.float32)
+        t32 = np.float32(t)
+        tt32 = t32 * t32
+        den_a = np.array([[tt32], [tt32 * t32]], dtype=np.float32)
+        den_b = np.array([[t32], [tt32]], dtype=np.float32)
     with np.errstate(all="ignore"):
-        if mode is FloatMode.X87_EXTENDED:
-            ex0, ev0, ex1, ev1, et = (a.astype(LD) for a in (x0, v0, x1, v1, t))
-            d = ex1 - ex0
-            tt = et * et
-            a1 = (6 * d) / tt - (2 * (ev1 + 2 * ev0)) / et
-            a2 = (-12 * d) / (tt * et) + (6 * (ev1 + ev0)) / tt
-            return a1.astype(np.float32), a2.astype(np.float32)
-        d32 = x1 - x0
-        tt32 = t * t
-        b1 = (6 * d32) / tt32 - (2 * (v1 + 2 * v0)) / t
-        b2 = (-12 * d32) / (tt32 * t) + (6 * (v1 + v0)) / tt32
-        return b1.astype(np.float32), b2.astype(np.float32)
+        coef = coefficients_kernel(rows, den_a, den_b, mode)
+    return coef[0], coef[1]
 
 
 def positions(
     x0: F32Array, v0: F32Array, a1: F32Array, a2: F32Array, tau: F32Array, mode: FloatMode
 ) -> F32Array:
-    """((x0 + v0·τ) + (a1·τ·τ)/2) + (a2·τ·τ·τ)/6, stored as float32 (§5.4, §11).
-
-    ``tau`` has shape (K, 1) against (n,) coefficients, or (N, 1) against (N, n) rows.
-    In extended precision a1·τ and τ·τ are exact (48 bits), so (a1·τ)·τ/2 is the single
-    rounding of a1·τ²/2 and is computed as (a1/2)·(τ·τ); a2·τ·τ·τ keeps its two
-    roundings, ((a2·τ²)·τ).
-    """
+    """The interpolated positions for float32 inputs (``tau`` shaped (K, 1))."""
     with np.errstate(all="ignore"):
         if mode is FloatMode.X87_EXTENDED:
-            lt = tau.astype(LD)
-            lt2 = lt * lt
-            s = x0.astype(LD) + v0.astype(LD) * lt
-            s += (a1.astype(LD) * 0.5) * lt2
-            s += ((a2.astype(LD) * lt2) * lt) / 6
-            return s.astype(np.float32)
-        p = x0 + v0 * tau
-        p = p + ((a1 * tau) * tau) / 2
-        p = p + (((a2 * tau) * tau) * tau) / 6
-        return p.astype(np.float32)
+            f0, g0 = x0.astype(np.float64), v0.astype(np.float64)
+            h1, c2 = a1.astype(np.float64) / 2, a2.astype(np.float64)
+            t = tau.astype(np.float64)
+            bound = position_bound(f0, g0, h1, c2, float(t.max(initial=0.0)))
+            return positions_x87_checked(f0, g0, h1, c2, t, bound)
+        return positions_single(x0, v0, a1, a2, tau)
 
 
 def velocities(

@@ -19,7 +19,16 @@ from pymotoros.models import FloatMode
 from pymotoros.motion.axes import GroupAxes, to_pulses
 from pymotoros.motion.checks import check_speed, check_start, check_time
 from pymotoros.motion.constants import INT32_MAX, MAX_POINT_TIME_S
-from pymotoros.motion.numerics import c_int_array, coefficients, ms_to_seconds, positions, pulses
+from pymotoros.motion.numerics import (
+    LD,
+    c_int_array,
+    coefficients_kernel,
+    ms_to_seconds,
+    position_bound,
+    positions_single,
+    positions_x87_checked,
+    pulses,
+)
 from pymotoros.motion.points import TrajPoint
 
 logger = logging.getLogger(__name__)
@@ -137,10 +146,30 @@ def interpolate_arrays(
     time_ms = np.where(final, ms_arr[e_idx][seg], step_ms)
 
     duration = ms_to_seconds(ms_arr[e_idx] - start_ms, mode)[:, None]
-    x0, v0 = p32[s_idx], v32[s_idx]
-    a1, a2 = coefficients(x0, v0, p32[e_idx], v32[e_idx], duration, mode)
     tau = ms_to_seconds(step_ms - start_ms[seg], mode)[:, None]
-    pos_steps = positions(x0[seg], v0[seg], a1[seg], a2[seg], tau, mode)
+    with np.errstate(all="ignore"):
+        if mode is FloatMode.X87_EXTENDED:
+            rows = np.stack((p32[s_idx], v32[s_idx], p32[e_idx], v32[e_idx])).astype(LD)
+            et = duration.astype(LD)
+            tt = et * et
+            coef = coefficients_kernel(rows, np.stack((tt, tt * et)), np.stack((et, tt)), mode)
+            x0 = p32[s_idx].astype(np.float64)
+            v0 = v32[s_idx].astype(np.float64)
+            h1 = coef[0].astype(np.float64) / 2
+            a2 = coef[1].astype(np.float64)
+            bound = position_bound(x0, v0, h1, a2, duration.astype(np.float64))
+            pos_steps = positions_x87_checked(
+                x0[seg], v0[seg], h1[seg], a2[seg], tau.astype(np.float64), bound[seg]
+            )
+        else:
+            rows32 = np.stack((p32[s_idx], v32[s_idx], p32[e_idx], v32[e_idx]))
+            tt32 = duration * duration
+            coef = coefficients_kernel(
+                rows32, np.stack((tt32, tt32 * duration)), np.stack((duration, tt32)), mode
+            )
+            pos_steps = positions_single(
+                rows32[0][seg], rows32[1][seg], coef[0][seg], coef[1][seg], tau
+            )
     pos_steps[final] = p32[e_idx]
     targets = pulses(pos_steps, axes.factors_ros, mode)[:, axes.columns]
     chain = np.concatenate((targets0, targets))

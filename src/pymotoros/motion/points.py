@@ -9,15 +9,11 @@ packs a Python float does (§11).
 from __future__ import annotations
 
 from dataclasses import dataclass
-
-import numpy as np
-import numpy.typing as npt
+from typing import Final
 
 from pymotoros.models import FloatMode
 from pymotoros.motion.constants import SLOTS
-from pymotoros.motion.numerics import seconds_to_ms
-
-F32Array = npt.NDArray[np.float32]
+from pymotoros.motion.numerics import f32_tuple, seconds_to_ms
 
 
 @dataclass(frozen=True, slots=True)
@@ -39,24 +35,30 @@ class TrajPoint:
             raise ValueError(f"a group point has at most {SLOTS} positions and velocities")
 
 
-@dataclass(frozen=True, slots=True, eq=False)
+@dataclass(frozen=True, slots=True)
 class GroupPoint:
-    """A point as a group's interpolation state holds it (§5.2): integer ms and float32."""
+    """A point as a group's interpolation state holds it (§5.2): integer ms, float32 values."""
 
     time_ms: int
-    pos: F32Array
-    """8 float32 positions, ROS order."""
-    vel: F32Array
+    pos: tuple[float, ...]
+    """8 float32 positions (as Python floats), ROS order."""
+    vel: tuple[float, ...]
     """8 float32 velocities, ROS order."""
+    tame: bool = True
+    """Every value is finite and below 10¹⁵ in magnitude, so no float32 or float64
+    operation of the interpolation can overflow (the engine then skips numpy's
+    floating-point error handling)."""
 
     @classmethod
     def from_traj(cls, point: TrajPoint, mode: FloatMode) -> GroupPoint:
-        return cls(seconds_to_ms(point.time, mode), padded_f32(point.pos), padded_f32(point.vel))
+        pos = f32_tuple(point.pos, SLOTS)
+        vel = f32_tuple(point.vel, SLOTS)
+        tame = sum(map(abs, pos)) + sum(map(abs, vel)) < TAME_LIMIT  # False for inf and NaN
+        return cls(seconds_to_ms(point.time, mode), pos, vel, tame)
 
 
-def padded_f32(values: tuple[float, ...]) -> F32Array:
-    """The 8 float32 slots of a wire array, zero-filled after the given values."""
-    out = np.zeros(SLOTS, dtype=np.float32)
-    with np.errstate(over="ignore"):
-        out[: len(values)] = np.asarray(values, dtype=np.float64)
-    return out
+TAME_LIMIT: Final = 1e15
+
+
+ORIGIN = GroupPoint(0, (0.0,) * SLOTS, (0.0,) * SLOTS)
+"""The state of a group that has never started (MotoROS's zero-initialised struct)."""

@@ -15,7 +15,11 @@ through the integer grid and the previous pulse target.
 
 from __future__ import annotations
 
+import contextlib
+from collections.abc import Iterable
 from dataclasses import dataclass
+from itertools import repeat
+from operator import add
 
 import numpy as np
 import numpy.typing as npt
@@ -23,8 +27,21 @@ import numpy.typing as npt
 from pymotoros.models import FloatMode
 from pymotoros.motion.axes import GroupAxes
 from pymotoros.motion.constants import SLOTS
-from pymotoros.motion.numerics import coefficients, ms_to_seconds, positions, pulses, velocities
+from pymotoros.motion.numerics import (
+    LD,
+    coefficients_kernel,
+    coefficients_x87_scalar,
+    f32,
+    f32_tuple,
+    position_bound,
+    positions_single,
+    positions_x87_checked,
+    pulse,
+    pulses,
+    velocities,
+)
 from pymotoros.motion.points import GroupPoint
+from pymotoros.motion.queue import Increment
 
 F32Array = npt.NDArray[np.float32]
 I64Array = npt.NDArray[np.int64]
@@ -67,32 +84,32 @@ class Segment:
     start: GroupPoint
     end: GroupPoint
     grid: Grid
-    times: list[int]
-    """Entry times, ms; the last one is the end time."""
+    entries: list[Increment]
+    """One queue entry per step; the last one is at the end time."""
     targets: I64Array
-    """Absolute pulse target of each entry, shape (entries, num_axes), column j holding
-    controller slot ``axes.axis_slots[j]``."""
-    increments: I64Array
-    """Shape (entries, 8): pulse increments in controller order, 0 where no axis."""
-    tau: F32Array
-    """τ of each full step (s, float32)."""
-    a1: F32Array
-    a2: F32Array
-    pos: F32Array
-    """Interpolated float32 positions (entries, num_axes), ROS order; last row = end."""
+    """Absolute pulse target of each entry (entries, num_axes), column j = controller slot
+    ``axes.axis_slots[j]``."""
+    coef: F32Array
+    """a1 and a2 stacked (2, num_axes), float32."""
+    taus: list[float]
+    """τ of each full step (s, float32 values)."""
+    pos: F32Array | None
+    """Interpolated float32 positions of the full steps (full_steps, num_axes), ROS order."""
     mode: FloatMode
 
     def state_at(self, index: int) -> GroupPoint:
         """The group's current point once entry ``index`` has been computed."""
-        if index == len(self.times) - 1:
+        if index == len(self.entries) - 1 or self.pos is None:
             return self.end
-        n = self.a1.shape[-1]
-        pos = self.start.pos.copy()
-        pos[:n] = self.pos[index]
-        vel = self.start.vel.copy()
-        tau = self.tau[index : index + 1]
-        vel[:n] = velocities(self.start.vel[:n], self.a1, self.a2, tau, self.mode)
-        return GroupPoint(self.times[index], pos, vel)
+        n = self.coef.shape[-1]
+        tau = np.array([[self.taus[index]]], dtype=np.float32)
+        v0 = np.array(self.start.vel[:n], dtype=np.float32)
+        vel = velocities(v0, self.coef[0], self.coef[1], tau, self.mode)[0]
+        return GroupPoint(
+            self.entries[index].time_ms,
+            tuple(self.pos[index].tolist()) + self.start.pos[n:],
+            tuple(vel.tolist()) + self.start.vel[n:],
+        )
 
 
 def compute_segment(
@@ -100,30 +117,85 @@ def compute_segment(
     end: GroupPoint,
     leftover_ms: int,
     previous: tuple[int, ...],
+    tool: int,
     axes: GroupAxes,
 ) -> Segment | None:
     """Every step of the segment start → end, or None if end is not after start.
 
-    ``previous`` is prevPulsePos (8 slots, controller order).
+    ``previous`` is prevPulsePos (8 slots, controller order); ``tool`` is latched into
+    every entry. Written for few numpy calls: a tick-by-tick simulation computes one
+    segment per trajectory point.
     """
-    if end.time_ms <= start.time_ms:
+    s_ms = start.time_ms
+    if end.time_ms <= s_ms:
         return None
     mode = axes.float_mode
     n = axes.num_axes
-    grid = plan_grid(start.time_ms, end.time_ms, leftover_ms, axes.period_ms)
-    duration = ms_to_seconds(np.array([end.time_ms - start.time_ms]), mode)
+    period = axes.period_ms
+    grid = plan_grid(s_ms, end.time_ms, leftover_ms, period)
+    full = grid.full_steps
+    steps = [grid.first_ms + period * k for k in range(full)]
+    # (int ms)/1000 stored as float32. The exact quotient is never within 2⁻³⁵ of a
+    # float32 rounding boundary, so float64 division then rounding gives the x87 value.
+    duration = f32((end.time_ms - s_ms) / 1000)
+    taus = list(f32_tuple([(c - s_ms) / 1000 for c in steps], full))
     x0, v0 = start.pos[:n], start.vel[:n]
-    a1, a2 = coefficients(x0, v0, end.pos[:n], end.vel[:n], duration, mode)
-    steps = grid.first_ms + axes.period_ms * np.arange(grid.full_steps, dtype=np.int64)
-    tau = ms_to_seconds(steps - start.time_ms, mode)
-    pos = np.empty((grid.entries, n), dtype=np.float32)
-    pos[:-1] = positions(x0, v0, a1, a2, tau[:, None], mode)
-    pos[-1] = end.pos[:n]
-    targets = pulses(pos, axes.factors_ros, mode)[:, axes.columns]
-    increments = np.zeros((grid.entries, SLOTS), dtype=np.int64)
-    slots = list(axes.axis_slots)
-    increments[0, slots] = targets[0] - np.array([previous[s] for s in slots], dtype=np.int64)
-    increments[1:, slots] = np.diff(targets, axis=0)
-    times = steps.tolist()
-    times.append(end.time_ms)
-    return Segment(start, end, grid, times, targets, increments, tau, a1, a2, pos, mode)
+    x1, v1 = end.pos[:n], end.vel[:n]
+    pos: F32Array | None = None
+    errors = contextlib.nullcontext() if start.tame and end.tame else np.errstate(all="ignore")
+    with errors:
+        if mode is FloatMode.X87_EXTENDED:
+            fast = coefficients_x87_scalar(x0, v0, x1, v1, duration)
+            if fast is None:
+                rows = np.array([*x0, *v0, *x1, *v1], dtype=LD).reshape(4, n)
+                et = LD(duration)
+                tt = et * et
+                den_a = np.array([[tt], [tt * et]], dtype=LD)
+                den_b = np.array([[et], [tt]], dtype=LD)
+                coef = coefficients_kernel(rows, den_a, den_b, mode)
+            else:
+                coef = np.array(fast, dtype=np.float32).reshape(2, n)
+            if full:
+                # x0, v0, a1/2 and a2 in one float64 array (a1/2 is exact)
+                co = coef.tolist() if fast is None else [fast[:n], fast[n:]]
+                flat = [*x0, *v0, *(c / 2 for c in co[0]), *co[1]]
+                terms = np.array(flat, dtype=np.float64).reshape(4, n)
+                bound = position_bound(terms[0], terms[1], terms[2], terms[3], duration)
+                tau64 = np.array(taus, dtype=np.float64).reshape(full, 1)
+                pos = positions_x87_checked(terms[0], terms[1], terms[2], terms[3], tau64, bound)
+        else:
+            rows32 = np.array([*x0, *v0, *x1, *v1], dtype=np.float32).reshape(4, n)
+            t32 = np.float32(duration)
+            tt32 = t32 * t32
+            den_a = np.array([[tt32], [tt32 * t32]], dtype=np.float32)
+            den_b = np.array([[t32], [tt32]], dtype=np.float32)
+            coef = coefficients_kernel(rows32, den_a, den_b, mode)
+            if full:
+                tau = np.array(taus, dtype=np.float32).reshape(full, 1)
+                pos = positions_single(rows32[0], rows32[1], coef[0], coef[1], tau)
+    # Absolute targets (row 0: prevPulsePos), truncated from the exact products.
+    targets = np.empty((full + 2, n), dtype=np.int64)
+    targets[0] = axes.take(previous)
+    factors = axes.factors_ros_list
+    last = [pulse(x, f, mode) for x, f in zip(x1, factors, strict=True)]
+    if pos is not None:
+        ros = pulses(pos, axes.factors_ros, mode)
+        targets[1 : full + 1] = ros if axes.identity_columns else ros[:, axes.columns]
+    targets[full + 1] = last if axes.identity_columns else [last[j] for j in axes.columns_list]
+    incs = (targets[1:] - targets[:-1]).tolist()
+    times = [*steps, end.time_ms]
+    if axes.contiguous:
+        pad = (0,) * (SLOTS - n)
+        spread: Iterable[tuple[int, ...]] = map(add, map(tuple, incs), repeat(pad))
+    else:
+        spread = (_spread(row, axes.axis_slots) for row in incs)
+    entries = list(map(tuple.__new__, repeat(Increment), zip(times, spread, repeat(tool))))
+    targets = targets[1:]
+    return Segment(start, end, grid, entries, targets, coef, taus, pos, mode)
+
+
+def _spread(row: list[int], slots: tuple[int, ...]) -> tuple[int, ...]:
+    out = [0] * SLOTS
+    for value, slot in zip(row, slots, strict=True):
+        out[slot] = value
+    return tuple(out)

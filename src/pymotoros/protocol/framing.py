@@ -17,9 +17,9 @@ the IO port. Hence :func:`decode_request` (server side) and
 from __future__ import annotations
 
 import struct
-from collections.abc import Iterator, Mapping
+from collections.abc import Callable, Iterator, Mapping
 from types import MappingProxyType
-from typing import Final, NamedTuple
+from typing import Final, NamedTuple, TypeAlias
 
 from pymotoros.errors import LocalProtocolError, RemoteProtocolError
 from pymotoros.protocol.constants import (
@@ -29,7 +29,6 @@ from pymotoros.protocol.constants import (
     PREFIX_SIZE,
     ByteOrder,
     CommType,
-    MsgType,
     Port,
     ReplyType,
 )
@@ -59,8 +58,8 @@ from pymotoros.protocol.messages import (
     MotoWriteMRegisterReply,
     Ping,
     PingReply,
-    Role,
     RobotStatus,
+    Role,
     UnknownMessage,
     WireMessage,
 )
@@ -232,21 +231,24 @@ class FrameDecoder:
         """The next whole frame, or None if more bytes are needed."""
         buf = self._buf
         pos = self._pos
-        available = len(buf) - pos
-        if available < PREFIX_SIZE:
+        size = len(buf)
+        if size - pos >= FRAME_OVERHEAD:
+            # hot path: prefix and header in one unpack
+            length, msg_type, comm_type, reply_type = self._head.unpack_from(buf, pos)
+        elif size - pos >= PREFIX_SIZE:
+            (length,) = self._prefix.unpack_from(buf, pos)
+        else:
             return None
-        (length,) = self._prefix.unpack_from(buf, pos)
         if length < MIN_LENGTH_PREFIX or length > MAX_LENGTH_PREFIX:
             raise RemoteProtocolError(
                 f"length prefix {length} outside {MIN_LENGTH_PREFIX}..{MAX_LENGTH_PREFIX}",
                 data=buf[pos : pos + MAX_WIRE_MESSAGE_SIZE],
             )
         end = pos + PREFIX_SIZE + length
-        if end > len(buf):
+        if end > size:
             return None
-        _, msg_type, comm_type, reply_type = self._head.unpack_from(buf, pos)
         body = buf[pos + FRAME_OVERHEAD : end]
-        if end == len(buf):
+        if end == size:
             self._buf = b""
             self._pos = 0
         elif end > _COMPACT_AFTER:
@@ -323,19 +325,23 @@ REPLY_CLASSES: Final[Mapping[Port, Mapping[int, type[Message]]]] = MappingProxyT
 )
 """Client side: what the controller sends on each port, by msg_type."""
 
-_REQ_MOTION: Final = REQUEST_CLASSES[Port.MOTION]
-_REQ_IO: Final = REQUEST_CLASSES[Port.IO]
-_REQ_STATE: Final = REQUEST_CLASSES[Port.STATE]
-_REP_MOTION: Final = REPLY_CLASSES[Port.MOTION]
-_REP_IO: Final = REPLY_CLASSES[Port.IO]
-_REP_STATE: Final = REPLY_CLASSES[Port.STATE]
+# Plain dicts of bound ``unpack`` methods for the hot path (Enum attribute access and
+# MappingProxyType lookups cost more than the decoding of a small body).
+_Unpack: TypeAlias = Callable[[bytes, ByteOrder], Message]
 
 
-def _decode(frame: Frame, order: ByteOrder, table: Mapping[int, type[Message]]) -> WireMessage:
-    cls = table.get(frame.msg_type)
-    if cls is None:
-        return UnknownMessage(frame.msg_type, frame.body)
-    return cls.unpack(frame.body, order)
+def _unpackers(table: Mapping[int, type[Message]]) -> dict[int, _Unpack]:
+    return {msg_type: cls.unpack for msg_type, cls in table.items()}
+
+
+_MOTION: Final = Port.MOTION
+_STATE: Final = Port.STATE
+_REQ_MOTION: Final = _unpackers(REQUEST_CLASSES[Port.MOTION])
+_REQ_IO: Final = _unpackers(REQUEST_CLASSES[Port.IO])
+_REQ_STATE: Final = _unpackers(REQUEST_CLASSES[Port.STATE])
+_REP_MOTION: Final = _unpackers(REPLY_CLASSES[Port.MOTION])
+_REP_IO: Final = _unpackers(REPLY_CLASSES[Port.IO])
+_REP_STATE: Final = _unpackers(REPLY_CLASSES[Port.STATE])
 
 
 def decode_request(frame: Frame, order: ByteOrder, port: Port) -> WireMessage:
@@ -346,13 +352,13 @@ def decode_request(frame: Frame, order: ByteOrder, port: Port) -> WireMessage:
     servers that follow MotoROS's size rules call :func:`sizes.check_request`
     instead, which trims surplus bytes and answers short ones.
     """
-    if port is Port.MOTION:
-        table = _REQ_MOTION
-    elif port is Port.IO:
-        table = _REQ_IO
-    else:
-        table = _REQ_STATE
-    return _decode(frame, order, table)
+    msg_type, _, _, body = frame
+    unpack = (_REQ_MOTION if port is _MOTION else _REQ_STATE if port is _STATE else _REQ_IO).get(
+        msg_type
+    )
+    if unpack is None:
+        return UnknownMessage(msg_type, body)
+    return unpack(body, order)
 
 
 def decode_reply(frame: Frame, order: ByteOrder, port: Port) -> WireMessage:
@@ -361,10 +367,10 @@ def decode_reply(frame: Frame, order: ByteOrder, port: Port) -> WireMessage:
     Types the port does not know become :class:`UnknownMessage`; a body of the
     wrong size raises :class:`RemoteProtocolError` (MotoROS sends exact sizes).
     """
-    if port is Port.STATE:
-        table = _REP_STATE
-    elif port is Port.MOTION:
-        table = _REP_MOTION
-    else:
-        table = _REP_IO
-    return _decode(frame, order, table)
+    msg_type, _, _, body = frame
+    unpack = (_REP_STATE if port is _STATE else _REP_MOTION if port is _MOTION else _REP_IO).get(
+        msg_type
+    )
+    if unpack is None:
+        return UnknownMessage(msg_type, body)
+    return unpack(body, order)

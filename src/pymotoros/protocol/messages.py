@@ -43,6 +43,7 @@ __all__ = [
     "BODY_SIZE_FULL_EX_HEAD",
     "BODY_SIZE_GROUP_RECORD",
     "BODY_SIZE_MOTION_REPLY",
+    "BODY_SIZE_TRAJ_PT_FULL",
     "ZERO_JOINTS",
     "DhLink",
     "IoErrorReply",
@@ -71,8 +72,8 @@ __all__ = [
     "MotoWriteMRegisterReply",
     "Ping",
     "PingReply",
-    "Role",
     "RobotStatus",
+    "Role",
     "UnknownMessage",
     "WireMessage",
 ]
@@ -86,6 +87,9 @@ UINT32_MAX: Final = 2**32 - 1
 BODY_SIZE_GROUP_RECORD: Final = 132
 """groupNo, validFields, time, pos[10], vel[10], acc[10]: JOINT_FEEDBACK body and the
 per-group record of FULL_EX / FEEDBACK_EX (§1.4)."""
+
+BODY_SIZE_TRAJ_PT_FULL: Final = 136
+"""groupNo, sequence, validFields, time, pos[10], vel[10], acc[10] (§1.4)."""
 
 BODY_SIZE_FULL_EX_HEAD: Final = 8
 """numberOfValidGroups + sequence in front of the FULL_EX records (§1.4)."""
@@ -167,7 +171,7 @@ def _pad_joints(owner: str, name: str, values: Iterable[float] | None) -> tuple[
     """Pad a short joint list with zeros to the 10 slots of the wire."""
     if values is None:
         return ZERO_JOINTS
-    padded = tuple(float(v) for v in values)
+    padded = tuple(values)
     if len(padded) > MAX_JOINTS:
         raise LocalProtocolError(f"{owner}: {name} has {len(padded)} values, at most {MAX_JOINTS}")
     return padded + ZERO_JOINTS[len(padded) :]
@@ -257,11 +261,16 @@ class Message:
         return obj
 
 
+def _slot_setters(cls: type, *names: str) -> tuple[_Setter, ...]:
+    """The slot descriptors' ``__set__``: they write a frozen instance without ``__setattr__``."""
+    return tuple(getattr(cls, name).__set__ for name in names)
+
+
 def _register(cls: type[_M]) -> type[_M]:
     """Derive the Structs and slot setters of a fixed-layout message class."""
     cls._STRUCTS = _structs("".join(kind.value for _name, kind in cls.FIELDS))
     cls.BODY_SIZE = cls._STRUCTS[0].size
-    cls._SETTERS = tuple(getattr(cls, name).__set__ for name, _kind in cls.FIELDS)
+    cls._SETTERS = _slot_setters(cls, *(name for name, _kind in cls.FIELDS))
     return cls
 
 
@@ -526,6 +535,22 @@ class JointTrajPtFull(Message):
             _pad_joints(name, "acc", acc),
         )
 
+    @classmethod
+    def unpack(cls, body: bytes, order: ByteOrder) -> Self:
+        """Hot path of the motion server: hand-unrolled, no validation (see module doc)."""
+        if len(body) != BODY_SIZE_TRAJ_PT_FULL:
+            raise _size_error(cls, body, BODY_SIZE_TRAJ_PT_FULL)
+        v = (_POINT_BE if order == ">" else _POINT_LE).unpack(body)
+        obj = _new(cls)
+        _pt_group_no(obj, v[0])
+        _pt_sequence(obj, v[1])
+        _pt_valid_fields(obj, v[2])
+        _pt_time(obj, v[3])
+        _pt_pos(obj, v[4:14])
+        _pt_vel(obj, v[14:24])
+        _pt_acc(obj, v[24:34])
+        return obj
+
     def pack(self, order: ByteOrder) -> bytes:
         return (_POINT_BE if order == ">" else _POINT_LE).pack(
             self.group_no,
@@ -539,6 +564,15 @@ class JointTrajPtFull(Message):
 
 
 _POINT_LE, _POINT_BE = JointTrajPtFull._STRUCTS
+(
+    _pt_group_no,
+    _pt_sequence,
+    _pt_valid_fields,
+    _pt_time,
+    _pt_pos,
+    _pt_vel,
+    _pt_acc,
+) = JointTrajPtFull._SETTERS
 
 
 @_register
@@ -701,7 +735,7 @@ class MotoGetDhParametersReply(Message):
 
 _DH_STRUCTS: Final = _structs(f"{MAX_GROUPS * MAX_DH_LINKS * _FLOATS_PER_LINK}f")
 MotoGetDhParametersReply.BODY_SIZE = BODY_SIZE_DH_REPLY
-MotoGetDhParametersReply._SETTERS = (MotoGetDhParametersReply.groups.__set__,)  # type: ignore[attr-defined]
+MotoGetDhParametersReply._SETTERS = _slot_setters(MotoGetDhParametersReply, "groups")
 
 
 # --------------------------------------------------------------------------- multi-group
@@ -774,10 +808,8 @@ class MotoJointTrajPtFullEx(Message):
 
 
 _EX_HEAD_STRUCTS: Final = _structs("ii")
-MotoJointTrajPtFullEx._SETTERS = (
-    MotoJointTrajPtFullEx.number_of_valid_groups.__set__,  # type: ignore[attr-defined]
-    MotoJointTrajPtFullEx.sequence.__set__,  # type: ignore[attr-defined]
-    MotoJointTrajPtFullEx.groups.__set__,  # type: ignore[attr-defined]
+MotoJointTrajPtFullEx._SETTERS = _slot_setters(
+    MotoJointTrajPtFullEx, "number_of_valid_groups", "sequence", "groups"
 )
 
 
@@ -831,16 +863,17 @@ class MotoJointFeedbackEx(Message):
         records = tuple(
             JointFeedback.unpack(body[start : start + BODY_SIZE_GROUP_RECORD], order)
             for start in range(
-                head.size, head.size + _group_count(n) * BODY_SIZE_GROUP_RECORD, BODY_SIZE_GROUP_RECORD
+                head.size,
+                head.size + _group_count(n) * BODY_SIZE_GROUP_RECORD,
+                BODY_SIZE_GROUP_RECORD,
             )
         )
         return cls._trusted((n, records))
 
 
 _EX_COUNT_STRUCTS: Final = _structs("i")
-MotoJointFeedbackEx._SETTERS = (
-    MotoJointFeedbackEx.number_of_valid_groups.__set__,  # type: ignore[attr-defined]
-    MotoJointFeedbackEx.groups.__set__,  # type: ignore[attr-defined]
+MotoJointFeedbackEx._SETTERS = _slot_setters(
+    MotoJointFeedbackEx, "number_of_valid_groups", "groups"
 )
 
 
@@ -1072,4 +1105,3 @@ class UnknownMessage:
 
 WireMessage: TypeAlias = Message | UnknownMessage
 """Anything the decoders return and ``encode`` accepts."""
-

@@ -36,7 +36,7 @@ from pymotoros.protocol.constants import (
     TCP_PORT_STATE,
     ByteOrder,
 )
-from pymotoros.runtime.clock import Clock, LoopClock
+from pymotoros.runtime.clock import PRECISE_SPIN_S, Clock, LoopClock
 from pymotoros.runtime.http_api import create_http_app
 from pymotoros.runtime.io_server import IoServer
 from pymotoros.runtime.motion_server import MotionServer
@@ -98,7 +98,10 @@ class SimulatorApp:
         self.controller = controller
         self.config = config or SimulatorConfig()
         self.clock: Clock = clock or LoopClock()
-        self.ticker = Ticker(controller.tick, controller.period_ms / 1000.0, self.clock)
+        # Real time: the interpolation loop gets the precise (spinning) flavour of the
+        # loop clock; the same time line, so the state stream and the ticker agree.
+        tick_clock: Clock = clock or LoopClock(spin=PRECISE_SPIN_S)
+        self.ticker = Ticker(controller.tick, controller.period_ms / 1000.0, tick_clock)
         order = self.config.byte_order
         self.motion = MotionServer(controller, order)
         self.state = StateServer(
@@ -116,6 +119,7 @@ class SimulatorApp:
         self._http: _EmbeddedUvicorn | None = None
         self._http_task: asyncio.Task[None] | None = None
         self._loop_tasks: list[asyncio.Task[None]] = []
+        self._started = False
         self._shutdown_done = False
 
     # ----------------------------------------------------------- public
@@ -146,7 +150,13 @@ class SimulatorApp:
         await asyncio.shield(self._serve_task)
 
     async def serve(self) -> None:
-        """Listen and run until :meth:`request_stop` or cancellation; then shut down in order."""
+        """Listen and run until :meth:`request_stop` or cancellation; then shut down in order.
+
+        An application serves once; build a new one to serve again.
+        """
+        if self._started:
+            raise RuntimeError("this SimulatorApp has already served; create a new one")
+        self._started = True
         cfg = self.config
         if not is_loopback(cfg.host):
             logger.warning(
@@ -233,7 +243,7 @@ class SimulatorApp:
 
     async def _start_http(self, tg: asyncio.TaskGroup, sock: socket.socket) -> int:
         bound = int(sock.getsockname()[1])
-        app = create_http_app(self.controller, self.tick_stats)
+        app = create_http_app(self.controller, self.tick_stats, self.ticker.reset_stats)
         config = uvicorn.Config(
             app,
             log_level="warning",

@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import logging
 from collections.abc import Callable
-from typing import Literal
+from typing import Literal, Protocol, runtime_checkable
 
 from fastapi import FastAPI, Request
 from fastapi.exceptions import RequestValidationError
@@ -58,6 +58,21 @@ class AlarmBody(BaseModel):
     code: int = Field(ge=0, le=9999, description="alarm number, e.g. 4107")
     subcode: int = Field(default=0, ge=0, description="alarm subcode")
     text: str = Field(default="", max_length=128, description="alarm text shown on the pendant")
+
+
+class IoFailureBody(BaseModel):
+    model_config = _STRICT
+    reads: bool = Field(default=False, description="client IO reads fail with 1004")
+    writes: bool = Field(default=False, description="client IO writes fail with 1005")
+
+
+@runtime_checkable
+class _FaultInjection(Protocol):
+    """Extras of ``VirtualController`` beyond the OperatorPanel protocol."""
+
+    def raise_error(self, code: int, subcode: int = 0, text: str = "") -> None: ...
+
+    def set_io_api_failure(self, *, reads: bool = False, writes: bool = False) -> None: ...
 
 
 class IoBody(BaseModel):
@@ -169,6 +184,8 @@ def _describe_validation(exc: RequestValidationError) -> str:
             parts.append(f"the body is not valid JSON ({err.get('msg', '')})")
         elif kind == "missing" and not loc:
             parts.append("a JSON body is required")
+        elif not loc and kind in ("model_attributes_type", "dict_type"):
+            parts.append("the body must be a JSON object (send Content-Type: application/json)")
         elif kind == "extra_forbidden":
             parts.append(f"unknown field {where!r}")
         else:
@@ -214,7 +231,9 @@ _ERRORS: dict[int | str, dict[str, object]] = {
 
 
 def create_http_app(
-    controller: SimulatedController, tick_stats: Callable[[], TickStats]
+    controller: SimulatedController,
+    tick_stats: Callable[[], TickStats],
+    reset_tick_stats: Callable[[], None] | None = None,
 ) -> FastAPI:
     """The control API of one simulated controller."""
     app = FastAPI(
@@ -291,6 +310,30 @@ def create_http_app(
         """Force any bit (0/1) or M-register (address 1000000 + n, 0..65535)."""
         logger.info("operator: force IO %d = %d", body.address, body.value)
         controller.force_io(body.address, body.value)
+        return state()
+
+    if isinstance(controller, _FaultInjection):
+        extras = controller
+
+        @app.post("/api/error", response_model=StateModel, responses=_ERRORS, tags=["operator"])
+        async def raise_error(body: AlarmBody) -> StateModel:
+            """Raise an operator error (not an alarm): motion is refused with 5002 until reset."""
+            logger.info("operator: raise error %d/%d %r", body.code, body.subcode, body.text)
+            extras.raise_error(body.code, body.subcode, body.text)
+            return state()
+
+        @app.post("/api/io/failure", response_model=StateModel, responses=_ERRORS, tags=["io"])
+        async def io_failure(body: IoFailureBody) -> StateModel:
+            """Fault injection: make client IO reads (1004) and/or writes (1005) fail."""
+            logger.info("operator: IO API failure reads=%s writes=%s", body.reads, body.writes)
+            extras.set_io_api_failure(reads=body.reads, writes=body.writes)
+            return state()
+
+    @app.post("/api/tick/reset", response_model=StateModel, tags=["state"])
+    async def reset_tick() -> StateModel:
+        """Forget the loop's lateness samples and overrun count (e.g. after a warm-up)."""
+        if reset_tick_stats is not None:
+            reset_tick_stats()
         return state()
 
     @app.get("/api/io/{address}", response_model=IoValueModel, responses=_ERRORS, tags=["io"])

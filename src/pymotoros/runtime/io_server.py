@@ -99,7 +99,7 @@ class IoServer(TcpService):
 
     def __init__(self, controller: MotoRosController, order: ByteOrder) -> None:
         # The IO port's replacement rule tests the *motion* queues, as MotoROS does (§2.2).
-        super().__init__(IO_CLIENTS, controller.has_queued_motion)
+        super().__init__(IO_CLIENTS, lambda: controller.has_queued_motion())
         self._controller = controller
         self._order = order
         self.requests = 0

@@ -90,7 +90,7 @@ class MotionServer(TcpService):
     name = "motion"
 
     def __init__(self, controller: MotoRosController, order: ByteOrder) -> None:
-        super().__init__(MOTION_CLIENTS, controller.has_queued_motion)
+        super().__init__(MOTION_CLIENTS, lambda: controller.has_queued_motion())
         self._controller = controller
         self._order = order
         self.requests = 0

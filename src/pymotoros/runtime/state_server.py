@@ -81,7 +81,7 @@ class StateServer(TcpService):
         period: float = STATE_PERIOD_S,
         message_gap: float = STATE_MESSAGE_GAP_S,
     ) -> None:
-        super().__init__(STATE_CLIENTS, controller.has_queued_motion)
+        super().__init__(STATE_CLIENTS, lambda: controller.has_queued_motion())
         self._controller = controller
         self._order = order
         self._clock = clock

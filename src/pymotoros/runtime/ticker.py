@@ -6,7 +6,7 @@ Simulated time stays exact whatever the wall clock does, because every tick adva
 the controller by exactly one period.
 
 asyncio on a general-purpose OS is soft real-time: the loop measures how late each
-tick starts (lateness, kept for the last :data:`LATENESS_WINDOW` ticks), counts
+tick starts (lateness p50/p99/max over the last :data:`LATENESS_WINDOW` ticks), counts
 overruns (a tick that started more than a whole period late, i.e. a missed slot) and,
 after a stall of more than :data:`RESYNC_PERIODS` periods, restarts the schedule from
 *now* instead of running a burst of catch-up ticks. It never logs per tick.
@@ -60,6 +60,7 @@ class TickStats:
     skipped: int
     """Ticks dropped by resyncs: simulated time lags wall time by ``skipped × period``."""
     lateness_ms: LatenessStats
+    """Over the last :data:`LATENESS_WINDOW` ticks (or since :meth:`Ticker.reset_stats`)."""
 
 
 def _percentile(ordered: list[float], fraction: float) -> float:
@@ -89,7 +90,6 @@ class Ticker:
         self._clock = clock
         self._resync_after = resync_periods * period
         self._lateness: deque[float] = deque(maxlen=window)
-        self._max_lateness = 0.0
         self.count = 0
         self.overruns = 0
         self.resyncs = 0
@@ -108,14 +108,13 @@ class Ticker:
             lateness_ms=LatenessStats(
                 p50=_percentile(ordered, 0.50) * 1000.0,
                 p99=_percentile(ordered, 0.99) * 1000.0,
-                max=self._max_lateness * 1000.0,
+                max=(ordered[-1] if ordered else 0.0) * 1000.0,
             ),
         )
 
     def reset_stats(self) -> None:
         """Forget lateness and counters of overruns (e.g. after start-up, in a benchmark)."""
         self._lateness.clear()
-        self._max_lateness = 0.0
         self.overruns = 0
         self.resyncs = 0
         self.skipped = 0
@@ -134,6 +133,7 @@ class Ticker:
         period = self.period
         deadline = clock.now()
         next_log = deadline + STATS_LOG_INTERVAL_S
+        next_stall_log = deadline
         while True:
             late = clock.now() - deadline
             if late > self._resync_after:
@@ -144,18 +144,19 @@ class Ticker:
                 self.overruns += 1
                 self.skipped += missed
                 deadline += missed * period
-                logger.warning(
-                    "interpolation loop stalled %.1f ms (%d periods); skipped %d ticks",
-                    late * 1000.0,
-                    missed,
-                    missed,
-                )
+                if deadline >= next_stall_log:  # at most one warning per log interval
+                    next_stall_log = deadline + STATS_LOG_INTERVAL_S
+                    logger.warning(
+                        "interpolation loop stalled %.1f ms and skipped %d ticks "
+                        "(%d stalls so far); simulated time now lags wall time",
+                        late * 1000.0,
+                        missed,
+                        self.resyncs,
+                    )
                 late = clock.now() - deadline
             elif late > period:
                 self.overruns += 1
             self._lateness.append(late)
-            if late > self._max_lateness:
-                self._max_lateness = late
             self._step()
             self.count += 1
             if self._waiters:

@@ -1,0 +1,137 @@
+"""Codec throughput: frames per second for JOINT_TRAJ_PT_FULL and JOINT_FEEDBACK.
+
+Run:  python bench/bench_codec.py [--seconds 0.5] [--repeat 5]
+
+Prints the best of ``--repeat`` timed runs for each case (the machine is shared,
+so the best run is the one least disturbed). Not a test: nothing fails.
+
+Cases
+  baseline        bare struct.unpack_from of the whole 148-byte JOINT_FEEDBACK frame
+  encode          message object -> whole frame bytes (prefix, header, body)
+  decode          frame bytes -> typed message: FrameDecoder.feed + next_frame
+                  (prefix and header parse) + decode_reply / decode_request
+  decode-stream   the same, 100 frames fed as one chunk (a busy socket)
+  check_request   server path: frame -> size rules (sizes.check_request) -> message
+"""
+
+from __future__ import annotations
+
+import argparse
+import platform
+import struct
+import sys
+import time
+from collections.abc import Callable
+
+from pymotoros.protocol import (
+    ByteOrder,
+    FrameDecoder,
+    JointFeedback,
+    JointTrajPtFull,
+    Port,
+    decode_reply,
+    decode_request,
+    encode,
+)
+from pymotoros.protocol.sizes import check_request
+
+ORDER = ByteOrder.LITTLE
+STREAM_FRAMES = 100
+
+
+def _rate(step: Callable[[], object], per_call: int, seconds: float, repeat: int) -> float:
+    """Best frames/s over ``repeat`` runs of about ``seconds`` each."""
+    calls = 1000
+    while True:  # calibrate: enough calls for ~seconds (bounded by the doubling)
+        start = time.process_time()
+        for _ in range(calls):
+            step()
+        elapsed = time.process_time() - start
+        if elapsed >= seconds / 4 or calls >= 1 << 24:
+            break
+        calls *= 2
+    calls = max(1, int(calls * seconds / max(elapsed, 1e-9)))
+    best = 0.0
+    for _ in range(repeat):
+        start = time.process_time()
+        for _ in range(calls):
+            step()
+        elapsed = time.process_time() - start
+        best = max(best, calls * per_call / elapsed)
+    return best
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--seconds", type=float, default=0.5, help="length of one timed run")
+    parser.add_argument("--repeat", type=int, default=5, help="timed runs per case (best wins)")
+    args = parser.parse_args()
+
+    # float32-exact values, so that decoding gives back an equal message
+    pos = [0.125, -0.25, 0.375, -0.5, 0.625, -0.75]
+    vel = [0.015625, 0.03125, 0.046875, 0.0625, 0.078125, 0.09375]
+    feedback = JointFeedback.for_joints(0, pos, vel)
+    point = JointTrajPtFull.for_joints(0, 12, 0.25, pos, vel)
+    fb_frame = encode(feedback, ORDER)
+    pt_frame = encode(point, ORDER)
+    fb_stream = fb_frame * STREAM_FRAMES
+    pt_stream = pt_frame * STREAM_FRAMES
+    whole = struct.Struct("<iiiiiif30f")
+    decoder = FrameDecoder(ORDER)
+
+    def decode_feedback() -> object:
+        decoder.feed(fb_frame)
+        frame = decoder.next_frame()
+        assert frame is not None
+        return decode_reply(frame, ORDER, Port.STATE)
+
+    def decode_point() -> object:
+        decoder.feed(pt_frame)
+        frame = decoder.next_frame()
+        assert frame is not None
+        return decode_request(frame, ORDER, Port.MOTION)
+
+    def stream(data: bytes, port: Port, decode: Callable[..., object]) -> Callable[[], None]:
+        def run() -> None:
+            decoder.feed(data)
+            for frame in decoder.frames():
+                decode(frame, ORDER, port)
+
+        return run
+
+    def check_point() -> object:
+        decoder.feed(pt_frame)
+        frame = decoder.next_frame()
+        assert frame is not None
+        return check_request(frame, ORDER, Port.MOTION)
+
+    assert decode_feedback() == feedback
+    assert decode_point() == point
+
+    cases: list[tuple[str, Callable[[], object], int]] = [
+        ("baseline struct.unpack_from JOINT_FEEDBACK", lambda: whole.unpack_from(fb_frame), 1),
+        ("encode JOINT_TRAJ_PT_FULL", lambda: encode(point, ORDER), 1),
+        ("encode JOINT_FEEDBACK", lambda: encode(feedback, ORDER), 1),
+        ("decode JOINT_TRAJ_PT_FULL", decode_point, 1),
+        ("decode JOINT_FEEDBACK", decode_feedback, 1),
+        (
+            f"decode-stream JOINT_TRAJ_PT_FULL ({STREAM_FRAMES}/chunk)",
+            stream(pt_stream, Port.MOTION, decode_request),
+            STREAM_FRAMES,
+        ),
+        (
+            f"decode-stream JOINT_FEEDBACK ({STREAM_FRAMES}/chunk)",
+            stream(fb_stream, Port.STATE, decode_reply),
+            STREAM_FRAMES,
+        ),
+        ("check_request JOINT_TRAJ_PT_FULL", check_point, 1),
+    ]
+    print(f"python {platform.python_version()} on {platform.machine()}, {sys.platform}")
+    print(f"best of {args.repeat} runs of {args.seconds} s each\n")
+    for name, step, per_call in cases:
+        rate = _rate(step, per_call, args.seconds, args.repeat)
+        print(f"{name:<52} {rate:>12,.0f} frames/s")
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,96 @@
+"""Tick-by-tick speed of the virtual controller while a 6-axis trajectory streams.
+
+A 60 s trajectory for the default cell (HC10 on YRC1000), every joint moving, sent
+point by point as a client would: each point is offered once per tick until the
+controller stops answering BUSY. The controller runs in virtual time, one
+``tick()`` per 4 ms interpolation period, until the queue has drained.
+
+Prints, for each point spacing, the best of ``--repeat`` runs:
+
+* ticks, and the wall time spent inside ``tick()`` (µs per tick, and × real time);
+* the same with the slowest 1 % of ticks left out ("trimmed"): on a busy machine those
+  are the ticks during which the process was preempted;
+* the wall time of the whole loop, point submissions and BUSY answers included.
+
+Run: ``python bench/bench_controller.py [--seconds 60] [--repeat 3]``
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import time
+
+from pymotoros.controller import PointData, VirtualController
+from pymotoros.protocol.constants import MotionCommand, ResultCode
+
+
+def trajectory(seconds: float, spacing: float) -> list[PointData]:
+    """Every joint on a slow sine, starting and ending at rest at 0 rad."""
+    n = round(seconds / spacing)
+    pts = []
+    for k in range(n + 1):
+        t = k * spacing
+        w = 2 * math.pi / seconds
+        pos = [0.4 * (1 - math.cos(w * t)) * (1 + 0.1 * i) for i in range(6)]
+        vel = [0.4 * w * math.sin(w * t) * (1 + 0.1 * i) for i in range(6)]
+        pts.append(
+            PointData(0, 7, t, (*pos, 0.0, 0.0, 0.0, 0.0), (*vel, 0.0, 0.0, 0.0, 0.0), (0.0,) * 10)
+        )
+    return pts
+
+
+def run(seconds: float, spacing: float) -> tuple[int, float, float, float]:
+    vc = VirtualController()
+    vc.wait_for(vc.motion_ctrl(0, MotionCommand.START_TRAJ_MODE))
+    points = trajectory(seconds, spacing)
+    clock = time.perf_counter
+    tick = vc.tick
+    durations: list[float] = []
+    record = durations.append
+    ticks = 0
+    seq = 0
+    start = clock()
+    max_ticks = int(seconds * 1000 / vc.period_ms) * 2 + 1000
+    while seq < len(points) or vc.has_queued_motion():
+        if seq < len(points):
+            outcome = vc.wait_for(vc.trajectory_point(seq, points[seq]))
+            if outcome.result != ResultCode.BUSY:
+                if not outcome.ok:
+                    raise RuntimeError(f"point {seq} refused: {outcome.detail}")
+                seq += 1
+        t0 = clock()
+        tick()
+        record(clock() - t0)
+        ticks += 1
+        if ticks > max_ticks:
+            raise RuntimeError("the trajectory did not finish")
+    total = clock() - start
+    durations.sort()
+    kept = durations[: len(durations) * 99 // 100]
+    trimmed = sum(kept) / len(kept) * ticks
+    return ticks, sum(durations), trimmed, total
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--seconds", type=float, default=60.0)
+    parser.add_argument("--repeat", type=int, default=3)
+    args = parser.parse_args()
+    print(f"{args.seconds:g} s trajectory, 6 axes, HC10 on YRC1000, best of {args.repeat}")
+    print(
+        f"{'spacing':>8} {'ticks':>7} {'µs/tick':>8} {'× rt':>6} "
+        f"{'trimmed µs':>10} {'× rt':>6} {'loop s':>7} {'× rt':>6}"
+    )
+    for spacing in (0.1, 0.05, 0.02):
+        runs = [run(args.seconds, spacing) for _ in range(args.repeat)]
+        ticks, in_tick, trimmed, total = min(runs, key=lambda r: r[1])
+        print(
+            f"{spacing * 1000:>6.0f}ms {ticks:>7} {in_tick / ticks * 1e6:>8.2f} "
+            f"{args.seconds / in_tick:>6.0f} {trimmed / ticks * 1e6:>10.2f} "
+            f"{args.seconds / trimmed:>6.0f} {total:>7.3f} {args.seconds / total:>6.0f}"
+        )
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,294 @@
+"""Benchmarks of the servers and the interpolation loop (prints numbers; not a test).
+
+    python bench/bench_runtime.py                 # the recorded run: 60 s of streaming
+    python bench/bench_runtime.py --duration 10   # a quick look while developing
+
+What it measures, each against a ``pymotoros sim`` subprocess on 127.0.0.1 port 0:
+
+1. start-up: seconds from spawning ``pymotoros sim`` to its ready line (median of N);
+2. interpolation-loop lateness p50/p99/max and overruns over ``--duration`` seconds while
+   a trajectory streams (JOINT_TRAJ_PT_FULL with BUSY retries, a back-and-forth sweep of
+   joint 1) and four state clients read the stream; read from the control API after a
+   ``POST /api/tick/reset`` at the end of a warm-up;
+3. motion-port round trip of CHECK_QUEUE_CNT (blocking socket, one request in flight)
+   next to a plain asyncio echo server answering a 68-byte message with 76 bytes;
+4. resident memory of the simulator (VmRSS and peak VmHWM) after the run.
+"""
+
+from __future__ import annotations
+
+import argparse
+import asyncio
+import contextlib
+import math
+import os
+import re
+import signal
+import socket
+import statistics
+import subprocess
+import sys
+import textwrap
+import time
+from collections.abc import Iterator
+from dataclasses import dataclass
+
+import httpx
+
+from pymotoros.protocol.constants import ByteOrder, MotionCommand, Port, ResultCode
+from pymotoros.protocol.framing import FrameDecoder, decode_reply, encode
+from pymotoros.protocol.messages import JointTrajPtFull, MotoMotionCtrl, MotoMotionReply
+
+READY = re.compile(r"pymotoros sim ready motion=(\d+) state=(\d+) io=(\d+) http=(\d+)")
+ORDER = ByteOrder.LITTLE
+
+ECHO_SERVER = textwrap.dedent(
+    """
+    import asyncio, sys
+
+    REPLY = bytes(76)
+
+    async def handle(reader, writer):
+        try:
+            while True:
+                await reader.readexactly(68)
+                writer.write(REPLY)
+                await writer.drain()
+        except (asyncio.IncompleteReadError, ConnectionError):
+            writer.close()
+
+    async def main():
+        server = await asyncio.start_server(handle, "127.0.0.1", 0)
+        print(server.sockets[0].getsockname()[1], flush=True)
+        async with server:
+            await server.serve_forever()
+
+    asyncio.run(main())
+    """
+)
+
+
+@dataclass
+class Sim:
+    proc: subprocess.Popen[str]
+    motion: int
+    state: int
+    io: int
+    http: int
+    startup_s: float
+
+
+def start_sim() -> Sim:
+    cmd = [sys.executable, "-m", "pymotoros", "-q", "sim"]
+    cmd += ["--motion-port", "0", "--state-port", "0", "--io-port", "0", "--http-port", "0"]
+    t0 = time.perf_counter()
+    proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, text=True)  # noqa: S603 - our own argv
+    assert proc.stdout is not None
+    line = proc.stdout.readline()
+    startup = time.perf_counter() - t0
+    match = READY.fullmatch(line.strip())
+    if match is None:
+        proc.kill()
+        raise SystemExit(f"unexpected first line from pymotoros sim: {line!r}")
+    motion, state, io, http = (int(g) for g in match.groups())
+    return Sim(proc, motion, state, io, http, startup)
+
+
+def stop_sim(sim: Sim) -> int:
+    sim.proc.send_signal(signal.SIGTERM)
+    return sim.proc.wait(timeout=30)
+
+
+@contextlib.contextmanager
+def running_sim() -> Iterator[Sim]:
+    sim = start_sim()
+    try:
+        yield sim
+    finally:
+        code = stop_sim(sim)
+        if code != 0:
+            print(f"warning: pymotoros sim exited with {code}")
+
+
+def http(sim: Sim, method: str, path: str) -> dict[str, object]:
+    resp = httpx.request(method, f"http://127.0.0.1:{sim.http}{path}", timeout=10)
+    resp.raise_for_status()
+    result: dict[str, object] = resp.json()
+    return result
+
+
+def memory_kib(pid: int) -> tuple[int, int]:
+    fields = {}
+    with open(f"/proc/{pid}/status", encoding="ascii") as f:
+        for line in f:
+            key, _, value = line.partition(":")
+            fields[key] = value.strip()
+    return int(fields["VmRSS"].split()[0]), int(fields["VmHWM"].split()[0])
+
+
+def pct(samples: list[float], q: float) -> float:
+    ordered = sorted(samples)
+    return ordered[max(0, math.ceil(q * len(ordered)) - 1)]
+
+
+# --------------------------------------------------------------------------- clients
+
+
+class MotionClient:
+    """asyncio motion client on raw frames (the codec only)."""
+
+    def __init__(self, reader: asyncio.StreamReader, writer: asyncio.StreamWriter) -> None:
+        self.reader, self.writer = reader, writer
+        self.decoder = FrameDecoder(ORDER)
+
+    async def request(self, message: object) -> MotoMotionReply:
+        self.writer.write(encode(message, ORDER))  # type: ignore[arg-type]
+        while (frame := self.decoder.next_frame()) is None:
+            data = await self.reader.read(4096)
+            if not data:
+                raise ConnectionError("simulator closed the motion connection")
+            self.decoder.feed(data)
+        reply = decode_reply(frame, ORDER, Port.MOTION)
+        assert isinstance(reply, MotoMotionReply)
+        return reply
+
+
+async def state_reader(port: int, stop: asyncio.Event, counts: list[int]) -> None:
+    reader, writer = await asyncio.open_connection("127.0.0.1", port)
+    try:
+        while not stop.is_set():
+            data = await reader.read(65536)
+            if not data:
+                break
+            counts[0] += len(data)
+    finally:
+        writer.close()
+        with contextlib.suppress(ConnectionError):
+            await writer.wait_closed()
+
+
+def sweep_point(seq: int, t: float, amplitude: float, period: float) -> JointTrajPtFull:
+    w = 2 * math.pi / period
+    pos = amplitude * (1 - math.cos(w * t)) / 2
+    vel = amplitude * w * math.sin(w * t) / 2
+    return JointTrajPtFull.for_joints(0, seq, t, [pos, 0, 0, 0, 0, 0], [vel, 0, 0, 0, 0, 0])
+
+
+async def stream_and_listen(sim: Sim, duration: float, warmup: float) -> dict[str, object]:
+    stop = asyncio.Event()
+    counts = [0]
+    async with asyncio.TaskGroup() as tg:
+        for _ in range(4):
+            tg.create_task(state_reader(sim.state, stop, counts))
+        reader, writer = await asyncio.open_connection("127.0.0.1", sim.motion)
+        client = MotionClient(reader, writer)
+        reply = await client.request(MotoMotionCtrl(0, 0, MotionCommand.START_TRAJ_MODE))
+        if reply.result != ResultCode.SUCCESS:
+            raise SystemExit(f"START_TRAJ_MODE failed: {reply}")
+        loop = asyncio.get_running_loop()
+        start = loop.time()
+        reset_at = start + warmup
+        end = reset_at + duration
+        seq, t, busy, points = 0, 0.0, 0, 0
+        stats_reset = False
+        while loop.time() < end:
+            if not stats_reset and loop.time() >= reset_at:
+                await asyncio.to_thread(http, sim, "POST", "/api/tick/reset")
+                stats_reset = True
+            reply = await client.request(sweep_point(seq, t, 0.5, 4.0))
+            if reply.result == ResultCode.BUSY:
+                busy += 1
+                await asyncio.sleep(0.005)  # as the ROS driver does
+                continue
+            if reply.result != ResultCode.SUCCESS:
+                raise SystemExit(f"point {seq} refused: {reply}")
+            seq, t, points = seq + 1, t + 0.1, points + 1
+        state = await asyncio.to_thread(http, sim, "GET", "/api/state")
+        await client.request(MotoMotionCtrl(0, 0, MotionCommand.STOP_MOTION))
+        writer.close()
+        stop.set()
+    tick = state["tick"]
+    assert isinstance(tick, dict)
+    return {"tick": tick, "points": points, "busy": busy, "state_bytes": counts[0]}
+
+
+def round_trips(port: int, request: bytes, reply_size: int, n: int) -> list[float]:
+    with socket.create_connection(("127.0.0.1", port), timeout=10) as sock:
+        sock.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
+        samples = []
+        for i in range(n + 200):
+            t0 = time.perf_counter()
+            sock.sendall(request)
+            got = 0
+            while got < reply_size:
+                chunk = sock.recv(4096)
+                if not chunk:
+                    raise ConnectionError("server closed")
+                got += len(chunk)
+            if i >= 200:  # warm-up
+                samples.append(time.perf_counter() - t0)
+        return samples
+
+
+def echo_round_trips(n: int) -> list[float]:
+    cmd = [sys.executable, "-c", ECHO_SERVER]
+    proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, text=True)  # noqa: S603 - our own argv
+    try:
+        assert proc.stdout is not None
+        port = int(proc.stdout.readline())
+        return round_trips(port, bytes(68), 76, n)
+    finally:
+        proc.terminate()
+        proc.wait(timeout=10)
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--duration", type=float, default=60.0, help="streaming seconds")
+    parser.add_argument("--warmup", type=float, default=3.0, help="seconds before measuring")
+    parser.add_argument("--round-trips", type=int, default=5000)
+    parser.add_argument("--startups", type=int, default=5)
+    args = parser.parse_args()
+
+    print(f"machine: {os.cpu_count()} cores, Python {sys.version.split()[0]}")
+
+    startups = []
+    for _ in range(args.startups):
+        with running_sim() as sim:
+            startups.append(sim.startup_s)
+    print(
+        f"start-up to ready line: median {statistics.median(startups):.2f} s "
+        f"(min {min(startups):.2f}, max {max(startups):.2f}, n={len(startups)})"
+    )
+
+    with running_sim() as sim:
+        result = asyncio.run(stream_and_listen(sim, args.duration, args.warmup))
+        tick = result["tick"]
+        assert isinstance(tick, dict)
+        late = tick["lateness_ms"]
+        print(
+            f"interpolation loop over {args.duration:.0f} s, trajectory streaming "
+            f"({result['points']} points, {result['busy']} BUSY) + 4 state clients "
+            f"({result['state_bytes'] / args.duration / 4 / 1024:.1f} KiB/s each):"
+        )
+        print(
+            f"  lateness p50 {late['p50']:.3f} ms, p99 {late['p99']:.3f} ms, "
+            f"max {late['max']:.3f} ms; {tick['count']} ticks in total, "
+            f"{tick['overruns']} overruns (period {tick['period_ms']} ms)"
+        )
+        request = encode(MotoMotionCtrl(0, 0, MotionCommand.CHECK_QUEUE_CNT), ORDER)
+        sim_rt = round_trips(sim.motion, request, 76, args.round_trips)
+        rss, hwm = memory_kib(sim.proc.pid)
+
+    echo_rt = echo_round_trips(args.round_trips)
+    for name, samples in (("CHECK_QUEUE_CNT", sim_rt), ("asyncio echo baseline", echo_rt)):
+        print(
+            f"round trip {name}: p50 {pct(samples, 0.5) * 1e6:.0f} us, "
+            f"p99 {pct(samples, 0.99) * 1e6:.0f} us (n={len(samples)})"
+        )
+    print(f"  ratio p50 {pct(sim_rt, 0.5) / pct(echo_rt, 0.5):.2f}x")
+    print(f"resident memory of the simulator: {rss / 1024:.1f} MiB (peak {hwm / 1024:.1f} MiB)")
+
+
+if __name__ == "__main__":
+    main()

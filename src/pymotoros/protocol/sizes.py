@@ -1,0 +1,253 @@
+"""MotoROS's size-by-type rules (reference §1.5) as data, and the verdict they give.
+
+MotoROS never reads the length prefix: it decides from ``msg_type`` alone how
+many bytes a message must have, and answers a short message with 3001, an
+unknown type with 3003, and a state message sent to the motion port by closing
+the connection. A client must not be able to tell our servers from the real
+one, so the servers ask :func:`check_request` what to do with every frame.
+
+Our servers reassemble fragments with :class:`~pymotoros.protocol.framing.FrameDecoder`
+(the real controller answers 3001 to a fragment; see docs/protocol.md), so a
+"short" message here is a complete frame whose body is shorter than its type
+needs: a peer that sent a wrong prefix.
+
+All sizes in this module are *total* sizes on the wire (prefix + header + body),
+because that is what MotoROS compares against what ``recv`` returned.
+"""
+
+from __future__ import annotations
+
+import struct
+from collections.abc import Mapping
+from dataclasses import dataclass
+from types import MappingProxyType
+from typing import Final, TypeAlias
+
+from pymotoros.protocol.constants import (
+    MAX_MESSAGE_SIZE,
+    ByteOrder,
+    CommType,
+    InvalidSubcode,
+    MsgType,
+    Port,
+    ResultCode,
+)
+from pymotoros.protocol.framing import FRAME_OVERHEAD, Frame, decode_request
+from pymotoros.protocol.messages import (
+    BODY_SIZE_FULL_EX_HEAD,
+    BODY_SIZE_GROUP_RECORD,
+    IoErrorReply,
+    Message,
+    MotoMotionReply,
+    UnknownMessage,
+)
+
+__all__ = [
+    "ECHO_ON_SHORT",
+    "FULL_EX_SIZE_UNKNOWN_BELOW",
+    "IO_SIZES",
+    "MOTION_CLOSE_TYPES",
+    "MOTION_SIZES",
+    "Accept",
+    "Close",
+    "Reject",
+    "Verdict",
+    "check_request",
+    "expected_size",
+    "short_message_reply",
+    "unknown_type_reply",
+]
+
+# --------------------------------------------------------------------------- the table (§1.5)
+
+MOTION_SIZES: Final[Mapping[int, int]] = MappingProxyType(
+    {
+        MsgType.PING: 16,
+        MsgType.ROBOT_STATUS: 44,
+        MsgType.JOINT_TRAJ_PT_FULL: 152,
+        MsgType.JOINT_FEEDBACK: 148,
+        MsgType.MOTO_MOTION_CTRL: 68,
+        MsgType.MOTO_MOTION_REPLY: 76,
+        MsgType.MOTO_READ_IO_BIT: 20,
+        MsgType.MOTO_WRITE_IO_BIT: 24,
+        MsgType.MOTO_READ_IO_GROUP: 20,
+        MsgType.MOTO_WRITE_IO_GROUP: 24,
+        MsgType.MOTO_JOINT_FEEDBACK_EX: 548,
+        MsgType.MOTO_SELECT_TOOL: 28,
+        MsgType.MOTO_GET_DH_PARAMETERS: 16,
+    }
+)
+"""Motion port (§1.5): total size per known type, FULL_EX (2016) aside (computed from n).
+2, 2004..2011 and the M-register types 2012/2013 are *unknown* here."""
+
+IO_SIZES: Final[Mapping[int, int]] = MappingProxyType(
+    {
+        MsgType.MOTO_READ_IO_BIT: 20,
+        MsgType.MOTO_WRITE_IO_BIT: 24,
+        MsgType.MOTO_READ_IO_GROUP: 20,
+        MsgType.MOTO_WRITE_IO_GROUP: 24,
+        MsgType.MOTO_READ_MREGISTER: 20,
+        MsgType.MOTO_WRITE_MREGISTER: 24,
+    }
+)
+"""IO port (§1.5): only the six IO request types are known."""
+
+MOTION_CLOSE_TYPES: Final = frozenset(
+    {
+        MsgType.ROBOT_STATUS,
+        MsgType.JOINT_FEEDBACK,
+        MsgType.MOTO_MOTION_REPLY,
+        MsgType.MOTO_JOINT_FEEDBACK_EX,
+    }
+)
+"""Known sizes the motion server does not process: MotoROS drops the connection (§1.5)."""
+
+ECHO_ON_SHORT: Final = frozenset(
+    {
+        MsgType.MOTO_MOTION_CTRL,
+        MsgType.JOINT_TRAJ_PT_FULL,
+        MsgType.MOTO_JOINT_TRAJ_PT_FULL_EX,
+        MsgType.MOTO_SELECT_TOOL,
+    }
+)
+"""Types whose 3001 reply has groupNo 0 and echoes sequence (and command) (§1.5, §1.6)."""
+
+FULL_EX_SIZE_UNKNOWN_BELOW: Final = 20
+"""With fewer bytes than this, MotoROS cannot read n and expects the full 552 (§1.5)."""
+
+_FULL_EX_BASE: Final = FRAME_OVERHEAD + BODY_SIZE_FULL_EX_HEAD
+"""24: the FULL_EX total size with n = 0 (24 + 132·n)."""
+
+_SEQUENCE_OFFSET: Final[Mapping[int, int]] = MappingProxyType(
+    {
+        MsgType.MOTO_MOTION_CTRL: 4,
+        MsgType.JOINT_TRAJ_PT_FULL: 4,
+        MsgType.MOTO_JOINT_TRAJ_PT_FULL_EX: 4,
+        MsgType.MOTO_SELECT_TOOL: 8,  # groupNo, tool, sequence (§1.4)
+    }
+)
+"""Body offset of the sequence echoed in a 3001 reply."""
+
+_CTRL_COMMAND_OFFSET: Final = 8
+"""Body offset of MOTO_MOTION_CTRL's ``command`` (§1.4)."""
+
+_NO_GROUP: Final = -1
+"""groupNo and sequence of a reply that belongs to no request (§1.6)."""
+
+
+def _int_at(body: bytes, offset: int, order: ByteOrder) -> int:
+    """int32 at ``offset``, with missing bytes read as zero (MotoROS's zero-filled buffer)."""
+    chunk = body[offset : offset + 4].ljust(4, b"\0")
+    value: int = struct.unpack(order + "i", chunk)[0]
+    return value
+
+
+def expected_size(msg_type: int, port: Port, body: bytes, order: ByteOrder) -> int | None:
+    """Total bytes MotoROS wants for this type on this port, or None if the type is unknown.
+
+    FULL_EX: 24 + 132·n with n read from the body; 552 when n is not there yet.
+    A negative n is clamped to 0 (MotoROS computes a size below the header and
+    then reads outside its buffer; we do not copy that).
+    """
+    if port is Port.IO:
+        return IO_SIZES.get(msg_type)
+    if port is not Port.MOTION:
+        raise ValueError(f"MotoROS reads no requests on the {port.value} port")
+    if msg_type == MsgType.MOTO_JOINT_TRAJ_PT_FULL_EX:
+        if FRAME_OVERHEAD + len(body) < FULL_EX_SIZE_UNKNOWN_BELOW:
+            return MAX_MESSAGE_SIZE
+        n = _int_at(body, 0, order)
+        return _FULL_EX_BASE + max(n, 0) * BODY_SIZE_GROUP_RECORD
+    return MOTION_SIZES.get(msg_type)
+
+
+# --------------------------------------------------------------------------- error replies
+
+
+def unknown_type_reply(msg_type: int, port: Port) -> MotoMotionReply | IoErrorReply:
+    """INVALID/3003 as MotoROS sends it: group -1, sequence -1, command = the type."""
+    if port is Port.IO:
+        return IoErrorReply(ResultCode.INVALID, InvalidSubcode.MSGTYPE)
+    return MotoMotionReply(
+        _NO_GROUP, _NO_GROUP, msg_type, ResultCode.INVALID, InvalidSubcode.MSGTYPE
+    )
+
+
+def short_message_reply(
+    frame: Frame, order: ByteOrder, port: Port
+) -> MotoMotionReply | IoErrorReply:
+    """INVALID/3001 for a body shorter than its type needs (§1.5).
+
+    For MOTION_CTRL, TRAJ_PT_FULL, FULL_EX and SELECT_TOOL the reply has groupNo 0
+    and echoes the sequence (and MOTION_CTRL's command; the others' command is
+    their type); bytes that did not arrive read as zero. Any other type gets
+    group -1, sequence -1, command = type. On the IO port it is the IO error reply.
+    """
+    if port is Port.IO:
+        return IoErrorReply(ResultCode.INVALID, InvalidSubcode.MSGSIZE)
+    msg_type = frame.msg_type
+    offset = _SEQUENCE_OFFSET.get(msg_type)
+    if offset is None:
+        return MotoMotionReply(
+            _NO_GROUP, _NO_GROUP, msg_type, ResultCode.INVALID, InvalidSubcode.MSGSIZE
+        )
+    sequence = _int_at(frame.body, offset, order)
+    command = msg_type
+    if msg_type == MsgType.MOTO_MOTION_CTRL:
+        command = _int_at(frame.body, _CTRL_COMMAND_OFFSET, order)
+    return MotoMotionReply(0, sequence, command, ResultCode.INVALID, InvalidSubcode.MSGSIZE)
+
+
+# --------------------------------------------------------------------------- the verdict
+
+
+@dataclass(frozen=True, slots=True)
+class Accept:
+    """Process ``message``.
+
+    ``surplus`` counts body bytes beyond what the type needs; MotoROS ignores
+    them here (worth a log line). ``reply_expected`` is False for a SERVICE_REPLY
+    comm type on the motion port: MotoROS processes it but sends nothing (§1.1).
+    """
+
+    message: Message
+    surplus: int = 0
+    reply_expected: bool = True
+
+
+@dataclass(frozen=True, slots=True)
+class Reject:
+    """Send ``reply`` (INVALID/3001 or 3003) and keep the connection."""
+
+    reply: MotoMotionReply | IoErrorReply
+    subcode: InvalidSubcode
+
+
+@dataclass(frozen=True, slots=True)
+class Close:
+    """Close the connection without a reply (motion port, types 13/15/2002/2017)."""
+
+    msg_type: int
+    reason: str
+
+
+Verdict: TypeAlias = Accept | Reject | Close
+
+
+def check_request(frame: Frame, order: ByteOrder, port: Port) -> Verdict:
+    """What MotoROS does with this complete frame on the motion or IO port (§1.5)."""
+    msg_type = frame.msg_type
+    expected = expected_size(msg_type, port, frame.body, order)
+    if expected is None:
+        return Reject(unknown_type_reply(msg_type, port), InvalidSubcode.MSGTYPE)
+    received = FRAME_OVERHEAD + len(frame.body)
+    if received < expected:
+        return Reject(short_message_reply(frame, order, port), InvalidSubcode.MSGSIZE)
+    if port is Port.MOTION and msg_type in MOTION_CLOSE_TYPES:
+        return Close(msg_type, f"{MsgType.describe(msg_type)} is not a request (§1.5)")
+    body = frame.body[: expected - FRAME_OVERHEAD]
+    message = decode_request(Frame(msg_type, frame.comm_type, frame.reply_type, body), order, port)
+    if isinstance(message, UnknownMessage):  # pragma: no cover - the tables agree (tested)
+        raise RuntimeError(f"bug: type {msg_type} has a size on {port} but no class")
+    reply_expected = not (port is Port.MOTION and frame.comm_type == CommType.SERVICE_REPLY)
+    return Accept(message, received - expected, reply_expected)

@@ -1,0 +1,75 @@
+"""Every queue-clearing trigger of reference §3.6, and what does not clear."""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+
+import pytest
+
+from pymotoros.controller import PendantMode, VirtualController
+from pymotoros.controller.signals import PFL_STOP, ROS_READY
+
+from .helpers import CMD, command
+from .states import moving, settle_monitor
+
+TRIGGERS: dict[str, Callable[[VirtualController], None]] = {
+    "alarm": lambda vc: vc.raise_alarm(4100, 0, "minor alarm"),
+    "E-stop": lambda vc: vc.press_estop(True),
+    "hold": lambda vc: vc.set_hold(True),
+    "TEACH": lambda vc: vc.set_mode(PendantMode.TEACH),
+    "remote off": lambda vc: vc.set_remote(False),
+    "servo off": lambda vc: vc.set_servo(False),
+    "job stopped": lambda vc: vc.force_io(50070, 0),
+    "OT#889 falls": lambda vc: vc.force_io(ROS_READY, 0),
+    "PFL stop": lambda vc: vc.force_io(PFL_STOP, 1),
+    "STOP_MOTION": lambda vc: command(vc, CMD.STOP_MOTION) and None,
+    "STOP_SERVOS": lambda vc: command(vc, CMD.STOP_SERVOS) and None,
+    "motion connection closed": lambda vc: vc.motion_disconnected(),
+}
+
+
+@pytest.mark.parametrize("trigger", list(TRIGGERS))
+def test_trigger_clears_every_queue(trigger: str) -> None:
+    vc = moving()
+    interp = vc.motoros.interpolators[0]
+    assert vc.has_queued_motion()
+    assert interp.pending
+    TRIGGERS[trigger](vc)
+    settle_monitor(vc)
+    assert not vc.has_queued_motion(), trigger
+    assert not interp.pending, trigger
+    assert command(vc, CMD.CHECK_QUEUE_CNT).subcode == 0
+
+
+def test_operator_error_does_not_clear() -> None:
+    vc = moving()
+    vc.raise_error(2010, 0, "error")
+    settle_monitor(vc)
+    assert vc.has_queued_motion()
+
+
+def test_release_of_estop_does_not_resume() -> None:
+    vc = moving()
+    vc.press_estop(True)
+    settle_monitor(vc)
+    vc.press_estop(False)
+    settle_monitor(vc)
+    before = vc.snapshot().groups[0].command_pulse
+    vc.run_ticks(50)
+    assert vc.snapshot().groups[0].command_pulse == before
+    assert not command(vc, CMD.CHECK_MOTION_READY).ok
+
+
+def test_stop_traj_mode_refused_while_queued() -> None:
+    vc = moving()
+    outcome = command(vc, CMD.STOP_TRAJ_MODE)
+    assert (outcome.result, outcome.subcode) == (2, 0)
+    assert "queued" in outcome.detail
+    assert vc.has_queued_motion()
+
+
+def test_start_traj_mode_when_ready_keeps_the_queue() -> None:
+    """Already ready: START_TRAJ_MODE answers at once and touches nothing (§3.2 step 2)."""
+    vc = moving()
+    assert command(vc, CMD.START_TRAJ_MODE).ok
+    assert vc.has_queued_motion()

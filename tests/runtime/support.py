@@ -1,0 +1,25 @@
+"""Shared helpers of the runtime tests (fixtures live in conftest.py)."""
+
+from __future__ import annotations
+
+import asyncio
+import contextlib
+from collections.abc import AsyncIterator
+
+from pymotoros.runtime.app import SimulatorConfig
+from pymotoros.runtime.clock import ManualClock
+
+LOCAL = SimulatorConfig(host="127.0.0.1", motion_port=0, state_port=0, io_port=0, http_port=None)
+"""Every listener on loopback port 0, no control API."""
+
+
+@contextlib.asynccontextmanager
+async def virtual_time(clock: ManualClock) -> AsyncIterator[None]:
+    """Run ``clock`` as fast as the loop goes for the duration of the block."""
+    driver = asyncio.create_task(clock.run_virtual_time(), name="virtual-time")
+    try:
+        yield
+    finally:
+        driver.cancel()
+        with contextlib.suppress(asyncio.CancelledError):
+            await driver
