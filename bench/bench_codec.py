@@ -8,9 +8,10 @@ so the best run is the one least disturbed). Not a test: nothing fails.
 Cases
   baseline        bare struct.unpack_from of the whole 148-byte JOINT_FEEDBACK frame
   encode          message object -> whole frame bytes (prefix, header, body)
-  decode          frame bytes -> typed message: FrameDecoder.feed + next_frame
-                  (prefix and header parse) + decode_reply / decode_request
-  decode-stream   the same, 100 frames fed as one chunk (a busy socket)
+  decode          frame bytes -> typed message, prefix and header parse included:
+                  FrameDecoder.feed + next_reply / next_request (one step), and
+                  FrameDecoder.feed + next_frame + decode_reply / decode_request
+  decode-stream   one step, 100 frames fed as one chunk (a busy socket)
   check_request   server path: frame -> size rules (sizes.check_request) -> message
 """
 
@@ -81,21 +82,31 @@ def main() -> None:
 
     def decode_feedback() -> object:
         decoder.feed(fb_frame)
+        return decoder.next_reply(Port.STATE)
+
+    def decode_point() -> object:
+        decoder.feed(pt_frame)
+        return decoder.next_request(Port.MOTION)
+
+    def two_step_feedback() -> object:
+        decoder.feed(fb_frame)
         frame = decoder.next_frame()
         assert frame is not None
         return decode_reply(frame, ORDER, Port.STATE)
 
-    def decode_point() -> object:
+    def two_step_point() -> object:
         decoder.feed(pt_frame)
         frame = decoder.next_frame()
         assert frame is not None
         return decode_request(frame, ORDER, Port.MOTION)
 
-    def stream(data: bytes, port: Port, decode: Callable[..., object]) -> Callable[[], None]:
+    def stream(
+        data: bytes, next_message: Callable[[Port], object], port: Port
+    ) -> Callable[[], None]:
         def run() -> None:
             decoder.feed(data)
-            for frame in decoder.frames():
-                decode(frame, ORDER, port)
+            for _ in range(STREAM_FRAMES):
+                next_message(port)
 
         return run
 
@@ -107,21 +118,25 @@ def main() -> None:
 
     assert decode_feedback() == feedback
     assert decode_point() == point
+    assert two_step_feedback() == feedback
+    assert two_step_point() == point
 
     cases: list[tuple[str, Callable[[], object], int]] = [
         ("baseline struct.unpack_from JOINT_FEEDBACK", lambda: whole.unpack_from(fb_frame), 1),
         ("encode JOINT_TRAJ_PT_FULL", lambda: encode(point, ORDER), 1),
         ("encode JOINT_FEEDBACK", lambda: encode(feedback, ORDER), 1),
-        ("decode JOINT_TRAJ_PT_FULL", decode_point, 1),
-        ("decode JOINT_FEEDBACK", decode_feedback, 1),
+        ("decode JOINT_TRAJ_PT_FULL (next_request)", decode_point, 1),
+        ("decode JOINT_FEEDBACK (next_reply)", decode_feedback, 1),
+        ("decode JOINT_TRAJ_PT_FULL (next_frame+decode_request)", two_step_point, 1),
+        ("decode JOINT_FEEDBACK (next_frame+decode_reply)", two_step_feedback, 1),
         (
             f"decode-stream JOINT_TRAJ_PT_FULL ({STREAM_FRAMES}/chunk)",
-            stream(pt_stream, Port.MOTION, decode_request),
+            stream(pt_stream, decoder.next_request, Port.MOTION),
             STREAM_FRAMES,
         ),
         (
             f"decode-stream JOINT_FEEDBACK ({STREAM_FRAMES}/chunk)",
-            stream(fb_stream, Port.STATE, decode_reply),
+            stream(fb_stream, decoder.next_reply, Port.STATE),
             STREAM_FRAMES,
         ),
         ("check_request JOINT_TRAJ_PT_FULL", check_point, 1),
@@ -130,7 +145,7 @@ def main() -> None:
     print(f"best of {args.repeat} runs of {args.seconds} s each\n")
     for name, step, per_call in cases:
         rate = _rate(step, per_call, args.seconds, args.repeat)
-        print(f"{name:<52} {rate:>12,.0f} frames/s")
+        print(f"{name:<56} {rate:>12,.0f} frames/s")
 
 
 if __name__ == "__main__":

@@ -10,7 +10,9 @@ Prints, for each point spacing, the best of ``--repeat`` runs:
 * ticks, and the wall time spent inside ``tick()`` (µs per tick, and × real time);
 * the same with the slowest 1 % of ticks left out ("trimmed"): on a busy machine those
   are the ticks during which the process was preempted;
-* the wall time of the whole loop, point submissions and BUSY answers included.
+* the wall time of the whole loop, point submissions and BUSY answers included;
+* the controller alone: ticks with the increment queue filled directly (IncMove, servo,
+  job, status monitor, no interpolation), to separate the motion engine's share.
 
 Run: ``python bench/bench_controller.py [--seconds 60] [--repeat 3]``
 """
@@ -22,6 +24,7 @@ import math
 import time
 
 from pymotoros.controller import PointData, VirtualController
+from pymotoros.motion import QUEUE_SIZE, Increment
 from pymotoros.protocol.constants import MotionCommand, ResultCode
 
 
@@ -72,6 +75,25 @@ def run(seconds: float, spacing: float) -> tuple[int, float, float, float]:
     return ticks, sum(durations), trimmed, total
 
 
+def controller_alone(ticks: int) -> float:
+    """µs per tick with the queue pre-filled: IncMove, servo, job, monitor, no interpolation."""
+    vc = VirtualController()
+    vc.wait_for(vc.motion_ctrl(0, MotionCommand.START_TRAJ_MODE))
+    queue = vc.motoros.interpolators[0].queue
+    entry = (1, 2, 3, 4, 5, 6, 0, 0)
+    best = float("inf")
+    for _ in range(5):
+        start = time.perf_counter()
+        done = 0
+        while done < ticks:
+            queue.extend(Increment(vc.time_ms + 4 * (k + 1), entry, 0) for k in range(QUEUE_SIZE))
+            for _ in range(QUEUE_SIZE):
+                vc.tick()
+            done += QUEUE_SIZE
+        best = min(best, (time.perf_counter() - start) / done)
+    return best * 1e6
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--seconds", type=float, default=60.0)
@@ -90,6 +112,8 @@ def main() -> None:
             f"{args.seconds / in_tick:>6.0f} {trimmed / ticks * 1e6:>10.2f} "
             f"{args.seconds / trimmed:>6.0f} {total:>7.3f} {args.seconds / total:>6.0f}"
         )
+    alone = controller_alone(15000)
+    print(f"controller alone (queue pre-filled, no interpolation): {alone:.2f} µs/tick")
 
 
 if __name__ == "__main__":

@@ -78,8 +78,10 @@ class Sim:
     startup_s: float
 
 
-def start_sim() -> Sim:
+def start_sim(nice: int = 0) -> Sim:
     cmd = [sys.executable, "-m", "pymotoros", "-q", "sim"]
+    if nice:
+        cmd = ["nice", "-n", str(nice), *cmd]
     cmd += ["--motion-port", "0", "--state-port", "0", "--io-port", "0", "--http-port", "0"]
     t0 = time.perf_counter()
     proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, text=True)  # noqa: S603 - our own argv
@@ -100,8 +102,8 @@ def stop_sim(sim: Sim) -> int:
 
 
 @contextlib.contextmanager
-def running_sim() -> Iterator[Sim]:
-    sim = start_sim()
+def running_sim(nice: int = 0) -> Iterator[Sim]:
+    sim = start_sim(nice)
     try:
         yield sim
     finally:
@@ -248,9 +250,19 @@ def main() -> None:
     parser.add_argument("--warmup", type=float, default=3.0, help="seconds before measuring")
     parser.add_argument("--round-trips", type=int, default=5000)
     parser.add_argument("--startups", type=int, default=5)
+    parser.add_argument(
+        "--sim-nice",
+        type=int,
+        default=0,
+        help="run the simulator under `nice -n N` (negative: higher priority, needs root); "
+        "shows what the loop does when the OS gives it the CPU on a busy machine",
+    )
     args = parser.parse_args()
 
-    print(f"machine: {os.cpu_count()} cores, Python {sys.version.split()[0]}")
+    print(
+        f"machine: {os.cpu_count()} cores, Python {sys.version.split()[0]}, "
+        f"load average {os.getloadavg()[0]:.2f} at start"
+    )
 
     startups = []
     for _ in range(args.startups):
@@ -261,13 +273,14 @@ def main() -> None:
         f"(min {min(startups):.2f}, max {max(startups):.2f}, n={len(startups)})"
     )
 
-    with running_sim() as sim:
+    with running_sim(args.sim_nice) as sim:
         result = asyncio.run(stream_and_listen(sim, args.duration, args.warmup))
         tick = result["tick"]
         assert isinstance(tick, dict)
         late = tick["lateness_ms"]
         print(
-            f"interpolation loop over {args.duration:.0f} s, trajectory streaming "
+            f"interpolation loop over {args.duration:.0f} s (nice {args.sim_nice}), "
+            "trajectory streaming "
             f"({result['points']} points, {result['busy']} BUSY) + 4 state clients "
             f"({result['state_bytes'] / args.duration / 4 / 1024:.1f} KiB/s each):"
         )
@@ -288,6 +301,7 @@ def main() -> None:
         )
     print(f"  ratio p50 {pct(sim_rt, 0.5) / pct(echo_rt, 0.5):.2f}x")
     print(f"resident memory of the simulator: {rss / 1024:.1f} MiB (peak {hwm / 1024:.1f} MiB)")
+    print(f"load average {os.getloadavg()[0]:.2f} at the end (other work on the machine)")
 
 
 if __name__ == "__main__":

@@ -248,3 +248,34 @@ async def test_several_groups_move_together_with_full_ex() -> None:
             assert _off((*arm, *arm, 0.5, -0.2), result.final_positions) < TOLERANCE
             result = await robot.move_joints((0.0,) * 7, group=1)  # one group: type 14
             assert _off((0.0,) * 7, result.final_positions) < TOLERANCE
+
+
+async def test_safety_speed_limit_is_noticed_and_the_move_still_ends(tmp_path: Path) -> None:
+    cell = tmp_path / "fsu.toml"
+    cell.write_text(
+        '[controller]\nmodel = "yrc1000"\nfsu_speed_limit_pct = 40\n[robot]\nmodel = "hc10"\n'
+    )
+    with running_sim("--config", str(cell)) as own:
+        async with RobotClient(**own.client_options()) as robot:
+            await robot.wait_for_state()
+            await robot.enable()
+            goal = (1.0, 0.0, 0.0, 0.0, -1.0, 0.0)
+            result = await robot.move_joints(goal)
+            assert _off(goal, result.final_positions) < TOLERANCE
+            assert result.following.slowed
+            assert result.following.max_lag_s > 0.25
+            assert result.elapsed_s > 1.5 * result.trajectory.duration
+
+
+async def test_fs100_is_big_endian_and_the_wrong_order_is_explained() -> None:
+    with running_sim("--controller", "fs100", "--robot", "mh5") as own:
+        async with RobotClient(**own.client_options(), controller="fs100", robot="mh5") as robot:
+            await robot.wait_for_state()
+            await robot.enable()
+            goal = (0.3, 0.2, 0.1, 0.0, -1.0, 0.5)
+            result = await robot.move_joints(goal)
+            assert _off(goal, result.final_positions) < TOLERANCE
+        wrong = RobotClient(**own.client_options(), controller="yrc1000", robot="mh5")
+        async with wrong:
+            with pytest.raises(ConnectionLostError, match=r"other byte order.*--controller"):
+                await wrong.wait_for_state(5.0)

@@ -17,7 +17,7 @@ from pymotoros.client.planning import (
     passes_motoros_speed_check,
     plan_joint_move,
 )
-from pymotoros.models import ROBOTS, robot_model
+from pymotoros.models import ROBOTS, GroupModel, robot_model
 
 HC10 = robot_model("hc10").groups[0]
 LIMITS = JointLimits.from_group(HC10)
@@ -36,19 +36,33 @@ def _positions(limits: JointLimits) -> st.SearchStrategy[tuple[float, ...]]:
 scaling = st.floats(0.05, 1.0)
 
 
-@settings(max_examples=60, deadline=None)
+GROUPS = [g for model in ROBOTS.values() for g in model.groups]
+
+
+@st.composite
+def moves(draw: st.DrawFn) -> tuple[GroupModel, tuple[float, ...], tuple[float, ...]]:
+    group = draw(st.sampled_from(GROUPS))
+    limits = JointLimits.from_group(group)
+    return group, draw(_positions(limits)), draw(_positions(limits))
+
+
+@settings(max_examples=100, deadline=None)
 @given(
-    start=_positions(LIMITS),
-    goal=_positions(LIMITS),
+    move=moves(),
     vs=scaling,
     acc=scaling,
     period=st.sampled_from([0.004, 0.01, 0.02, 0.05]),
 )
 def test_moves_respect_limits_and_are_near_optimal(
-    start: tuple[float, ...], goal: tuple[float, ...], vs: float, acc: float, period: float
+    move: tuple[GroupModel, tuple[float, ...], tuple[float, ...]],
+    vs: float,
+    acc: float,
+    period: float,
 ) -> None:
+    group, start, goal = move
+    limits = JointLimits.from_group(group)
     traj = plan_joint_move(
-        start, goal, LIMITS, velocity_scaling=vs, acceleration_scaling=acc, sample_period=period
+        start, goal, limits, velocity_scaling=vs, acceleration_scaling=acc, sample_period=period
     )
     pts = traj.points
     assert pts[0].time == 0.0
@@ -60,11 +74,11 @@ def test_moves_respect_limits_and_are_near_optimal(
         assert b.time - a.time >= MIN_SAMPLE_PERIOD_S - EPS
         assert b.time - a.time <= max(period, 2 * MIN_SAMPLE_PERIOD_S) + EPS
     for p in pts:
-        for i, axis in enumerate(HC10.axes):
+        for i, axis in enumerate(group.axes):
             lo, hi = min(start[i], goal[i]), max(start[i], goal[i])
             assert lo - 1e-9 <= p.positions[i] <= hi + 1e-9
-            assert LIMITS.lower[i] - EPS <= p.positions[i] <= LIMITS.upper[i] + EPS
-            assert abs(p.velocities[i]) <= LIMITS.max_velocity[i] * vs * (1 + 1e-9)
+            assert axis.lower - EPS <= p.positions[i] <= axis.upper + EPS
+            assert abs(p.velocities[i]) <= limits.max_velocity[i] * vs * (1 + 1e-9)
             assert abs(p.velocities[i]) <= axis.max_velocity
             assert passes_motoros_speed_check(p.velocities[i], motoros_speed_limit(axis, 4))
             if p.accelerations:
@@ -126,3 +140,24 @@ def test_motoros_speed_check_truncates_like_the_controller() -> None:
     assert passes_motoros_speed_check(3.9, 3.14)
     assert not passes_motoros_speed_check(4.0, 3.14)
     assert not passes_motoros_speed_check(-4.0, 3.14)
+
+
+def test_several_groups_are_planned_as_one_synchronised_move() -> None:
+    groups = robot_model("sda10f").groups
+    limits = JointLimits.concat([JointLimits.from_group(g) for g in groups])
+    start = tuple(v for g in groups for v in g.home)
+    goal = tuple(min(0.5, hi) for hi in limits.upper)
+    traj = plan_joint_move(start, goal, limits)
+    assert limits.dof == sum(g.num_axes for g in groups)
+    assert traj.goal == goal
+    for p in traj.points:
+        assert all(
+            abs(v) <= vmax * (1 + 1e-9)
+            for v, vmax in zip(p.velocities, limits.max_velocity, strict=True)
+        )
+    # Phase synchronisation: every joint is the same fraction of the way at every point.
+    for p in traj.points[1:-1]:
+        fractions = [
+            (x - s) / (g - s) for x, s, g in zip(p.positions, start, goal, strict=True) if g != s
+        ]
+        assert max(fractions) - min(fractions) < 1e-6

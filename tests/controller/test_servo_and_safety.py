@@ -312,3 +312,54 @@ def test_docs_show_the_current_transition_table() -> None:
     doc = (Path(__file__).resolve().parents[2] / "docs" / "fidelity.md").read_text("utf-8")
     block = doc.split("<!-- transition-table -->\n", 1)[1].split("\n<!-- /transition-table -->")[0]
     assert block == transition_table()
+
+
+def test_fsu_speed_limit_slows_the_move_but_motoros_resends_the_pulses() -> None:
+    def run(fsu: int | None) -> tuple[int, tuple[int, ...]]:
+        controller: dict[str, object] = {"pfl": False}
+        if fsu is not None:
+            controller["fsu_speed_limit_pct"] = fsu
+        vc = VirtualController(cell_from_dict({"controller": controller}))
+        assert command(vc, CMD.START_TRAJ_MODE).ok
+        assert send(vc, 0, point(0, 0.0, [0.0] * 6)).ok
+        limit = [0.8 * v for v in vc.motoros.axes[0].max_speed[:6]]  # 80 % of max speed
+        assert send(vc, 1, point(0, 1.0, limit, limit)).ok
+        start = vc.time_ms
+        tick_until(vc, vc.has_queued_motion, "queued", max_ticks=5)
+        tick_until(
+            vc,
+            lambda: not vc.has_queued_motion() and not any(map(any, vc.motoros.unprocessed_pulses)),
+            "every pulse executed",
+        )
+        assert not vc.motoros.inc_move_error
+        return vc.time_ms - start, vc.snapshot().groups[0].command_pulse
+
+    free_ms, free_end = run(None)
+    slow_ms, slow_end = run(50)
+    assert slow_end == free_end  # every pulse arrives in the end
+    assert slow_ms > 1.4 * free_ms  # but later: the FSU let half the speed through
+
+
+def test_eco_idle_timer_and_brake_sag_give_the_3011_users_meet() -> None:
+    """ros-industrial/motoman#501: a start planned before eco mode fails after it."""
+    cell = cell_from_dict({"controller": {"eco_idle_s": 2, "brake_sag_pulses": 200}})
+    vc = VirtualController(cell)
+    assert command(vc, CMD.START_TRAJ_MODE).ok
+    planned = list(vc.joint_feedback(0).pos[:6])  # the client reads the state …
+    tick_until(vc, lambda: vc.snapshot().servo and vc.io.get(ECO_MODE) == 1, "eco", 1000)
+    assert vc.time_ms >= 2000
+    settle_monitor(vc)
+    assert vc.robot_status().drives_powered == 0
+    # … and starts from it after eco mode: the brakes moved the axes meanwhile
+    o = complete(vc, vc.trajectory_point(0, point(0, 0.0, planned)))
+    assert (o.result, o.subcode) == (R.INVALID, 3011)
+    assert vc.io.get(ECO_MODE) == 0  # the sequence-0 re-enable left eco mode
+    fresh = list(vc.joint_feedback(0).pos[:6])
+    assert send(vc, 0, point(0, 0.0, fresh)).ok
+
+
+def test_no_sag_by_default() -> None:
+    vc = ready()
+    before = vc.snapshot().groups[0].command_pulse
+    vc.press_estop(True)
+    assert vc.snapshot().groups[0].command_pulse == before

@@ -12,11 +12,18 @@ from __future__ import annotations
 from fractions import Fraction
 
 import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from pymotoros.models import FloatMode
+from pymotoros.motion import TrajPoint, interpolate, numerics
 from pymotoros.motion.numerics import LD, positions, pulses
 
+from .helpers import axes_for
 from .motoros_reference import round_f32
+from .strategies import trajectories
+from .test_tick_engine import queued_by_ticks
 
 X0 = np.float32(1 + 2**-23)
 V0 = np.float32(15123692 * 2.0**-42)  # exactly representable
@@ -42,3 +49,20 @@ def test_fs100_rounds_the_product_first() -> None:
     )
     product = round_f32(Fraction(float(V0)) * Fraction(float(TAU)))
     assert float(pos[0, 0]) == float(round_f32(Fraction(float(X0)) + product))
+
+
+@settings(max_examples=25, deadline=None)
+@given(trajectories(durations=st.integers(1, 400).map(lambda k: k / 1000)))
+def test_the_checked_float64_paths_equal_the_longdouble_fallback(points: list[TrajPoint]) -> None:
+    """With an absurd safety factor every value takes the longdouble fallback; the
+    results must not change (both in the tick engine and the offline engine)."""
+    axes = axes_for("hc10", "yrc1000")
+    normal = interpolate(points, axes, validate=False)
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setattr(numerics, "RISK_FACTOR", 1e300)
+        assert numerics.coefficients_x87_scalar([0.1], [0.2], [0.3], [0.4], 0.1) is None
+        forced = interpolate(points, axes, validate=False)
+        ticks = queued_by_ticks(points, axes)
+    assert ticks == list(zip(normal[0].tolist(), normal[1].tolist(), strict=True))
+    assert np.array_equal(normal[0], forced[0])
+    assert np.array_equal(normal[1], forced[1])

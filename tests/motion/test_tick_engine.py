@@ -205,7 +205,7 @@ def test_not_motion_ready_ends_the_segment_where_it_stands(hc10: GroupAxes) -> N
     g.start(start, to_pulses(start.pos, hc10))
     g.set_pending(still(2.0, (1.0,) * 6))
     g.fill(True)  # 200 queued, the 201st step computed and waiting for room
-    blocked = g.queue._entries[-1]
+    blocked = list(g.queue)[-1]
     g.fill(False)
     assert not g.pending
     assert g.current.time_ms == 804  # the step after the 200th (800 ms)

@@ -2,8 +2,6 @@
 
 from __future__ import annotations
 
-import dataclasses
-
 import pytest
 
 from pymotoros.errors import LocalProtocolError
@@ -18,7 +16,11 @@ from pymotoros.protocol import (
     MotoMotionCtrl,
     MotoReadIoBit,
     MotoSelectTool,
+    MotoWriteIoBitReply,
     MotoWriteIoGroup,
+    MotoWriteIoGroupReply,
+    Ping,
+    PingReply,
     UnknownMessage,
     encode,
 )
@@ -74,8 +76,28 @@ def test_lists_are_stored_as_tuples() -> None:
 
 def test_messages_are_frozen() -> None:
     point = JointTrajPtFull.for_joints(0, 0, 0.0, [], [])
-    with pytest.raises(dataclasses.FrozenInstanceError):
+    with pytest.raises(AttributeError):
         point.sequence = 3  # type: ignore[misc]
+    with pytest.raises(AttributeError):
+        point.extra = 1  # type: ignore[attr-defined]
+
+
+def test_equality_is_typed() -> None:
+    """Messages are tuples underneath; equality must still tell the types apart."""
+    assert Ping() != PingReply()
+    assert MotoWriteIoBitReply(0) != MotoWriteIoGroupReply(0)
+    assert MotoWriteIoBitReply(0) != (0,)
+    assert MotoWriteIoBitReply(0) == MotoWriteIoBitReply(0)
+    assert len({MotoWriteIoBitReply(0), MotoWriteIoBitReply(0)}) == 1
+    assert bool(Ping())  # an empty body is still a message
+
+
+def test_replace_and_asdict() -> None:
+    point = JointTrajPtFull.for_joints(0, 0, 0.5, [1.0], [])
+    later = point._replace(sequence=4)
+    assert type(later) is JointTrajPtFull
+    assert later.sequence == 4
+    assert point._asdict()["time"] == 0.5
 
 
 def test_full_ex_count_must_match_records() -> None:

@@ -23,6 +23,7 @@ import click
 from pymotoros.controller import VirtualController
 from pymotoros.controller.cell import CellConfig, default_cell, load_cell
 from pymotoros.errors import ConfigError
+from pymotoros.models import ROBOTS, ControllerType
 from pymotoros.protocol.constants import TCP_PORT_IO, TCP_PORT_MOTION, TCP_PORT_STATE
 from pymotoros.runtime.app import DEFAULT_HTTP_PORT, SimulatorApp, SimulatorConfig
 
@@ -44,12 +45,13 @@ async def run_simulator(app: SimulatorApp) -> None:
         with contextlib.suppress(NotImplementedError, RuntimeError):
             loop.add_signal_handler(sig, app.request_stop)
             handled.append(sig)
+    # Everything allocated so far (models, the web stack) is permanent: keep it out of the
+    # collector's way so that a full collection cannot stall the 4 ms loop. Done before the
+    # loop starts ticking.
+    gc.collect()
+    gc.freeze()
     try:
         async with app:
-            # Everything allocated at start-up (models, the web stack) is permanent: keep it
-            # out of the collector's way so that a full collection cannot stall the 4 ms loop.
-            gc.collect()
-            gc.freeze()
             ports = app.ports
             sys.stdout.write(ready_line(ports.motion, ports.state, ports.io, ports.http) + "\n")
             sys.stdout.flush()
@@ -86,8 +88,20 @@ def _cell(
     show_default=True,
     help="Control API port.",
 )
-@click.option("--controller", "controller_name", default="yrc1000", show_default=True)
-@click.option("--robot", "robot_name", default="hc10", show_default=True)
+@click.option(
+    "--controller",
+    "controller_name",
+    default="yrc1000",
+    show_default=True,
+    help=f"Controller model: {', '.join(t.value for t in ControllerType)} (FS100 is big-endian).",
+)
+@click.option(
+    "--robot",
+    "robot_name",
+    default="hc10",
+    show_default=True,
+    help=f"Robot model: {', '.join(sorted(ROBOTS))}.",
+)
 @click.option(
     "--config",
     "config_path",

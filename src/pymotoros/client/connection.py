@@ -15,6 +15,7 @@ import asyncio
 import contextlib
 import logging
 import socket
+import struct
 from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Final
@@ -22,6 +23,9 @@ from typing import Final
 from pymotoros.client.errors import ConnectError, ConnectionLostError, RequestTimeoutError
 from pymotoros.errors import RemoteProtocolError
 from pymotoros.protocol.constants import (
+    HEADER_SIZE,
+    MAX_LENGTH_PREFIX,
+    PREFIX_SIZE,
     TCP_PORT_IO,
     TCP_PORT_MOTION,
     TCP_PORT_STATE,
@@ -48,6 +52,7 @@ wire_logger = logging.getLogger("pymotoros.client.wire")
 READ_CHUNK: Final = 4096
 DEFAULT_CONNECT_TIMEOUT_S: Final = 5.0
 DEFAULT_REQUEST_TIMEOUT_S: Final = 5.0
+CLOSE_TIMEOUT_S: Final = 2.0
 
 _PORT_HINT: Final[dict[Port, str]] = {
     Port.MOTION: "--motion-port",
@@ -97,6 +102,20 @@ def reply_matches(request: WireMessage, reply: WireMessage, expected: type | Non
     if isinstance(reply, IoErrorReply):
         return True
     return expected is not None and isinstance(reply, expected)
+
+
+def _order_hint(data: bytes, order: ByteOrder) -> str:
+    """A hint when the bytes would make sense in the other byte order."""
+    if len(data) < PREFIX_SIZE:
+        return ""
+    other = ByteOrder.BIG if order is ByteOrder.LITTLE else ByteOrder.LITTLE
+    (length,) = struct.unpack(f"{other.value}i", data[:PREFIX_SIZE])
+    if HEADER_SIZE <= length <= MAX_LENGTH_PREFIX:
+        return (
+            "; the bytes read well in the other byte order: check --controller "
+            "(the FS100 is big-endian, every other controller little-endian)"
+        )
+    return ""
 
 
 class FrameConnection:
@@ -219,10 +238,14 @@ class FrameConnection:
             reason = "closed by the client"
             raise
         except RemoteProtocolError as exc:
-            reason = f"undecodable data from the controller ({exc})"
+            hint = _order_hint(exc.data, self.order)
+            reason = f"undecodable data from the controller ({exc}){hint}"
             logger.error("%s: %s; data %s", self, exc, exc.data[:64].hex())
         except OSError as exc:
             reason = f"socket error ({exc.strerror or exc})"
+        except Exception as exc:  # the connection boundary: fail the waiters, never leak
+            reason = f"internal error ({exc!r})"
+            logger.exception("%s: reader failed", self)
         finally:
             if self._closing:
                 reason = "closed by the client"
@@ -296,5 +319,6 @@ class FrameConnection:
             await self._task
         self._fail(self._lost("closed by the client"))
         self._writer.close()
-        with contextlib.suppress(OSError, ConnectionError):
-            await self._writer.wait_closed()
+        with contextlib.suppress(OSError, TimeoutError):
+            async with asyncio.timeout(CLOSE_TIMEOUT_S):
+                await self._writer.wait_closed()

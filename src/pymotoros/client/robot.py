@@ -500,6 +500,7 @@ class RobotClient:
         The trajectory's joints are those of ``groups`` one after the other; one group
         goes as JOINT_TRAJ_PT_FULL, several as JOINT_TRAJ_PT_FULL_EX.
         """
+        self._need(self._state_conn, Port.STATE)  # completion is judged from the state stream
         groups = tuple(groups)
         monitor = FollowingMonitor(trajectory, groups, on_sample=on_progress)
         remove = self.tracker.add_listener(monitor.listen)

@@ -27,6 +27,7 @@ from typing import TYPE_CHECKING, Final
 
 from pymotoros.client.errors import (
     AxisDeviation,
+    ConnectionLostError,
     MotionIncompleteError,
     MotionTimeoutError,
     ReplyError,
@@ -80,6 +81,10 @@ STALL_TIMEOUT_S: Final = 2.0
 
 LAG_WARNING_S: Final = 0.25
 """A robot this far behind the plan is being slowed (a safety speed limit, HOLD…)."""
+
+
+ARRIVED_PROGRESS: Final = 0.999
+"""Progress from which the following monitor counts the robot as arrived (no lag)."""
 
 
 @dataclass(slots=True)
@@ -236,6 +241,9 @@ async def send_point(
     backoff = BUSY_BACKOFF_FIRST_S
     first_busy: float | None = None
     while True:
+        lost = client.tracker.error
+        if lost is not None:  # the state stream is gone: the move could not be watched
+            raise ConnectionLostError(str(lost))
         reply = await client.request_motion(message)
         if reply.result != ResultCode.BUSY:
             if first_busy is not None:
@@ -352,7 +360,8 @@ class FollowingMonitor:
         error = max((abs(a - b) for a, b in zip(positions, planned, strict=False)), default=0.0)
         progress = min(max(traj.progress(positions), 0.0), 1.0)
         reached = traj.time_at_progress(progress)
-        lag = max(0.0, min(elapsed, traj.duration) - reached) if progress < 1.0 else 0.0
+        # Within 0.1 % of the goal the robot is there: its last pulses of settling are no lag.
+        lag = max(0.0, elapsed - reached) if progress < ARRIVED_PROGRESS else 0.0
         sample = FollowingSample(elapsed, progress, lag, error)
         rep = self.report
         rep.samples += 1
@@ -372,14 +381,28 @@ class FollowingMonitor:
         return sample
 
 
-def _quiet(prev: RobotState | None, state: RobotState, groups: Sequence[int]) -> bool:
-    """Feedback of ``groups`` moved less than SETTLE_STEP since ``prev``."""
-    if prev is None:
-        return False
-    a, b = _joined_positions(prev, groups), _joined_positions(state, groups)
-    if a is None or b is None:
-        return False
-    return all(abs(x - y) <= SETTLE_STEP for x, y in zip(a, b, strict=True))
+class _RestDetector:
+    """Counts state cycles (one per ROBOT_STATUS) with ``in_motion`` false and still feedback."""
+
+    def __init__(self, groups: Sequence[int]) -> None:
+        self.groups = tuple(groups)
+        self.quiet = 0
+        self._cycle = -1
+        self._prev: tuple[float, ...] | None = None
+
+    def update(self, state: RobotState) -> bool:
+        """True once the robot has been at rest for :data:`SETTLE_SAMPLES` cycles."""
+        if state.status_count != self._cycle and state.status is not None:
+            self._cycle = state.status_count
+            pos = _joined_positions(state, self.groups)
+            still = (
+                pos is not None
+                and self._prev is not None
+                and all(abs(a - b) <= SETTLE_STEP for a, b in zip(pos, self._prev, strict=True))
+            )
+            self.quiet = self.quiet + 1 if still and state.status.in_motion is False else 0
+            self._prev = pos
+        return self.quiet >= SETTLE_SAMPLES
 
 
 async def wait_until_at_rest(
@@ -392,22 +415,14 @@ async def wait_until_at_rest(
     feedback still moves (users meet 3011 here).
     """
     tracker = client.tracker
-    quiet = 0
-    prev: RobotState | None = None
+    rest = _RestDetector(groups)
     try:
         async with asyncio.timeout(timeout_s):
             state = tracker.state
             while True:
-                status = state.status
-                if status is not None and status.in_motion is False and _quiet(prev, state, groups):
-                    quiet += 1
-                    if quiet >= SETTLE_SAMPLES:
-                        pos = _joined_positions(state, groups)
-                        if pos is not None:
-                            return pos
-                elif state.count != (prev.count if prev else -1):
-                    quiet = 0
-                prev = state
+                pos = _joined_positions(state, groups)
+                if rest.update(state) and pos is not None:
+                    return pos
                 state = await tracker.next_state()
     except TimeoutError:
         status = tracker.state.status
@@ -440,8 +455,7 @@ async def wait_for_completion(
     start = time.monotonic()
     soft_deadline = start + trajectory.duration + settle_timeout_s
     hard_deadline = start + (timeout_s if timeout_s is not None else 10 * trajectory.duration + 30)
-    quiet = 0
-    prev: RobotState | None = None
+    rest = _RestDetector(groups)
     best_progress, best_at = -1.0, start
     state = tracker.state
     while True:
@@ -449,14 +463,12 @@ async def wait_for_completion(
         positions = _joined_positions(state, groups)
         status = state.status
         if positions is not None and status is not None:
-            monitor.update(state)
             err = max(abs(p - g) for p, g in zip(positions, goal, strict=True))
             progress = trajectory.progress(positions)
             if progress > best_progress + 1e-4:
                 best_progress, best_at = progress, now
-            at_rest = status.in_motion is False and _quiet(prev, state, groups)
-            quiet = quiet + 1 if at_rest else 0
-            if quiet >= SETTLE_SAMPLES and err <= goal_tolerance:
+            at_rest = rest.update(state)
+            if at_rest and err <= goal_tolerance:
                 counts = [await client.queue_count(g) for g in groups]
                 if not any(counts):
                     return positions
@@ -470,7 +482,7 @@ async def wait_for_completion(
                         detail=f"the robot stopped {err:.4f} from the goal",
                     )
             past_end = now > start + trajectory.duration + 1.0
-            if quiet >= SETTLE_SAMPLES and past_end and now - best_at > STALL_TIMEOUT_S:
+            if at_rest and past_end and now - best_at > STALL_TIMEOUT_S:
                 raise MotionIncompleteError(
                     f"the robot came to rest {err:.5f} from the goal and is not moving "
                     "(was the motion stopped?)"
@@ -482,5 +494,4 @@ async def wait_for_completion(
                 f"{now - start:.2f} s, progress {max(best_progress, 0.0):.0%}, largest lag "
                 f"{lag:.2f} s"
             )
-        prev = state
         state = await tracker.next_state()

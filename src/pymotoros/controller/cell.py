@@ -45,6 +45,8 @@ FEEDBACK_LAG_TICKS: Final = 3
 """Mean delay of the encoder feedback behind the command, in ticks (12 ms at 4 ms)."""
 MAX_NOISE_PULSES: Final = 10
 """Noise is encoder jitter; above this it would hide the 30-pulse in_motion threshold."""
+MAX_BRAKE_SAG_PULSES: Final = 1000
+"""Brake sag is small: users report a few thousandths of a radian (ros-industrial/motoman#501)."""
 MAX_TOOL: Final = 63
 """Tool numbers 0..63 (§5.8)."""
 
@@ -81,6 +83,15 @@ class ServoConfig:
     servo_on_delay_ms: int = SERVO_ON_DELAY_MS
     lag_ticks: int = FEEDBACK_LAG_TICKS
     noise_pulses: int = 0
+    brake_sag_pulses: int = 0
+    """When servo power goes off (servo off, E-stop, eco mode) the brakes hold the axes
+    a little away from where they were: each axis moves by a seeded amount within
+    ±this many pulses, command and feedback alike (0: no sag)."""
+    eco_idle_s: int | None = None
+    """Eco mode starts after this many seconds with servo on and no motion (None: never)."""
+    fsu_speed_limit_pct: int | None = None
+    """A Functional Safety Unit joint-speed limit: the controller executes at most this
+    share of each axis's maximum increment per tick and drops the rest (None: no FSU)."""
 
 
 @dataclass(frozen=True, slots=True)
@@ -304,6 +315,17 @@ def cell_from_dict(
         servo_on_delay_ms=ctrl_t.integer("servo_on_delay_ms", SERVO_ON_DELAY_MS, 0, 4900),
         lag_ticks=ctrl_t.integer("feedback_lag_ticks", FEEDBACK_LAG_TICKS, 0, 50),
         noise_pulses=ctrl_t.integer("feedback_noise_pulses", 0, 0, MAX_NOISE_PULSES),
+        brake_sag_pulses=ctrl_t.integer("brake_sag_pulses", 0, 0, MAX_BRAKE_SAG_PULSES),
+        eco_idle_s=(
+            ctrl_t.integer("eco_idle_s", 600, 1, 86400)
+            if ctrl_t.data.get("eco_idle_s") is not None
+            else None
+        ),
+        fsu_speed_limit_pct=(
+            ctrl_t.integer("fsu_speed_limit_pct", 100, 1, 100)
+            if ctrl_t.data.get("fsu_speed_limit_pct") is not None
+            else None
+        ),
     )
     pfl_value = ctrl_t.get("pfl")
     ctrl_t.finish()

@@ -133,6 +133,8 @@ class VirtualController:
         )
         self._scheduler = Scheduler(self._clock)
         self._observers: list[SnapshotObserver] = []
+        self._power_losses = 0
+        self._eco_idle_ms = None if cell.servo.eco_idle_s is None else cell.servo.eco_idle_s * 1000
         self._machine.add_observer(self._on_operator_change)
         self._motoros.boot()
 
@@ -168,6 +170,8 @@ class VirtualController:
         motoros = self._motoros
         if now >= motoros.next_monitor_ms:
             motoros.monitor_tick(now)
+            if self._eco_idle_ms is not None:
+                self._check_eco_idle(now, self._eco_idle_ms)
         if not motoros.inc_move_tick():
             for servo in self._servos:
                 servo.idle()
@@ -292,7 +296,7 @@ class VirtualController:
         powered = self._machine.state.drives_powered
         tick = self._clock.tick_count
         for axes, servo in zip(self._axes, self._servos, strict=True):
-            if servo.settled() and not powered:
+            if servo.settled():  # feedback = command (± noise of at most 10 pulses)
                 continue
             fb = servo.feedback(tick, powered)
             cmd = servo.command
@@ -494,10 +498,29 @@ class VirtualController:
 
     # ================================================================== internals
 
+    def _brakes_engage(self) -> None:
+        sag = self.cell.servo.brake_sag_pulses
+        self._power_losses += 1
+        if not sag:
+            return
+        for servo, axes in zip(self._servos, self._axes, strict=True):
+            servo.shift(servo.sag_offsets(sag, self._power_losses, axes.valid))
+
+    def _check_eco_idle(self, now: int, idle_ms: int) -> None:
+        """Eco mode after the configured idle time with servo on (checked every 10 ms)."""
+        s = self._machine.state
+        if not s.servo_on or s.eco:
+            return
+        if now - self._motoros.last_motion_ms >= idle_ms and now - s.servo_ready_at_ms >= idle_ms:
+            logger.info("eco mode: no motion for %d s", idle_ms // 1000)
+            self._fire(Event.ENTER_ECO)
+
     def _on_skill(self, slave: int, text: str) -> None:
         self._motoros.on_skill(slave, text)
 
     def _on_operator_change(self, old: OperatorState, new: OperatorState, event: Event) -> None:
+        if old.drives_powered and not new.drives_powered:
+            self._brakes_engage()
         if new.job_running and not old.job_running:
             self._runner.start()
         elif old.job_running and not new.job_running:

@@ -147,6 +147,8 @@ class MotoRos:
         """DX100 SKILLSND "ROS-START" flags for slave 1 and slave 2 (§4.3)."""
         self.error_code = 0
         """ROBOT_STATUS error_code: the first active alarm's number (§2.6)."""
+        self.last_motion_ms = 0
+        """Controller time of the last increment the servos took (for the eco idle timer)."""
 
         # the status monitor's last reading (§2.6)
         self._alarm_bits: tuple[int, ...] = (0, 0, 0, 0)
@@ -168,6 +170,18 @@ class MotoRos:
         self._takes_gen = -1
         self._takes_changes = -1
         self._takes: IncMoveReturn = IncMoveReturn.IMOV_UNREADY
+        # FSU speed limit (cell option) and MotoROS's compensation for it (§5.6 step 3)
+        pct = cell.servo.fsu_speed_limit_pct
+        self._fsu_limit: tuple[tuple[int, ...], ...] | None = (
+            None
+            if pct is None
+            else tuple(
+                tuple(max(1, m * pct // 100) if m else 0 for m in a.max_increment)
+                for a in self.axes
+            )
+        )
+        self._to_process: list[list[int]] = [[0] * 8 for _ in self.axes]
+        self._processed: list[list[int]] = [[0] * 8 for _ in self.axes]
         # IncMove retry while the controller leaves eco mode (§5.6 step 6.2)
         self._eco_retry: tuple[tuple[tuple[int, ...], ...], int, int] | None = None
 
@@ -684,6 +698,16 @@ class MotoRos:
     ) -> Outcome:
         """Sequence 0: initialise the group, then the interleaved start/speed checks."""
         interp = self.interpolators[g]
+        queued = len(interp.queue)
+        if queued or interp.pending:
+            logger.warning(
+                "group %d: trajectory start (sequence 0) while %d increments are queued%s; "
+                "MotoROS makes no BUSY check here and re-initialises the group, the queued "
+                "motion still runs",
+                g,
+                queued,
+                " and a point is pending" if interp.pending else "",
+            )
         commanded = tuple(self.servos[g].command)
         interp.start(traj, commanded)
         refusal = check_start(traj, commanded, self.axes[g])
@@ -755,16 +779,79 @@ class MotoRos:
         if self._eco_retry is not None:
             return self._retry_eco()
         if not self.motion_ready or self.stop_flag:
+            if self._fsu_limit is not None:
+                self._fsu_reset()
             return False
+        if self._fsu_limit is not None:
+            return self._inc_move_fsu(self._fsu_limit)
         incs = inc_move(self.interpolators)
         if incs is None:
             return False
         result = self._controller_takes_increments()
         if result is IncMoveReturn.OK:
-            for servo, inc in zip(self.servos, incs, strict=True):
-                servo.apply(inc.pulses)
+            self.last_motion_ms = self._clock.time_ms
+            servos = self.servos
+            if len(servos) == 1:
+                servos[0].apply(incs[0].pulses)
+            else:
+                for servo, inc in zip(servos, incs, strict=True):
+                    servo.apply(inc.pulses)
             return True
         return self._inc_move_failed(result, tuple(i.pulses for i in incs))
+
+    @property
+    def unprocessed_pulses(self) -> tuple[tuple[int, ...], ...]:
+        """Per group, pulses sent (or due) that the controller has not executed (FSU)."""
+        return tuple(
+            tuple(a - b for a, b in zip(t, p, strict=True))
+            for t, p in zip(self._to_process, self._processed, strict=True)
+        )
+
+    def _fsu_reset(self) -> None:
+        for g in range(self._num_groups):
+            self._to_process[g] = [0] * 8
+            self._processed[g] = [0] * 8
+
+    def _inc_move_fsu(self, limits: tuple[tuple[int, ...], ...]) -> bool:
+        """IncMove with the v1.9.12 FSU compensation, on a controller whose FSU clips.
+
+        The controller executes at most ``limits`` pulses per axis and tick and drops
+        the rest. MotoROS measures what was executed (the change of the commanded
+        position), keeps the unexecuted pulses, resends them clamped to what the
+        controller took last time (or the axis maximum if it took nothing), and does
+        not read its queue while such pulses remain.
+        """
+        missing = False
+        remaining: list[list[int]] = []
+        for g in range(self._num_groups):
+            rest = [a - b for a, b in zip(self._to_process[g], self._processed[g], strict=True)]
+            remaining.append(rest)
+            missing = missing or any(rest)
+        if missing:
+            sends = []
+            for g, rest in enumerate(remaining):
+                taken = self._processed[g]
+                max_inc = self.axes[g].max_increment
+                clamp = [abs(t) or m for t, m in zip(taken, max_inc, strict=True)]
+                sends.append(tuple(max(-c, min(c, r)) for r, c in zip(rest, clamp, strict=True)))
+            to_process = remaining
+        else:
+            incs = inc_move(self.interpolators)
+            if incs is None:
+                self._fsu_reset()
+                return False
+            sends = [i.pulses for i in incs]
+            to_process = [list(p) for p in sends]
+        result = self._controller_takes_increments()
+        if result is not IncMoveReturn.OK:
+            self._fsu_reset()
+            return self._inc_move_failed(result, tuple(tuple(s) for s in sends))
+        self.last_motion_ms = self._clock.time_ms
+        for g, servo in enumerate(self.servos):
+            executed = servo.apply_limited(sends[g], limits[g])
+            self._processed[g] = list(executed)
+            self._to_process[g] = to_process[g]
+        return True
 
     def _controller_takes_increments(self) -> IncMoveReturn:
         """The controller's answer to mpExRcsIncrementMove (cached while nothing changes)."""
@@ -827,6 +914,7 @@ class MotoRos:
         result = self._controller_takes_increments()
         if result is IncMoveReturn.OK:
             self._eco_retry = None
+            self.last_motion_ms = now
             for servo, p in zip(self.servos, pulses, strict=True):
                 servo.apply(p)
             return True

@@ -98,6 +98,17 @@ class ServoGroup:
             unfolded.clear()
         return self._command
 
+    def apply_limited(self, increment: Sequence[int], limit: Sequence[int]) -> tuple[int, ...]:
+        """One tick under an FSU speed limit: each axis moves at most ``limit`` pulses.
+
+        Returns what was executed; the rest is dropped, as the FSU does.
+        """
+        executed = tuple(
+            max(-lim, min(lim, inc)) for inc, lim in zip(increment, limit, strict=True)
+        )
+        self.apply(executed)
+        return executed
+
     def apply(self, increment: Sequence[int]) -> None:
         """One tick with these pulse increments (8 slots)."""
         self._history.append(increment)
@@ -120,6 +131,16 @@ class ServoGroup:
         for _ in range(self._window):
             self._history.append(ZERO_INCREMENT)
         self._quiet = self._window
+
+    def shift(self, offsets: Sequence[int]) -> None:
+        """Move command and feedback together by ``offsets`` (brakes catching the axes)."""
+        self.reset_to([c + o for c, o in zip(self.command, offsets, strict=True)])
+
+    def sag_offsets(self, amplitude: int, event: int, valid: Sequence[bool]) -> list[int]:
+        """Deterministic offsets within ±amplitude for the ``event``-th power loss."""
+        span = 2 * amplitude + 1
+        base = _mix(self._seed ^ (0x5A6 * (event + 1)))
+        return [(_mix(base + k) % span - amplitude) if valid[k] else 0 for k in range(SLOTS)]
 
     def settled(self) -> bool:
         """No increment in the whole feedback window: feedback equals the command."""

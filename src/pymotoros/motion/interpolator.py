@@ -10,36 +10,86 @@ The controller drives it:
   :func:`pymotoros.motion.inc_move` for all groups;
 * any queue-clearing trigger → :meth:`GroupInterpolator.clear`.
 
-When a point becomes the segment's end, the whole segment is computed at once
-(vectorised, see :mod:`pymotoros.motion.segment`) and handed to the queue as space
-allows; a tick then costs a few tuple operations.
+A segment's step grid, and so the number and times of its entries, is integer
+arithmetic; its pulses are not needed before IncMove reaches them. So ``fill`` plans
+the segment and queues its entries at once (as the real task does, within the 200
+limit), and the pulses of all queued segments are computed together, vectorised
+(:func:`pymotoros.motion.batch.batch_targets`), when the first of them is due. The
+results are those of the step-by-step loop; a tick costs a few tuple operations.
 """
 
 from __future__ import annotations
 
 import logging
 from collections.abc import Sequence
+from itertools import repeat
+from operator import add
+
+import numpy as np
 
 from pymotoros.motion.axes import GroupAxes
+from pymotoros.motion.batch import batch_targets
 from pymotoros.motion.constants import QUEUE_SIZE, SLOTS
 from pymotoros.motion.points import ORIGIN, GroupPoint, TrajPoint
 from pymotoros.motion.queue import Increment, IncrementQueue
-from pymotoros.motion.segment import Segment, compute_segment
+from pymotoros.motion.segment import Grid, compute_segment, plan_grid
 
 logger = logging.getLogger(__name__)
+
+
+class PlannedSegment:
+    """A segment whose grid is known; its pulses are computed on demand."""
+
+    __slots__ = (
+        "end",
+        "entries",
+        "grid",
+        "leftover_before",
+        "prev_before",
+        "start",
+        "targets",
+        "tool",
+    )
+
+    def __init__(
+        self, start: GroupPoint, end: GroupPoint, grid: Grid, tool: int, leftover: int
+    ) -> None:
+        self.start = start
+        self.end = end
+        self.grid = grid
+        self.tool = tool
+        self.leftover_before = leftover
+        self.entries: list[Increment] | None = None
+        self.prev_before: tuple[int, ...] = ()
+        """prevPulsePos before the segment (known once computed)."""
+        self.targets: list[list[int]] = []
+        """Absolute target of each entry, valid slots in ascending order."""
+
+    @property
+    def count(self) -> int:
+        return self.grid.full_steps + 1
+
+    def target(self, index: int, axes: GroupAxes) -> tuple[int, ...]:
+        """prevPulsePos once entry ``index`` is queued (8 slots)."""
+        out = list(self.prev_before)
+        for slot, value in zip(axes.axis_slots, self.targets[index], strict=True):
+            out[slot] = value
+        return tuple(out)
 
 
 class GroupInterpolator:
     """The per-group state of §5.2 plus the AddToIncQueue task that fills its queue."""
 
     __slots__ = (
-        "_batch",
+        "_active",
+        "_chain_prev",
         "_current",
         "_leftover",
         "_next",
         "_pending",
         "_prev",
-        "_segment",
+        "_prev_at",
+        "_uncomputed",
         "axes",
         "q_time",
         "queue",
@@ -48,7 +98,7 @@ class GroupInterpolator:
 
     def __init__(self, axes: GroupAxes) -> None:
         self.axes = axes
-        self.queue = IncrementQueue()
+        self.queue = IncrementQueue(self._compute)
         """The 200-entry increment queue (``count`` for CHECK_QUEUE_CNT)."""
         self.tool = 0
         """Tool for segments interpolated from now on (SELECT_TOOL sets it, §5.8)."""
@@ -56,11 +106,17 @@ class GroupInterpolator:
         """Time of the last increment IncMove consumed (§5.6)."""
         self._current = ORIGIN
         self._pending: GroupPoint | None = None
-        self._segment: Segment | None = None
-        self._batch: list[Increment] = []
-        self._next = 0
         self._leftover = 0
+        self._active: PlannedSegment | None = None
+        """The segment being queued (its end is the pending point)."""
+        self._next = 0
+        """Next entry of the active segment to queue."""
+        self._uncomputed: list[PlannedSegment] = []
+        self._chain_prev: tuple[int, ...] = (0,) * SLOTS
+        """prevPulsePos after the last computed segment (or the start)."""
         self._prev: tuple[int, ...] = (0,) * SLOTS
+        self._prev_at: tuple[PlannedSegment, int] | None = None
+        """The entry whose target is prevPulsePos, or None: then it is ``_prev``."""
 
     # ------------------------------------------------------------------ state
 
@@ -82,9 +138,11 @@ class GroupInterpolator:
     @property
     def prev_pulses(self) -> tuple[int, ...]:
         """``prevPulsePos``: the last queued absolute target, 8 slots, controller order."""
-        if self._segment is not None and self._next > 0:
-            return self._target(self._segment, self._next - 1)
-        return self._prev
+        if self._prev_at is None:
+            return self._prev
+        self._compute()
+        segment, index = self._prev_at
+        return segment.target(index, self.axes)
 
     # ------------------------------------------------------------------ commands
 
@@ -100,12 +158,14 @@ class GroupInterpolator:
         """
         if len(commanded_pulses) != SLOTS:
             raise ValueError(f"commanded pulses need {SLOTS} slots")
-        self._drop_segment()
+        self._compute()  # entries still queued keep the pulses they were planned with
+        self._active = None
         self._pending = None
         self._current = GroupPoint.from_traj(point, self.axes.float_mode)
         self._leftover = 0
         self.q_time = self._current.time_ms
-        self._prev = tuple(int(p) for p in commanded_pulses)
+        self._prev = self._chain_prev = tuple(int(p) for p in commanded_pulses)
+        self._prev_at = None
 
     def set_pending(self, point: TrajPoint) -> None:
         """Accept a sequence > 0 point: it becomes the end of the next segment."""
@@ -118,9 +178,10 @@ class GroupInterpolator:
 
     def clear(self) -> None:
         """Clear the queue and drop the pending point (StopMotion and every clear, §3.6)."""
+        if self._active is not None:
+            self._abort(self._active)
+        self._compute()
         self.queue.clear()
-        if self._segment is not None:
-            self._abort(self._segment)
         self._pending = None
 
     # ------------------------------------------------------------------ the task
@@ -132,7 +193,7 @@ class GroupInterpolator:
         point that had not started is consumed without increments (as the real loop
         does when its condition fails at once).
         """
-        segment = self._segment
+        segment = self._active
         if segment is None:
             pending = self._pending
             if pending is None:
@@ -140,66 +201,134 @@ class GroupInterpolator:
             if not motion_ready:
                 self._pending = None
                 return
-            segment = compute_segment(
-                self._current, pending, self._leftover, self._prev, self.tool, self.axes
-            )
-            if segment is None:
+            current = self._current
+            if pending.time_ms <= current.time_ms:
                 logger.warning(
                     "group %s: point at %d ms is not after the current time %d ms; "
                     "dropped without increments (MotoROS already answered SUCCESS)",
                     self.axes.name,
                     pending.time_ms,
-                    self._current.time_ms,
+                    current.time_ms,
                 )
                 self._pending = None
                 return
-            self._segment = segment
-            self._batch = segment.entries
+            grid = plan_grid(current.time_ms, pending.time_ms, self._leftover, self.axes.period_ms)
+            segment = PlannedSegment(current, pending, grid, self.tool, self._leftover)
+            self._uncomputed.append(segment)
+            self._active = segment
             self._next = 0
         elif not motion_ready:
             self._abort(segment)
             return
-        batch = self._batch
-        done = self._next
-        entries = self.queue._entries  # the deque itself: this runs every tick
-        room = QUEUE_SIZE - len(entries)
+        # The queue's own fields: this runs every tick, usually to add one entry.
+        queue = self.queue
+        room = QUEUE_SIZE - len(queue._entries) - queue._lazy_count
         if room <= 0:
             return
-        stop = done + room
-        if stop >= len(batch):
-            entries.extend(batch[done:] if done else batch)
-            self._finish(segment)
+        done = self._next
+        count = segment.grid.full_steps + 1
+        stop = count if done + room >= count else done + room
+        lazy = queue._lazy
+        if lazy and lazy[-1][0] is segment:  # extend the chunk queued on the last tick
+            lazy[-1] = (segment, lazy[-1][1], stop)
         else:
-            entries.extend(batch[done:stop])
+            lazy.append((segment, done, stop))
+        queue._lazy_count += stop - done
+        self._prev_at = (segment, stop - 1)
+        if stop == count:
+            self._current = segment.end
+            self._leftover = segment.grid.leftover_ms
+            self._active = None
+            self._pending = None
+        else:
             self._next = stop
 
     # ------------------------------------------------------------------ internals
 
-    def _target(self, segment: Segment, index: int) -> tuple[int, ...]:
-        prev = list(self._prev)
-        for slot, value in zip(self.axes.axis_slots, segment.targets[index].tolist(), strict=True):
-            prev[slot] = value
-        return tuple(prev)
-
-    def _finish(self, segment: Segment) -> None:
-        self._prev = self._target(segment, len(self._batch) - 1)
-        self._current = segment.end
-        self._leftover = segment.grid.leftover_ms
-        self._drop_segment()
-        self._pending = None
-
-    def _abort(self, segment: Segment) -> None:
+    def _abort(self, segment: PlannedSegment) -> None:
         """End the segment at the step the task was blocked on (computed, not queued)."""
+        self._compute()
         blocked = self._next
-        if blocked > 0:
-            self._prev = self._target(segment, blocked - 1)
-        self._current = segment.state_at(blocked)
-        last = len(self._batch) - 1
-        self._leftover = segment.grid.leftover_ms if blocked == last else 0
-        self._drop_segment()
+        full = compute_segment(
+            segment.start,
+            segment.end,
+            segment.leftover_before,
+            segment.prev_before,
+            segment.tool,
+            self.axes,
+        )
+        if full is None:  # pragma: no cover - a planned segment always has steps
+            raise RuntimeError("planned segment without steps")
+        self._current = full.state_at(blocked)
+        self._leftover = segment.grid.leftover_ms if blocked == segment.count - 1 else 0
+        self._active = None
         self._pending = None
 
-    def _drop_segment(self) -> None:
-        self._segment = None
-        self._batch = []
-        self._next = 0
+    def _compute(self) -> None:
+        """Compute the pulses of every planned segment not computed yet, in order."""
+        segments = self._uncomputed
+        if not segments:
+            return
+        self._uncomputed = []
+        axes = self.axes
+        n = axes.num_axes
+        prev = self._chain_prev
+        if len(segments) == 1:
+            only = segments[0]
+            single = compute_segment(
+                only.start, only.end, only.leftover_before, prev, only.tool, axes
+            )
+            if single is None:  # pragma: no cover - a planned segment always has steps
+                raise RuntimeError("planned segment without steps")
+            only.prev_before = prev
+            only.entries = single.entries
+            only.targets = single.targets.tolist()
+            self._chain_prev = only.target(only.count - 1, axes)
+            return
+        x0 = np.array([s.start.pos[:n] for s in segments], dtype=np.float32)
+        v0 = np.array([s.start.vel[:n] for s in segments], dtype=np.float32)
+        x1 = np.array([s.end.pos[:n] for s in segments], dtype=np.float32)
+        v1 = np.array([s.end.vel[:n] for s in segments], dtype=np.float32)
+        ints = np.array(
+            [
+                (s.start.time_ms, s.end.time_ms, s.grid.first_ms, s.grid.full_steps)
+                for s in segments
+            ],
+            dtype=np.int64,
+        )
+        times, targets = batch_targets(
+            x0, v0, x1, v1, ints[:, 0], ints[:, 1], ints[:, 2], ints[:, 3], axes
+        )
+        chain = np.empty((len(times) + 1, n), dtype=np.int64)
+        chain[0] = axes.take(prev)
+        chain[1:] = targets
+        incs = (chain[1:] - chain[:-1]).tolist()
+        rows = targets.tolist()
+        if axes.contiguous:
+            pad = (0,) * (SLOTS - n)
+            spread = list(map(add, map(tuple, incs), repeat(pad)))
+        else:
+            spread = [_spread(row, axes.axis_slots) for row in incs]
+        time_list = times.tolist()
+        lo = 0
+        for segment in segments:
+            hi = lo + segment.count
+            segment.prev_before = prev
+            segment.targets = rows[lo:hi]
+            segment.entries = list(
+                map(
+                    tuple.__new__,
+                    repeat(Increment),
+                    zip(time_list[lo:hi], spread[lo:hi], repeat(segment.tool)),
+                )
+            )
+            prev = segment.target(segment.count - 1, axes)
+            lo = hi
+        self._chain_prev = prev
+
+
+def _spread(row: list[int], slots: tuple[int, ...]) -> tuple[int, ...]:
+    out = [0] * SLOTS
+    for value, slot in zip(row, slots, strict=True):
+        out[slot] = value
+    return tuple(out)

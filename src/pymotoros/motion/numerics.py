@@ -18,6 +18,10 @@ The operand order of each expression is the order the specification writes it; i
 extended precision it decides the last bit only in rare cases, in single precision
 more often, so it is kept everywhere. The functions here are the only place that
 knows about float modes; everything else calls them.
+
+Longdouble arithmetic is slow in numpy, so the x87 coefficients and positions are
+first computed in float64 and kept only where they provably round to the same float32
+as the x87 would (:func:`positions_x87_checked`); the rest goes through longdouble.
 """
 
 from __future__ import annotations
@@ -151,14 +155,14 @@ _COEF_CONSTANTS: dict[tuple[type, int], tuple[AnyArray, ...]] = {}
 
 
 def _constants(dtype: type, ndim: int) -> tuple[AnyArray, ...]:
-    """[6, −12], [2, 1], [2, 6], [−1, 1] and [½, 1] shaped to broadcast over (2, …, n)."""
+    """[6, −12], [2, 1], [2, 6] and [−1, 1] shaped to broadcast over (2, …, n)."""
     key = (dtype, ndim)
     found = _COEF_CONSTANTS.get(key)
     if found is None:
         shape = (2,) + (1,) * ndim
         found = tuple(
             np.array(pair, dtype=dtype).reshape(shape)
-            for pair in ((6, -12), (2, 1), (2, 6), (-1, 1), (0.5, 1))
+            for pair in ((6, -12), (2, 1), (2, 6), (-1, 1))
         )
         _COEF_CONSTANTS[key] = found
     return found
@@ -177,12 +181,18 @@ def coefficients_kernel(
     adding the exact negation, and 1·v0 is exact, so each element sees exactly the
     operations of its own formula.
     """
-    c_delta, c_v0, c_sum, c_sign, _ = _constants(rows.dtype.type, rows.ndim - 1)
+    c_delta, c_v0, c_sum, c_sign = _constants(rows.dtype.type, rows.ndim - 1)
     delta = rows[2] - rows[0]
     first = (delta * c_delta) / den_a
     second = ((rows[3] + c_v0 * rows[1]) * c_sum) / den_b
     out: F32Array = (first + second * c_sign).astype(np.float32)
     return out
+
+
+_LOW29: Final = (1 << 29) - 1
+_MID29: Final = 1 << 28
+RISK_FACTOR: Final = 33.0
+"""Safety factor of :func:`positions_x87_checked` (2⁵ from the error analysis, plus slack)."""
 
 
 def coefficients_x87_scalar(
@@ -226,11 +236,6 @@ def coefficients_x87_scalar(
     return list(f32_tuple(values, len(values)))
 
 
-def half_and_one(coef: F32Array) -> AnyArray:
-    """(a1/2, a2) in longdouble from stacked float32 coefficients (x87 positions)."""
-    return coef.astype(LD) * _constants(LD, coef.ndim - 1)[4]
-
-
 def positions_x87(
     x0: AnyArray, v0: AnyArray, h1: AnyArray, a2: AnyArray, lt: AnyArray, lt2: AnyArray
 ) -> F32Array:
@@ -246,12 +251,6 @@ def positions_x87(
     s += ((a2 * lt2) * lt) / 6
     out: F32Array = s.astype(np.float32)
     return out
-
-
-_LOW29: Final = (1 << 29) - 1
-_MID29: Final = 1 << 28
-RISK_FACTOR: Final = 33.0
-"""Safety factor of :func:`positions_x87_checked` (2⁵ from the error analysis, plus slack)."""
 
 
 def position_bound(
@@ -309,27 +308,6 @@ def positions_single(
     p = p + ((a1 * tau) * tau) / 2
     p = p + (((a2 * tau) * tau) * tau) / 6
     return p.astype(np.float32)
-
-
-def coefficients(
-    x0: F32Array, v0: F32Array, x1: F32Array, v1: F32Array, t: float, mode: FloatMode
-) -> tuple[F32Array, F32Array]:
-    """a1, a2 for one segment of length ``t`` (float32 s, > 0): :func:`coefficients_kernel`."""
-    if mode is FloatMode.X87_EXTENDED:
-        rows = np.array([x0, v0, x1, v1], dtype=LD)
-        et = LD(t)
-        tt = et * et
-        den_a = np.array([[tt], [tt * et]], dtype=LD)
-        den_b = np.array([[et], [tt]], dtype=LD)
-    else:
-        rows = np.array([x0, v0, x1, v1], dtype=np.float32)
-        t32 = np.float32(t)
-        tt32 = t32 * t32
-        den_a = np.array([[tt32], [tt32 * t32]], dtype=np.float32)
-        den_b = np.array([[t32], [tt32]], dtype=np.float32)
-    with np.errstate(all="ignore"):
-        coef = coefficients_kernel(rows, den_a, den_b, mode)
-    return coef[0], coef[1]
 
 
 def positions(

@@ -17,16 +17,11 @@ import numpy.typing as npt
 
 from pymotoros.models import FloatMode
 from pymotoros.motion.axes import GroupAxes, to_pulses
+from pymotoros.motion.batch import batch_targets
 from pymotoros.motion.checks import check_speed, check_start, check_time
 from pymotoros.motion.constants import INT32_MAX, MAX_POINT_TIME_S
 from pymotoros.motion.numerics import (
-    LD,
     c_int_array,
-    coefficients_kernel,
-    ms_to_seconds,
-    position_bound,
-    positions_single,
-    positions_x87_checked,
     pulses,
 )
 from pymotoros.motion.points import TrajPoint
@@ -134,46 +129,20 @@ def interpolate_arrays(
     ms_arr = np.array(ms, dtype=np.int64)
     s_idx = np.array(seg_start, dtype=np.intp)
     e_idx = np.array(seg_end, dtype=np.intp)
-    first_arr = np.array(seg_first, dtype=np.int64)
-    full_arr = np.array(seg_full, dtype=np.int64)
-    counts = full_arr + 1
-    total = int(counts.sum())
-    seg = np.repeat(np.arange(len(seg_start)), counts)
-    k = np.arange(total, dtype=np.int64) - np.repeat(np.cumsum(counts) - counts, counts)
-    final = k == full_arr[seg]
-    start_ms = ms_arr[s_idx]
-    step_ms = first_arr[seg] + period * k
-    time_ms = np.where(final, ms_arr[e_idx][seg], step_ms)
-
-    duration = ms_to_seconds(ms_arr[e_idx] - start_ms, mode)[:, None]
-    tau = ms_to_seconds(step_ms - start_ms[seg], mode)[:, None]
-    with np.errstate(all="ignore"):
-        if mode is FloatMode.X87_EXTENDED:
-            rows = np.stack((p32[s_idx], v32[s_idx], p32[e_idx], v32[e_idx])).astype(LD)
-            et = duration.astype(LD)
-            tt = et * et
-            coef = coefficients_kernel(rows, np.stack((tt, tt * et)), np.stack((et, tt)), mode)
-            x0 = p32[s_idx].astype(np.float64)
-            v0 = v32[s_idx].astype(np.float64)
-            h1 = coef[0].astype(np.float64) / 2
-            a2 = coef[1].astype(np.float64)
-            bound = position_bound(x0, v0, h1, a2, duration.astype(np.float64))
-            pos_steps = positions_x87_checked(
-                x0[seg], v0[seg], h1[seg], a2[seg], tau.astype(np.float64), bound[seg]
-            )
-        else:
-            rows32 = np.stack((p32[s_idx], v32[s_idx], p32[e_idx], v32[e_idx]))
-            tt32 = duration * duration
-            coef = coefficients_kernel(
-                rows32, np.stack((tt32, tt32 * duration)), np.stack((duration, tt32)), mode
-            )
-            pos_steps = positions_single(
-                rows32[0][seg], rows32[1][seg], coef[0][seg], coef[1][seg], tau
-            )
-    pos_steps[final] = p32[e_idx]
-    targets = pulses(pos_steps, axes.factors_ros, mode)[:, axes.columns]
-    chain = np.concatenate((targets0, targets))
-    increments = chain[1:] - chain[:-1]
+    time_ms, targets = batch_targets(
+        p32[s_idx],
+        v32[s_idx],
+        p32[e_idx],
+        v32[e_idx],
+        ms_arr[s_idx],
+        ms_arr[e_idx],
+        np.array(seg_first, dtype=np.int64),
+        np.array(seg_full, dtype=np.int64),
+        axes,
+    )
+    increments = np.empty_like(targets)
+    increments[0] = targets[0] - targets0[0]
+    np.subtract(targets[1:], targets[:-1], out=increments[1:])
     return time_ms.astype(np.int64, copy=False), increments
 
 

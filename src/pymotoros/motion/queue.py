@@ -1,10 +1,17 @@
-"""A group's increment queue (200 entries, §5.1–5.2) and its entries."""
+"""A group's increment queue (200 entries, §5.1–5.2) and its entries.
+
+The tick-by-tick engine queues a segment's entries before computing their pulses: it
+knows their number and times from the step grid alone. The pulses of every segment
+waiting in the queue are computed together, vectorised, when IncMove reaches them
+(:meth:`IncrementQueue.realise`). Counting, CHECK_QUEUE_CNT and the 200-entry limit
+see the same queue either way.
+"""
 
 from __future__ import annotations
 
 from collections import deque
-from collections.abc import Iterable, Iterator
-from typing import NamedTuple
+from collections.abc import Callable, Iterator
+from typing import NamedTuple, Protocol
 
 from pymotoros.motion.constants import QUEUE_SIZE, SLOTS
 
@@ -27,45 +34,82 @@ class Increment(NamedTuple):
 ZERO_PULSES: tuple[int, ...] = (0,) * SLOTS
 
 
+class LazyEntries(Protocol):
+    """A segment whose entries may not be computed yet."""
+
+    @property
+    def entries(self) -> list[Increment] | None: ...
+
+
 class IncrementQueue:
     """The bounded FIFO between AddToIncQueue and IncMove."""
 
-    __slots__ = ("_entries",)
+    __slots__ = ("_compute", "_entries", "_lazy", "_lazy_count")
 
-    def __init__(self) -> None:
+    def __init__(self, compute: Callable[[], None] | None = None) -> None:
         self._entries: deque[Increment] = deque()
+        self._lazy: deque[tuple[LazyEntries, int, int]] = deque()
+        self._lazy_count = 0
+        self._compute = compute
+        """Computes every segment with queued but uncomputed entries (set by the owner)."""
 
     def __len__(self) -> int:
-        return len(self._entries)
+        return len(self._entries) + self._lazy_count
 
     def __iter__(self) -> Iterator[Increment]:
+        self.realise()
         return iter(tuple(self._entries))
 
     @property
     def count(self) -> int:
         """Entries queued: what CHECK_QUEUE_CNT reports."""
-        return len(self._entries)
+        return len(self._entries) + self._lazy_count
 
     @property
     def room(self) -> int:
-        return QUEUE_SIZE - len(self._entries)
+        return QUEUE_SIZE - len(self)
 
     @property
     def full(self) -> bool:
-        return len(self._entries) >= QUEUE_SIZE
+        return len(self) >= QUEUE_SIZE
 
     def peek(self) -> Increment | None:
+        if not self._entries:
+            self.realise()
         return self._entries[0] if self._entries else None
 
     def pop(self) -> Increment:
         """The oldest entry; IndexError when empty."""
+        if not self._entries:
+            self.realise()
         return self._entries.popleft()
 
-    def extend(self, entries: Iterable[Increment]) -> None:
-        """Append entries; the caller respects :attr:`room`."""
-        self._entries.extend(entries)
-        if len(self._entries) > QUEUE_SIZE:
-            raise RuntimeError(f"increment queue over {QUEUE_SIZE} entries")
+    def add_lazy(self, segment: LazyEntries, start: int, stop: int) -> None:
+        """Append entries start … stop − 1 of a segment, computed later if need be."""
+        self._lazy.append((segment, start, stop))
+        self._lazy_count += stop - start
+        self._check()
+
+    def realise(self) -> None:
+        """Compute the pulses of every queued entry."""
+        if not self._lazy:
+            return
+        if self._compute is not None:
+            self._compute()
+        entries = self._entries
+        for segment, start, stop in self._lazy:
+            computed = segment.entries
+            if computed is None:
+                raise RuntimeError("a queued segment was not computed")
+            entries.extend(computed[start:stop])
+        self._lazy.clear()
+        self._lazy_count = 0
 
     def clear(self) -> None:
         self._entries.clear()
+        self._lazy.clear()
+        self._lazy_count = 0
+
+    def _check(self) -> None:
+        if len(self) > QUEUE_SIZE:
+            raise RuntimeError(f"increment queue over {QUEUE_SIZE} entries")

@@ -33,9 +33,8 @@ from pymotoros.motion.numerics import (
     coefficients_x87_scalar,
     f32,
     f32_tuple,
-    position_bound,
     positions_single,
-    positions_x87_checked,
+    positions_x87,
     pulse,
     pulses,
     velocities,
@@ -156,13 +155,14 @@ def compute_segment(
             else:
                 coef = np.array(fast, dtype=np.float32).reshape(2, n)
             if full:
-                # x0, v0, a1/2 and a2 in one float64 array (a1/2 is exact)
+                # x0, v0, a1/2 and a2 as one longdouble array (a1/2 is exact); for a
+                # few steps the longdouble kernel is cheaper than the checked float64
+                # one the offline engine uses (same results).
                 co = coef.tolist() if fast is None else [fast[:n], fast[n:]]
                 flat = [*x0, *v0, *(c / 2 for c in co[0]), *co[1]]
-                terms = np.array(flat, dtype=np.float64).reshape(4, n)
-                bound = position_bound(terms[0], terms[1], terms[2], terms[3], duration)
-                tau64 = np.array(taus, dtype=np.float64).reshape(full, 1)
-                pos = positions_x87_checked(terms[0], terms[1], terms[2], terms[3], tau64, bound)
+                terms = np.array(flat, dtype=np.float64).reshape(4, n).astype(LD)
+                lt = np.array(taus, dtype=np.float64).reshape(full, 1).astype(LD)
+                pos = positions_x87(terms[0], terms[1], terms[2], terms[3], lt, lt * lt)
         else:
             rows32 = np.array([*x0, *v0, *x1, *v1], dtype=np.float32).reshape(4, n)
             t32 = np.float32(duration)

@@ -14,9 +14,14 @@ exact body size; trimming surplus bytes the MotoROS way is the job of
 :mod:`pymotoros.protocol.sizes`.
 
 Decoding is on the hot path (the state stream is 40 Hz × groups × clients, and
-the client decodes every frame), so ``unpack`` builds instances without running
-``__post_init__``: the ``struct`` format already guarantees every shape that
-validation would check. Layouts: reference §1.3 and §1.4.
+the client decodes every frame). Each message is therefore a ``NamedTuple``
+underneath, behind a :class:`Message` mixin: ``unpack`` builds it with one
+``tuple.__new__`` and no validation (the ``struct`` format already guarantees
+every shape that validation would check). Measured on JOINT_FEEDBACK, a frozen
+slotted dataclass filled slot by slot decoded about 40 % slower; see
+docs/benchmarks.md. The mixin makes equality typed (``Ping() != PingReply()``,
+a message never equals a plain tuple) and every message truthy.
+Layouts: reference §1.3 and §1.4.
 """
 
 from __future__ import annotations
@@ -25,7 +30,7 @@ import enum
 import struct
 from collections.abc import Callable, Iterable, Sequence
 from dataclasses import dataclass, field
-from typing import Any, ClassVar, Final, NamedTuple, Self, TypeAlias, TypeVar
+from typing import TYPE_CHECKING, Any, ClassVar, Final, NamedTuple, Self, TypeAlias, cast
 
 from pymotoros.errors import LocalProtocolError, RemoteProtocolError
 from pymotoros.protocol.constants import (
@@ -129,8 +134,8 @@ class _Kind(enum.Enum):
 
 _I32, _U32, _F32, _JOINTS = _Kind.I32, _Kind.U32, _Kind.F32, _Kind.JOINTS
 
-_Setter: TypeAlias = Callable[[object, object], None]
-_M = TypeVar("_M", bound="Message")
+_tnew: Final[Callable[..., Any]] = tuple.__new__
+"""Builds a message from its field values without validation (decode path only)."""
 
 
 def _structs(body_format: str) -> tuple[struct.Struct, struct.Struct]:
@@ -181,11 +186,13 @@ def _pad_joints(owner: str, name: str, values: Iterable[float] | None) -> tuple[
 
 
 class Message:
-    """Base of every typed message body.
+    """Mixin of every typed message body (put it *first* in the bases).
 
-    Subclasses are frozen, slotted dataclasses that declare ``MSG_TYPE``, ``ROLE``
-    and ``FIELDS`` (name and wire kind of each field, in wire order). Fixed-size
-    bodies get ``pack``/``unpack`` from here; variable ones override them.
+    A message class is ``class X(Message, _XFields)`` where ``_XFields`` is a
+    ``NamedTuple`` of the body's fields in wire order; ``X`` declares
+    ``MSG_TYPE``, ``ROLE`` and ``FIELDS`` (name and wire kind of each field).
+    Construction validates (``LocalProtocolError``) and turns joint lists into
+    tuples; fixed-size bodies get ``pack``/``unpack`` from here.
     """
 
     __slots__ = ()
@@ -199,31 +206,56 @@ class Message:
     """True for IO replies: their header says FAILURE when ``result_code`` is non-zero."""
 
     _STRUCTS: ClassVar[tuple[struct.Struct, struct.Struct]]
-    _SETTERS: ClassVar[tuple[_Setter, ...]] = ()
+    _FLAT: ClassVar[bool] = True
+    """No array field: the struct's values are the tuple's values."""
 
-    def __post_init__(self) -> None:
-        owner = type(self).__name__
-        for name, kind in self.FIELDS:
-            value = getattr(self, name)
+    if not TYPE_CHECKING:  # mypy keeps the typed NamedTuple constructor
+
+        def __new__(cls, *args, **kwargs):
+            return cls._validated(super().__new__(cls, *args, **kwargs))
+
+    @classmethod
+    def _validated(cls, message: Self) -> Self:
+        """Check every field; return the message with joint arrays as tuples."""
+        owner = cls.__name__
+        values = list(cast(tuple[Any, ...], message))
+        changed = False
+        for index, (name, kind) in enumerate(cls.FIELDS):
+            value = values[index]
             if kind is _JOINTS:
-                values = tuple(value)
-                if len(values) != MAX_JOINTS:
+                joints = tuple(value)
+                if len(joints) != MAX_JOINTS:
                     raise LocalProtocolError(
-                        f"{owner}.{name} has {len(values)} values; the wire carries exactly "
+                        f"{owner}.{name} has {len(joints)} values; the wire carries exactly "
                         f"{MAX_JOINTS} (use for_joints() to pad)"
                     )
-                for index, item in enumerate(values):
-                    _check_float(owner, f"{name}[{index}]", item)
-                object.__setattr__(self, name, values)
+                for slot, item in enumerate(joints):
+                    _check_float(owner, f"{name}[{slot}]", item)
+                if joints is not value:
+                    values[index] = joints
+                    changed = True
             elif kind is _F32:
                 _check_float(owner, name, value)
             else:
                 _check_int(owner, name, value, kind)
+        return cast(Self, _tnew(cls, values)) if changed else message
+
+    def __eq__(self, other: object) -> bool:
+        return type(self) is type(other) and tuple.__eq__(cast(tuple[Any, ...], self), other)
+
+    def __ne__(self, other: object) -> bool:
+        return not self == other
+
+    def __hash__(self) -> int:
+        return tuple.__hash__(cast(tuple[Any, ...], self))
+
+    def __bool__(self) -> bool:
+        """A message is a message, even with an empty body (tuples would say False)."""
+        return True
 
     def _flat(self) -> list[Any]:
         flat: list[Any] = []
-        for name, kind in self.FIELDS:
-            value = getattr(self, name)
+        for (_name, kind), value in zip(self.FIELDS, cast(tuple[Any, ...], self), strict=True):
             if kind is _JOINTS:
                 flat.extend(value)
             else:
@@ -232,7 +264,13 @@ class Message:
 
     def pack(self, order: ByteOrder) -> bytes:
         """The body bytes in ``order`` (no prefix, no header)."""
-        return _pick(self._STRUCTS, order).pack(*self._flat())
+        layout = _pick(self._STRUCTS, order)
+        try:
+            if self._FLAT:
+                return layout.pack(*cast(tuple[Any, ...], self))
+            return layout.pack(*self._flat())
+        except (struct.error, OverflowError, TypeError) as exc:  # only after _replace()
+            raise LocalProtocolError(f"cannot pack {self!r}: {exc}") from None
 
     @classmethod
     def unpack(cls, body: bytes, order: ByteOrder) -> Self:
@@ -241,6 +279,8 @@ class Message:
         if len(body) != layout.size:
             raise _size_error(cls, body, layout.size)
         raw = layout.unpack(body)
+        if cls._FLAT:
+            return cast(Self, _tnew(cls, raw))
         values: list[object] = []
         index = 0
         for _name, kind in cls.FIELDS:
@@ -250,75 +290,39 @@ class Message:
             else:
                 values.append(raw[index])
                 index += 1
-        return cls._trusted(values)
+        return cast(Self, _tnew(cls, values))
 
     @classmethod
-    def _trusted(cls, values: Sequence[object]) -> Self:
-        """Build without validation: only for values that came out of ``struct``."""
-        obj = object.__new__(cls)
-        for setter, value in zip(cls._SETTERS, values, strict=True):
-            setter(obj, value)
-        return obj
+    def unpack_from(cls, buffer: bytes, start: int, end: int, order: ByteOrder) -> Self:
+        """``unpack(buffer[start:end])``; hot types override it to skip the slice copy."""
+        return cls.unpack(buffer[start:end], order)
 
 
-def _slot_setters(cls: type, *names: str) -> tuple[_Setter, ...]:
-    """The slot descriptors' ``__set__``: they write a frozen instance without ``__setattr__``."""
-    return tuple(getattr(cls, name).__set__ for name in names)
-
-
-def _register(cls: type[_M]) -> type[_M]:
-    """Derive the Structs and slot setters of a fixed-layout message class."""
+def _register(cls: type[Message]) -> None:
+    """Derive the Structs of a fixed-layout message class from its ``FIELDS``."""
     cls._STRUCTS = _structs("".join(kind.value for _name, kind in cls.FIELDS))
     cls.BODY_SIZE = cls._STRUCTS[0].size
-    cls._SETTERS = _slot_setters(cls, *(name for name, _kind in cls.FIELDS))
-    return cls
+    cls._FLAT = all(kind is not _JOINTS for _name, kind in cls.FIELDS)
 
 
-# --------------------------------------------------------------------------- ping
+# --------------------------------------------------------------------------- field tuples
+# The NamedTuples below only hold fields; messages sharing a layout share one.
 
 
-@_register
-@dataclass(frozen=True, slots=True)
-class Ping(Message):
-    """PING request (type 1, empty body); MotoROS answers with an empty PING reply."""
+class DhLink(NamedTuple):
+    """Denavit–Hartenberg parameters of one link, as MotoROS reports them."""
 
-    MSG_TYPE: ClassVar[MsgType] = MsgType.PING
-    ROLE: ClassVar[Role] = Role.REQUEST
-
-
-@_register
-@dataclass(frozen=True, slots=True)
-class PingReply(Message):
-    """The PING reply: same type 1, comm SERVICE_REPLY, reply SUCCESS, empty body."""
-
-    MSG_TYPE: ClassVar[MsgType] = MsgType.PING
-    ROLE: ClassVar[Role] = Role.REPLY
+    theta: float
+    d: float
+    a: float
+    alpha: float
 
 
-# --------------------------------------------------------------------------- state topics
+class _NoFields(NamedTuple):
+    pass
 
 
-@_register
-@dataclass(frozen=True, slots=True)
-class RobotStatus(Message):
-    """ROBOT_STATUS (13): seven int32 status fields, sent every state cycle (§2.6).
-
-    Tri-state fields are 1/0 (-1 "unknown" only for a rare ``in_motion``);
-    ``mode`` is 1 (manual/teach) or 2 (auto/play).
-    """
-
-    MSG_TYPE: ClassVar[MsgType] = MsgType.ROBOT_STATUS
-    ROLE: ClassVar[Role] = Role.TOPIC
-    FIELDS: ClassVar[tuple[tuple[str, _Kind], ...]] = (
-        ("drives_powered", _I32),
-        ("e_stopped", _I32),
-        ("error_code", _I32),
-        ("in_error", _I32),
-        ("in_motion", _I32),
-        ("mode", _I32),
-        ("motion_possible", _I32),
-    )
-
+class _Status(NamedTuple):
     drives_powered: int
     e_stopped: int
     error_code: int
@@ -326,6 +330,134 @@ class RobotStatus(Message):
     in_motion: int
     mode: int
     motion_possible: int
+
+
+class _GroupRecord(NamedTuple):
+    group_no: int
+    valid_fields: int
+    time: float
+    pos: tuple[float, ...]
+    vel: tuple[float, ...]
+    acc: tuple[float, ...] = ZERO_JOINTS
+
+
+class _Point(NamedTuple):
+    group_no: int
+    sequence: int
+    valid_fields: int
+    time: float
+    pos: tuple[float, ...]
+    vel: tuple[float, ...]
+    acc: tuple[float, ...] = ZERO_JOINTS
+
+
+class _Ctrl(NamedTuple):
+    group_no: int
+    sequence: int
+    command: int
+    data: tuple[float, ...] = ZERO_JOINTS
+
+
+class _Reply(NamedTuple):
+    group_no: int
+    sequence: int
+    command: int
+    result: int
+    subcode: int
+    data: tuple[float, ...] = ZERO_JOINTS
+
+
+class _Tool(NamedTuple):
+    group_no: int
+    tool: int
+    sequence: int
+
+
+class _Address(NamedTuple):
+    io_address: int
+
+
+class _AddressValue(NamedTuple):
+    io_address: int
+    io_value: int
+
+
+class _ValueResult(NamedTuple):
+    value: int
+    result_code: int
+
+
+class _Result(NamedTuple):
+    result_code: int
+
+
+class _Register(NamedTuple):
+    register_number: int
+
+
+class _RegisterValue(NamedTuple):
+    register_number: int
+    value: int
+
+
+class _ErrorReply(NamedTuple):
+    result: int
+    subcode: int
+
+
+class _Dh(NamedTuple):
+    groups: tuple[tuple[DhLink, ...], ...]
+
+
+class _FullEx(NamedTuple):
+    number_of_valid_groups: int
+    sequence: int
+    groups: tuple[JointTrajPtExData, ...]
+
+
+class _FeedbackEx(NamedTuple):
+    number_of_valid_groups: int
+    groups: tuple[JointFeedback, ...]
+
+
+_I32_FIELDS_ERROR: Final = (("result", _I32), ("subcode", _I32))
+
+
+# --------------------------------------------------------------------------- ping
+
+
+class Ping(Message, _NoFields):
+    """PING request (type 1, empty body); MotoROS answers with an empty PING reply."""
+
+    __slots__ = ()
+    MSG_TYPE: ClassVar[MsgType] = MsgType.PING
+    ROLE: ClassVar[Role] = Role.REQUEST
+
+
+class PingReply(Message, _NoFields):
+    """The PING reply: same type 1, comm SERVICE_REPLY, reply SUCCESS, empty body."""
+
+    __slots__ = ()
+    MSG_TYPE: ClassVar[MsgType] = MsgType.PING
+    ROLE: ClassVar[Role] = Role.REPLY
+
+
+# --------------------------------------------------------------------------- state topics
+
+
+class RobotStatus(Message, _Status):
+    """ROBOT_STATUS (13): seven int32 status fields, sent every state cycle (§2.6).
+
+    Tri-state fields are 1/0 (-1 "unknown" only for a rare ``in_motion``);
+    ``mode`` is 1 (manual/teach) or 2 (auto/play).
+    """
+
+    __slots__ = ()
+    MSG_TYPE: ClassVar[MsgType] = MsgType.ROBOT_STATUS
+    ROLE: ClassVar[Role] = Role.TOPIC
+    FIELDS: ClassVar[tuple[tuple[str, _Kind], ...]] = tuple(
+        (name, _I32) for name in _Status._fields
+    )
 
 
 _GROUP_RECORD_FIELDS: Final[tuple[tuple[str, _Kind], ...]] = (
@@ -337,10 +469,13 @@ _GROUP_RECORD_FIELDS: Final[tuple[tuple[str, _Kind], ...]] = (
     ("acc", _JOINTS),
 )
 
+_RECORD_POS_AT: Final = 12
+_RECORD_VEL_AT: Final = 52
+_RECORD_ACC_AT: Final = 92
+"""Offsets of pos, vel and acc in the 132-byte group record (§1.4)."""
 
-@_register
-@dataclass(frozen=True, slots=True)
-class JointFeedback(Message):
+
+class JointFeedback(Message, _GroupRecord):
     """JOINT_FEEDBACK (15): one group's feedback position (rad or m) and speed.
 
     MotoROS sends ``valid_fields`` 6 (position + velocity), ``time`` 0.0 and ``acc``
@@ -348,20 +483,10 @@ class JointFeedback(Message):
     The same 132-byte layout is one slot of JOINT_FEEDBACK_EX.
     """
 
+    __slots__ = ()
     MSG_TYPE: ClassVar[MsgType] = MsgType.JOINT_FEEDBACK
     ROLE: ClassVar[Role] = Role.TOPIC
     FIELDS: ClassVar[tuple[tuple[str, _Kind], ...]] = _GROUP_RECORD_FIELDS
-
-    group_no: int
-    valid_fields: int
-    time: float
-    """s; always 0.0 from MotoROS."""
-    pos: tuple[float, ...]
-    """rad (rotary) or m (linear), 10 slots."""
-    vel: tuple[float, ...]
-    """rad/s or m/s, 10 slots."""
-    acc: tuple[float, ...] = ZERO_JOINTS
-    """Always zero from MotoROS."""
 
     @classmethod
     def for_joints(
@@ -393,55 +518,53 @@ class JointFeedback(Message):
 
     @classmethod
     def unpack(cls, body: bytes, order: ByteOrder) -> Self:
-        """Hot path of the state stream: hand-unrolled, no validation (see module doc)."""
-        if len(body) != BODY_SIZE_GROUP_RECORD:
-            raise _size_error(cls, body, BODY_SIZE_GROUP_RECORD)
-        v = (_FEEDBACK_BE if order == ">" else _FEEDBACK_LE).unpack(body)
-        obj = _new(cls)
-        _fb_group_no(obj, v[0])
-        _fb_valid_fields(obj, v[1])
-        _fb_time(obj, v[2])
-        _fb_pos(obj, v[3:13])
-        _fb_vel(obj, v[13:23])
-        _fb_acc(obj, v[23:33])
-        return obj
+        return cls.unpack_from(body, 0, len(body), order)
 
-    def pack(self, order: ByteOrder) -> bytes:
-        return (_FEEDBACK_BE if order == ">" else _FEEDBACK_LE).pack(
-            self.group_no, self.valid_fields, self.time, *self.pos, *self.vel, *self.acc
+    @classmethod
+    def unpack_from(cls, buffer: bytes, start: int, end: int, order: ByteOrder) -> Self:
+        """Hot path of the state stream: hand-unrolled, no validation (see module doc).
+
+        Three 10-float unpacks are cheaper than one 33-value unpack plus slicing.
+        """
+        if end - start != BODY_SIZE_GROUP_RECORD:
+            raise _size_error(cls, buffer[start:end], BODY_SIZE_GROUP_RECORD)
+        if order == ">":
+            head, joints = _RECORD_HEAD_BE, _JOINTS_BE
+        else:
+            head, joints = _RECORD_HEAD_LE, _JOINTS_LE
+        group_no, valid_fields, time = head.unpack_from(buffer, start)
+        return cast(
+            Self,
+            _tnew(
+                cls,
+                (
+                    group_no,
+                    valid_fields,
+                    time,
+                    joints.unpack_from(buffer, start + _RECORD_POS_AT),
+                    joints.unpack_from(buffer, start + _RECORD_VEL_AT),
+                    joints.unpack_from(buffer, start + _RECORD_ACC_AT),
+                ),
+            ),
         )
 
 
-_new: Final = object.__new__
-_FEEDBACK_LE, _FEEDBACK_BE = JointFeedback._STRUCTS
-_fb_group_no: Final[_Setter] = JointFeedback._SETTERS[0]
-_fb_valid_fields: Final[_Setter] = JointFeedback._SETTERS[1]
-_fb_time: Final[_Setter] = JointFeedback._SETTERS[2]
-_fb_pos: Final[_Setter] = JointFeedback._SETTERS[3]
-_fb_vel: Final[_Setter] = JointFeedback._SETTERS[4]
-_fb_acc: Final[_Setter] = JointFeedback._SETTERS[5]
+_register(JointFeedback)
+_RECORD_HEAD_LE, _RECORD_HEAD_BE = _structs("iif")  # groupNo, validFields, time
+_JOINTS_LE, _JOINTS_BE = _structs(_JOINTS.value)
 
 
-@_register
-@dataclass(frozen=True, slots=True)
-class JointTrajPtExData(Message):
+class JointTrajPtExData(Message, _GroupRecord):
     """One group's record inside JOINT_TRAJ_PT_FULL_EX: a point without its own sequence.
 
     Not a message on its own (``MSG_TYPE`` is that of the carrying FULL_EX); the
     layout is the 132-byte group record of §1.4.
     """
 
+    __slots__ = ()
     MSG_TYPE: ClassVar[MsgType] = MsgType.MOTO_JOINT_TRAJ_PT_FULL_EX
     ROLE: ClassVar[Role] = Role.REQUEST
     FIELDS: ClassVar[tuple[tuple[str, _Kind], ...]] = _GROUP_RECORD_FIELDS
-
-    group_no: int
-    valid_fields: int
-    time: float
-    """s from trajectory start."""
-    pos: tuple[float, ...]
-    vel: tuple[float, ...]
-    acc: tuple[float, ...] = ZERO_JOINTS
 
     @classmethod
     def for_joints(
@@ -468,6 +591,9 @@ class JointTrajPtExData(Message):
         )
 
 
+_register(JointTrajPtExData)
+
+
 def _point_flags(acc: object) -> int:
     flags = ValidFields.TIME | ValidFields.POSITION | ValidFields.VELOCITY
     return int(flags | ValidFields.ACCELERATION if acc is not None else flags)
@@ -475,16 +601,21 @@ def _point_flags(acc: object) -> int:
 
 # --------------------------------------------------------------------------- motion requests
 
+_POINT_POS_AT: Final = 16
+_POINT_VEL_AT: Final = 56
+_POINT_ACC_AT: Final = 96
+"""Offsets of pos, vel and acc in the JOINT_TRAJ_PT_FULL body (§1.4)."""
 
-@_register
-@dataclass(frozen=True, slots=True)
-class JointTrajPtFull(Message):
+
+class JointTrajPtFull(Message, _Point):
     """JOINT_TRAJ_PT_FULL (14): one trajectory point for one group (§3.4).
 
     MotoROS needs ``valid_fields`` to contain TIME, POSITION and VELOCITY (else
-    3015) and ignores ``acc``. Arrays are in ROS joint order.
+    3015) and ignores ``acc``. Arrays are in ROS joint order (rad or m, rad/s or
+    m/s); ``time`` is seconds from the trajectory start.
     """
 
+    __slots__ = ()
     MSG_TYPE: ClassVar[MsgType] = MsgType.JOINT_TRAJ_PT_FULL
     ROLE: ClassVar[Role] = Role.REQUEST
     FIELDS: ClassVar[tuple[tuple[str, _Kind], ...]] = (
@@ -496,18 +627,6 @@ class JointTrajPtFull(Message):
         ("vel", _JOINTS),
         ("acc", _JOINTS),
     )
-
-    group_no: int
-    sequence: int
-    valid_fields: int
-    time: float
-    """s from trajectory start."""
-    pos: tuple[float, ...]
-    """rad or m, 10 slots."""
-    vel: tuple[float, ...]
-    """rad/s or m/s, 10 slots."""
-    acc: tuple[float, ...] = ZERO_JOINTS
-    """Ignored by MotoROS."""
 
     @classmethod
     def for_joints(
@@ -537,53 +656,47 @@ class JointTrajPtFull(Message):
 
     @classmethod
     def unpack(cls, body: bytes, order: ByteOrder) -> Self:
-        """Hot path of the motion server: hand-unrolled, no validation (see module doc)."""
-        if len(body) != BODY_SIZE_TRAJ_PT_FULL:
-            raise _size_error(cls, body, BODY_SIZE_TRAJ_PT_FULL)
-        v = (_POINT_BE if order == ">" else _POINT_LE).unpack(body)
-        obj = _new(cls)
-        _pt_group_no(obj, v[0])
-        _pt_sequence(obj, v[1])
-        _pt_valid_fields(obj, v[2])
-        _pt_time(obj, v[3])
-        _pt_pos(obj, v[4:14])
-        _pt_vel(obj, v[14:24])
-        _pt_acc(obj, v[24:34])
-        return obj
+        return cls.unpack_from(body, 0, len(body), order)
 
-    def pack(self, order: ByteOrder) -> bytes:
-        return (_POINT_BE if order == ">" else _POINT_LE).pack(
-            self.group_no,
-            self.sequence,
-            self.valid_fields,
-            self.time,
-            *self.pos,
-            *self.vel,
-            *self.acc,
+    @classmethod
+    def unpack_from(cls, buffer: bytes, start: int, end: int, order: ByteOrder) -> Self:
+        """Hot path of the motion server: hand-unrolled, no validation (see module doc)."""
+        if end - start != BODY_SIZE_TRAJ_PT_FULL:
+            raise _size_error(cls, buffer[start:end], BODY_SIZE_TRAJ_PT_FULL)
+        if order == ">":
+            head, joints = _POINT_HEAD_BE, _JOINTS_BE
+        else:
+            head, joints = _POINT_HEAD_LE, _JOINTS_LE
+        group_no, sequence, valid_fields, time = head.unpack_from(buffer, start)
+        return cast(
+            Self,
+            _tnew(
+                cls,
+                (
+                    group_no,
+                    sequence,
+                    valid_fields,
+                    time,
+                    joints.unpack_from(buffer, start + _POINT_POS_AT),
+                    joints.unpack_from(buffer, start + _POINT_VEL_AT),
+                    joints.unpack_from(buffer, start + _POINT_ACC_AT),
+                ),
+            ),
         )
 
 
-_POINT_LE, _POINT_BE = JointTrajPtFull._STRUCTS
-(
-    _pt_group_no,
-    _pt_sequence,
-    _pt_valid_fields,
-    _pt_time,
-    _pt_pos,
-    _pt_vel,
-    _pt_acc,
-) = JointTrajPtFull._SETTERS
+_register(JointTrajPtFull)
+_POINT_HEAD_LE, _POINT_HEAD_BE = _structs("iiif")  # groupNo, sequence, validFields, time
 
 
-@_register
-@dataclass(frozen=True, slots=True)
-class MotoMotionCtrl(Message):
+class MotoMotionCtrl(Message, _Ctrl):
     """MOTO_MOTION_CTRL (2001): a motion command (:class:`MotionCommand`) for a group.
 
     ``data`` is ignored by MotoROS; ``command`` stays an int so that an unknown
     code can be decoded and answered.
     """
 
+    __slots__ = ()
     MSG_TYPE: ClassVar[MsgType] = MsgType.MOTO_MOTION_CTRL
     ROLE: ClassVar[Role] = Role.REQUEST
     FIELDS: ClassVar[tuple[tuple[str, _Kind], ...]] = (
@@ -593,15 +706,11 @@ class MotoMotionCtrl(Message):
         ("data", _JOINTS),
     )
 
-    group_no: int
-    sequence: int
-    command: int
-    data: tuple[float, ...] = ZERO_JOINTS
+
+_register(MotoMotionCtrl)
 
 
-@_register
-@dataclass(frozen=True, slots=True)
-class MotoMotionReply(Message):
+class MotoMotionReply(Message, _Reply):
     """MOTO_MOTION_REPLY (2002): the answer to every motion-port request.
 
     ``command`` echoes the request's command (MOTION_CTRL) or its msg_type; the
@@ -609,6 +718,7 @@ class MotoMotionReply(Message):
     For CHECK_QUEUE_CNT the count travels in ``subcode``.
     """
 
+    __slots__ = ()
     MSG_TYPE: ClassVar[MsgType] = MsgType.MOTO_MOTION_REPLY
     ROLE: ClassVar[Role] = Role.REPLY
     FIELDS: ClassVar[tuple[tuple[str, _Kind], ...]] = (
@@ -620,19 +730,14 @@ class MotoMotionReply(Message):
         ("data", _JOINTS),
     )
 
-    group_no: int
-    sequence: int
-    command: int
-    result: int
-    subcode: int
-    data: tuple[float, ...] = ZERO_JOINTS
+
+_register(MotoMotionReply)
 
 
-@_register
-@dataclass(frozen=True, slots=True)
-class MotoSelectTool(Message):
+class MotoSelectTool(Message, _Tool):
     """MOTO_SELECT_TOOL (2018). Field order on the wire is groupNo, tool, sequence."""
 
+    __slots__ = ()
     MSG_TYPE: ClassVar[MsgType] = MsgType.MOTO_SELECT_TOOL
     ROLE: ClassVar[Role] = Role.REQUEST
     FIELDS: ClassVar[tuple[tuple[str, _Kind], ...]] = (
@@ -641,50 +746,42 @@ class MotoSelectTool(Message):
         ("sequence", _I32),
     )
 
-    group_no: int
-    tool: int
-    sequence: int
+
+_register(MotoSelectTool)
 
 
-@_register
-@dataclass(frozen=True, slots=True)
-class MotoGetDhParameters(Message):
+class MotoGetDhParameters(Message, _NoFields):
     """MOTO_GET_DH_PARAMETERS (2020) request: empty body."""
 
+    __slots__ = ()
     MSG_TYPE: ClassVar[MsgType] = MsgType.MOTO_GET_DH_PARAMETERS
     ROLE: ClassVar[Role] = Role.REQUEST
 
 
-class DhLink(NamedTuple):
-    """Denavit–Hartenberg parameters of one link, as MotoROS reports them."""
-
-    theta: float
-    d: float
-    a: float
-    alpha: float
+_cls: type[Message]
+for _cls in (Ping, PingReply, RobotStatus, MotoGetDhParameters):
+    _register(_cls)
 
 
 _ZERO_LINK: Final = DhLink(0.0, 0.0, 0.0, 0.0)
 _FLOATS_PER_LINK: Final = 4
 
 
-@_register
-@dataclass(frozen=True, slots=True)
-class MotoGetDhParametersReply(Message):
+class MotoGetDhParametersReply(Message, _Dh):
     """The GET_DH_PARAMETERS reply (type 2020 again): 4 groups × 8 links, always.
 
     Groups the controller does not have are all zero (§1.4).
     """
 
+    __slots__ = ()
     MSG_TYPE: ClassVar[MsgType] = MsgType.MOTO_GET_DH_PARAMETERS
     ROLE: ClassVar[Role] = Role.REPLY
-    FIELDS: ClassVar[tuple[tuple[str, _Kind], ...]] = ()
+    BODY_SIZE: ClassVar[int] = BODY_SIZE_DH_REPLY
 
-    groups: tuple[tuple[DhLink, ...], ...]
-
-    def __post_init__(self) -> None:
-        owner = type(self).__name__
-        groups = tuple(self.groups)
+    @classmethod
+    def _validated(cls, message: Self) -> Self:
+        owner = cls.__name__
+        groups = tuple(message.groups)
         if len(groups) != MAX_GROUPS:
             raise LocalProtocolError(
                 f"{owner}: {len(groups)} groups, the wire carries exactly {MAX_GROUPS} "
@@ -701,7 +798,7 @@ class MotoGetDhParametersReply(Message):
                 for name, value in zip(DhLink._fields, link, strict=True):
                     _check_float(owner, f"groups[{g}][{k}].{name}", value)
             checked.append(row)
-        object.__setattr__(self, "groups", tuple(checked))
+        return cast(Self, _tnew(cls, (tuple(checked),)))
 
     @classmethod
     def for_groups(cls, groups: Iterable[Iterable[Sequence[float]]]) -> Self:
@@ -730,12 +827,10 @@ class MotoGetDhParametersReply(Message):
             )
             for base in range(0, MAX_GROUPS * per_group, per_group)
         )
-        return cls._trusted((groups,))
+        return cast(Self, _tnew(cls, (groups,)))
 
 
 _DH_STRUCTS: Final = _structs(f"{MAX_GROUPS * MAX_DH_LINKS * _FLOATS_PER_LINK}f")
-MotoGetDhParametersReply.BODY_SIZE = BODY_SIZE_DH_REPLY
-MotoGetDhParametersReply._SETTERS = _slot_setters(MotoGetDhParametersReply, "groups")
 
 
 # --------------------------------------------------------------------------- multi-group
@@ -746,8 +841,18 @@ def _group_count(n: int) -> int:
     return min(max(n, 0), MAX_GROUPS)
 
 
-@dataclass(frozen=True, slots=True)
-class MotoJointTrajPtFullEx(Message):
+def _check_records(owner: str, n: int, groups: tuple[object, ...], kind: type) -> None:
+    _check_int(owner, "number_of_valid_groups", n, _I32)
+    if len(groups) != _group_count(n):
+        raise LocalProtocolError(
+            f"{owner}: number_of_valid_groups {n} needs {_group_count(n)} records, "
+            f"got {len(groups)}"
+        )
+    if not all(isinstance(g, kind) for g in groups):
+        raise LocalProtocolError(f"{owner}.groups must hold {kind.__name__} records")
+
+
+class MotoJointTrajPtFullEx(Message, _FullEx):
     """MOTO_JOINT_TRAJ_PT_FULL_EX (2016): one point for several groups, one sequence.
 
     The body is 8 + 132·n bytes. ``number_of_valid_groups`` is kept as sent
@@ -755,27 +860,18 @@ class MotoJointTrajPtFullEx(Message):
     ``clamp(n, 0, 4)`` records. Use :meth:`for_groups` to set n from the records.
     """
 
+    __slots__ = ()
     MSG_TYPE: ClassVar[MsgType] = MsgType.MOTO_JOINT_TRAJ_PT_FULL_EX
     ROLE: ClassVar[Role] = Role.REQUEST
     BODY_SIZE: ClassVar[int] = BODY_SIZE_FULL_EX_HEAD
 
-    number_of_valid_groups: int
-    sequence: int
-    groups: tuple[JointTrajPtExData, ...]
-
-    def __post_init__(self) -> None:
-        owner = type(self).__name__
-        _check_int(owner, "number_of_valid_groups", self.number_of_valid_groups, _I32)
-        _check_int(owner, "sequence", self.sequence, _I32)
-        groups = tuple(self.groups)
-        if len(groups) != _group_count(self.number_of_valid_groups):
-            raise LocalProtocolError(
-                f"{owner}: number_of_valid_groups {self.number_of_valid_groups} needs "
-                f"{_group_count(self.number_of_valid_groups)} records, got {len(groups)}"
-            )
-        if not all(isinstance(g, JointTrajPtExData) for g in groups):
-            raise LocalProtocolError(f"{owner}.groups must hold JointTrajPtExData records")
-        object.__setattr__(self, "groups", groups)
+    @classmethod
+    def _validated(cls, message: Self) -> Self:
+        owner = cls.__name__
+        groups = tuple(message.groups)
+        _check_records(owner, message.number_of_valid_groups, groups, JointTrajPtExData)
+        _check_int(owner, "sequence", message.sequence, _I32)
+        return cast(Self, _tnew(cls, (message.number_of_valid_groups, message.sequence, groups)))
 
     @classmethod
     def for_groups(cls, sequence: int, groups: Iterable[JointTrajPtExData]) -> Self:
@@ -804,42 +900,29 @@ class MotoJointTrajPtFullEx(Message):
             JointTrajPtExData.unpack(body[start : start + BODY_SIZE_GROUP_RECORD], order)
             for start in range(head.size, expected, BODY_SIZE_GROUP_RECORD)
         )
-        return cls._trusted((n, sequence, records))
+        return cast(Self, _tnew(cls, (n, sequence, records)))
 
 
 _EX_HEAD_STRUCTS: Final = _structs("ii")
-MotoJointTrajPtFullEx._SETTERS = _slot_setters(
-    MotoJointTrajPtFullEx, "number_of_valid_groups", "sequence", "groups"
-)
 
 
-@dataclass(frozen=True, slots=True)
-class MotoJointFeedbackEx(Message):
+class MotoJointFeedbackEx(Message, _FeedbackEx):
     """MOTO_JOINT_FEEDBACK_EX (2017): every group's feedback in one message.
 
     Always 4 slots on the wire (532-byte body); slots past ``groups`` are zero.
     ``groups`` holds ``clamp(n, 0, 4)`` :class:`JointFeedback` records.
     """
 
+    __slots__ = ()
     MSG_TYPE: ClassVar[MsgType] = MsgType.MOTO_JOINT_FEEDBACK_EX
     ROLE: ClassVar[Role] = Role.TOPIC
     BODY_SIZE: ClassVar[int] = BODY_SIZE_FEEDBACK_EX
 
-    number_of_valid_groups: int
-    groups: tuple[JointFeedback, ...]
-
-    def __post_init__(self) -> None:
-        owner = type(self).__name__
-        _check_int(owner, "number_of_valid_groups", self.number_of_valid_groups, _I32)
-        groups = tuple(self.groups)
-        if len(groups) != _group_count(self.number_of_valid_groups):
-            raise LocalProtocolError(
-                f"{owner}: number_of_valid_groups {self.number_of_valid_groups} needs "
-                f"{_group_count(self.number_of_valid_groups)} records, got {len(groups)}"
-            )
-        if not all(isinstance(g, JointFeedback) for g in groups):
-            raise LocalProtocolError(f"{owner}.groups must hold JointFeedback records")
-        object.__setattr__(self, "groups", groups)
+    @classmethod
+    def _validated(cls, message: Self) -> Self:
+        groups = tuple(message.groups)
+        _check_records(cls.__name__, message.number_of_valid_groups, groups, JointFeedback)
+        return cast(Self, _tnew(cls, (message.number_of_valid_groups, groups)))
 
     @classmethod
     def for_groups(cls, groups: Iterable[JointFeedback]) -> Self:
@@ -860,161 +943,119 @@ class MotoJointFeedbackEx(Message):
             raise _size_error(cls, body, BODY_SIZE_FEEDBACK_EX)
         head = _pick(_EX_COUNT_STRUCTS, order)
         (n,) = head.unpack_from(body)
+        end = head.size + _group_count(n) * BODY_SIZE_GROUP_RECORD
         records = tuple(
-            JointFeedback.unpack(body[start : start + BODY_SIZE_GROUP_RECORD], order)
-            for start in range(
-                head.size,
-                head.size + _group_count(n) * BODY_SIZE_GROUP_RECORD,
-                BODY_SIZE_GROUP_RECORD,
-            )
+            JointFeedback.unpack_from(body, start, start + BODY_SIZE_GROUP_RECORD, order)
+            for start in range(head.size, end, BODY_SIZE_GROUP_RECORD)
         )
-        return cls._trusted((n, records))
+        return cast(Self, _tnew(cls, (n, records)))
 
 
 _EX_COUNT_STRUCTS: Final = _structs("i")
-MotoJointFeedbackEx._SETTERS = _slot_setters(
-    MotoJointFeedbackEx, "number_of_valid_groups", "groups"
-)
 
 
 # --------------------------------------------------------------------------- IO
 
 
-@_register
-@dataclass(frozen=True, slots=True)
-class MotoReadIoBit(Message):
+class MotoReadIoBit(Message, _Address):
     """MOTO_READ_IO_BIT (2003): read one bit at ``io_address`` (IO port, or motion port)."""
 
+    __slots__ = ()
     MSG_TYPE: ClassVar[MsgType] = MsgType.MOTO_READ_IO_BIT
     ROLE: ClassVar[Role] = Role.REQUEST
     FIELDS: ClassVar[tuple[tuple[str, _Kind], ...]] = (("io_address", _U32),)
 
-    io_address: int
 
-
-@_register
-@dataclass(frozen=True, slots=True)
-class MotoReadIoBitReply(Message):
+class MotoReadIoBitReply(Message, _ValueResult):
     """MOTO_READ_IO_BIT_REPLY (2004): ``value`` 0/1 and an :class:`IoResultCode`."""
 
+    __slots__ = ()
     MSG_TYPE: ClassVar[MsgType] = MsgType.MOTO_READ_IO_BIT_REPLY
     ROLE: ClassVar[Role] = Role.REPLY
     IO_RESULT: ClassVar[bool] = True
     FIELDS: ClassVar[tuple[tuple[str, _Kind], ...]] = (("value", _U32), ("result_code", _U32))
 
-    value: int
-    result_code: int
 
-
-@_register
-@dataclass(frozen=True, slots=True)
-class MotoWriteIoBit(Message):
+class MotoWriteIoBit(Message, _AddressValue):
     """MOTO_WRITE_IO_BIT (2005): write 0/1 to ``io_address``."""
 
+    __slots__ = ()
     MSG_TYPE: ClassVar[MsgType] = MsgType.MOTO_WRITE_IO_BIT
     ROLE: ClassVar[Role] = Role.REQUEST
     FIELDS: ClassVar[tuple[tuple[str, _Kind], ...]] = (("io_address", _U32), ("io_value", _U32))
 
-    io_address: int
-    io_value: int
 
-
-@_register
-@dataclass(frozen=True, slots=True)
-class MotoWriteIoBitReply(Message):
+class MotoWriteIoBitReply(Message, _Result):
     """MOTO_WRITE_IO_BIT_REPLY (2006): an :class:`IoResultCode`."""
 
+    __slots__ = ()
     MSG_TYPE: ClassVar[MsgType] = MsgType.MOTO_WRITE_IO_BIT_REPLY
     ROLE: ClassVar[Role] = Role.REPLY
     IO_RESULT: ClassVar[bool] = True
     FIELDS: ClassVar[tuple[tuple[str, _Kind], ...]] = (("result_code", _U32),)
 
-    result_code: int
 
-
-@_register
-@dataclass(frozen=True, slots=True)
-class MotoReadIoGroup(Message):
+class MotoReadIoGroup(Message, _Address):
     """MOTO_READ_IO_GROUP (2007): read 8 bits; ``io_address`` is a byte number n (bits n·10+k)."""
 
+    __slots__ = ()
     MSG_TYPE: ClassVar[MsgType] = MsgType.MOTO_READ_IO_GROUP
     ROLE: ClassVar[Role] = Role.REQUEST
     FIELDS: ClassVar[tuple[tuple[str, _Kind], ...]] = (("io_address", _U32),)
 
-    io_address: int
 
-
-@_register
-@dataclass(frozen=True, slots=True)
-class MotoReadIoGroupReply(Message):
+class MotoReadIoGroupReply(Message, _ValueResult):
     """MOTO_READ_IO_GROUP_REPLY (2008): ``value`` 0..255 (bit 0 = LSB) and a result code."""
 
+    __slots__ = ()
     MSG_TYPE: ClassVar[MsgType] = MsgType.MOTO_READ_IO_GROUP_REPLY
     ROLE: ClassVar[Role] = Role.REPLY
     IO_RESULT: ClassVar[bool] = True
     FIELDS: ClassVar[tuple[tuple[str, _Kind], ...]] = (("value", _U32), ("result_code", _U32))
 
-    value: int
-    result_code: int
 
-
-@_register
-@dataclass(frozen=True, slots=True)
-class MotoWriteIoGroup(Message):
+class MotoWriteIoGroup(Message, _AddressValue):
     """MOTO_WRITE_IO_GROUP (2009): write ``io_value`` (≤ 0xFF) to byte ``io_address``."""
 
+    __slots__ = ()
     MSG_TYPE: ClassVar[MsgType] = MsgType.MOTO_WRITE_IO_GROUP
     ROLE: ClassVar[Role] = Role.REQUEST
     FIELDS: ClassVar[tuple[tuple[str, _Kind], ...]] = (("io_address", _U32), ("io_value", _U32))
 
-    io_address: int
-    io_value: int
 
-
-@_register
-@dataclass(frozen=True, slots=True)
-class MotoWriteIoGroupReply(Message):
+class MotoWriteIoGroupReply(Message, _Result):
     """MOTO_WRITE_IO_GROUP_REPLY (2010): an :class:`IoResultCode`."""
 
+    __slots__ = ()
     MSG_TYPE: ClassVar[MsgType] = MsgType.MOTO_WRITE_IO_GROUP_REPLY
     ROLE: ClassVar[Role] = Role.REPLY
     IO_RESULT: ClassVar[bool] = True
     FIELDS: ClassVar[tuple[tuple[str, _Kind], ...]] = (("result_code", _U32),)
 
-    result_code: int
 
-
-@_register
-@dataclass(frozen=True, slots=True)
-class MotoReadMRegister(Message):
+class MotoReadMRegister(Message, _Register):
     """MOTO_READ_MREGISTER (2012, IO port only): ``register_number`` M000..M999 (or +1000000)."""
 
+    __slots__ = ()
     MSG_TYPE: ClassVar[MsgType] = MsgType.MOTO_READ_MREGISTER
     ROLE: ClassVar[Role] = Role.REQUEST
     FIELDS: ClassVar[tuple[tuple[str, _Kind], ...]] = (("register_number", _U32),)
 
-    register_number: int
 
-
-@_register
-@dataclass(frozen=True, slots=True)
-class MotoReadMRegisterReply(Message):
+class MotoReadMRegisterReply(Message, _ValueResult):
     """Reply to READ_MREGISTER: reuses type 2012; a 16-bit ``value`` and a result code."""
 
+    __slots__ = ()
     MSG_TYPE: ClassVar[MsgType] = MsgType.MOTO_READ_MREGISTER
     ROLE: ClassVar[Role] = Role.REPLY
     IO_RESULT: ClassVar[bool] = True
     FIELDS: ClassVar[tuple[tuple[str, _Kind], ...]] = (("value", _U32), ("result_code", _U32))
 
-    value: int
-    result_code: int
 
-
-@_register
-@dataclass(frozen=True, slots=True)
-class MotoWriteMRegister(Message):
+class MotoWriteMRegister(Message, _RegisterValue):
     """MOTO_WRITE_MREGISTER (2013, IO port only): write ``value`` (≤ 0xFFFF), M000..M559."""
 
+    __slots__ = ()
     MSG_TYPE: ClassVar[MsgType] = MsgType.MOTO_WRITE_MREGISTER
     ROLE: ClassVar[Role] = Role.REQUEST
     FIELDS: ClassVar[tuple[tuple[str, _Kind], ...]] = (
@@ -1022,30 +1063,22 @@ class MotoWriteMRegister(Message):
         ("value", _U32),
     )
 
-    register_number: int
-    value: int
 
-
-@_register
-@dataclass(frozen=True, slots=True)
-class MotoWriteMRegisterReply(Message):
+class MotoWriteMRegisterReply(Message, _Result):
     """Reply to WRITE_MREGISTER: reuses type 2013; an :class:`IoResultCode`."""
 
+    __slots__ = ()
     MSG_TYPE: ClassVar[MsgType] = MsgType.MOTO_WRITE_MREGISTER
     ROLE: ClassVar[Role] = Role.REPLY
     IO_RESULT: ClassVar[bool] = True
     FIELDS: ClassVar[tuple[tuple[str, _Kind], ...]] = (("result_code", _U32),)
-
-    result_code: int
 
 
 _IO_ERROR_PADDING: Final = BODY_SIZE_MOTION_REPLY - 8
 """Zero bytes after result and subcode in the IO error reply (60-byte body, §1.6)."""
 
 
-@_register
-@dataclass(frozen=True, slots=True)
-class IoErrorReply(Message):
+class IoErrorReply(Message, _ErrorReply):
     """The IO port's answer to an unknown type (3003) or a short message (3001).
 
     MotoROS sends it as type 2002 with the shape of a MOTION_REPLY, but with
@@ -1054,12 +1087,10 @@ class IoErrorReply(Message):
     :class:`MotoMotionReply`.
     """
 
+    __slots__ = ()
     MSG_TYPE: ClassVar[MsgType] = MsgType.MOTO_MOTION_REPLY
     ROLE: ClassVar[Role] = Role.REPLY
-    FIELDS: ClassVar[tuple[tuple[str, _Kind], ...]] = (("result", _I32), ("subcode", _I32))
-
-    result: int
-    subcode: int
+    FIELDS: ClassVar[tuple[tuple[str, _Kind], ...]] = _I32_FIELDS_ERROR
 
     def pack(self, order: ByteOrder) -> bytes:
         return _pick(self._STRUCTS, order).pack(self.result, self.subcode) + bytes(
@@ -1071,9 +1102,25 @@ class IoErrorReply(Message):
         """60 bytes; the trailing 52 are not checked (MotoROS leaves them zero)."""
         if len(body) != BODY_SIZE_MOTION_REPLY:
             raise _size_error(cls, body, BODY_SIZE_MOTION_REPLY)
-        return cls._trusted(_pick(cls._STRUCTS, order).unpack_from(body))
+        return cast(Self, _tnew(cls, _pick(cls._STRUCTS, order).unpack_from(body)))
 
 
+for _cls in (
+    MotoReadIoBit,
+    MotoReadIoBitReply,
+    MotoWriteIoBit,
+    MotoWriteIoBitReply,
+    MotoReadIoGroup,
+    MotoReadIoGroupReply,
+    MotoWriteIoGroup,
+    MotoWriteIoGroupReply,
+    MotoReadMRegister,
+    MotoReadMRegisterReply,
+    MotoWriteMRegister,
+    MotoWriteMRegisterReply,
+    IoErrorReply,
+):
+    _register(_cls)
 IoErrorReply.BODY_SIZE = BODY_SIZE_MOTION_REPLY
 
 

@@ -251,6 +251,7 @@ class SimulatorApp:
             access_log=False,
             timeout_graceful_shutdown=1,
         )
+        config.load()  # the slow part of uvicorn's start-up, done before the loop starts ticking
         server = _EmbeddedUvicorn(config)
         self._http = server
         self._http_task = tg.create_task(_serve_http(server, sock), name="http-api")

@@ -151,12 +151,9 @@ class IoServer(TcpService):
             )
             return IoErrorReply(ResultCode.INVALID, checked.error_subcode)
         msg = checked.message
-        assert msg is not None  # noqa: S101 - no error means a decoded message
-        reply = (
-            None
-            if isinstance(msg, UnknownMessage)
-            else handle_io_request(self._controller, msg, "io")
-        )
+        if msg is None or isinstance(msg, UnknownMessage):  # pragma: no cover - answered above
+            return IoErrorReply(ResultCode.INVALID, InvalidSubcode.MSGTYPE)
+        reply = handle_io_request(self._controller, msg, "io")
         if reply is None:  # pragma: no cover - check_request only passes IO types here
             return IoErrorReply(ResultCode.INVALID, InvalidSubcode.MSGTYPE)
         return reply

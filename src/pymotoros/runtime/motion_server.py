@@ -158,7 +158,7 @@ class MotionServer(TcpService):
                 InvalidSubcode.describe(checked.error_subcode),
                 checked.reason,
             )
-            reply: Message | None = MotoMotionReply(
+            reply: Message = MotoMotionReply(
                 checked.reply_group,
                 checked.reply_sequence,
                 checked.reply_command,
@@ -173,10 +173,7 @@ class MotionServer(TcpService):
                     checked.trimmed,
                     frame.msg_type,
                 )
-            assert checked.message is not None  # noqa: S101 - no error means decoded
-            reply = await self._process(conn, checked.message)
-        if reply is None:
-            return
+            reply = await self._process(conn, checked.message, frame.msg_type)
         if frame.comm_type == CommType.SERVICE_REPLY:
             # MotoROS processes such a message but sends nothing back (§1.1).
             logger.debug("motion: client %s: request sent as SERVICE_REPLY, no reply", conn.peer)
@@ -189,7 +186,7 @@ class MotionServer(TcpService):
 
     # ----------------------------------------------------------- requests
 
-    async def _process(self, conn: Connection, msg: WireMessage) -> Message | None:
+    async def _process(self, conn: Connection, msg: WireMessage | None, msg_type: int) -> Message:
         c = self._controller
         if isinstance(msg, MotoMotionCtrl):
             outcome = await self._resolve(c.motion_ctrl(msg.group_no, msg.command))
@@ -235,9 +232,12 @@ class MotionServer(TcpService):
             return MotoGetDhParametersReply.for_groups(dh)
         if isinstance(msg, Ping):
             return PingReply()
-        if isinstance(msg, UnknownMessage):  # pragma: no cover - check_request answers 3003
-            return MotoMotionReply(-1, -1, msg.msg_type, ResultCode.INVALID, InvalidSubcode.MSGTYPE)
-        return handle_io_request(c, msg, "motion")
+        reply = None
+        if msg is not None and not isinstance(msg, UnknownMessage):
+            reply = handle_io_request(c, msg, "motion")
+        if reply is None:  # pragma: no cover - check_request answers unknown types itself
+            return MotoMotionReply(-1, -1, msg_type, ResultCode.INVALID, InvalidSubcode.MSGTYPE)
+        return reply
 
     async def _resolve(self, result: Outcome | Pending) -> Outcome:
         if isinstance(result, Outcome):

@@ -1,0 +1,224 @@
+"""``pymotoros interpolate``: a trajectory CSV to the pulse increments MotoROS would queue.
+
+External contract::
+
+    pymotoros interpolate TRAJ.csv --controller yrc1000 --robot hc10
+                          [--pulses-per-rad P1,...,Pn] [-o OUT.csv]
+
+Input: a header row, then ``time,p1..pn,v1..vn`` per point (s, rad, rad/s, ROS
+order); the first row is the trajectory start (sequence 0) and the robot stands
+exactly there. Output: ``time_ms,i1..in``, one row per increment-queue entry, pulse
+increments in controller order. A point MotoROS would refuse ends the command with
+exit code 1 and a one-line message; a malformed file or option with exit code 2.
+"""
+
+from __future__ import annotations
+
+import csv
+import logging
+import math
+from pathlib import Path
+from typing import IO, Final
+
+import click
+import numpy as np
+
+from pymotoros.errors import ConfigError, TrajectoryRejectedError
+from pymotoros.models import (
+    DEFAULT_CONTROLLER,
+    DEFAULT_ROBOT,
+    ROBOTS,
+    ControllerType,
+    controller_model,
+    robot_model,
+)
+from pymotoros.motion import GroupAxes, interpolate_arrays
+
+logger = logging.getLogger(__name__)
+
+EXIT_REJECTED: Final = 1
+"""A point MotoROS would refuse (the message names point, axis, value, limit, subcode)."""
+
+
+class _Rejected(click.ClickException):
+    exit_code = EXIT_REJECTED
+
+
+def _parse_ratios(value: str | None, n: int) -> list[float] | None:
+    if value is None:
+        return None
+    parts = [p.strip() for p in value.split(",")]
+    if len(parts) != n:
+        raise click.BadParameter(
+            f"needs {n} comma-separated values (one per axis, ROS order), got {len(parts)}",
+            param_hint="--pulses-per-rad",
+        )
+    ratios = []
+    for i, part in enumerate(parts, start=1):
+        try:
+            ratio = float(part)
+        except ValueError:
+            raise click.BadParameter(
+                f"value {i} ({part!r}) is not a number", param_hint="--pulses-per-rad"
+            ) from None
+        if not (math.isfinite(ratio) and ratio > 0):
+            raise click.BadParameter(
+                f"value {i} ({part!r}) must be a positive number", param_hint="--pulses-per-rad"
+            )
+        ratios.append(ratio)
+    return ratios
+
+
+def read_trajectory(
+    stream: IO[str], n: int, name: str
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(times, positions, velocities) of a trajectory CSV with ``n`` axes.
+
+    Errors name the row (1 = the header) and the column (1-based, with its role).
+    """
+    columns = 1 + 2 * n
+    roles = ["time"] + [f"p{i}" for i in range(1, n + 1)] + [f"v{i}" for i in range(1, n + 1)]
+    reader = csv.reader(stream)
+    header = next(reader, None)
+    if header is None:
+        raise click.BadParameter(f"{name} is empty; it needs a header row", param_hint="TRAJ.csv")
+    if len(header) != columns:
+        raise click.BadParameter(
+            f"{name} row 1 (header): {len(header)} columns, expected {columns} "
+            f"({', '.join(roles)})",
+            param_hint="TRAJ.csv",
+        )
+    rows: list[list[float]] = []
+    for number, row in enumerate(reader, start=2):
+        if not row or all(not cell.strip() for cell in row):
+            continue
+        if len(row) != columns:
+            raise click.BadParameter(
+                f"{name} row {number}: {len(row)} columns, expected {columns} "
+                f"(time, {n} positions, {n} velocities)",
+                param_hint="TRAJ.csv",
+            )
+        values = []
+        for col, cell in enumerate(row):
+            try:
+                value = float(cell)
+            except ValueError:
+                value = math.nan
+            if not math.isfinite(value):
+                raise click.BadParameter(
+                    f"{name} row {number}, column {col + 1} ({roles[col]}): "
+                    f"{cell.strip()!r} is not a finite number",
+                    param_hint="TRAJ.csv",
+                )
+            values.append(value)
+        rows.append(values)
+    if not rows:
+        raise click.BadParameter(
+            f"{name} has no points after the header; the first row is the start point",
+            param_hint="TRAJ.csv",
+        )
+    data = np.array(rows, dtype=np.float64)
+    return data[:, 0], data[:, 1 : n + 1], data[:, n + 1 :]
+
+
+def write_increments(stream: IO[str], time_ms: np.ndarray, increments: np.ndarray) -> None:
+    n = increments.shape[1]
+    stream.write(",".join(["time_ms", *(f"i{i}" for i in range(1, n + 1))]) + "\n")
+    table = np.column_stack((time_ms, increments))
+    stream.writelines(",".join(map(str, row)) + "\n" for row in table.tolist())
+
+
+_ROBOT_HELP: Final = ", ".join(
+    name + ("" if len(r.groups) == 1 else " (multi-group: not supported here)")
+    for name, r in ROBOTS.items()
+)
+
+
+@click.command(context_settings={"help_option_names": ["-h", "--help"]})
+@click.argument(
+    "traj", metavar="TRAJ.csv", type=click.Path(exists=True, dir_okay=False, path_type=Path)
+)
+@click.option(
+    "--controller",
+    "controller_name",
+    type=click.Choice([t.value for t in ControllerType], case_sensitive=False),
+    default=DEFAULT_CONTROLLER.value,
+    show_default=True,
+    help="Controller family: decides the interpolation period and the float arithmetic "
+    "(x87 extended precision, or strict single precision on FS100).",
+)
+@click.option(
+    "--robot",
+    "robot_name",
+    default=DEFAULT_ROBOT,
+    show_default=True,
+    help=f"Robot model, single control group only: {_ROBOT_HELP}.",
+)
+@click.option(
+    "--pulses-per-rad",
+    "ratios",
+    metavar="P1,...,Pn",
+    help="Override the model's pulses per rad, one per axis in ROS order. The speed limits "
+    "in rad/s stay the model's.",
+)
+@click.option(
+    "-o",
+    "--output",
+    type=click.Path(dir_okay=False, writable=True, path_type=Path),
+    help="Write the increments here instead of to stdout.",
+)
+def interpolate(
+    traj: Path,
+    controller_name: str,
+    robot_name: str,
+    ratios: str | None,
+    output: Path | None,
+) -> None:
+    """Turn a trajectory CSV into the pulse increments MotoROS 1.9.12 would queue.
+
+    TRAJ.csv has a header row, then one row per point: time,p1..pn,v1..vn (s, rad,
+    rad/s, joints in ROS order). The first row is the trajectory start (sequence 0);
+    the robot stands exactly there. The output has a header row time_ms,i1..in, then
+    one row per increment-queue entry: the integer ms time and the pulse increment of
+    each axis in controller order (for 7-axis arms E is the last column).
+
+    A point MotoROS would refuse stops the command with exit code 1 and a message
+    naming the point (0 = start), the axis, the value, the limit and the subcode.
+    Robots with several control groups (sda10f) are not supported here.
+    """
+    try:
+        robot = robot_model(robot_name)
+        controller = controller_model(controller_name)
+    except ConfigError as exc:
+        raise click.BadParameter(str(exc)) from None
+    if len(robot.groups) != 1:
+        raise click.BadParameter(
+            f"{robot.name} has {len(robot.groups)} control groups "
+            f"({', '.join(g.name for g in robot.groups)}); pymotoros interpolate handles "
+            "single-group robots only",
+            param_hint="--robot",
+        )
+    if controller.type.value not in robot.controllers:
+        logger.warning(
+            "%s is not sold with a %s controller (known: %s); interpolating anyway",
+            robot.name,
+            controller.type.value,
+            ", ".join(sorted(robot.controllers)),
+        )
+    group = robot.groups[0]
+    n = group.num_axes
+    try:
+        axes = GroupAxes.from_model(group, controller, _parse_ratios(ratios, n))
+    except ConfigError as exc:
+        raise click.BadParameter(str(exc), param_hint="--pulses-per-rad") from None
+    with traj.open(newline="", encoding="utf-8") as stream:
+        times, pos, vel = read_trajectory(stream, n, traj.name)
+    try:
+        time_ms, increments = interpolate_arrays(times, pos, vel, axes)
+    except TrajectoryRejectedError as exc:
+        raise _Rejected(f"MotoROS would refuse {exc}") from None
+    if output is None:
+        write_increments(click.get_text_stream("stdout"), time_ms, increments)
+    else:
+        with output.open("w", encoding="utf-8", newline="") as out:
+            write_increments(out, time_ms, increments)
