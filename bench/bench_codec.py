@@ -2,8 +2,9 @@
 
 Run:  python bench/bench_codec.py [--seconds 0.5] [--repeat 5]
 
-Prints the best of ``--repeat`` timed runs for each case (the machine is shared,
-so the best run is the one least disturbed). Not a test: nothing fails.
+Prints the best of ``--repeat`` timed rounds for each case, measured in CPU time
+of this process; rounds interleave the cases, so that load from other processes
+on a shared machine disturbs them alike. Not a test: nothing fails.
 
 Cases
   baseline        bare struct.unpack_from of the whole 148-byte JOINT_FEEDBACK frame
@@ -40,10 +41,10 @@ ORDER = ByteOrder.LITTLE
 STREAM_FRAMES = 100
 
 
-def _rate(step: Callable[[], object], per_call: int, seconds: float, repeat: int) -> float:
-    """Best frames/s over ``repeat`` runs of about ``seconds`` each."""
+def _calibrate(step: Callable[[], object], seconds: float) -> int:
+    """Calls of ``step`` that take about ``seconds`` (bounded doubling)."""
     calls = 1000
-    while True:  # calibrate: enough calls for ~seconds (bounded by the doubling)
+    while True:
         start = time.process_time()
         for _ in range(calls):
             step()
@@ -51,14 +52,22 @@ def _rate(step: Callable[[], object], per_call: int, seconds: float, repeat: int
         if elapsed >= seconds / 4 or calls >= 1 << 24:
             break
         calls *= 2
-    calls = max(1, int(calls * seconds / max(elapsed, 1e-9)))
-    best = 0.0
+    return max(1, int(calls * seconds / max(elapsed, 1e-9)))
+
+
+def _measure(
+    cases: list[tuple[str, Callable[[], object], int]], seconds: float, repeat: int
+) -> dict[str, float]:
+    """Best frames/s of each case; rounds interleave the cases so load spikes hit all alike."""
+    calls = {name: _calibrate(step, seconds) for name, step, _ in cases}
+    best = dict.fromkeys(calls, 0.0)
     for _ in range(repeat):
-        start = time.process_time()
-        for _ in range(calls):
-            step()
-        elapsed = time.process_time() - start
-        best = max(best, calls * per_call / elapsed)
+        for name, step, per_call in cases:
+            start = time.process_time()
+            for _ in range(calls[name]):
+                step()
+            elapsed = time.process_time() - start
+            best[name] = max(best[name], calls[name] * per_call / elapsed)
     return best
 
 
@@ -143,8 +152,7 @@ def main() -> None:
     ]
     print(f"python {platform.python_version()} on {platform.machine()}, {sys.platform}")
     print(f"best of {args.repeat} runs of {args.seconds} s each\n")
-    for name, step, per_call in cases:
-        rate = _rate(step, per_call, args.seconds, args.repeat)
+    for name, rate in _measure(cases, args.seconds, args.repeat).items():
         print(f"{name:<56} {rate:>12,.0f} frames/s")
 
 

@@ -54,7 +54,7 @@ def bench_offline(axes: GroupAxes, seconds: float, spacing_ms: float, repeat: in
     )
 
 
-def bench_ticks(axes: GroupAxes, seconds: float, spacing_ms: float, repeat: int = 3) -> None:
+def bench_ticks(axes: GroupAxes, seconds: float, spacing_ms: float, repeat: int = 5) -> None:
     t, pos, vel = trajectory(seconds, spacing_ms, axes)
     points = [
         TrajPoint(float(t[i]), tuple(pos[i].tolist()), tuple(vel[i].tolist()))

@@ -33,7 +33,8 @@ def test_example_files_load() -> None:
     files = sorted(EXAMPLES.glob("*.toml"))
     assert files
     for f in files:
-        VirtualController(load_cell(f))
+        vc = VirtualController(load_cell(f))
+        assert command(vc, CMD.START_TRAJ_MODE).ok, f.name
 
 
 def test_full_file(tmp_path: Path) -> None:
@@ -153,3 +154,15 @@ def test_initial_state_from_the_file() -> None:
     assert [a.code for a in snap.alarms] == [4100]
     assert vc.robot_status().error_code == 4100
     assert command(vc, CMD.CHECK_MOTION_READY).subcode == Nr.ALARM
+
+
+def test_bad_job_file_is_a_config_error(tmp_path: Path) -> None:
+    (tmp_path / "INIT_ROS.JBI").write_text(
+        "/JOB\r\n//NAME INIT_ROS\r\n//INST\r\nNOP\r\nMOVL V=100\r\nEND\r\n", newline=""
+    )
+    (tmp_path / "cell.toml").write_text('[controller]\njobs = "."\n', encoding="utf-8")
+    with pytest.raises(ConfigError) as info:
+        load_cell(tmp_path / "cell.toml")
+    message = str(info.value)
+    assert "controller.jobs" in message
+    assert "INIT_ROS.JBI, line 5: unsupported instruction 'MOVL'" in message

@@ -2,9 +2,13 @@
 
 from __future__ import annotations
 
+import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from pymotoros.motion import GroupAxes, GroupInterpolator, interpolate, to_pulses
+from pymotoros.motion.offline import _plan_loop, _plan_vectorised
 from pymotoros.motion.segment import Grid, plan_grid
 
 from .helpers import still
@@ -59,3 +63,26 @@ def test_equal_quirk_keeps_the_leftover_for_the_following_segment(hc10: GroupAxe
         times += [g.queue.pop().time_ms for _ in range(g.queue.count)]
     assert times == [4, 8, 12, 16, 20, 24, 25, 28, 31, 35, 39, 40]
     assert g.leftover_ms == 3
+
+
+@settings(max_examples=200, deadline=None)
+@given(
+    st.lists(st.integers(-20, 60), min_size=1, max_size=30).map(
+        lambda steps: [sum(steps[: i + 1]) for i in range(len(steps))]
+    ),
+    st.sampled_from([4, 8, 1]),
+)
+def test_vectorised_grid_plan_equals_the_loop(ms: list[int], period: int) -> None:
+    """The phase argument of the vectorised planner, against the literal loop."""
+    looped = _plan_loop(ms, period)
+    fast = _plan_vectorised(np.array(ms, dtype=np.int64), period)
+    if fast is None:  # the quirk occurred: the loop decides
+        return
+    for a, b in zip(fast, looped, strict=True):
+        assert list(np.asarray(a).tolist()) == list(b)
+
+
+def test_vectorised_plan_gives_up_on_the_quirk() -> None:
+    # 0 → 25 ms leaves 3 ms; 25 → 28 ms is the 3 ms step landing exactly: quirk.
+    assert _plan_vectorised(np.array([0, 25, 28, 40], dtype=np.int64), 4) is None
+    assert _plan_loop([0, 25, 28, 40], 4)[2] == [4, 28, 31]

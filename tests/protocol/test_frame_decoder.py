@@ -19,6 +19,7 @@ from pymotoros.protocol import (
     JointFeedback,
     MotoJointFeedbackEx,
     MotoMotionReply,
+    MotoSelectTool,
     Port,
     RobotStatus,
     UnknownMessage,
@@ -292,3 +293,77 @@ def test_encode_frame_round_trips_raw_frames() -> None:
     decoder = FrameDecoder(ByteOrder.BIG)
     decoder.feed(encode_frame(f, ByteOrder.BIG))
     assert decoder.next_frame() == f
+
+
+# ------------------------------------------------------------------ one-step decoding
+
+
+@pytest.mark.parametrize("o", [LE, BE], ids=["le", "be"])
+def test_next_reply_at_every_split_matches_two_step(o: str) -> None:
+    data, frames = _stream(o)
+    order = ORDER_OF[o]
+    expected = [decode_reply(f, order, Port.STATE) for f in frames]
+    for cut in range(0, len(data) + 1, 7):
+        decoder = FrameDecoder(order)
+        got = []
+        for chunk in (data[:cut], data[cut:]):
+            decoder.feed(chunk)
+            while (message := decoder.next_reply(Port.STATE)) is not None:
+                got.append(message)
+        assert got == expected, f"split at {cut}"
+
+
+def test_next_reply_one_byte_at_a_time() -> None:
+    data, frames = _stream(LE)
+    decoder = FrameDecoder(ByteOrder.LITTLE)
+    got = []
+    for index in range(len(data)):
+        decoder.feed(data[index : index + 1])
+        message = decoder.next_reply(Port.STATE)
+        if message is not None:
+            got.append(message)
+    assert got == [decode_reply(f, ByteOrder.LITTLE, Port.STATE) for f in frames]
+    assert isinstance(got[-1], UnknownMessage)  # the ping reply is not a state message
+
+
+def test_next_reply_port_decides_the_class() -> None:
+    body = Body(LE, 60).i(0, 3).i(4, 3003).bytes()
+    for port, expected in ((Port.IO, "IoErrorReply"), (Port.MOTION, "MotoMotionReply")):
+        decoder = FrameDecoder(ByteOrder.LITTLE)
+        decoder.feed(frame(LE, 2002, 3, 1, body))
+        assert type(decoder.next_reply(port)).__name__ == expected
+
+
+def test_next_request_decodes_requests() -> None:
+    body = Body(BE, 12).i(0, 1).i(4, 5).i(8, 9).bytes()
+    decoder = FrameDecoder(ByteOrder.BIG)
+    decoder.feed(frame(BE, 2018, 2, 0, body) + frame(BE, 2012, 2, 0, bytes(4)))
+    assert decoder.next_request(Port.MOTION) == MotoSelectTool(1, 5, 9)
+    assert decoder.next_request(Port.MOTION) == UnknownMessage(2012, bytes(4))
+    assert decoder.next_request(Port.MOTION) is None
+
+
+def test_next_reply_bad_prefix_and_bad_size() -> None:
+    decoder = FrameDecoder(ByteOrder.LITTLE)
+    decoder.feed(struct.pack("<i", 600))
+    with pytest.raises(RemoteProtocolError, match="600"):
+        decoder.next_reply(Port.STATE)
+    decoder.discard()
+    # a well-framed JOINT_FEEDBACK with a 4-byte body: consumed, then refused
+    decoder.feed(frame(LE, 15, 1, 0, bytes(4)) + frame(LE, 13, 1, 0, bytes(28)))
+    with pytest.raises(RemoteProtocolError, match="JointFeedback"):
+        decoder.next_reply(Port.STATE)
+    assert decoder.next_reply(Port.STATE) == RobotStatus(0, 0, 0, 0, 0, 0, 0)
+
+
+@given(data=st.binary(max_size=700))
+@settings(max_examples=300)
+def test_next_reply_on_garbage_only_raises_remote_errors(data: bytes) -> None:
+    decoder = FrameDecoder(ByteOrder.BIG)
+    decoder.feed(data)
+    for _ in range(len(data) // 16 + 1):  # bounded: each frame takes at least 16 bytes
+        try:
+            if decoder.next_reply(Port.STATE) is None:
+                break
+        except RemoteProtocolError:
+            break

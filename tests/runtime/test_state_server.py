@@ -4,8 +4,10 @@ from __future__ import annotations
 
 import asyncio
 import itertools
+import logging
 import socket
 import statistics
+import struct
 from collections.abc import AsyncIterator
 
 import pytest
@@ -128,3 +130,19 @@ async def test_slow_reader_gets_latest_state_not_a_backlog(
         pytest.fail("no fresh feedback within 400 frames")
     assert isinstance(await peer.message(), RobotStatus)
     await peer.close()
+
+
+async def test_client_reset_is_not_an_error(
+    app: SimulatorApp, caplog: pytest.LogCaptureFixture
+) -> None:
+    peer = await state_peer(app)
+    await peer.frame()
+    sock = peer.writer.get_extra_info("socket")
+    sock.setsockopt(socket.SOL_SOCKET, socket.SO_LINGER, struct.pack("ii", 1, 0))  # close = RST
+    handlers = list(app.state._tasks.values())
+    with caplog.at_level(logging.INFO, logger="pymotoros.runtime"):
+        await peer.close()
+        done, _ = await asyncio.wait(handlers, timeout=5.0)
+    assert len(done) == 1
+    assert app.state.clients == 0
+    assert not [r for r in caplog.records if r.levelno >= logging.ERROR]

@@ -203,24 +203,25 @@ def _status_table(client: RobotClient, state: RobotState) -> str:
     st = state.status
     if st is not None:
         lines += [
-            f"  mode            {st.mode.value.upper()}",
-            f"  servo power     {_yes(st.drives_powered, 'on', 'off')}",
-            f"  e-stop          {_yes(st.e_stopped, 'PRESSED', 'released')}",
-            f"  alarm           {st.error_code if st.in_error else 'none'}",
-            f"  in motion       {_yes(st.in_motion)}",
-            f"  motion possible {_yes(st.motion_possible)}"
+            f"  mode              {st.mode.value.upper()}",
+            f"  servo power       {_yes(st.drives_powered, 'on', 'off')}",
+            f"  e-stop            {_yes(st.e_stopped, 'PRESSED', 'released')}",
+            f"  alarm             {st.error_code if st.in_error else 'none'}",
+            f"  in motion         {_yes(st.in_motion)}",
+            f"  motion possible   {_yes(st.motion_possible)}"
             + ("" if st.motion_possible else "  (pymotoros enable)"),
         ]
+    width = max(len(n) for g in client.robot.groups for n in g.joint_names) + 2
     for index, group in enumerate(client.robot.groups):
         fb = state.joints.get(index)
-        lines.append(f"  group {group.name}: {'joint':<12}{'rad':>10}{'deg':>10}{'rad/s':>10}")
+        lines.append(f"  {group.name:<{width + 2}}{'rad':>10}{'deg':>10}{'rad/s':>10}")
         for j, name in enumerate(group.joint_names):
             if fb is None:
-                lines.append(f"    {name:<20}{'-':>10}")
+                lines.append(f"    {name:<{width}}{'-':>10}")
                 continue
             pos = fb.positions[j]
             vel = fb.velocities[j] if fb.velocities else math.nan
-            lines.append(f"  {'':<9}{name:<12}{pos:>10.4f}{math.degrees(pos):>10.2f}{vel:>10.4f}")
+            lines.append(f"    {name:<{width}}{pos:>10.4f}{math.degrees(pos):>10.2f}{vel:>10.4f}")
     return "\n".join(lines)
 
 

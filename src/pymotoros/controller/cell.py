@@ -22,8 +22,9 @@ from typing import Final
 
 from pymotoros.controller.alarms import alarm_class
 from pymotoros.controller.api import AlarmInfo, PendantMode
-from pymotoros.controller.inform import BUILTIN_VARIANTS
-from pymotoros.errors import ConfigError
+from pymotoros.controller.inform import BUILTIN_VARIANTS, JobRunner, load_jobs
+from pymotoros.controller.io_image import IoImage
+from pymotoros.errors import ConfigError, JobError
 from pymotoros.models import (
     DEFAULT_CONTROLLER,
     DEFAULT_ROBOT,
@@ -307,6 +308,10 @@ def cell_from_dict(
         for p in jobs:
             if not p.exists():
                 raise ctrl_t.error("jobs", f"{p} does not exist")
+        try:  # refuse a bad job now, with the key, rather than when the controller boots
+            JobRunner(load_jobs(jobs), IoImage(ctrl))
+        except JobError as exc:
+            raise ctrl_t.error("jobs", str(exc)) from exc
     elif jobs_value is not None:
         raise ctrl_t.error(
             "jobs", f"must be 'auto', one of {', '.join(BUILTIN_VARIANTS)} or job file paths"

@@ -47,8 +47,9 @@ from pymotoros.controller.machine import (
 from pymotoros.controller.motoros import DhTable, MotoRos
 from pymotoros.controller.processes import ControllerClock, Scheduler
 from pymotoros.controller.servo import IN_MOTION_PULSES, ServoGroup
+from pymotoros.controller.units import RosConverter
 from pymotoros.models.controllers import M_REGISTER_BASE
-from pymotoros.motion import GroupAxes, GroupInterpolator, from_pulses, to_pulses
+from pymotoros.motion import GroupAxes, GroupInterpolator, to_pulses
 from pymotoros.protocol.constants import MAX_JOINTS, IoResultCode, MotionCommand, ValidFields
 
 logger = logging.getLogger(__name__)
@@ -110,6 +111,7 @@ class VirtualController:
         self._interps = tuple(GroupInterpolator(a) for a in self._axes)
         for interp, tool in zip(self._interps, init.tools, strict=False):
             interp.tool = tool
+        self._to_ros = tuple(RosConverter(a) for a in self._axes)
         self._servos = tuple(
             ServoGroup(
                 to_pulses(init.joints[g] if init.joints else (), axes),
@@ -159,13 +161,15 @@ class VirtualController:
 
     def tick(self) -> None:
         """Advance controller time by exactly one interpolation period."""
-        now = self._clock.advance()
+        clock = self._clock
+        clock.tick_count += 1
+        now = clock.time_ms = clock.time_ms + clock.period_ms
         machine = self._machine
         timer = machine.next_timer_ms
         if timer is not None and now >= timer:
             machine.advance(now)
         runner = self._runner
-        if runner.due(now) and runner.step(now):
+        if (now >= runner.wake_ms or self._io.changes != runner.seen_changes) and runner.step(now):
             machine.fire(Event.END_JOB, now)
         motoros = self._motoros
         if now >= motoros.next_monitor_ms:
@@ -279,14 +283,11 @@ class VirtualController:
     def joint_feedback(self, group_no: int) -> FeedbackData:
         """§2.4: feedback pulses → rad (m), ROS order; speed from the servo model."""
         self._check_group(group_no)
-        axes = self._axes[group_no]
         servo = self._servos[group_no]
         pulses = servo.feedback(self._clock.tick_count, self._machine.state.drives_powered)
+        to_ros = self._to_ros[group_no]
         return FeedbackData(
-            group_no,
-            FEEDBACK_FIELDS,
-            _pad(from_pulses(pulses, axes)),
-            _pad(from_pulses(servo.speed(), axes)),
+            group_no, FEEDBACK_FIELDS, _pad(to_ros(pulses)), _pad(to_ros(servo.speed()))
         )
 
     def in_motion(self) -> bool:
@@ -332,8 +333,8 @@ class VirtualController:
                 GroupSnapshot(
                     name=self.cell.groups[g].name,
                     joint_names=axes.joint_names,
-                    command_rad=from_pulses(cmd, axes)[:n],
-                    feedback_rad=from_pulses(servo.feedback(tick, s.drives_powered), axes)[:n],
+                    command_rad=self._to_ros[g](cmd)[:n],
+                    feedback_rad=self._to_ros[g](servo.feedback(tick, s.drives_powered))[:n],
                     command_pulse=tuple(cmd[axes.ros_to_slot[i]] for i in range(n)),
                     queue=len(interp.queue),
                     tool=interp.tool,

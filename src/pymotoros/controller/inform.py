@@ -31,6 +31,8 @@ from pymotoros.models import IoArea
 
 logger = logging.getLogger(__name__)
 
+IDLE_WAKE_MS: Final = 1 << 62
+"""``JobRunner.wake_ms`` when no timer runs: only an IO change can wake a task."""
 MAX_INSTRUCTIONS_PER_TICK: Final = 1000
 """Guard against a job that never blocks (none of the supported instructions loops)."""
 
@@ -329,6 +331,7 @@ class JobRunner:
             logger.debug("job %s stopped at %s", self.main, self.position())
             self._tasks = []
         self.generation += 1
+        self.wake_ms = IDLE_WAKE_MS
 
     def due(self, now_ms: int) -> bool:
         """Whether :meth:`step` may have something to do (cheap; called every tick)."""
@@ -338,7 +341,7 @@ class JobRunner:
 
     def _park(self) -> None:
         """Remember when the tasks can next move: a TIMER's end, or any IO change."""
-        wake = 1 << 62
+        wake = IDLE_WAKE_MS
         for task in self._tasks:
             if task.ended:
                 continue
@@ -353,6 +356,8 @@ class JobRunner:
         """Run every task as far as it goes at ``now_ms``; True when the job just ended."""
         tasks = self._tasks
         if not tasks:
+            self.wake_ms = IDLE_WAKE_MS
+            self.seen_changes = self._io.changes
             return False
         # Fast path, every tick while the job is parked: is any task able to move?
         get = self._io.get
@@ -392,6 +397,7 @@ class JobRunner:
                 )
         if all(t.ended for t in tasks):
             self._tasks = []
+            self.wake_ms = IDLE_WAKE_MS
             logger.debug("job %s ended", self.main)
             return True
         self._park()

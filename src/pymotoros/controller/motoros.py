@@ -143,6 +143,7 @@ class MotoRos:
         self.stop_flag = False
         self.pfl_during_move = False
         self.inc_move_error = False
+        self.inc_move_error_reason = ""
         self.skill_flags = [False, False]
         """DX100 SKILLSND "ROS-START" flags for slave 1 and slave 2 (§4.3)."""
         self.error_code = 0
@@ -364,12 +365,56 @@ class MotoRos:
     ) -> Outcome:
         sub = self.not_ready_subcode()
         detail = f"not ready for motion: {int(sub)} {sub.name}: {sub.meaning}"
-        if sub is NotReadySubcode.SKILLSEND:
-            detail += self._skill_detail()
+        why = self._not_ready_why(sub)
+        if why:
+            detail += f" ({why})"
         return _outcome(result, int(sub), detail, group_no=group_no)
 
+    def _not_ready_why(self, sub: NotReadySubcode) -> str:
+        """The specifics behind a NOT_READY subcode, and what clears it."""
+        s = self._machine.state
+        if sub is NotReadySubcode.ALARM:
+            alarms = ", ".join(f"{a.code}/{a.subcode} {a.text}".strip() for a in s.alarms)
+            return f"{alarms or 'alarm output on'}; RESET_ALARM or START_TRAJ_MODE resets it"
+        if sub is NotReadySubcode.ERROR:
+            errors = ", ".join(f"{e.code} {e.text}".strip() for e in s.errors)
+            return f"{errors or 'error output on'}; RESET_ALARM cancels it"
+        if sub is NotReadySubcode.ESTOP:
+            chains = ", ".join(e.name.lower() for e in sorted(s.estop, key=lambda e: e.value))
+            return f"{chains or 'an'} E-stop pressed; release it, then START_TRAJ_MODE"
+        if sub is NotReadySubcode.NOT_PLAY:
+            return "select PLAY on the pendant, then START_TRAJ_MODE"
+        if sub is NotReadySubcode.NOT_REMOTE:
+            return "switch the controller to REMOTE"
+        if sub is NotReadySubcode.SERVO_OFF:
+            return "eco mode" if self._eco else "START_TRAJ_MODE switches servo power on"
+        if sub is NotReadySubcode.HOLD:
+            return "release HOLD, then START_TRAJ_MODE restarts INIT_ROS"
+        if sub is NotReadySubcode.PFL_ACTIVE:
+            active = [
+                name
+                for name, on in zip(
+                    ("PFL stop", "PFL escape", "avoiding", "avoid joint", "avoid translation"),
+                    self._pfl,
+                    strict=True,
+                )
+                if on
+            ]
+            now = ", ".join(active) if active else "PFL signals clear, the event is latched"
+            return f"{now}; START_TRAJ_MODE clears the latch"
+        if sub is NotReadySubcode.INC_MOVE_ERROR:
+            return f"{self.inc_move_error_reason}; START_TRAJ_MODE clears it"
+        if sub is NotReadySubcode.NOT_STARTED:
+            return "INIT_ROS is not running; START_TRAJ_MODE starts it"
+        if sub is NotReadySubcode.WAITING_ROS:
+            where = ", ".join(f"{job} line {line}" for job, line in self._runner.position())
+            return f"INIT_ROS at {where or 'its start'}; OT#889 not on yet"
+        if sub is NotReadySubcode.SKILLSEND:
+            return self._skill_detail()
+        return ""
+
     def _skill_detail(self) -> str:
-        reasons = []
+        reasons: list[str] = []
         if self._dx100 and not self.skill_flags[0]:
             reasons.append('SKILLSND "ROS-START" not received for slave 1')
         if self._dx100 and self._num_groups > 1 and not self.skill_flags[1]:
@@ -378,7 +423,7 @@ class MotoRos:
             reasons.append("OT#889 is on but its rising edge was not seen")
         if self.stop_flag:
             reasons.append("a stop is in progress")
-        return " (" + "; ".join(reasons) + ")" if reasons else ""
+        return "; ".join(reasons)
 
     # ================================================================== queues
 
@@ -901,6 +946,7 @@ class MotoRos:
             result.value,
         )
         self.inc_move_error = True
+        self.inc_move_error_reason = f"an incremental move was refused: {result.value}"
         self._stop_motion_now()
         return False
 

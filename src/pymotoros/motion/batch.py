@@ -20,8 +20,8 @@ import numpy.typing as npt
 from pymotoros.models import FloatMode
 from pymotoros.motion.axes import GroupAxes
 from pymotoros.motion.numerics import (
-    LD,
     coefficients_kernel,
+    coefficients_x87_checked,
     ms_to_seconds,
     position_bound,
     positions_single,
@@ -69,10 +69,9 @@ def batch_targets(
     targets = np.empty((total, n), dtype=np.int64)
     with np.errstate(all="ignore"):
         if mode is FloatMode.X87_EXTENDED:
-            rows = np.stack((x0, v0, x1, v1)).astype(LD)
-            et = duration.astype(LD)
-            tt = et * et
-            coef = coefficients_kernel(rows, np.stack((tt, tt * et)), np.stack((et, tt)), mode)
+            coef = coefficients_x87_checked(
+                np.stack((x0, v0, x1, v1)).astype(np.float64), duration.astype(np.float64)
+            )
             f0 = x0.astype(np.float64)
             g0 = v0.astype(np.float64)
             h1 = coef[0].astype(np.float64) / 2

@@ -236,6 +236,39 @@ def coefficients_x87_scalar(
     return list(f32_tuple(values, len(values)))
 
 
+def coefficients_x87_checked(rows: F64Array, t: F64Array) -> F32Array:
+    """:func:`coefficients_kernel` for the x87, computed in float64 and checked.
+
+    ``rows`` (4, S, n): x0, v0, x1, v1 as float64 holding float32 values; ``t`` (S, 1):
+    the float32 segment lengths. Same argument as :func:`coefficients_x87_scalar`; the
+    segments with a value too close to a float32 midpoint are redone in longdouble.
+    """
+    tt = t * t  # exact
+    den_a = np.stack((tt, tt * t))
+    den_b = np.stack((t, tt))
+    c_delta, c_v0, c_sum, c_sign = _constants(np.float64, rows.ndim - 1)
+    first = ((rows[2] - rows[0]) * c_delta) / den_a
+    second = ((rows[3] + c_v0 * rows[1]) * (c_sum * c_sign)) / den_b
+    value = first + second
+    size = np.abs(first) + np.abs(second)
+    dist = np.minimum(np.abs((value.view(np.int64) & _LOW29) - _MID29), 1 << 27)
+    magnitude = np.abs(value)
+    risky = ((dist * magnitude <= RISK_FACTOR * size) & (size > 0)) | ~(magnitude < 1e30)
+    out: F32Array = value.astype(np.float32)
+    if risky.any():
+        # Redo the segments (rows) concerned in longdouble.
+        redo = risky.reshape(2, -1, risky.shape[-1]).any(axis=(0, 2)).reshape(risky.shape[1:-1])
+        et = t[redo].astype(LD)
+        ett = et * et
+        out[:, redo] = coefficients_kernel(
+            rows[:, redo].astype(LD),
+            np.stack((ett, ett * et)),
+            np.stack((et, ett)),
+            FloatMode.X87_EXTENDED,
+        )
+    return out
+
+
 def positions_x87(
     x0: AnyArray, v0: AnyArray, h1: AnyArray, a2: AnyArray, lt: AnyArray, lt2: AnyArray
 ) -> F32Array:

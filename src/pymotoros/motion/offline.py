@@ -84,18 +84,62 @@ def interpolate_arrays(
         ms_exact = t32.astype(np.float64) * 1000.0  # exact: 24 × 10 bits
     else:
         ms_exact = (t32 * np.float32(1000.0)).astype(np.float64)
-    ms = c_int_array(ms_exact, mode).tolist()
+    ms_arr = c_int_array(ms_exact, mode)
+    planned = _plan_vectorised(ms_arr, period) or _plan_loop(ms_arr.tolist(), period)
+    seg_start, seg_end, seg_first, seg_full, dropped = planned
+    if dropped:
+        logger.warning(
+            "%d point(s) not after the point before them were dropped without increments "
+            "(MotoROS accepts and ignores them): %s",
+            len(dropped),
+            ", ".join(map(str, dropped[:10])) + (" …" if len(dropped) > 10 else ""),
+        )
 
-    # The step grid, segment by segment (integers only; the leftover links them).
+    targets0 = pulses(p32[0:1], axes.factors_ros, mode)[:, axes.columns]
+    if not len(seg_start):
+        return np.zeros(0, dtype=np.int64), np.zeros((0, n), dtype=np.int64)
+
+    s_idx = np.asarray(seg_start, dtype=np.intp)
+    e_idx = np.asarray(seg_end, dtype=np.intp)
+    time_ms, targets = batch_targets(
+        p32[s_idx],
+        v32[s_idx],
+        p32[e_idx],
+        v32[e_idx],
+        ms_arr[s_idx],
+        ms_arr[e_idx],
+        np.asarray(seg_first, dtype=np.int64),
+        np.asarray(seg_full, dtype=np.int64),
+        axes,
+    )
+    increments = np.empty_like(targets)
+    increments[0] = targets[0] - targets0[0]
+    np.subtract(targets[1:], targets[:-1], out=increments[1:])
+    return time_ms.astype(np.int64, copy=False), increments
+
+
+_Plan = tuple[
+    Sequence[int] | I64Array,
+    Sequence[int] | I64Array,
+    Sequence[int] | I64Array,
+    Sequence[int] | I64Array,
+    list[int],
+]
+"""Per segment: start point index, end point index, first step time, full steps; and
+the indices of the dropped points."""
+
+
+def _plan_loop(ms: list[int], period: int) -> _Plan:
+    """The step grids segment by segment, as the real task meets them (§5.4)."""
     seg_start: list[int] = []
     seg_end: list[int] = []
     seg_first: list[int] = []
     seg_full: list[int] = []
+    dropped: list[int] = []
     current = 0
     now = ms[0]
     leftover = 0
-    dropped: list[int] = []
-    for j in range(1, count):
+    for j in range(1, len(ms)):
         end = ms[j]
         if end <= now:
             dropped.append(j)
@@ -114,36 +158,36 @@ def interpolate_arrays(
         seg_full.append(full)
         current = j
         now = end
-    if dropped:
-        logger.warning(
-            "%d point(s) not after the point before them were dropped without increments "
-            "(MotoROS accepts and ignores them): %s",
-            len(dropped),
-            ", ".join(map(str, dropped[:10])) + (" …" if len(dropped) > 10 else ""),
-        )
+    return seg_start, seg_end, seg_first, seg_full, dropped
 
-    targets0 = pulses(p32[0:1], axes.factors_ros, mode)[:, axes.columns]
-    if not seg_start:
-        return np.zeros(0, dtype=np.int64), np.zeros((0, n), dtype=np.int64)
 
-    ms_arr = np.array(ms, dtype=np.int64)
-    s_idx = np.array(seg_start, dtype=np.intp)
-    e_idx = np.array(seg_end, dtype=np.intp)
-    time_ms, targets = batch_targets(
-        p32[s_idx],
-        v32[s_idx],
-        p32[e_idx],
-        v32[e_idx],
-        ms_arr[s_idx],
-        ms_arr[e_idx],
-        np.array(seg_first, dtype=np.int64),
-        np.array(seg_full, dtype=np.int64),
-        axes,
-    )
-    increments = np.empty_like(targets)
-    increments[0] = targets[0] - targets0[0]
-    np.subtract(targets[1:], targets[:-1], out=increments[1:])
-    return time_ms.astype(np.int64, copy=False), increments
+def _plan_vectorised(ms: I64Array, period: int) -> _Plan | None:
+    """The same grids without a Python loop, or None when the leftover quirk occurs.
+
+    The steps of all segments lie on one grid, ``first step ≡ start + leftover`` (mod
+    period): every rule of §5.4 keeps that phase, except the quirk (a leftover-sized
+    first step landing exactly on the end keeps its leftover, which moves the grid).
+    So the leftover of each segment follows from the phase alone; if some segment
+    meets the quirk, the caller runs the loop instead.
+    """
+    if len(ms) < 2:
+        return [], [], [], [], []
+    before = np.maximum.accumulate(ms)[:-1]
+    accepted = ms[1:] > before
+    ends = np.flatnonzero(accepted) + 1
+    dropped = (np.flatnonzero(~accepted) + 1).tolist()
+    if not len(ends):
+        return [], [], [], [], dropped
+    starts = np.concatenate(([0], ends[:-1]))
+    now = ms[starts]
+    end = ms[ends]
+    phase = ms[0] % period
+    leftover = (phase - now) % period
+    first = now + np.where(leftover == 0, period, leftover)
+    if np.any((leftover != 0) & (first == end)):
+        return None
+    full = np.maximum(0, -((first - end) // period))  # ceil((end − first) / period)
+    return starts.astype(np.int64), ends.astype(np.int64), first, full.astype(np.int64), dropped
 
 
 def _validate(

@@ -17,10 +17,11 @@ Decoding is on the hot path (the state stream is 40 Hz × groups × clients, and
 the client decodes every frame). Each message is therefore a ``NamedTuple``
 underneath, behind a :class:`Message` mixin: ``unpack`` builds it with one
 ``tuple.__new__`` and no validation (the ``struct`` format already guarantees
-every shape that validation would check). Measured on JOINT_FEEDBACK, a frozen
-slotted dataclass filled slot by slot decoded about 40 % slower; see
-docs/benchmarks.md. The mixin makes equality typed (``Ping() != PingReply()``,
-a message never equals a plain tuple) and every message truthy.
+every shape that validation would check). A frozen slotted dataclass filled
+slot by slot measured clearly slower on JOINT_FEEDBACK (docs/benchmarks.md).
+The mixin makes equality typed (``Ping() != PingReply()``, a message never
+equals a plain tuple) and every message truthy; like any NamedTuple, messages
+also offer ``_replace`` and ``_asdict`` (``_replace`` skips validation).
 Layouts: reference §1.3 and §1.4.
 """
 
@@ -516,6 +517,16 @@ class JointFeedback(Message, _GroupRecord):
             _pad_joints(name, "acc", acc),
         )
 
+    def pack(self, order: ByteOrder) -> bytes:
+        """Hand-unrolled: the state server packs one per group every cycle."""
+        group_no, valid_fields, time, pos, vel, acc = self
+        try:
+            return (_RECORD_BE if order == ">" else _RECORD_LE).pack(
+                group_no, valid_fields, time, *pos, *vel, *acc
+            )
+        except (struct.error, OverflowError, TypeError) as exc:  # only after _replace()
+            raise LocalProtocolError(f"cannot pack {self!r}: {exc}") from None
+
     @classmethod
     def unpack(cls, body: bytes, order: ByteOrder) -> Self:
         return cls.unpack_from(body, 0, len(body), order)
@@ -550,6 +561,7 @@ class JointFeedback(Message, _GroupRecord):
 
 
 _register(JointFeedback)
+_RECORD_LE, _RECORD_BE = JointFeedback._STRUCTS
 _RECORD_HEAD_LE, _RECORD_HEAD_BE = _structs("iif")  # groupNo, validFields, time
 _JOINTS_LE, _JOINTS_BE = _structs(_JOINTS.value)
 
@@ -654,6 +666,16 @@ class JointTrajPtFull(Message, _Point):
             _pad_joints(name, "acc", acc),
         )
 
+    def pack(self, order: ByteOrder) -> bytes:
+        """Hand-unrolled: the client packs one per trajectory point."""
+        group_no, sequence, valid_fields, time, pos, vel, acc = self
+        try:
+            return (_POINT_BE if order == ">" else _POINT_LE).pack(
+                group_no, sequence, valid_fields, time, *pos, *vel, *acc
+            )
+        except (struct.error, OverflowError, TypeError) as exc:  # only after _replace()
+            raise LocalProtocolError(f"cannot pack {self!r}: {exc}") from None
+
     @classmethod
     def unpack(cls, body: bytes, order: ByteOrder) -> Self:
         return cls.unpack_from(body, 0, len(body), order)
@@ -686,6 +708,7 @@ class JointTrajPtFull(Message, _Point):
 
 
 _register(JointTrajPtFull)
+_POINT_LE, _POINT_BE = JointTrajPtFull._STRUCTS
 _POINT_HEAD_LE, _POINT_HEAD_BE = _structs("iiif")  # groupNo, sequence, validFields, time
 
 

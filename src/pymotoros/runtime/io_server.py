@@ -36,14 +36,13 @@ from pymotoros.protocol.messages import (
     MotoWriteIoGroupReply,
     MotoWriteMRegister,
     MotoWriteMRegisterReply,
-    UnknownMessage,
     WireMessage,
 )
+from pymotoros.protocol.sizes import Accept, Reject, check_request, expected_size
 from pymotoros.runtime.connections import IO_CLIENTS
-from pymotoros.runtime.requests import Checked, check_request
 from pymotoros.runtime.tcp import READ_CHUNK, Connection, TcpService
 
-__all__ = ["IoServer", "handle_io_request"]
+__all__ = ["IoServer", "handle_io_request", "log_rejection"]
 
 logger = logging.getLogger(__name__)
 
@@ -58,6 +57,25 @@ def _log_io_refusal(port: str, what: str, target: int, code: IoResultCode, value
             value,
             IoResultCode.describe(code),
         )
+
+
+def log_rejection(
+    conn: Connection, frame: Frame, verdict: Reject, order: ByteOrder, port: Port
+) -> None:
+    """One warning per protocol error, with the sizes behind it (motion and IO ports)."""
+    expected = expected_size(frame.msg_type, port, frame.body, order)
+    if expected is None:
+        why = f"type {frame.msg_type} is not served on the {port.value} port"
+    else:
+        why = f"type {frame.msg_type} needs {expected} bytes, the frame has {frame.size}"
+    logger.warning(
+        "%s: client %s: answered INVALID/%d (%s): %s",
+        port.value,
+        conn.peer,
+        verdict.subcode,
+        verdict.subcode.meaning,
+        why,
+    )
 
 
 def handle_io_request(controller: MotoRosController, msg: WireMessage, port: str) -> Message | None:
@@ -139,22 +157,14 @@ class IoServer(TcpService):
 
     def _reply(self, conn: Connection, frame: Frame) -> Message:
         self.requests += 1
-        checked: Checked = check_request(frame, self._order, Port.IO)
-        if checked.error_subcode is not None:
-            logger.warning(
-                "io: client %s: type %d with a %d-byte body answered INVALID/%d: %s",
-                conn.peer,
-                frame.msg_type,
-                len(frame.body),
-                checked.error_subcode,
-                checked.reason,
-            )
-            return IoErrorReply(ResultCode.INVALID, checked.error_subcode)
-        msg = checked.message
-        if msg is None or isinstance(msg, UnknownMessage):  # pragma: no cover - answered above
-            return IoErrorReply(ResultCode.INVALID, InvalidSubcode.MSGTYPE)
-        reply = handle_io_request(self._controller, msg, "io")
-        if reply is None:  # pragma: no cover - check_request only passes IO types here
+        verdict = check_request(frame, self._order, Port.IO)
+        if isinstance(verdict, Reject):
+            log_rejection(conn, frame, verdict, self._order, Port.IO)
+            return verdict.reply
+        reply = None
+        if isinstance(verdict, Accept):
+            reply = handle_io_request(self._controller, verdict.message, "io")
+        if reply is None:  # pragma: no cover - check_request only accepts IO types here
             return IoErrorReply(ResultCode.INVALID, InvalidSubcode.MSGTYPE)
         return reply
 

@@ -50,12 +50,10 @@ from pymotoros.protocol.messages import (
     MotoSelectTool,
     Ping,
     PingReply,
-    UnknownMessage,
-    WireMessage,
 )
+from pymotoros.protocol.sizes import Close, Reject, check_request
 from pymotoros.runtime.connections import MOTION_CLIENTS
-from pymotoros.runtime.io_server import handle_io_request
-from pymotoros.runtime.requests import check_request
+from pymotoros.runtime.io_server import handle_io_request, log_rejection
 from pymotoros.runtime.tcp import READ_CHUNK, Connection, TcpService
 
 __all__ = ["MotionServer"]
@@ -142,38 +140,26 @@ class MotionServer(TcpService):
 
     async def _serve_frame(self, conn: Connection, frame: Frame) -> None:
         self.requests += 1
-        checked = check_request(frame, self._order, Port.MOTION)
-        if checked.close:
+        verdict = check_request(frame, self._order, Port.MOTION)
+        if isinstance(verdict, Close):
             logger.warning(
                 "motion: client %s sent %s; closing the connection as MotoROS does",
                 conn.peer,
-                checked.reason,
+                verdict.reason,
             )
             raise _CloseConnectionError
-        if checked.error_subcode is not None:
-            logger.warning(
-                "motion: client %s: answered INVALID/%d (%s): %s",
-                conn.peer,
-                checked.error_subcode,
-                InvalidSubcode.describe(checked.error_subcode),
-                checked.reason,
-            )
-            reply: Message = MotoMotionReply(
-                checked.reply_group,
-                checked.reply_sequence,
-                checked.reply_command,
-                ResultCode.INVALID,
-                checked.error_subcode,
-            )
+        if isinstance(verdict, Reject):
+            log_rejection(conn, frame, verdict, self._order, Port.MOTION)
+            reply: Message = verdict.reply
         else:
-            if checked.trimmed:
+            if verdict.surplus:
                 logger.debug(
                     "motion: client %s: %d surplus bytes after type %d ignored",
                     conn.peer,
-                    checked.trimmed,
+                    verdict.surplus,
                     frame.msg_type,
                 )
-            reply = await self._process(conn, checked.message, frame.msg_type)
+            reply = await self._process(conn, verdict.message, frame.msg_type)
         if frame.comm_type == CommType.SERVICE_REPLY:
             # MotoROS processes such a message but sends nothing back (§1.1).
             logger.debug("motion: client %s: request sent as SERVICE_REPLY, no reply", conn.peer)
@@ -186,7 +172,7 @@ class MotionServer(TcpService):
 
     # ----------------------------------------------------------- requests
 
-    async def _process(self, conn: Connection, msg: WireMessage | None, msg_type: int) -> Message:
+    async def _process(self, conn: Connection, msg: Message, msg_type: int) -> Message:
         c = self._controller
         if isinstance(msg, MotoMotionCtrl):
             outcome = await self._resolve(c.motion_ctrl(msg.group_no, msg.command))
@@ -232,9 +218,7 @@ class MotionServer(TcpService):
             return MotoGetDhParametersReply.for_groups(dh)
         if isinstance(msg, Ping):
             return PingReply()
-        reply = None
-        if msg is not None and not isinstance(msg, UnknownMessage):
-            reply = handle_io_request(c, msg, "motion")
+        reply = handle_io_request(c, msg, "motion")
         if reply is None:  # pragma: no cover - check_request answers unknown types itself
             return MotoMotionReply(-1, -1, msg_type, ResultCode.INVALID, InvalidSubcode.MSGTYPE)
         return reply

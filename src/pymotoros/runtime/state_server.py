@@ -152,9 +152,13 @@ class StateServer(TcpService):
         try:
             async with asyncio.TaskGroup() as tg:
                 sender = tg.create_task(self._send_loop(client), name=f"state-send:{conn.peer}")
-                while await conn.reader.read(READ_CHUNK):
-                    pass  # MotoROS ignores anything a state client sends
-                sender.cancel()
+                try:
+                    while await conn.reader.read(READ_CHUNK):
+                        pass  # MotoROS ignores anything a state client sends
+                except OSError as exc:  # a reset (clients often close with unread data), a timeout
+                    logger.info("state: client %s: connection lost (%s)", conn.peer, exc)
+                finally:
+                    sender.cancel()
         finally:
             self._clients.pop(conn, None)
             if client.dropped:

@@ -182,7 +182,7 @@ class TcpService(ABC):
         try:
             self.on_connect(conn)
             await self.serve_connection(conn)
-        except (ConnectionError, asyncio.IncompleteReadError) as exc:
+        except (OSError, asyncio.IncompleteReadError) as exc:  # resets, keep-alive timeouts
             logger.info("%s: client %s: connection lost (%s)", self.name, conn.peer, exc)
         except Exception:
             logger.exception("%s: client %s: handler failed; closing it", self.name, conn.peer)
