@@ -78,10 +78,12 @@ class Sim:
     startup_s: float
 
 
-def start_sim(nice: int = 0) -> Sim:
+def start_sim(nice: int = 0, fifo: int = 0) -> Sim:
     cmd = [sys.executable, "-m", "pymotoros", "-q", "sim"]
     if nice:
         cmd = ["nice", "-n", str(nice), *cmd]
+    if fifo:
+        cmd = ["chrt", "--fifo", str(fifo), *cmd]
     cmd += ["--motion-port", "0", "--state-port", "0", "--io-port", "0", "--http-port", "0"]
     t0 = time.perf_counter()
     proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, text=True)  # noqa: S603 - our own argv
@@ -102,8 +104,8 @@ def stop_sim(sim: Sim) -> int:
 
 
 @contextlib.contextmanager
-def running_sim(nice: int = 0) -> Iterator[Sim]:
-    sim = start_sim(nice)
+def running_sim(nice: int = 0, fifo: int = 0) -> Iterator[Sim]:
+    sim = start_sim(nice, fifo)
     try:
         yield sim
     finally:
@@ -257,6 +259,13 @@ def main() -> None:
         help="run the simulator under `nice -n N` (negative: higher priority, needs root); "
         "shows what the loop does when the OS gives it the CPU on a busy machine",
     )
+    parser.add_argument(
+        "--sim-fifo",
+        type=int,
+        default=0,
+        help="run the simulator under `chrt --fifo N` (SCHED_FIFO real-time priority, needs "
+        "root or CAP_SYS_NICE), as a real-time deployment would",
+    )
     args = parser.parse_args()
 
     print(
@@ -273,13 +282,14 @@ def main() -> None:
         f"(min {min(startups):.2f}, max {max(startups):.2f}, n={len(startups)})"
     )
 
-    with running_sim(args.sim_nice) as sim:
+    with running_sim(args.sim_nice, args.sim_fifo) as sim:
         result = asyncio.run(stream_and_listen(sim, args.duration, args.warmup))
         tick = result["tick"]
         assert isinstance(tick, dict)
         late = tick["lateness_ms"]
         print(
-            f"interpolation loop over {args.duration:.0f} s (nice {args.sim_nice}), "
+            f"interpolation loop over {args.duration:.0f} s "
+            f"(nice {args.sim_nice}, fifo {args.sim_fifo or 'off'}), "
             "trajectory streaming "
             f"({result['points']} points, {result['busy']} BUSY) + 4 state clients "
             f"({result['state_bytes'] / args.duration / 4 / 1024:.1f} KiB/s each):"

@@ -549,3 +549,20 @@ def test_cell_file_sets_models_and_boot_pose(tmp_path: Path) -> None:
             state.close()
         log = sim.stderr.read_text()
     assert "--robot is ignored" in log
+
+
+def test_port_in_use_is_a_clear_error(tmp_path: Path) -> None:
+    with socket.create_server(("127.0.0.1", 0)) as taken:
+        port = str(taken.getsockname()[1])
+        others = ["--state-port", "0", "--io-port", "0", "--http-port", "0"]
+        result = subprocess.run(  # noqa: S603 - our own interpreter and arguments
+            [sys.executable, "-m", "pymotoros", "sim", "--motion-port", port, *others],
+            capture_output=True,
+            text=True,
+            timeout=STARTUP_TIMEOUT,
+            check=False,
+        )
+    assert result.returncode == 1
+    assert "cannot listen on 127.0.0.1" in result.stderr
+    assert "in use" in result.stderr
+    assert result.stdout == ""

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import math
 
-from pymotoros.controller import VirtualController
+from pymotoros.controller import Pending, VirtualController
 from pymotoros.controller.signals import OPERATING, ROS_DONE, ROS_READY
 from pymotoros.protocol.constants import NotReadySubcode, ResultCode
 
@@ -32,7 +32,7 @@ def test_boot_start_stream_stop() -> None:
 
     # START_TRAJ_MODE takes controller time: servo on, INIT_ROS, OT#889
     pending = vc.motion_ctrl(0, CMD.START_TRAJ_MODE)
-    assert not isinstance(pending, type(ready)), "START_TRAJ_MODE should take controller time"
+    assert isinstance(pending, Pending), "START_TRAJ_MODE takes controller time"
     started_at = vc.time_ms
     outcome = complete(vc, pending)
     assert outcome.ok, outcome

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import pytest
 
-from pymotoros.controller import PendantMode, VirtualController, cell_from_dict
+from pymotoros.controller import PendantMode, Pending, VirtualController, cell_from_dict
 from pymotoros.controller.machine import (
     TRANSITIONS,
     EstopSource,
@@ -178,7 +178,7 @@ def test_eco_mode_wakes_on_motion() -> None:
     here = list(vc.snapshot().groups[0].command_rad)
     # sequence 0 in eco mode: STOP_TRAJ_MODE, START_TRAJ_MODE, then the start (v1.9.12)
     pending = vc.trajectory_point(0, point(0, 0.0, here))
-    assert not isinstance(pending, type(command(vc, CMD.CHECK_QUEUE_CNT)))
+    assert isinstance(pending, Pending)
     outcome = complete(vc, pending)
     assert outcome.ok, outcome.detail
     assert vc.io.get(ECO_MODE) == 0

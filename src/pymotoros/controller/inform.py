@@ -333,12 +333,6 @@ class JobRunner:
         self.generation += 1
         self.wake_ms = IDLE_WAKE_MS
 
-    def due(self, now_ms: int) -> bool:
-        """Whether :meth:`step` may have something to do (cheap; called every tick)."""
-        return bool(self._tasks) and (
-            now_ms >= self.wake_ms or self._io.changes != self.seen_changes
-        )
-
     def _park(self) -> None:
         """Remember when the tasks can next move: a TIMER's end, or any IO change."""
         wake = IDLE_WAKE_MS

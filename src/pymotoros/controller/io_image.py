@@ -92,9 +92,6 @@ class IoImage:
                 self.monitor_dirty = True
                 self.monitored_changes += 1
 
-    def mregister(self, index: int) -> int:
-        return self._mreg[index]
-
     def set_mregister(self, index: int, value: int) -> None:
         self._mreg[index] = value
 

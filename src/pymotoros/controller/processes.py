@@ -23,7 +23,7 @@ Process: TypeAlias = Generator[int, None, Outcome]
 
 
 class ControllerClock:
-    """Controller time: advanced only by ``tick()``, one interpolation period at a time."""
+    """Controller time: advanced only by ``VirtualController.tick()``, one period at a time."""
 
     __slots__ = ("period_ms", "tick_count", "time_ms")
 
@@ -31,11 +31,6 @@ class ControllerClock:
         self.period_ms = period_ms
         self.time_ms = 0
         self.tick_count = 0
-
-    def advance(self) -> int:
-        self.tick_count += 1
-        self.time_ms += self.period_ms
-        return self.time_ms
 
 
 class _Sleeper:
@@ -89,8 +84,3 @@ class Scheduler:
                 sleeper.pending.complete(stop.value)
                 continue
             sleeper.wake_ms = now + delay
-
-
-def sleep(ms: int) -> Generator[int, None, None]:
-    """``yield from sleep(50)`` inside a process."""
-    yield ms

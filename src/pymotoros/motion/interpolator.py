@@ -22,8 +22,6 @@ from __future__ import annotations
 
 import logging
 from collections.abc import Sequence
-from itertools import repeat
-from operator import add
 
 import numpy as np
 
@@ -32,7 +30,7 @@ from pymotoros.motion.batch import batch_targets
 from pymotoros.motion.constants import QUEUE_SIZE, SLOTS
 from pymotoros.motion.points import ORIGIN, GroupPoint, TrajPoint
 from pymotoros.motion.queue import Increment, IncrementQueue
-from pymotoros.motion.segment import Grid, compute_segment, plan_grid
+from pymotoros.motion.segment import Grid, compute_segment, make_entries, plan_grid
 
 logger = logging.getLogger(__name__)
 
@@ -302,33 +300,17 @@ class GroupInterpolator:
         chain = np.empty((len(times) + 1, n), dtype=np.int64)
         chain[0] = axes.take(prev)
         chain[1:] = targets
-        incs = (chain[1:] - chain[:-1]).tolist()
+        tools: list[int] = []
+        for segment in segments:
+            tools += [segment.tool] * segment.count
+        entries = make_entries(times.tolist(), chain, tools, axes)
         rows = targets.tolist()
-        if axes.contiguous:
-            pad = (0,) * (SLOTS - n)
-            spread = list(map(add, map(tuple, incs), repeat(pad)))
-        else:
-            spread = [_spread(row, axes.axis_slots) for row in incs]
-        time_list = times.tolist()
         lo = 0
         for segment in segments:
             hi = lo + segment.count
             segment.prev_before = prev
             segment.targets = rows[lo:hi]
-            segment.entries = list(
-                map(
-                    tuple.__new__,
-                    repeat(Increment),
-                    zip(time_list[lo:hi], spread[lo:hi], repeat(segment.tool)),
-                )
-            )
+            segment.entries = entries[lo:hi]
             prev = segment.target(segment.count - 1, axes)
             lo = hi
         self._chain_prev = prev
-
-
-def _spread(row: list[int], slots: tuple[int, ...]) -> tuple[int, ...]:
-    out = [0] * SLOTS
-    for value, slot in zip(row, slots, strict=True):
-        out[slot] = value
-    return tuple(out)

@@ -182,16 +182,25 @@ def compute_segment(
         ros = pulses(pos, axes.factors_ros, mode)
         targets[1 : full + 1] = ros if axes.identity_columns else ros[:, axes.columns]
     targets[full + 1] = last if axes.identity_columns else [last[j] for j in axes.columns_list]
-    incs = (targets[1:] - targets[:-1]).tolist()
-    times = [*steps, end.time_ms]
+    entries = make_entries([*steps, end.time_ms], targets, tool, axes)
+    return Segment(start, end, grid, entries, targets[1:], coef, taus, pos, mode)
+
+
+def make_entries(
+    times: list[int], chain: I64Array, tool: int | list[int], axes: GroupAxes
+) -> list[Increment]:
+    """Queue entries from absolute targets: ``chain`` row 0 is the previous target, row
+    k + 1 the target of entry k (valid slots in ascending order); ``tool`` for every
+    entry or one per entry."""
+    incs = (chain[1:] - chain[:-1]).tolist()
     if axes.contiguous:
-        pad = (0,) * (SLOTS - n)
+        pad = (0,) * (SLOTS - axes.num_axes)
         spread: Iterable[tuple[int, ...]] = map(add, map(tuple, incs), repeat(pad))
     else:
         spread = (_spread(row, axes.axis_slots) for row in incs)
-    entries = list(map(tuple.__new__, repeat(Increment), zip(times, spread, repeat(tool))))
-    targets = targets[1:]
-    return Segment(start, end, grid, entries, targets, coef, taus, pos, mode)
+    # tuple.__new__ builds each NamedTuple without a Python-level call
+    tools = repeat(tool) if isinstance(tool, int) else tool
+    return list(map(tuple.__new__, repeat(Increment), zip(times, spread, tools, strict=False)))
 
 
 def _spread(row: list[int], slots: tuple[int, ...]) -> tuple[int, ...]:

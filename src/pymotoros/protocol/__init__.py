@@ -38,6 +38,11 @@ from pymotoros.protocol.framing import (
     encode_frame,
     header_problem,
 )
+from pymotoros.protocol.joint_order import (
+    ros_to_slot_map,
+    to_controller_order,
+    to_ros_order,
+)
 from pymotoros.protocol.messages import (
     ZERO_JOINTS,
     DhLink,
@@ -72,6 +77,7 @@ from pymotoros.protocol.messages import (
     UnknownMessage,
     WireMessage,
 )
+from pymotoros.protocol.sizes import Accept, Close, Reject, Verdict, check_request
 
 __all__ = [
     "HEADER_SIZE",
@@ -85,7 +91,9 @@ __all__ = [
     "TCP_PORT_MOTION",
     "TCP_PORT_STATE",
     "ZERO_JOINTS",
+    "Accept",
     "ByteOrder",
+    "Close",
     "CommType",
     "DhLink",
     "Frame",
@@ -122,17 +130,23 @@ __all__ = [
     "Ping",
     "PingReply",
     "Port",
+    "Reject",
     "ReplyType",
     "ResultCode",
     "RobotStatus",
     "Role",
     "UnknownMessage",
     "ValidFields",
+    "Verdict",
     "WireMessage",
+    "check_request",
     "decode_reply",
     "decode_request",
     "encode",
     "encode_frame",
     "header_problem",
+    "ros_to_slot_map",
     "subcode_meaning",
+    "to_controller_order",
+    "to_ros_order",
 ]
