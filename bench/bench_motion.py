@@ -50,7 +50,8 @@ def bench_offline(axes: GroupAxes, seconds: float, spacing_ms: float, repeat: in
     count = incs.size
     print(
         f"offline  {seconds:g} s, points every {spacing_ms:g} ms: {len(times)} entries × "
-        f"{axes.num_axes} axes in {best * 1e3:.2f} ms = {count / best / 1e6:.1f} M axis-increments/s"
+        f"{axes.num_axes} axes in {best * 1e3:.2f} ms = "
+        f"{count / best / 1e6:.1f} M axis-increments/s"
     )
 
 

@@ -49,6 +49,10 @@ def queued_by_ticks(points: list[TrajPoint], axes: GroupAxes) -> list[tuple[int,
     raise AssertionError("did not finish")
 
 
+def busy(g: GroupInterpolator) -> bool:
+    return g.pending
+
+
 def offline(points: list[TrajPoint], axes: GroupAxes) -> list[tuple[int, list[int]]]:
     times, incs = interpolate(points, axes, validate=False)
     return list(zip(times.tolist(), incs.tolist(), strict=True))
@@ -84,7 +88,7 @@ def test_queue_holds_200_and_the_point_stays_pending(hc10: GroupAxes) -> None:
     g.fill(True)  # no room: nothing happens
     assert g.queue.count == QUEUE_SIZE
     ticks = 0
-    while g.pending:
+    while busy(g):
         inc_move([g])
         g.fill(True)
         ticks += 1

@@ -38,10 +38,7 @@ temporaries would cost more in fresh memory pages than in arithmetic."""
 
 
 def batch_targets(
-    x0: F32Array,
-    v0: F32Array,
-    x1: F32Array,
-    v1: F32Array,
+    rows: F32Array,
     start_ms: I64Array,
     end_ms: I64Array,
     first_ms: I64Array,
@@ -50,9 +47,10 @@ def batch_targets(
 ) -> tuple[I64Array, I64Array]:
     """(time_ms (N,), targets (N, num_axes)) of S segments, in order.
 
-    ``x0 … v1`` are (S, num_axes) float32 start/end positions and velocities (ROS
-    order); ``start_ms``, ``end_ms``, ``first_ms`` and ``full`` (S,) describe each grid.
-    Target column j is controller slot ``axes.axis_slots[j]``.
+    ``rows`` is (4, S, num_axes) float32: start positions, start velocities, end
+    positions, end velocities (ROS order); ``start_ms``, ``end_ms``, ``first_ms`` and
+    ``full`` (S,) describe each grid. Target column j is controller slot
+    ``axes.axis_slots[j]``.
     """
     mode = axes.float_mode
     n = axes.num_axes
@@ -64,33 +62,34 @@ def batch_targets(
     final = k == full[seg]
     step_ms = first_ms[seg] + period * k
     time_ms: I64Array = np.where(final, end_ms[seg], step_ms).astype(np.int64, copy=False)
-    duration = ms_to_seconds(end_ms - start_ms, mode)[:, None]
-    tau = ms_to_seconds(step_ms - start_ms[seg], mode)[:, None]
+    duration = ms_to_seconds(end_ms - start_ms)[:, None]
+    tau = ms_to_seconds(step_ms - start_ms[seg])[:, None]
     targets = np.empty((total, n), dtype=np.int64)
+    x1 = rows[2]
     with np.errstate(all="ignore"):
         if mode is FloatMode.X87_EXTENDED:
-            coef = coefficients_x87_checked(
-                np.stack((x0, v0, x1, v1)).astype(np.float64), duration.astype(np.float64)
-            )
-            f0 = x0.astype(np.float64)
-            g0 = v0.astype(np.float64)
-            h1 = coef[0].astype(np.float64) / 2
+            rows64 = rows.astype(np.float64)
+            t64 = duration.astype(np.float64)
+            coef = coefficients_x87_checked(rows64, t64)
+            h1 = coef[0].astype(np.float64) * 0.5
             a2 = coef[1].astype(np.float64)
-            bound = position_bound(f0, g0, h1, a2, duration.astype(np.float64))
+            x0, v0 = rows64[0], rows64[1]
+            bound = position_bound(x0, v0, h1, a2, t64)
             tau64 = tau.astype(np.float64)
         else:
-            rows32 = np.stack((x0, v0, x1, v1))
             tt32 = duration * duration
             coef = coefficients_kernel(
-                rows32, np.stack((tt32, tt32 * duration)), np.stack((duration, tt32)), mode
+                rows, np.array((tt32, tt32 * duration)), np.array((duration, tt32)), mode
             )
         for lo in range(0, total, CHUNK):
             hi = min(lo + CHUNK, total)
             sg = seg[lo:hi]
             if mode is FloatMode.X87_EXTENDED:
-                pos = positions_x87_checked(f0[sg], g0[sg], h1[sg], a2[sg], tau64[lo:hi], bound[sg])
+                pos = positions_x87_checked(x0[sg], v0[sg], h1[sg], a2[sg], tau64[lo:hi], bound[sg])
             else:
-                pos = positions_single(x0[sg], v0[sg], coef[0][sg], coef[1][sg], tau[lo:hi])
+                pos = positions_single(
+                    rows[0][sg], rows[1][sg], coef[0][sg], coef[1][sg], tau[lo:hi]
+                )
             fin = final[lo:hi]
             pos[fin] = x1[sg[fin]]
             part = pulses(pos, axes.factors_ros, mode)

@@ -283,10 +283,10 @@ class GroupInterpolator:
             only.targets = single.targets.tolist()
             self._chain_prev = only.target(only.count - 1, axes)
             return
-        x0 = np.array([s.start.pos[:n] for s in segments], dtype=np.float32)
-        v0 = np.array([s.start.vel[:n] for s in segments], dtype=np.float32)
-        x1 = np.array([s.end.pos[:n] for s in segments], dtype=np.float32)
-        v1 = np.array([s.end.vel[:n] for s in segments], dtype=np.float32)
+        rows = np.array(
+            [(s.start.pos[:n], s.start.vel[:n], s.end.pos[:n], s.end.vel[:n]) for s in segments],
+            dtype=np.float32,
+        ).transpose(1, 0, 2)
         ints = np.array(
             [
                 (s.start.time_ms, s.end.time_ms, s.grid.first_ms, s.grid.full_steps)
@@ -294,9 +294,7 @@ class GroupInterpolator:
             ],
             dtype=np.int64,
         )
-        times, targets = batch_targets(
-            x0, v0, x1, v1, ints[:, 0], ints[:, 1], ints[:, 2], ints[:, 3], axes
-        )
+        times, targets = batch_targets(rows, ints[:, 0], ints[:, 1], ints[:, 2], ints[:, 3], axes)
         chain = np.empty((len(times) + 1, n), dtype=np.int64)
         chain[0] = axes.take(prev)
         chain[1:] = targets
@@ -304,12 +302,12 @@ class GroupInterpolator:
         for segment in segments:
             tools += [segment.tool] * segment.count
         entries = make_entries(times.tolist(), chain, tools, axes)
-        rows = targets.tolist()
+        target_rows = targets.tolist()
         lo = 0
         for segment in segments:
             hi = lo + segment.count
             segment.prev_before = prev
-            segment.targets = rows[lo:hi]
+            segment.targets = target_rows[lo:hi]
             segment.entries = entries[lo:hi]
             prev = segment.target(segment.count - 1, axes)
             lo = hi

@@ -51,8 +51,6 @@ if np.finfo(LD).nmant != 63:  # pragma: no cover - only on platforms we do not s
         f"here it has a {np.finfo(LD).nmant + 1}-bit mantissa"
     )
 
-_F32_1000: Final = np.float32(1000.0)
-_LD_1000: Final = LD(1000)
 _INT32_LOW: Final = float(INT32_MIN) - 1.0
 _INT32_HIGH: Final = float(INT32_MAX) + 1.0
 
@@ -144,11 +142,15 @@ def from_pulse(count: int, factor: float, mode: FloatMode) -> float:
     return float(np.float32(count) / np.float32(factor))
 
 
-def ms_to_seconds(ms: AnyArray, mode: FloatMode) -> F32Array:
-    """``(int ms) / 1000.0`` stored as float32: T and τ of §5.4 (§11)."""
-    if mode is FloatMode.X87_EXTENDED:
-        return (ms.astype(LD) / _LD_1000).astype(np.float32)
-    return ms.astype(np.float32) / _F32_1000
+def ms_to_seconds(ms: AnyArray) -> F32Array:
+    """``(int ms) / 1000.0`` stored as float32: T and τ of §5.4 (§11).
+
+    The same on both builds: an x87 quotient rounded to 64 bits, an FS100 quotient
+    rounded to 24 bits and a float64 one rounded to 53 bits all round to the same
+    float32, because k/1000 is never within 2⁻³⁵ (relative) of a float32 midpoint.
+    """
+    out: F32Array = (ms / 1000.0).astype(np.float32)
+    return out
 
 
 _COEF_CONSTANTS: dict[tuple[type, int], tuple[AnyArray, ...]] = {}
@@ -244,8 +246,8 @@ def coefficients_x87_checked(rows: F64Array, t: F64Array) -> F32Array:
     segments with a value too close to a float32 midpoint are redone in longdouble.
     """
     tt = t * t  # exact
-    den_a = np.stack((tt, tt * t))
-    den_b = np.stack((t, tt))
+    den_a = np.array((tt, tt * t))
+    den_b = np.array((t, tt))
     c_delta, c_v0, c_sum, c_sign = _constants(np.float64, rows.ndim - 1)
     first = ((rows[2] - rows[0]) * c_delta) / den_a
     second = ((rows[3] + c_v0 * rows[1]) * (c_sum * c_sign)) / den_b
@@ -290,10 +292,11 @@ def position_bound(
     x0: F64Array, v0: F64Array, h1: F64Array, a2: F64Array, t: float | F64Array
 ) -> F64Array:
     """RISK_FACTOR × (|x0| + |v0|·T + |a1/2|·T² + |a2|·T³/6): bounds the terms of every
-    position of a segment of length T; −1 where all are 0 (then the position is exact)."""
+    position of a segment of length T. Slightly below 0 where all are 0: such a
+    position is exactly 0 and needs no check."""
     tt = t * t
     m = np.abs(x0) + np.abs(v0) * t + np.abs(h1) * tt + np.abs(a2) * (tt * t) / 6
-    out: F64Array = np.where(m > 0, m * RISK_FACTOR, -1.0)
+    out: F64Array = m * RISK_FACTOR - 1e-300
     return out
 
 

@@ -102,10 +102,7 @@ def interpolate_arrays(
     s_idx = np.asarray(seg_start, dtype=np.intp)
     e_idx = np.asarray(seg_end, dtype=np.intp)
     time_ms, targets = batch_targets(
-        p32[s_idx],
-        v32[s_idx],
-        p32[e_idx],
-        v32[e_idx],
+        np.array((p32[s_idx], v32[s_idx], p32[e_idx], v32[e_idx])),
         ms_arr[s_idx],
         ms_arr[e_idx],
         np.asarray(seg_first, dtype=np.int64),
