@@ -218,6 +218,13 @@ def test_not_motion_ready_ends_the_segment_where_it_stands(hc10: GroupAxes) -> N
     assert blocked.time_ms == 800
     g.clear()
     assert g.queue.count == 0
+    # A later point without a new start continues from where the task stopped.
+    prev = g.prev_pulses
+    g.set_pending(still(1.0, (0.5,) * 6))
+    g.fill(True)
+    moved = [sum(e.pulses[k] for e in g.queue) for k in range(8)]
+    target = to_pulses((0.5,) * 6, hc10)
+    assert moved == [target[k] - prev[k] for k in range(8)]
 
 
 def test_a_pending_point_is_consumed_when_not_motion_ready(hc10: GroupAxes) -> None:

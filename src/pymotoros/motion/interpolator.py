@@ -259,6 +259,7 @@ class GroupInterpolator:
             raise RuntimeError("planned segment without steps")
         self._current = full.state_at(blocked)
         self._leftover = segment.grid.leftover_ms if blocked == segment.count - 1 else 0
+        self._chain_prev = self.prev_pulses  # the steps after the blocked one never existed
         self._active = None
         self._pending = None
 
