@@ -9,10 +9,10 @@ whatever the request's comm_type, and the connection is always kept.
 
 from __future__ import annotations
 
+import contextlib
 import logging
 
 from pymotoros.controller.api import MotoRosController
-from pymotoros.errors import RemoteProtocolError
 from pymotoros.protocol.constants import (
     ByteOrder,
     InvalidSubcode,
@@ -20,7 +20,7 @@ from pymotoros.protocol.constants import (
     Port,
     ResultCode,
 )
-from pymotoros.protocol.framing import Frame, FrameDecoder, encode
+from pymotoros.protocol.framing import Frame
 from pymotoros.protocol.messages import (
     IoErrorReply,
     Message,
@@ -40,7 +40,7 @@ from pymotoros.protocol.messages import (
 )
 from pymotoros.protocol.sizes import Accept, Reject, check_request, expected_size
 from pymotoros.runtime.connections import IO_CLIENTS
-from pymotoros.runtime.tcp import READ_CHUNK, Connection, TcpService
+from pymotoros.runtime.tcp import Connection, FramedService
 
 __all__ = ["IoServer", "handle_io_request", "log_rejection"]
 
@@ -110,50 +110,29 @@ def handle_io_request(controller: MotoRosController, msg: WireMessage, port: str
     return None
 
 
-class IoServer(TcpService):
+class IoServer(FramedService):
     """Serves IO reads and writes to one client."""
 
     name = "io"
 
     def __init__(self, controller: MotoRosController, order: ByteOrder) -> None:
         # The IO port's replacement rule tests the *motion* queues, as MotoROS does (§2.2).
-        super().__init__(IO_CLIENTS, lambda: controller.has_queued_motion())
+        super().__init__(
+            IO_CLIENTS,
+            lambda: controller.has_queued_motion(),
+            order,
+            IoErrorReply(ResultCode.INVALID, InvalidSubcode.MSGSIZE),
+        )
         self._controller = controller
-        self._order = order
         self.requests = 0
 
     def on_connect(self, conn: Connection) -> None:
         self._controller.io_connected()
 
     async def serve_connection(self, conn: Connection) -> None:
-        decoder = FrameDecoder(self._order)
-        while data := await conn.reader.read(READ_CHUNK):
-            fragmented = decoder.buffered > 0
-            decoder.feed(data)
-            while True:
-                try:
-                    frame = decoder.next_frame()
-                except RemoteProtocolError as exc:
-                    dropped = decoder.discard()
-                    logger.warning(
-                        "io: client %s: %s; %d bytes dropped, answered INVALID/3001",
-                        conn.peer,
-                        exc,
-                        len(dropped),
-                    )
-                    await self._send(conn, IoErrorReply(ResultCode.INVALID, InvalidSubcode.MSGSIZE))
-                    break
-                if frame is None:
-                    break
-                if fragmented:
-                    fragmented = False
-                    logger.debug(
-                        "io: client %s: type %d arrived in several pieces and was reassembled "
-                        "(a real controller would answer 3001)",
-                        conn.peer,
-                        frame.msg_type,
-                    )
-                await self._send(conn, self._reply(conn, frame))
+        async with contextlib.aclosing(self.frames(conn)) as frames:
+            async for frame in frames:
+                await self.send(conn, self._reply(conn, frame))
 
     def _reply(self, conn: Connection, frame: Frame) -> Message:
         self.requests += 1
@@ -167,7 +146,3 @@ class IoServer(TcpService):
         if reply is None:  # pragma: no cover - check_request only accepts IO types here
             return IoErrorReply(ResultCode.INVALID, InvalidSubcode.MSGTYPE)
         return reply
-
-    async def _send(self, conn: Connection, reply: Message) -> None:
-        conn.writer.write(encode(reply, self._order))  # one write per reply (clients §1.3)
-        await conn.writer.drain()

@@ -23,10 +23,10 @@ Every reply leaves in a single ``write``: common clients read one reply per
 from __future__ import annotations
 
 import asyncio
+import contextlib
 import logging
 
 from pymotoros.controller.api import MotoRosController, Outcome, Pending, PointData
-from pymotoros.errors import RemoteProtocolError
 from pymotoros.protocol.constants import (
     ByteOrder,
     CommType,
@@ -38,7 +38,7 @@ from pymotoros.protocol.constants import (
     ResultCode,
     subcode_meaning,
 )
-from pymotoros.protocol.framing import Frame, FrameDecoder, encode
+from pymotoros.protocol.framing import Frame
 from pymotoros.protocol.messages import (
     JointTrajPtFull,
     Message,
@@ -54,7 +54,7 @@ from pymotoros.protocol.messages import (
 from pymotoros.protocol.sizes import Close, Reject, check_request
 from pymotoros.runtime.connections import MOTION_CLIENTS
 from pymotoros.runtime.io_server import handle_io_request, log_rejection
-from pymotoros.runtime.tcp import READ_CHUNK, Connection, TcpService
+from pymotoros.runtime.tcp import Connection, FramedService
 
 __all__ = ["MotionServer"]
 
@@ -82,15 +82,19 @@ class _CloseConnectionError(Exception):
     """Internal: the request closes the connection without a reply."""
 
 
-class MotionServer(TcpService):
+class MotionServer(FramedService):
     """Serves MOTO_MOTION_CTRL, trajectory points, tools, DH parameters and IO to one client."""
 
     name = "motion"
 
     def __init__(self, controller: MotoRosController, order: ByteOrder) -> None:
-        super().__init__(MOTION_CLIENTS, lambda: controller.has_queued_motion())
+        super().__init__(
+            MOTION_CLIENTS,
+            lambda: controller.has_queued_motion(),
+            order,
+            MotoMotionReply(-1, -1, 0, ResultCode.INVALID, InvalidSubcode.MSGSIZE),
+        )
         self._controller = controller
-        self._order = order
         self.requests = 0
 
     def on_connect(self, conn: Connection) -> None:
@@ -103,36 +107,8 @@ class MotionServer(TcpService):
     # ----------------------------------------------------------- reading
 
     async def serve_connection(self, conn: Connection) -> None:
-        decoder = FrameDecoder(self._order)
-        while data := await conn.reader.read(READ_CHUNK):
-            fragmented = decoder.buffered > 0
-            decoder.feed(data)
-            while True:
-                try:
-                    frame = decoder.next_frame()
-                except RemoteProtocolError as exc:
-                    dropped = decoder.discard()
-                    logger.warning(
-                        "motion: client %s: %s; %d bytes dropped, answered INVALID/3001",
-                        conn.peer,
-                        exc,
-                        len(dropped),
-                    )
-                    await self._send(
-                        conn,
-                        MotoMotionReply(-1, -1, 0, ResultCode.INVALID, InvalidSubcode.MSGSIZE),
-                    )
-                    break
-                if frame is None:
-                    break
-                if fragmented:
-                    fragmented = False
-                    logger.debug(
-                        "motion: client %s: type %d arrived in several pieces and was "
-                        "reassembled (a real controller would answer 3001)",
-                        conn.peer,
-                        frame.msg_type,
-                    )
+        async with contextlib.aclosing(self.frames(conn)) as frames:
+            async for frame in frames:
                 try:
                     await self._serve_frame(conn, frame)
                 except _CloseConnectionError:
@@ -164,11 +140,7 @@ class MotionServer(TcpService):
             # MotoROS processes such a message but sends nothing back (§1.1).
             logger.debug("motion: client %s: request sent as SERVICE_REPLY, no reply", conn.peer)
             return
-        await self._send(conn, reply)
-
-    async def _send(self, conn: Connection, reply: Message) -> None:
-        conn.writer.write(encode(reply, self._order))  # one write per reply (clients §1.3)
-        await conn.writer.drain()
+        await self.send(conn, reply)
 
     # ----------------------------------------------------------- requests
 

@@ -16,9 +16,13 @@ import ipaddress
 import logging
 import socket
 from abc import ABC, abstractmethod
-from collections.abc import Callable
+from collections.abc import AsyncGenerator, Callable
 from typing import Final
 
+from pymotoros.errors import RemoteProtocolError
+from pymotoros.protocol.constants import ByteOrder
+from pymotoros.protocol.framing import Frame, FrameDecoder, encode
+from pymotoros.protocol.messages import Message
 from pymotoros.runtime.connections import (
     AdmissionKind,
     SlotTable,
@@ -26,7 +30,7 @@ from pymotoros.runtime.connections import (
     peer_name,
 )
 
-__all__ = ["Connection", "TcpService", "bind_socket", "is_loopback"]
+__all__ = ["Connection", "FramedService", "TcpService", "bind_socket", "is_loopback"]
 
 logger = logging.getLogger(__name__)
 
@@ -213,3 +217,62 @@ class TcpService(ABC):
     @abstractmethod
     async def serve_connection(self, conn: Connection) -> None:
         """Serve one client until EOF; return to close it."""
+
+
+class FramedService(TcpService):
+    """A port that reads Simple Message requests and answers each with one write.
+
+    Shared by the motion and IO servers: frames split across reads are reassembled
+    (a documented improvement: MotoROS answers the first piece with 3001), and a
+    length prefix outside the legal range is answered INVALID/3001 with the port's
+    own error reply, after which the buffered bytes are dropped to resynchronise.
+    """
+
+    def __init__(
+        self,
+        capacity: int,
+        motion_queued: Callable[[], bool],
+        order: ByteOrder,
+        bad_prefix_reply: Message,
+    ) -> None:
+        super().__init__(capacity, motion_queued)
+        self._order = order
+        self._bad_prefix_reply = bad_prefix_reply
+
+    async def frames(self, conn: Connection) -> AsyncGenerator[Frame, None]:
+        """The whole frames ``conn`` sends, until EOF."""
+        decoder = FrameDecoder(self._order)
+        while data := await conn.reader.read(READ_CHUNK):
+            fragmented = decoder.buffered > 0
+            decoder.feed(data)
+            while True:
+                try:
+                    frame = decoder.next_frame()
+                except RemoteProtocolError as exc:
+                    dropped = decoder.discard()
+                    logger.warning(
+                        "%s: client %s: %s; %d bytes dropped, answered INVALID/3001",
+                        self.name,
+                        conn.peer,
+                        exc,
+                        len(dropped),
+                    )
+                    await self.send(conn, self._bad_prefix_reply)
+                    break
+                if frame is None:
+                    break
+                if fragmented:
+                    fragmented = False
+                    logger.debug(
+                        "%s: client %s: type %d arrived in several pieces and was "
+                        "reassembled (a real controller would answer 3001)",
+                        self.name,
+                        conn.peer,
+                        frame.msg_type,
+                    )
+                yield frame
+
+    async def send(self, conn: Connection, message: Message) -> None:
+        """One write per message: common clients read one reply per ``recv()`` (clients §1.3)."""
+        conn.writer.write(encode(message, self._order))
+        await conn.writer.drain()
