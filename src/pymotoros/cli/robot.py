@@ -270,46 +270,45 @@ def status(as_json: bool, watch: bool, count: int | None, rate: float, **kwargs:
 # --------------------------------------------------------------------------- simple commands
 
 
-@click.command(epilog=EXIT_CODES_HELP)
-@robot_options
-def enable(**kwargs: Any) -> None:
-    """Enter trajectory mode: START_TRAJ_MODE (servo on, INIT_ROS started)."""
+def _motion_command(
+    kwargs: dict[str, Any],
+    call: Callable[[RobotClient], Coroutine[Any, Any, object]],
+    done: str,
+) -> None:
+    """Run one motion-port command that needs neither state nor IO, then say ``done``."""
     target = _target(kwargs)
 
     async def work() -> None:
         async with connected(target, motion=True, state=False, io=False) as client:
-            await client.start_trajectory_mode()
-        click.echo("trajectory mode on: the robot accepts motion")
+            await call(client)
+        click.echo(done)
 
     run(target, work)
+
+
+@click.command(epilog=EXIT_CODES_HELP)
+@robot_options
+def enable(**kwargs: Any) -> None:
+    """Enter trajectory mode: START_TRAJ_MODE (servo on, INIT_ROS started)."""
+    _motion_command(
+        kwargs,
+        RobotClient.start_trajectory_mode,
+        "trajectory mode on: the robot accepts motion",
+    )
 
 
 @click.command(epilog=EXIT_CODES_HELP)
 @robot_options
 def disable(**kwargs: Any) -> None:
     """Leave trajectory mode: STOP_TRAJ_MODE."""
-    target = _target(kwargs)
-
-    async def work() -> None:
-        async with connected(target, motion=True, state=False, io=False) as client:
-            await client.stop_trajectory_mode()
-        click.echo("trajectory mode off")
-
-    run(target, work)
+    _motion_command(kwargs, RobotClient.stop_trajectory_mode, "trajectory mode off")
 
 
 @click.command(epilog=EXIT_CODES_HELP)
 @robot_options
 def stop(**kwargs: Any) -> None:
     """Stop motion at once and clear every queue: STOP_MOTION."""
-    target = _target(kwargs)
-
-    async def work() -> None:
-        async with connected(target, motion=True, state=False, io=False) as client:
-            await client.stop_motion()
-        click.echo("stopped")
-
-    run(target, work)
+    _motion_command(kwargs, RobotClient.stop_motion, "stopped")
 
 
 @click.command(epilog=EXIT_CODES_HELP)
