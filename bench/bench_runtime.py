@@ -12,7 +12,10 @@ What it measures, each against a ``pymotoros sim`` subprocess on 127.0.0.1 port 
    ``POST /api/tick/reset`` at the end of a warm-up;
 3. motion-port round trip of CHECK_QUEUE_CNT (blocking socket, one request in flight)
    next to a plain asyncio echo server answering a 68-byte message with 76 bytes;
-4. resident memory of the simulator (VmRSS and peak VmHWM) after the run.
+4. resident memory of the simulator (VmRSS and peak VmHWM) after the run;
+5. the machine's floor: the same ``Ticker`` and ``LoopClock`` ticking a step that does
+   nothing, alone in a fresh process for ``--floor`` seconds. No loop on this machine can
+   be more punctual than that; it tells the simulator's own cost from the machine's.
 """
 
 from __future__ import annotations
@@ -20,6 +23,7 @@ from __future__ import annotations
 import argparse
 import asyncio
 import contextlib
+import json
 import math
 import os
 import re
@@ -66,6 +70,41 @@ ECHO_SERVER = textwrap.dedent(
     asyncio.run(main())
     """
 )
+
+
+FLOOR_TICKER = textwrap.dedent(
+    """
+    import asyncio, json, sys
+    from pymotoros.runtime.clock import PRECISE_SPIN_S, LoopClock
+    from pymotoros.runtime.ticker import Ticker
+
+    async def main(seconds):
+        ticker = Ticker(lambda: None, 0.004, LoopClock(spin=PRECISE_SPIN_S))
+        task = asyncio.create_task(ticker.run())
+        await ticker.wait_ticks(250)  # one second of warm-up
+        ticker.reset_stats()
+        await ticker.wait_ticks(int(seconds / 0.004))
+        task.cancel()
+        stats = ticker.stats()
+        print(json.dumps({"overruns": stats.overruns, "p50": stats.lateness_ms.p50,
+                          "p99": stats.lateness_ms.p99, "max": stats.lateness_ms.max}))
+
+    asyncio.run(main(float(sys.argv[1])))
+    """
+)
+
+
+def floor_lateness(seconds: float) -> dict[str, float]:
+    """Lateness of a do-nothing tick loop on this machine (see the module docstring)."""
+    out = subprocess.run(  # noqa: S603 - our own argv
+        [sys.executable, "-c", FLOOR_TICKER, str(seconds)],
+        capture_output=True,
+        text=True,
+        check=True,
+        timeout=seconds + 60,
+    ).stdout
+    result: dict[str, float] = json.loads(out)
+    return result
 
 
 @dataclass
@@ -253,6 +292,12 @@ def main() -> None:
     parser.add_argument("--round-trips", type=int, default=5000)
     parser.add_argument("--startups", type=int, default=5)
     parser.add_argument(
+        "--floor",
+        type=float,
+        default=20.0,
+        help="seconds of the do-nothing tick loop that measures the machine's floor (0: skip)",
+    )
+    parser.add_argument(
         "--sim-nice",
         type=int,
         default=0,
@@ -311,6 +356,13 @@ def main() -> None:
         )
     print(f"  ratio p50 {pct(sim_rt, 0.5) / pct(echo_rt, 0.5):.2f}x")
     print(f"resident memory of the simulator: {rss / 1024:.1f} MiB (peak {hwm / 1024:.1f} MiB)")
+    if args.floor > 0:
+        floor = floor_lateness(args.floor)
+        print(
+            f"machine floor, a do-nothing tick loop alone for {args.floor:.0f} s: "
+            f"lateness p50 {floor['p50']:.3f} ms, p99 {floor['p99']:.3f} ms, "
+            f"max {floor['max']:.3f} ms, {floor['overruns']:.0f} overruns"
+        )
     print(f"load average {os.getloadavg()[0]:.2f} at the end (other work on the machine)")
 
 
