@@ -60,6 +60,7 @@ def test_the_checked_float64_paths_equal_the_longdouble_fallback(points: list[Tr
     normal = interpolate(points, axes, validate=False)
     with pytest.MonkeyPatch.context() as mp:
         mp.setattr(numerics, "RISK_FACTOR", 1e300)
+        mp.setattr(numerics, "COEF_RISK_FACTOR", 1e300)
         assert numerics.coefficients_x87_scalar([0.1], [0.2], [0.3], [0.4], 0.1) is None
         forced = interpolate(points, axes, validate=False)
         ticks = queued_by_ticks(points, axes)

@@ -8,11 +8,27 @@ pulse target. The arithmetic per element is the one of
 float32 (FS100), positions with :func:`~pymotoros.motion.numerics.positions_x87_checked`
 or :func:`~pymotoros.motion.numerics.positions_single`; the tests check both engines
 against each other and against an exact rational model.
+
+How it is organised, for speed:
+
+* the last entry of a segment is its end point, whose target is the pulse value of the
+  end position: no coefficient is computed for a segment made of that entry alone
+  (frequent when points are as dense as the period);
+* :func:`batch_increments` (whole trajectories) works in blocks: the coefficients of
+  :data:`SEGMENT_CHUNK` segments at a time, the positions of :data:`CHUNK` steps at
+  a time (each step taking its segment's terms with one gather), then the pulses and
+  increments of :data:`CHUNK` entries at a time. Small blocks keep every temporary
+  array in the allocator's reused memory; large temporaries cost more in fresh memory
+  pages than in arithmetic, so only the results are allocated at full size;
+* :func:`queued_targets` (the tick engine's queue, a few hundred entries) does the
+  grid bookkeeping in Python and sends every entry through one position kernel: at
+  that size the cost is the number of numpy calls.
 """
 
 from __future__ import annotations
 
-from typing import Final
+from collections.abc import Sequence
+from typing import Any, Final
 
 import numpy as np
 import numpy.typing as npt
@@ -30,68 +46,174 @@ from pymotoros.motion.numerics import (
 )
 
 F32Array = npt.NDArray[np.float32]
+F64Array = npt.NDArray[np.float64]
 I64Array = npt.NDArray[np.int64]
+AnyArray = npt.NDArray[Any]
 
 CHUNK: Final = 2048
-"""Steps per block of the kernel: (2048 × 6) float64 = 96 KiB temporaries. Large
-temporaries would cost more in fresh memory pages than in arithmetic."""
+"""Steps (entries) per block of the position (pulse) kernel: (2048 × 6) float64 = 96
+KiB temporaries."""
+
+SEGMENT_CHUNK: Final = 1024
+"""Segments per block of the coefficient kernel."""
 
 
-def batch_targets(
+def batch_increments(
     rows: F32Array,
     start_ms: I64Array,
     end_ms: I64Array,
     first_ms: I64Array,
     full: I64Array,
+    previous: I64Array,
     axes: GroupAxes,
 ) -> tuple[I64Array, I64Array]:
-    """(time_ms (N,), targets (N, num_axes)) of S segments, in order.
+    """(time_ms (N,), increments (N, num_axes)) of S consecutive segments, in order.
 
     ``rows`` is (4, S, num_axes) float32: start positions, start velocities, end
     positions, end velocities (ROS order); ``start_ms``, ``end_ms``, ``first_ms`` and
-    ``full`` (S,) describe each grid. Target column j is controller slot
-    ``axes.axis_slots[j]``.
+    ``full`` (S,) describe each grid; ``previous`` (num_axes,) is the target before the
+    first entry. Column j is controller slot ``axes.axis_slots[j]``.
     """
     mode = axes.float_mode
     n = axes.num_axes
     period = axes.period_ms
-    counts = full + 1
-    total = int(counts.sum())
-    seg = np.repeat(np.arange(len(counts)), counts)
-    k = np.arange(total, dtype=np.int64) - np.repeat(np.cumsum(counts) - counts, counts)
-    final = k == full[seg]
-    step_ms = first_ms[seg] + period * k
-    time_ms: I64Array = np.where(final, end_ms[seg], step_ms).astype(np.int64, copy=False)
-    duration = ms_to_seconds(end_ms - start_ms)[:, None]
-    tau = ms_to_seconds(step_ms - start_ms[seg])[:, None]
-    targets = np.empty((total, n), dtype=np.int64)
-    x1 = rows[2]
+    stop = np.cumsum(full + 1)
+    total = int(stop[-1]) if len(stop) else 0
+    last = stop - 1
+    time_ms: I64Array = np.empty(total, dtype=np.int64)
+    time_ms[last] = end_ms
+    # Every entry's float32 position: the end point for the last entry of a segment.
+    pos_all: F32Array = np.empty((total, n), dtype=np.float32)
+    pos_all[last] = rows[2]
     with np.errstate(all="ignore"):
-        if mode is FloatMode.X87_EXTENDED:
-            rows64 = rows.astype(np.float64)
-            t64 = duration.astype(np.float64)
-            coef = coefficients_x87_checked(rows64, t64)
-            h1 = coef[0].astype(np.float64) * 0.5
-            a2 = coef[1].astype(np.float64)
-            x0, v0 = rows64[0], rows64[1]
-            bound = position_bound(x0, v0, h1, a2, t64)
-            tau64 = tau.astype(np.float64)
+        begin = last - full  # entry index of each segment's first entry
+        if full.all():  # usual when the points are further apart than the period
+            steps, first_b, start_b, end_b, sub = full, first_ms, start_ms, end_ms, rows
         else:
-            tt32 = duration * duration
-            coef = coefficients_kernel(
-                rows, np.array((tt32, tt32 * duration)), np.array((duration, tt32)), mode
+            busy = np.flatnonzero(full)
+            steps, first_b, start_b = full[busy], first_ms[busy], start_ms[busy]
+            end_b, begin, sub = end_ms[busy], begin[busy], rows[:, busy]
+        count = int(steps.sum())
+        if count:
+            # The steps (every entry but the last of each segment), segment by segment:
+            # step k of a segment whose steps start at global step g is g + k = ramp.
+            local = np.repeat(np.arange(len(steps)), steps)
+            offset = np.cumsum(steps) - steps
+            ramp = np.arange(count, dtype=np.int64)
+            step_ms = np.repeat(first_b - period * offset, steps) + period * ramp
+            index = np.repeat(begin - offset, steps) + ramp  # entry index of each step
+            time_ms[index] = step_ms
+            tau = ms_to_seconds(
+                np.repeat(first_b - start_b - period * offset, steps) + period * ramp
             )
+            duration = ms_to_seconds(end_b - start_b)[:, None]
+            x87 = mode is FloatMode.X87_EXTENDED
+            terms: AnyArray = _terms_x87(sub, duration) if x87 else _terms_single(sub, duration)
+            tau_k: AnyArray = (tau.astype(np.float64) if x87 else tau)[:, None]
+            for lo in range(0, count, CHUNK):
+                hi = min(lo + CHUNK, count)
+                per = terms[local[lo:hi]]
+                if x87:
+                    pos = positions_x87_checked(
+                        per[:, 0], per[:, 1], per[:, 2], per[:, 3], tau_k[lo:hi], per[:, 4]
+                    )
+                else:
+                    pos = positions_single(per[:, 0], per[:, 1], per[:, 2], per[:, 3], tau_k[lo:hi])
+                pos_all[index[lo:hi]] = pos
+        # Pulses and increments block by block: no full-size temporary.
+        increments: I64Array = np.empty((total, n), dtype=np.int64)
+        before = previous
         for lo in range(0, total, CHUNK):
             hi = min(lo + CHUNK, total)
-            sg = seg[lo:hi]
-            if mode is FloatMode.X87_EXTENDED:
-                pos = positions_x87_checked(x0[sg], v0[sg], h1[sg], a2[sg], tau64[lo:hi], bound[sg])
-            else:
-                pos = positions_single(
-                    rows[0][sg], rows[1][sg], coef[0][sg], coef[1][sg], tau[lo:hi]
-                )
-            fin = final[lo:hi]
-            pos[fin] = x1[sg[fin]]
-            part = pulses(pos, axes.factors_ros, mode)
-            targets[lo:hi] = part if axes.identity_columns else part[:, axes.columns]
-    return time_ms, targets
+            part = pulses(pos_all[lo:hi], axes.factors_ros, mode)
+            if not axes.identity_columns:
+                part = part[:, axes.columns]
+            increments[lo] = part[0] - before
+            np.subtract(part[1:], part[:-1], out=increments[lo + 1 : hi])
+            before = part[-1]
+    return time_ms, increments
+
+
+def queued_targets(
+    rows: F32Array, grids: Sequence[tuple[int, int, int, int]], axes: GroupAxes
+) -> tuple[list[int], I64Array]:
+    """:func:`batch_increments` for the tick engine: (entry times, absolute targets) of
+    the segments waiting in a queue, a few hundred entries at most.
+
+    ``grids`` holds (start ms, end ms, first step ms, steps besides the last) per
+    segment. At this size the cost is the number of numpy calls, not the arithmetic,
+    so the grid bookkeeping is done in Python and every entry goes through one
+    position kernel: the last entry of a segment takes the terms (x1, 0, 0, 0) at τ = 0,
+    which give x1 exactly and are never close to a rounding boundary.
+    """
+    mode = axes.float_mode
+    period = axes.period_ms
+    count = len(grids)
+    times: list[int] = []
+    pick: list[int] = []
+    tau_ms: list[int] = []
+    lengths: list[int] = []
+    for j, (start, end, first, full) in enumerate(grids):
+        lengths.append(end - start)
+        if full:
+            stop = first + period * full
+            times += range(first, stop, period)
+            tau_ms += range(first - start, stop - start, period)
+            pick += [j] * full
+        times.append(end)
+        tau_ms.append(0)
+        pick.append(count + j)
+    duration = ms_to_seconds(np.array(lengths))[:, None]
+    tau = ms_to_seconds(np.array(tau_ms))[:, None]
+    with np.errstate(all="ignore"):
+        if mode is FloatMode.X87_EXTENDED:
+            terms = _terms_x87(rows, duration)
+            ends = np.zeros_like(terms)
+            ends[:, 0] = rows[2]
+            ends[:, 4] = -1.0
+            per = np.concatenate((terms, ends))[pick]
+            pos = positions_x87_checked(
+                per[:, 0], per[:, 1], per[:, 2], per[:, 3], tau.astype(np.float64), per[:, 4]
+            )
+        else:
+            terms32 = _terms_single(rows, duration)
+            ends32 = np.zeros_like(terms32)
+            ends32[:, 0] = rows[2]
+            per32 = np.concatenate((terms32, ends32))[pick]
+            pos = positions_single(per32[:, 0], per32[:, 1], per32[:, 2], per32[:, 3], tau)
+        part = pulses(pos, axes.factors_ros, mode)
+    return times, part if axes.identity_columns else part[:, axes.columns]
+
+
+def _terms_x87(rows: F32Array, duration: F32Array) -> F64Array:
+    """(S, 5, n) float64: x0, v0, a1/2, a2 and the risk bound of each segment (x87)."""
+    size = rows.shape[1]
+    if size > SEGMENT_CHUNK:
+        out = np.empty((size, 5, rows.shape[2]), dtype=np.float64)
+        for lo in range(0, size, SEGMENT_CHUNK):
+            hi = lo + SEGMENT_CHUNK
+            out[lo:hi] = _terms_x87(rows[:, lo:hi], duration[lo:hi])
+        return out
+    rows64 = rows.astype(np.float64)
+    t64 = duration.astype(np.float64)
+    coef = coefficients_x87_checked(rows64, t64).astype(np.float64)
+    coef[0] *= 0.5  # a1/2: exact
+    x0, v0 = rows64[0], rows64[1]
+    bound = position_bound(x0, v0, coef[0], coef[1], t64)
+    return np.stack((x0, v0, coef[0], coef[1], bound), axis=1)
+
+
+def _terms_single(rows: F32Array, duration: F32Array) -> F32Array:
+    """(S, 4, n) float32: x0, v0, a1 and a2 of each segment (FS100)."""
+    size = rows.shape[1]
+    if size > SEGMENT_CHUNK:
+        out = np.empty((size, 4, rows.shape[2]), dtype=np.float32)
+        for lo in range(0, size, SEGMENT_CHUNK):
+            hi = lo + SEGMENT_CHUNK
+            out[lo:hi] = _terms_single(rows[:, lo:hi], duration[lo:hi])
+        return out
+    tt32 = duration * duration
+    coef = coefficients_kernel(
+        rows, np.array((tt32, tt32 * duration)), np.array((duration, tt32)), FloatMode.STRICT_SINGLE
+    )
+    return np.stack((rows[0], rows[1], coef[0], coef[1]), axis=1)

@@ -40,16 +40,18 @@ def inc_move(groups: Sequence[GroupInterpolator]) -> tuple[Increment, ...] | Non
             limit = q_time + group.axes.period_ms
             nxt = entries[0]
             if q_time <= nxt.time_ms <= limit and nxt.tool == entry.tool:
-                pulses = list(entry.pulses)
+                tool = entry.tool
+                pulses = entry.pulses
                 while True:
                     entries.popleft()
-                    pulses = list(map(add, pulses, nxt.pulses))
-                    entry = Increment(nxt.time_ms, tuple(pulses), entry.tool)
+                    pulses = tuple(map(add, pulses, nxt.pulses))
+                    time_ms = nxt.time_ms
                     if not entries:
                         break
                     nxt = entries[0]
-                    if not (q_time <= nxt.time_ms <= limit and nxt.tool == entry.tool):
+                    if not (q_time <= nxt.time_ms <= limit and nxt.tool == tool):
                         break
+                entry = Increment(time_ms, pulses, tool)
         group.q_time = entry.time_ms
         out.append(entry)
     return tuple(out) if moved else None

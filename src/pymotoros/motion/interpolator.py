@@ -14,38 +14,56 @@ A segment's step grid, and so the number and times of its entries, is integer
 arithmetic; its pulses are not needed before IncMove reaches them. So ``fill`` plans
 the segment and queues its entries at once (as the real task does, within the 200
 limit), and the pulses of all queued segments are computed together, vectorised
-(:func:`pymotoros.motion.batch.batch_targets`), when the first of them is due. The
-results are those of the step-by-step loop; a tick costs a few tuple operations.
+(:func:`pymotoros.motion.batch.queued_targets`), when the first of them is due. The
+results are those of the step-by-step loop; a tick costs a few tuple operations. A
+segment computed on its own (the queue ran dry) with few steps is done in plain Python.
 """
 
 from __future__ import annotations
 
 import logging
-from collections.abc import Sequence
+from collections.abc import Iterable, Sequence
+from itertools import repeat
+from operator import sub
+from typing import Final
 
 import numpy as np
+import numpy.typing as npt
 
+from pymotoros.models import FloatMode
 from pymotoros.motion.axes import GroupAxes
-from pymotoros.motion.batch import batch_targets
+from pymotoros.motion.batch import queued_targets
 from pymotoros.motion.constants import QUEUE_SIZE, SLOTS
+from pymotoros.motion.numerics import (
+    coefficients_x87_exact,
+    coefficients_x87_scalar,
+    f32,
+    f32_tuple,
+    positions_x87_scalar,
+    pulse,
+)
 from pymotoros.motion.points import ORIGIN, GroupPoint, TrajPoint
 from pymotoros.motion.queue import Increment, IncrementQueue
-from pymotoros.motion.segment import Grid, compute_segment, make_entries, plan_grid
+from pymotoros.motion.segment import Grid, compute_segment, plan_grid
 
 logger = logging.getLogger(__name__)
+
+SMALL_SEGMENT_STEPS: Final = 8
+"""A segment computed on its own with at most this many steps (besides the last) is
+done in plain Python: below that, numpy's per-call cost exceeds the arithmetic."""
 
 
 class PlannedSegment:
     """A segment whose grid is known; its pulses are computed on demand."""
 
     __slots__ = (
+        "chain",
         "end",
         "entries",
         "grid",
         "leftover_before",
-        "prev_before",
+        "offset",
         "start",
-        "targets",
         "tool",
     )
 
@@ -58,21 +76,20 @@ class PlannedSegment:
         self.tool = tool
         self.leftover_before = leftover
         self.entries: list[Increment] | None = None
-        self.prev_before: tuple[int, ...] = ()
-        """prevPulsePos before the segment (known once computed)."""
-        self.targets: list[list[int]] = []
-        """Absolute target of each entry, valid slots in ascending order."""
+        self.chain: Sequence[tuple[int, ...]] | npt.NDArray[np.int64] = ()
+        """Once computed: 8-slot absolute targets; row ``offset`` is prevPulsePos before
+        the segment, row ``offset + 1 + i`` the target of entry i (shared by the
+        segments computed together)."""
+        self.offset = 0
 
     @property
     def count(self) -> int:
         return self.grid.full_steps + 1
 
-    def target(self, index: int, axes: GroupAxes) -> tuple[int, ...]:
-        """prevPulsePos once entry ``index`` is queued (8 slots)."""
-        out = list(self.prev_before)
-        for slot, value in zip(axes.axis_slots, self.targets[index], strict=True):
-            out[slot] = value
-        return tuple(out)
+    def target(self, index: int) -> tuple[int, ...]:
+        """prevPulsePos once entry ``index`` is queued (8 slots); -1: before the segment."""
+        row = self.chain[self.offset + 1 + index]
+        return row if isinstance(row, tuple) else tuple(row.tolist())
 
 
 class GroupInterpolator:
@@ -140,7 +157,7 @@ class GroupInterpolator:
             return self._prev
         self._compute()
         segment, index = self._prev_at
-        return segment.target(index, self.axes)
+        return segment.target(index)
 
     # ------------------------------------------------------------------ commands
 
@@ -251,7 +268,7 @@ class GroupInterpolator:
             segment.start,
             segment.end,
             segment.leftover_before,
-            segment.prev_before,
+            segment.target(-1),
             segment.tool,
             self.axes,
         )
@@ -263,6 +280,57 @@ class GroupInterpolator:
         self._active = None
         self._pending = None
 
+    def _compute_small(self, segment: PlannedSegment, prev: tuple[int, ...]) -> bool:
+        """One x87 segment of a few steps in plain Python; False if the numpy kernel must
+        do it (FS100, untame values, more steps, or a value too close to a rounding
+        boundary)."""
+        axes = self.axes
+        full = segment.grid.full_steps
+        start, end = segment.start, segment.end
+        mode = axes.float_mode
+        if (
+            full > SMALL_SEGMENT_STEPS
+            or mode is not FloatMode.X87_EXTENDED
+            or not (start.tame and end.tame)
+        ):
+            return False
+        n = axes.num_axes
+        s_ms = start.time_ms
+        x0, v0 = start.pos[:n], start.vel[:n]
+        duration = f32((end.time_ms - s_ms) / 1000)
+        x1, v1 = end.pos[:n], end.vel[:n]
+        coef = coefficients_x87_scalar(x0, v0, x1, v1, duration) or coefficients_x87_exact(
+            x0, v0, x1, v1, duration
+        )
+        first, period = segment.grid.first_ms, axes.period_ms
+        times = [first + period * k for k in range(full)]
+        taus = f32_tuple([(c - s_ms) / 1000 for c in times], full)
+        h1 = [c / 2 for c in coef[:n]]
+        rows = positions_x87_scalar(x0, v0, h1, coef[n:], taus, duration)
+        if rows is None:
+            return False
+        rows.append(end.pos[:n])
+        times.append(end.time_ms)
+        slots = axes.ros_to_slot[:n]
+        factors = axes.factors_ros_list
+        chain = [prev]
+        entries: list[Increment] = []
+        before = prev
+        tool = segment.tool
+        for time_ms, row in zip(times, rows, strict=True):
+            target = list(before)
+            for x, f, slot in zip(row, factors, slots, strict=True):
+                target[slot] = pulse(x, f, mode)
+            after = tuple(target)
+            entries.append(Increment(time_ms, tuple(map(sub, after, before)), tool))
+            chain.append(after)
+            before = after
+        segment.entries = entries
+        segment.chain = chain
+        segment.offset = 0
+        self._chain_prev = before
+        return True
+
     def _compute(self) -> None:
         """Compute the pulses of every planned segment not computed yet, in order."""
         segments = self._uncomputed
@@ -270,46 +338,53 @@ class GroupInterpolator:
             return
         self._uncomputed = []
         axes = self.axes
-        n = axes.num_axes
         prev = self._chain_prev
-        if len(segments) == 1:
+        if len(segments) == 1 and segments[0].grid.full_steps == 0:
+            # A single entry at the end point (points as dense as the period): its
+            # target is the end position in pulses, no interpolation is involved.
             only = segments[0]
-            single = compute_segment(
-                only.start, only.end, only.leftover_before, prev, only.tool, axes
-            )
-            if single is None:  # pragma: no cover - a planned segment always has steps
-                raise RuntimeError("planned segment without steps")
-            only.prev_before = prev
-            only.entries = single.entries
-            only.targets = single.targets.tolist()
-            self._chain_prev = only.target(only.count - 1, axes)
+            mode = axes.float_mode
+            target = list(prev)
+            n = axes.num_axes
+            for x, f, slot in zip(
+                only.end.pos[:n], axes.factors_ros_list, axes.ros_to_slot[:n], strict=True
+            ):
+                target[slot] = pulse(x, f, mode)
+            after = tuple(target)
+            only.entries = [Increment(only.end.time_ms, tuple(map(sub, after, prev)), only.tool)]
+            only.chain = (prev, after)
+            only.offset = 0
+            self._chain_prev = after
             return
-        rows = np.array(
-            [(s.start.pos[:n], s.start.vel[:n], s.end.pos[:n], s.end.vel[:n]) for s in segments],
-            dtype=np.float32,
-        ).transpose(1, 0, 2)
-        ints = np.array(
-            [
-                (s.start.time_ms, s.end.time_ms, s.grid.first_ms, s.grid.full_steps)
-                for s in segments
-            ],
-            dtype=np.int64,
+        n = axes.num_axes
+        if len(segments) == 1 and self._compute_small(segments[0], prev):
+            return
+        count = len(segments)
+        raw = b"".join([p for s in segments for p in (s.start.packed(), s.end.packed())])
+        rows = np.frombuffer(raw, dtype=np.float32).reshape(count, 4, SLOTS)[:, :, :n]
+        grids = [(s.start.time_ms, s.end.time_ms, *s.grid[:2]) for s in segments]
+        times, targets = queued_targets(rows.transpose(1, 0, 2), grids, axes)
+        # Row 0: prevPulsePos before the first segment; the slots without an axis keep it.
+        chain = np.empty((len(times) + 1, SLOTS), dtype=np.int64)
+        chain[:] = prev
+        if axes.contiguous:
+            chain[1:, :n] = targets
+        else:
+            chain[1:, axes.axis_slots_array] = targets
+        increments = map(tuple, (chain[1:] - chain[:-1]).tolist())
+        tool = segments[0].tool
+        tools: Iterable[int] = repeat(tool)
+        if any(s.tool != tool for s in segments):
+            tools = [s.tool for s in segments for _ in range(s.count)]
+        # tuple.__new__ builds each NamedTuple without a Python-level call
+        entries = list(
+            map(tuple.__new__, repeat(Increment), zip(times, increments, tools, strict=False))
         )
-        times, targets = batch_targets(rows, ints[:, 0], ints[:, 1], ints[:, 2], ints[:, 3], axes)
-        chain = np.empty((len(times) + 1, n), dtype=np.int64)
-        chain[0] = axes.take(prev)
-        chain[1:] = targets
-        tools: list[int] = []
-        for segment in segments:
-            tools += [segment.tool] * segment.count
-        entries = make_entries(times.tolist(), chain, tools, axes)
-        target_rows = targets.tolist()
         lo = 0
         for segment in segments:
-            hi = lo + segment.count
-            segment.prev_before = prev
-            segment.targets = target_rows[lo:hi]
+            hi = lo + segment.grid.full_steps + 1
+            segment.chain = chain
+            segment.offset = lo
             segment.entries = entries[lo:hi]
-            prev = segment.target(segment.count - 1, axes)
             lo = hi
-        self._chain_prev = prev
+        self._chain_prev = tuple(chain[-1].tolist())

@@ -111,7 +111,11 @@ def seconds_to_ms(seconds: float, mode: FloatMode) -> int:
     x87: truncated from the exact product (0.7 s → 699 ms); FS100: from the product
     rounded to float32 (0.7 s → 700 ms).
     """
-    t = f32(seconds)
+    return float32_seconds_to_ms(f32(seconds), mode)
+
+
+def float32_seconds_to_ms(t: float, mode: FloatMode) -> int:
+    """:func:`seconds_to_ms` of a time already rounded to float32."""
     # The float64 product of 24 × 10 significant bits is exact; FS100 rounds it once.
     product = t * 1000.0 if mode is FloatMode.X87_EXTENDED else f32(t * 1000.0)
     return c_int(product, mode)
@@ -196,6 +200,16 @@ _MID29: Final = 1 << 28
 RISK_FACTOR: Final = 33.0
 """Safety factor of :func:`positions_x87_checked` (2⁵ from the error analysis, plus slack)."""
 
+COEF_RISK_FACTOR: Final = 12.0
+"""Safety factor of the coefficient checks. Each coefficient is two terms and a sum;
+on its longest path (a2: Δ, 12·Δ, T·T·T, the quotient; v1 + v0, 6·(…), the quotient;
+the sum) a value sees five roundings, each off by at most 2⁻⁵³ (float64) or 2⁻⁶⁴ (x87)
+of a quantity no larger than the sum of the magnitudes of the two terms. So float64
+and x87 differ by less than 5.001 × 2⁻⁵³ × that sum; 12 leaves more than a factor 2.
+(``tests/motion/test_extended_precision.py`` measures the difference.) On dense, smooth
+trajectories the two terms nearly cancel, so this factor decides how many segments are
+redone in longdouble."""
+
 
 def coefficients_x87_scalar(
     x0: Sequence[float], v0: Sequence[float], x1: Sequence[float], v1: Sequence[float], t: float
@@ -231,11 +245,82 @@ def coefficients_x87_scalar(
             continue
         low = int(frexp(value)[0] * 9007199254740992.0) & _LOW29  # the 29 bits past float32
         distance = min(abs(low - _MID29), 1 << 27)
-        if not distance * abs(value) > RISK_FACTOR * size:
+        if not distance * abs(value) > COEF_RISK_FACTOR * size:
             return None
         if not abs(value) < 1e30:
             return None
     return list(f32_tuple(values, len(values)))
+
+
+def coefficients_x87_exact(
+    x0: Sequence[float], v0: Sequence[float], x1: Sequence[float], v1: Sequence[float], t: float
+) -> list[float]:
+    """What :func:`coefficients_x87_scalar` returns, always: computed in longdouble."""
+    rows = np.array([*x0, *v0, *x1, *v1], dtype=LD).reshape(4, len(x0))
+    et = LD(t)
+    tt = et * et
+    den_a = np.array([[tt], [tt * et]], dtype=LD)
+    den_b = np.array([[et], [tt]], dtype=LD)
+    out: list[float] = (
+        coefficients_kernel(rows, den_a, den_b, FloatMode.X87_EXTENDED).ravel().tolist()
+    )
+    return out
+
+
+def positions_x87_scalar(
+    x0: Sequence[float],
+    v0: Sequence[float],
+    h1: Sequence[float],
+    a2: Sequence[float],
+    taus: Sequence[float],
+    t: float,
+) -> list[tuple[float, ...]] | None:
+    """:func:`positions_x87_checked` in plain Python floats, or None if unsure.
+
+    For a segment with few steps (points as dense as the period) a dozen numpy calls
+    cost more than the arithmetic: this evaluates the same float64 expressions (Python
+    floats are float64) with the same check against :func:`position_bound` (``t`` is
+    the segment length), one row of float32 values per τ. None: some value is too close
+    to a float32 midpoint or too large, and the caller uses the longdouble path.
+    """
+    tt = t * t
+    ttt = tt * t
+    bounds = [
+        (abs(p) + abs(s) * t + abs(h) * tt + abs(c) * ttt / 6) * RISK_FACTOR - 1e-300
+        for p, s, h, c in zip(x0, v0, h1, a2, strict=True)
+    ]
+    frexp = math.frexp
+    out: list[tuple[float, ...]] = []
+    for tau in taus:
+        tau2 = tau * tau
+        row: list[float] = []
+        for p, s, h, c, bound in zip(x0, v0, h1, a2, bounds, strict=True):
+            f = p + s * tau
+            f += h * tau2
+            f += ((c * tau2) * tau) / 6
+            size = abs(f)
+            low = int(frexp(size)[0] * 9007199254740992.0) & _LOW29
+            if not (min(abs(low - _MID29), 1 << 27) * size > bound and size < 1e30):
+                return None
+            row.append(f)
+        out.append(f32_tuple(row, len(row)))
+    return out
+
+
+SCALAR_REDO: Final = 8
+"""Up to this many risky coefficients are redone one by one with longdouble scalars."""
+
+
+def _coefficient_x87(k: int, x0: float, v0: float, x1: float, v1: float, t: float) -> float:
+    """One coefficient (k = 0: a1, 1: a2) as :func:`coefficients_kernel` computes it in
+    longdouble, operation for operation, stored as float32."""
+    e0, f0, e1, f1, et = LD(x0), LD(v0), LD(x1), LD(v1), LD(t)
+    tt = et * et
+    if k == 0:
+        value = ((e1 - e0) * 6) / tt + (((f1 + 2 * f0) * 2) / et) * -1
+    else:
+        value = ((e1 - e0) * -12) / (tt * et) + ((f1 + 1 * f0) * 6) / tt
+    return float(np.float32(value))
 
 
 def coefficients_x87_checked(rows: F64Array, t: F64Array) -> F32Array:
@@ -255,9 +340,19 @@ def coefficients_x87_checked(rows: F64Array, t: F64Array) -> F32Array:
     size = np.abs(first) + np.abs(second)
     dist = np.minimum(np.abs((value.view(np.int64) & _LOW29) - _MID29), 1 << 27)
     magnitude = np.abs(value)
-    risky = ((dist * magnitude <= RISK_FACTOR * size) & (size > 0)) | ~(magnitude < 1e30)
+    risky = (dist * magnitude <= COEF_RISK_FACTOR * size) & (size > 0)
+    if not magnitude.max(initial=0.0) < 1e30:  # also NaN
+        risky |= ~(magnitude < 1e30)
     out: F32Array = value.astype(np.float32)
     if risky.any():
+        where = np.nonzero(risky)
+        if len(where[0]) <= SCALAR_REDO:
+            # A few values: longdouble scalars cost less than a dozen array operations.
+            for index in zip(*(w.tolist() for w in where), strict=True):
+                k, rest = index[0], index[1:]
+                x0, v0, x1, v1 = (float(rows[(i, *rest)]) for i in range(4))
+                out[index] = _coefficient_x87(k, x0, v0, x1, v1, float(t[(*rest[:-1], 0)]))
+            return out
         # Redo the segments (rows) concerned in longdouble.
         redo = risky.reshape(2, -1, risky.shape[-1]).any(axis=(0, 2)).reshape(risky.shape[1:-1])
         et = t[redo].astype(LD)
@@ -320,7 +415,9 @@ def positions_x87_checked(
     out = f.astype(np.float32)
     dist = np.minimum(np.abs((f.view(np.int64) & _LOW29) - _MID29), 1 << 27)
     size = np.abs(f)
-    risky = (dist * size <= bound) | ~(size < 1e30)
+    risky = dist * size <= bound
+    if not size.max(initial=0.0) < 1e30:  # also NaN
+        risky |= ~(size < 1e30)
     if risky.any():
         where = np.nonzero(risky)
         shape = risky.shape

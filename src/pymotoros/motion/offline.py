@@ -17,7 +17,7 @@ import numpy.typing as npt
 
 from pymotoros.models import FloatMode
 from pymotoros.motion.axes import GroupAxes, to_pulses
-from pymotoros.motion.batch import batch_targets
+from pymotoros.motion.batch import batch_increments
 from pymotoros.motion.checks import check_speed, check_start, check_time
 from pymotoros.motion.constants import INT32_MAX, MAX_POINT_TIME_S
 from pymotoros.motion.numerics import (
@@ -95,24 +95,20 @@ def interpolate_arrays(
             ", ".join(map(str, dropped[:10])) + (" …" if len(dropped) > 10 else ""),
         )
 
-    targets0 = pulses(p32[0:1], axes.factors_ros, mode)[:, axes.columns]
     if not len(seg_start):
         return np.zeros(0, dtype=np.int64), np.zeros((0, n), dtype=np.int64)
-
+    start_target = pulses(p32[0:1], axes.factors_ros, mode)[0, axes.columns]
     s_idx = np.asarray(seg_start, dtype=np.intp)
     e_idx = np.asarray(seg_end, dtype=np.intp)
-    time_ms, targets = batch_targets(
+    return batch_increments(
         np.array((p32[s_idx], v32[s_idx], p32[e_idx], v32[e_idx])),
         ms_arr[s_idx],
         ms_arr[e_idx],
         np.asarray(seg_first, dtype=np.int64),
         np.asarray(seg_full, dtype=np.int64),
+        start_target,
         axes,
     )
-    increments = np.empty_like(targets)
-    increments[0] = targets[0] - targets0[0]
-    np.subtract(targets[1:], targets[:-1], out=increments[1:])
-    return time_ms.astype(np.int64, copy=False), increments
 
 
 _Plan = tuple[

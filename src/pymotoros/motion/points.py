@@ -8,12 +8,13 @@ packs a Python float does (§11).
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+import struct
+from dataclasses import dataclass, field
 from typing import Final
 
 from pymotoros.models import FloatMode
 from pymotoros.motion.constants import SLOTS
-from pymotoros.motion.numerics import f32_tuple, seconds_to_ms
+from pymotoros.motion.numerics import f32, f32_tuple, float32_seconds_to_ms
 
 
 @dataclass(frozen=True, slots=True)
@@ -48,16 +49,33 @@ class GroupPoint:
     """Every value is finite and below 10¹⁵ in magnitude, so no float32 or float64
     operation of the interpolation can overflow (the engine then skips numpy's
     floating-point error handling)."""
+    raw: bytes = field(default=b"", compare=False, repr=False)
+    """``pos`` then ``vel`` as 16 little-endian float32 (empty if not made yet): the
+    tick engine stacks many points into one array from these bytes."""
 
     @classmethod
     def from_traj(cls, point: TrajPoint, mode: FloatMode) -> GroupPoint:
-        pos = f32_tuple(point.pos, SLOTS)
-        vel = f32_tuple(point.vel, SLOTS)
+        pos_in, vel_in = point.pos, point.vel
+        try:  # the time, the positions and the velocities rounded to float32 at once
+            raw = _TIMED.pack(
+                point.time, *pos_in, *_ZEROS[len(pos_in) :], *vel_in, *_ZEROS[len(vel_in) :]
+            )
+        except OverflowError:  # beyond float32: the wire would carry ±inf
+            raw = _TIMED.pack(f32(point.time), *f32_tuple(pos_in, SLOTS), *f32_tuple(vel_in, SLOTS))
+        values = _TIMED.unpack(raw)
+        pos, vel = values[1 : SLOTS + 1], values[SLOTS + 1 :]
         tame = sum(map(abs, pos)) + sum(map(abs, vel)) < TAME_LIMIT  # False for inf and NaN
-        return cls(seconds_to_ms(point.time, mode), pos, vel, tame)
+        return cls(float32_seconds_to_ms(values[0], mode), pos, vel, tame, raw[4:])
+
+    def packed(self) -> bytes:
+        """:attr:`raw`, made now if the point was built without it."""
+        return self.raw or _POINT.pack(*self.pos, *self.vel)
 
 
 TAME_LIMIT: Final = 1e15
+_POINT: Final = struct.Struct(f"<{2 * SLOTS}f")
+_TIMED: Final = struct.Struct(f"<{2 * SLOTS + 1}f")
+_ZEROS: Final = (0.0,) * SLOTS
 
 
 ORIGIN = GroupPoint(0, (0.0,) * SLOTS, (0.0,) * SLOTS)

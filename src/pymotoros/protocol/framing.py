@@ -18,21 +18,28 @@ from __future__ import annotations
 
 import struct
 from collections.abc import Callable, Iterator, Mapping
+from dataclasses import dataclass
 from types import MappingProxyType
 from typing import Final, NamedTuple, TypeAlias
 
 from pymotoros.errors import LocalProtocolError, RemoteProtocolError
 from pymotoros.protocol.constants import (
     HEADER_SIZE,
+    MAX_JOINTS,
     MAX_LENGTH_PREFIX,
     MAX_WIRE_MESSAGE_SIZE,
     PREFIX_SIZE,
     ByteOrder,
     CommType,
+    MsgType,
     Port,
     ReplyType,
 )
 from pymotoros.protocol.messages import (
+    _RECORD_ACC_AT,
+    _RECORD_POS_AT,
+    _RECORD_VEL_AT,
+    BODY_SIZE_GROUP_RECORD,
     IoErrorReply,
     JointFeedback,
     JointTrajPtFull,
@@ -91,6 +98,25 @@ _HEAD_LE: Final = struct.Struct("<iiii")
 _HEAD_BE: Final = struct.Struct(">iiii")
 _PREFIX_LE: Final = struct.Struct("<i")
 _PREFIX_BE: Final = struct.Struct(">i")
+
+# next_reply's inline JOINT_FEEDBACK decode (reference §1.4; same layout as messages.py).
+_JOINT_FEEDBACK: Final = int(MsgType.JOINT_FEEDBACK)
+"""15 as a plain int: comparing with the IntEnum member costs more."""
+_FEEDBACK_LENGTH: Final = HEADER_SIZE + BODY_SIZE_GROUP_RECORD
+"""144: the length prefix of a JOINT_FEEDBACK frame."""
+_FEEDBACK_HEAD_LE: Final = struct.Struct("<iiiiiif")
+_FEEDBACK_HEAD_BE: Final = struct.Struct(">iiiiiif")
+"""Prefix, header, then groupNo, validFields, time of the group record."""
+_FEEDBACK_HEAD_SIZE: Final = _FEEDBACK_HEAD_LE.size
+_JOINTS_LE: Final = struct.Struct(f"<{MAX_JOINTS}f")
+_JOINTS_BE: Final = struct.Struct(f">{MAX_JOINTS}f")
+_FEEDBACK_POS_AT: Final = FRAME_OVERHEAD + _RECORD_POS_AT
+_FEEDBACK_VEL_AT: Final = FRAME_OVERHEAD + _RECORD_VEL_AT
+_FEEDBACK_ACC_AT: Final = FRAME_OVERHEAD + _RECORD_ACC_AT
+_new_feedback: Final[Callable[[type[JointFeedback], tuple[object, ...]], JointFeedback]] = (
+    tuple.__new__
+)
+"""Builds the message without validation, like JointFeedback.unpack_from."""
 
 
 class Frame(NamedTuple):
@@ -202,12 +228,40 @@ class FrameDecoder:
     Simple Message stream, so resynchronising is the caller's decision).
     """
 
-    __slots__ = ("_buf", "_head", "_order", "_pos", "_prefix")
+    __slots__ = (
+        "_buf",
+        "_order",
+        "_pos",
+        "_rep_io",
+        "_rep_motion",
+        "_rep_state",
+        "_req_io",
+        "_req_motion",
+        "_req_state",
+        "_unpack_feedback_head",
+        "_unpack_head",
+        "_unpack_joints",
+        "_unpack_prefix",
+    )
 
     def __init__(self, order: ByteOrder) -> None:
         self._order = order
-        self._head = _HEAD_BE if order == ">" else _HEAD_LE
-        self._prefix = _PREFIX_BE if order == ">" else _PREFIX_LE
+        big = order == ">"
+        # Everything that depends on the byte order alone is chosen here, once: the
+        # hot paths below then do no ``order`` comparison, no table selection by
+        # order and no ``Struct`` method lookup per frame (each costs a few % of a
+        # JOINT_FEEDBACK decode).
+        self._unpack_head = (_HEAD_BE if big else _HEAD_LE).unpack_from
+        self._unpack_prefix = (_PREFIX_BE if big else _PREFIX_LE).unpack_from
+        self._unpack_feedback_head = (_FEEDBACK_HEAD_BE if big else _FEEDBACK_HEAD_LE).unpack_from
+        self._unpack_joints = (_JOINTS_BE if big else _JOINTS_LE).unpack_from
+        tables = _BOUND_BE if big else _BOUND_LE
+        self._req_motion = tables.req_motion
+        self._req_io = tables.req_io
+        self._req_state = tables.req_state
+        self._rep_motion = tables.rep_motion
+        self._rep_io = tables.rep_io
+        self._rep_state = tables.rep_state
         self._buf = b""
         self._pos = 0
 
@@ -222,10 +276,12 @@ class FrameDecoder:
 
     def feed(self, data: bytes | bytearray | memoryview) -> None:
         """Append received bytes; nothing is parsed until :meth:`next_frame`."""
-        if self._pos == len(self._buf):
-            # nothing pending (the normal case): keep the chunk itself, no copy for bytes
+        if not self._buf:
+            # Nothing pending (the normal case): keep the chunk itself, no copy for bytes.
+            # Every method that consumes the last buffered byte resets ``_buf`` to b"" and
+            # ``_pos`` to 0, so an empty ``_buf`` is the whole test (cheaper than comparing
+            # ``_pos`` with ``len(_buf)``) and ``_pos`` is already 0.
             self._buf = data if type(data) is bytes else bytes(data)
-            self._pos = 0
             return
         if self._pos:
             self._buf = self._buf[self._pos :]
@@ -239,9 +295,9 @@ class FrameDecoder:
         size = len(buf)
         if size - pos >= FRAME_OVERHEAD:
             # hot path: prefix and header in one unpack
-            length, msg_type, comm_type, reply_type = self._head.unpack_from(buf, pos)
+            length, msg_type, comm_type, reply_type = self._unpack_head(buf, pos)
         elif size - pos >= PREFIX_SIZE:
-            (length,) = self._prefix.unpack_from(buf, pos)
+            (length,) = self._unpack_prefix(buf, pos)
         else:
             return None
         if length < MIN_LENGTH_PREFIX or length > MAX_LENGTH_PREFIX:
@@ -273,34 +329,75 @@ class FrameDecoder:
         """
         # The framing of _next_message, inlined: this path decodes every state
         # message a client receives, and the extra call costs ~5 % of it.
-        table = (
-            _REP_STATE_FROM
-            if port is _STATE
-            else _REP_MOTION_FROM
-            if port is _MOTION
-            else _REP_IO_FROM
-        )
         buf = self._buf
         pos = self._pos
         size = len(buf)
-        if size - pos < FRAME_OVERHEAD:
-            return self._next_message(table)  # partial: the general path decides
-        length, msg_type, _, _ = self._head.unpack_from(buf, pos)
-        end = pos + PREFIX_SIZE + length
-        if length < MIN_LENGTH_PREFIX or length > MAX_LENGTH_PREFIX or end > size:
-            return self._next_message(table)  # bad prefix or incomplete
-        if end == size:
-            self._buf = b""
-            self._pos = 0
-        elif end > _COMPACT_AFTER:
-            self._buf = buf[end:]
-            self._pos = 0
-        else:
-            self._pos = end
-        unpack_from = table.get(msg_type)
-        if unpack_from is None:
-            return UnknownMessage(msg_type, buf[pos + FRAME_OVERHEAD : end])
-        return unpack_from(buf, pos + FRAME_OVERHEAD, end, self._order)
+        if size - pos >= _FEEDBACK_HEAD_SIZE:
+            # One unpack reads prefix, header and what would be JOINT_FEEDBACK's groupNo,
+            # validFields and time; other types ignore the last three (they may be the
+            # next frame's bytes: harmless, any 4 bytes unpack as a float).
+            length, msg_type, _, _, group_no, valid_fields, time = self._unpack_feedback_head(
+                buf, pos
+            )
+            end = pos + PREFIX_SIZE + length
+            if (
+                msg_type == _JOINT_FEEDBACK
+                and length == _FEEDBACK_LENGTH  # within 12..548: no separate bounds test
+                and port is _STATE
+                and end <= size
+            ):
+                # The state stream (JOINT_FEEDBACK at 40 Hz per group and client), decoded
+                # right here exactly as JointFeedback.unpack_from does, without the call
+                # to it and without a second unpack for groupNo/validFields/time.
+                if end == size:
+                    self._buf = b""
+                    self._pos = 0
+                elif end > _COMPACT_AFTER:
+                    self._buf = buf[end:]
+                    self._pos = 0
+                else:
+                    self._pos = end
+                joints = self._unpack_joints
+                return _new_feedback(
+                    JointFeedback,
+                    (
+                        group_no,
+                        valid_fields,
+                        time,
+                        joints(buf, pos + _FEEDBACK_POS_AT),
+                        joints(buf, pos + _FEEDBACK_VEL_AT),
+                        joints(buf, pos + _FEEDBACK_ACC_AT),
+                    ),
+                )
+            if MIN_LENGTH_PREFIX <= length <= MAX_LENGTH_PREFIX and end <= size:
+                if end == size:
+                    self._buf = b""
+                    self._pos = 0
+                elif end > _COMPACT_AFTER:
+                    self._buf = buf[end:]
+                    self._pos = 0
+                else:
+                    self._pos = end
+                table = (  # inline, not _reply_table(): RobotStatus comes every cycle too
+                    self._rep_state
+                    if port is _STATE
+                    else self._rep_motion
+                    if port is _MOTION
+                    else self._rep_io
+                )
+                unpack_from = table.get(msg_type)
+                if unpack_from is None:
+                    return UnknownMessage(msg_type, buf[pos + FRAME_OVERHEAD : end])
+                return unpack_from(buf, pos + FRAME_OVERHEAD, end)
+        # partial, a bad prefix, or a frame too short to be JOINT_FEEDBACK (a 16-byte
+        # PING reply): the general path decides
+        return self._next_message(self._reply_table(port))
+
+    def _reply_table(self, port: Port) -> dict[int, _BoundUnpackFrom]:
+        """The bound decoders of ``port``'s replies (for next_reply's cold paths)."""
+        if port is _STATE:
+            return self._rep_state
+        return self._rep_motion if port is _MOTION else self._rep_io
 
     def next_request(self, port: Port) -> WireMessage | None:
         """:meth:`next_frame` then :func:`decode_request` in one step (exact sizes only).
@@ -309,23 +406,23 @@ class FrameDecoder:
         :func:`sizes.check_request` instead.
         """
         table = (
-            _REQ_MOTION_FROM
+            self._req_motion
             if port is _MOTION
-            else _REQ_STATE_FROM
+            else self._req_state
             if port is _STATE
-            else _REQ_IO_FROM
+            else self._req_io
         )
         return self._next_message(table)
 
-    def _next_message(self, table: Mapping[int, _UnpackFrom]) -> WireMessage | None:
+    def _next_message(self, table: Mapping[int, _BoundUnpackFrom]) -> WireMessage | None:
         # Same framing as next_frame, kept inline: a helper call costs ~10 % here.
         buf = self._buf
         pos = self._pos
         size = len(buf)
         if size - pos >= FRAME_OVERHEAD:
-            length, msg_type, _, _ = self._head.unpack_from(buf, pos)
+            length, msg_type, _, _ = self._unpack_head(buf, pos)
         elif size - pos >= PREFIX_SIZE:
-            (length,) = self._prefix.unpack_from(buf, pos)
+            (length,) = self._unpack_prefix(buf, pos)
         else:
             return None
         if length < MIN_LENGTH_PREFIX or length > MAX_LENGTH_PREFIX:
@@ -348,7 +445,7 @@ class FrameDecoder:
         unpack_from = table.get(msg_type)
         if unpack_from is None:
             return UnknownMessage(msg_type, buf[start:end])
-        return unpack_from(buf, start, end, self._order)
+        return unpack_from(buf, start, end)
 
     def frames(self) -> Iterator[Frame]:
         """Every whole frame currently buffered (stops at the first incomplete one)."""
@@ -417,36 +514,47 @@ REPLY_CLASSES: Final[Mapping[Port, Mapping[int, type[Message]]]] = MappingProxyT
 )
 """Client side: what the controller sends on each port, by msg_type."""
 
-# Plain dicts of bound ``unpack`` methods for the hot path (Enum attribute access and
-# MappingProxyType lookups cost more than the decoding of a small body).
-_Unpack: TypeAlias = Callable[[bytes, ByteOrder], Message]
+_BoundUnpackFrom: TypeAlias = Callable[[bytes, int, int], Message]
+"""A class's ``unpack_from`` with the byte order fixed: ``(buffer, start, end) -> message``."""
 
 
-def _unpackers(table: Mapping[int, type[Message]]) -> dict[int, _Unpack]:
-    return {msg_type: cls.unpack for msg_type, cls in table.items()}
+@dataclass(frozen=True, slots=True)
+class _BoundTables:
+    """Plain dicts msg_type -> bound decoder, per port and role, for one byte order.
+
+    Plain dicts because Enum attribute access and MappingProxyType lookups cost
+    more than the decoding of a small body; pre-bound to the byte order so the
+    hot path does not test it per message (see ``Message._bind_unpack_from``).
+    A slotted class, not a NamedTuple: Python 3.11 specialises slot reads, not
+    NamedTuple field reads, and ``decode_reply`` reads one per frame.
+    """
+
+    req_motion: dict[int, _BoundUnpackFrom]
+    req_io: dict[int, _BoundUnpackFrom]
+    req_state: dict[int, _BoundUnpackFrom]
+    rep_motion: dict[int, _BoundUnpackFrom]
+    rep_io: dict[int, _BoundUnpackFrom]
+    rep_state: dict[int, _BoundUnpackFrom]
 
 
-_UnpackFrom: TypeAlias = Callable[[bytes, int, int, ByteOrder], Message]
+def _bound_tables(order: ByteOrder) -> _BoundTables:
+    def bind(table: Mapping[int, type[Message]]) -> dict[int, _BoundUnpackFrom]:
+        return {msg_type: cls._bind_unpack_from(order) for msg_type, cls in table.items()}
+
+    return _BoundTables(
+        req_motion=bind(REQUEST_CLASSES[Port.MOTION]),
+        req_io=bind(REQUEST_CLASSES[Port.IO]),
+        req_state=bind(REQUEST_CLASSES[Port.STATE]),
+        rep_motion=bind(REPLY_CLASSES[Port.MOTION]),
+        rep_io=bind(REPLY_CLASSES[Port.IO]),
+        rep_state=bind(REPLY_CLASSES[Port.STATE]),
+    )
 
 
-def _unpackers_from(table: Mapping[int, type[Message]]) -> dict[int, _UnpackFrom]:
-    return {msg_type: cls.unpack_from for msg_type, cls in table.items()}
-
-
-_REQ_MOTION_FROM: Final = _unpackers_from(REQUEST_CLASSES[Port.MOTION])
-_REQ_IO_FROM: Final = _unpackers_from(REQUEST_CLASSES[Port.IO])
-_REQ_STATE_FROM: Final = _unpackers_from(REQUEST_CLASSES[Port.STATE])
-_REP_MOTION_FROM: Final = _unpackers_from(REPLY_CLASSES[Port.MOTION])
-_REP_IO_FROM: Final = _unpackers_from(REPLY_CLASSES[Port.IO])
-_REP_STATE_FROM: Final = _unpackers_from(REPLY_CLASSES[Port.STATE])
+_BOUND_LE: Final = _bound_tables(ByteOrder.LITTLE)
+_BOUND_BE: Final = _bound_tables(ByteOrder.BIG)
 _MOTION: Final = Port.MOTION
 _STATE: Final = Port.STATE
-_REQ_MOTION: Final = _unpackers(REQUEST_CLASSES[Port.MOTION])
-_REQ_IO: Final = _unpackers(REQUEST_CLASSES[Port.IO])
-_REQ_STATE: Final = _unpackers(REQUEST_CLASSES[Port.STATE])
-_REP_MOTION: Final = _unpackers(REPLY_CLASSES[Port.MOTION])
-_REP_IO: Final = _unpackers(REPLY_CLASSES[Port.IO])
-_REP_STATE: Final = _unpackers(REPLY_CLASSES[Port.STATE])
 
 
 def decode_request(frame: Frame, order: ByteOrder, port: Port) -> WireMessage:
@@ -458,12 +566,17 @@ def decode_request(frame: Frame, order: ByteOrder, port: Port) -> WireMessage:
     instead, which trims surplus bytes and answers short ones.
     """
     msg_type, _, _, body = frame
-    unpack = (_REQ_MOTION if port is _MOTION else _REQ_STATE if port is _STATE else _REQ_IO).get(
-        msg_type
-    )
-    if unpack is None:
+    tables = _BOUND_BE if order == ">" else _BOUND_LE
+    unpack_from = (
+        tables.req_motion
+        if port is _MOTION
+        else tables.req_state
+        if port is _STATE
+        else tables.req_io
+    ).get(msg_type)
+    if unpack_from is None:
         return UnknownMessage(msg_type, body)
-    return unpack(body, order)
+    return unpack_from(body, 0, len(body))
 
 
 def decode_reply(frame: Frame, order: ByteOrder, port: Port) -> WireMessage:
@@ -473,9 +586,14 @@ def decode_reply(frame: Frame, order: ByteOrder, port: Port) -> WireMessage:
     wrong size raises :class:`RemoteProtocolError` (MotoROS sends exact sizes).
     """
     msg_type, _, _, body = frame
-    unpack = (_REP_STATE if port is _STATE else _REP_MOTION if port is _MOTION else _REP_IO).get(
-        msg_type
-    )
-    if unpack is None:
+    tables = _BOUND_BE if order == ">" else _BOUND_LE
+    unpack_from = (
+        tables.rep_state
+        if port is _STATE
+        else tables.rep_motion
+        if port is _MOTION
+        else tables.rep_io
+    ).get(msg_type)
+    if unpack_from is None:
         return UnknownMessage(msg_type, body)
-    return unpack(body, order)
+    return unpack_from(body, 0, len(body))

@@ -31,7 +31,7 @@ import enum
 import struct
 from collections.abc import Callable, Iterable, Sequence
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Any, ClassVar, Final, NamedTuple, Self, TypeAlias, cast
+from typing import TYPE_CHECKING, Any, ClassVar, Final, NamedTuple, Self, TypeAlias, TypeVar, cast
 
 from pymotoros.errors import LocalProtocolError, RemoteProtocolError
 from pymotoros.protocol.constants import (
@@ -135,8 +135,21 @@ class _Kind(enum.Enum):
 
 _I32, _U32, _F32, _JOINTS = _Kind.I32, _Kind.U32, _Kind.F32, _Kind.JOINTS
 
-_tnew: Final[Callable[..., Any]] = tuple.__new__
-"""Builds a message from its field values without validation (decode path only)."""
+_T = TypeVar("_T")
+
+if TYPE_CHECKING:
+
+    def _tnew(cls: type[_T], values: Iterable[Any], /) -> _T:
+        """Typed view of ``tuple.__new__`` (see below)."""
+
+else:
+    # Builds a message from its field values without validation (decode path only).
+    # Typed above as returning ``cls``'s instance, so that decoders need no runtime
+    # ``typing.cast`` call (a Python-level call per message on the hot path).
+    _tnew = tuple.__new__
+
+_AnyTuple: TypeAlias = tuple[Any, ...]
+"""For ``cast``: naming the alias once avoids building ``tuple[Any, ...]`` on every call."""
 
 
 def _structs(body_format: str) -> tuple[struct.Struct, struct.Struct]:
@@ -219,7 +232,7 @@ class Message:
     def _validated(cls, message: Self) -> Self:
         """Check every field; return the message with joint arrays as tuples."""
         owner = cls.__name__
-        values = list(cast(tuple[Any, ...], message))
+        values = list(cast(_AnyTuple, message))
         changed = False
         for index, (name, kind) in enumerate(cls.FIELDS):
             value = values[index]
@@ -239,16 +252,16 @@ class Message:
                 _check_float(owner, name, value)
             else:
                 _check_int(owner, name, value, kind)
-        return cast(Self, _tnew(cls, values)) if changed else message
+        return _tnew(cls, values) if changed else message
 
     def __eq__(self, other: object) -> bool:
-        return type(self) is type(other) and tuple.__eq__(cast(tuple[Any, ...], self), other)
+        return type(self) is type(other) and tuple.__eq__(cast(_AnyTuple, self), other)
 
     def __ne__(self, other: object) -> bool:
         return not self == other
 
     def __hash__(self) -> int:
-        return tuple.__hash__(cast(tuple[Any, ...], self))
+        return tuple.__hash__(cast(_AnyTuple, self))
 
     def __bool__(self) -> bool:
         """A message is a message, even with an empty body (tuples would say False)."""
@@ -256,7 +269,7 @@ class Message:
 
     def _flat(self) -> list[Any]:
         flat: list[Any] = []
-        for (_name, kind), value in zip(self.FIELDS, cast(tuple[Any, ...], self), strict=True):
+        for (_name, kind), value in zip(self.FIELDS, cast(_AnyTuple, self), strict=True):
             if kind is _JOINTS:
                 flat.extend(value)
             else:
@@ -268,7 +281,7 @@ class Message:
         layout = _pick(self._STRUCTS, order)
         try:
             if self._FLAT:
-                return layout.pack(*cast(tuple[Any, ...], self))
+                return layout.pack(*cast(_AnyTuple, self))
             return layout.pack(*self._flat())
         except (struct.error, OverflowError, TypeError) as exc:  # only after _replace()
             raise LocalProtocolError(f"cannot pack {self!r}: {exc}") from None
@@ -281,7 +294,7 @@ class Message:
             raise _size_error(cls, body, layout.size)
         raw = layout.unpack(body)
         if cls._FLAT:
-            return cast(Self, _tnew(cls, raw))
+            return _tnew(cls, raw)
         values: list[object] = []
         index = 0
         for _name, kind in cls.FIELDS:
@@ -291,12 +304,43 @@ class Message:
             else:
                 values.append(raw[index])
                 index += 1
-        return cast(Self, _tnew(cls, values))
+        return _tnew(cls, values)
 
     @classmethod
     def unpack_from(cls, buffer: bytes, start: int, end: int, order: ByteOrder) -> Self:
         """``unpack(buffer[start:end])``; hot types override it to skip the slice copy."""
         return cls.unpack(buffer[start:end], order)
+
+    @classmethod
+    def _bind_unpack_from(cls, order: ByteOrder) -> Callable[[bytes, int, int], Message]:
+        """``unpack_from`` with ``order`` fixed, for the decoders' per-order tables.
+
+        Decoding is the same; only the per-message work that depends on the byte
+        order alone (``order == ">"``, picking the ``Struct``, looking up its
+        method) moves out of the hot path into this call, made once per type and
+        order at import. Flat fixed layouts decoded by :meth:`Message.unpack` get
+        a closure over their ``Struct``; the hot JOINT_FEEDBACK and
+        JOINT_TRAJ_PT_FULL override this; any other type calls its own
+        :meth:`unpack_from`.
+        """
+        if cls._FLAT and cls.unpack.__func__ is Message.unpack.__func__:  # type: ignore[attr-defined]
+            layout = _pick(cls._STRUCTS, order)
+            size = layout.size
+            unpack_fields = layout.unpack_from  # bound once: no attribute lookup per message
+
+            def unpack_flat(buffer: bytes, start: int, end: int) -> Message:
+                if end - start != size:
+                    raise _size_error(cls, buffer[start:end], size)
+                return _tnew(cls, unpack_fields(buffer, start))
+
+            return unpack_flat
+
+        unpack_from = cls.unpack_from
+
+        def unpack_other(buffer: bytes, start: int, end: int) -> Message:
+            return unpack_from(buffer, start, end, order)
+
+        return unpack_other
 
 
 def _register(cls: type[Message]) -> None:
@@ -544,20 +588,48 @@ class JointFeedback(Message, _GroupRecord):
         else:
             head, joints = _RECORD_HEAD_LE, _JOINTS_LE
         group_no, valid_fields, time = head.unpack_from(buffer, start)
-        return cast(
-            Self,
-            _tnew(
+        return _tnew(
+            cls,
+            (
+                group_no,
+                valid_fields,
+                time,
+                joints.unpack_from(buffer, start + _RECORD_POS_AT),
+                joints.unpack_from(buffer, start + _RECORD_VEL_AT),
+                joints.unpack_from(buffer, start + _RECORD_ACC_AT),
+            ),
+        )
+
+    @classmethod
+    def _bind_unpack_from(cls, order: ByteOrder) -> Callable[[bytes, int, int], JointFeedback]:
+        """:meth:`unpack_from` for one byte order: the client's per-frame work on the state port.
+
+        Same decoding; the Structs' bound methods are picked once here, so each
+        message costs no byte-order test and no attribute lookup.
+        """
+        head, joints = (
+            (_RECORD_HEAD_BE, _JOINTS_BE) if order == ">" else (_RECORD_HEAD_LE, _JOINTS_LE)
+        )
+        unpack_head = head.unpack_from
+        unpack_joints = joints.unpack_from
+
+        def unpack_feedback(buffer: bytes, start: int, end: int) -> JointFeedback:
+            if end - start != BODY_SIZE_GROUP_RECORD:
+                raise _size_error(cls, buffer[start:end], BODY_SIZE_GROUP_RECORD)
+            group_no, valid_fields, time = unpack_head(buffer, start)
+            return _tnew(
                 cls,
                 (
                     group_no,
                     valid_fields,
                     time,
-                    joints.unpack_from(buffer, start + _RECORD_POS_AT),
-                    joints.unpack_from(buffer, start + _RECORD_VEL_AT),
-                    joints.unpack_from(buffer, start + _RECORD_ACC_AT),
+                    unpack_joints(buffer, start + _RECORD_POS_AT),
+                    unpack_joints(buffer, start + _RECORD_VEL_AT),
+                    unpack_joints(buffer, start + _RECORD_ACC_AT),
                 ),
-            ),
-        )
+            )
+
+        return unpack_feedback
 
 
 _register(JointFeedback)
@@ -690,21 +762,46 @@ class JointTrajPtFull(Message, _Point):
         else:
             head, joints = _POINT_HEAD_LE, _JOINTS_LE
         group_no, sequence, valid_fields, time = head.unpack_from(buffer, start)
-        return cast(
-            Self,
-            _tnew(
+        return _tnew(
+            cls,
+            (
+                group_no,
+                sequence,
+                valid_fields,
+                time,
+                joints.unpack_from(buffer, start + _POINT_POS_AT),
+                joints.unpack_from(buffer, start + _POINT_VEL_AT),
+                joints.unpack_from(buffer, start + _POINT_ACC_AT),
+            ),
+        )
+
+    @classmethod
+    def _bind_unpack_from(cls, order: ByteOrder) -> Callable[[bytes, int, int], JointTrajPtFull]:
+        """:meth:`unpack_from` for one byte order: the motion server's per-point work."""
+        head, joints = (
+            (_POINT_HEAD_BE, _JOINTS_BE) if order == ">" else (_POINT_HEAD_LE, _JOINTS_LE)
+        )
+        unpack_head = head.unpack_from
+        unpack_joints = joints.unpack_from
+
+        def unpack_point(buffer: bytes, start: int, end: int) -> JointTrajPtFull:
+            if end - start != BODY_SIZE_TRAJ_PT_FULL:
+                raise _size_error(cls, buffer[start:end], BODY_SIZE_TRAJ_PT_FULL)
+            group_no, sequence, valid_fields, time = unpack_head(buffer, start)
+            return _tnew(
                 cls,
                 (
                     group_no,
                     sequence,
                     valid_fields,
                     time,
-                    joints.unpack_from(buffer, start + _POINT_POS_AT),
-                    joints.unpack_from(buffer, start + _POINT_VEL_AT),
-                    joints.unpack_from(buffer, start + _POINT_ACC_AT),
+                    unpack_joints(buffer, start + _POINT_POS_AT),
+                    unpack_joints(buffer, start + _POINT_VEL_AT),
+                    unpack_joints(buffer, start + _POINT_ACC_AT),
                 ),
-            ),
-        )
+            )
+
+        return unpack_point
 
 
 _register(JointTrajPtFull)
@@ -821,7 +918,7 @@ class MotoGetDhParametersReply(Message, _Dh):
                 for name, value in zip(DhLink._fields, link, strict=True):
                     _check_float(owner, f"groups[{g}][{k}].{name}", value)
             checked.append(row)
-        return cast(Self, _tnew(cls, (tuple(checked),)))
+        return _tnew(cls, (tuple(checked),))
 
     @classmethod
     def for_groups(cls, groups: Iterable[Iterable[Sequence[float]]]) -> Self:
@@ -850,7 +947,7 @@ class MotoGetDhParametersReply(Message, _Dh):
             )
             for base in range(0, MAX_GROUPS * per_group, per_group)
         )
-        return cast(Self, _tnew(cls, (groups,)))
+        return _tnew(cls, (groups,))
 
 
 _DH_STRUCTS: Final = _structs(f"{MAX_GROUPS * MAX_DH_LINKS * _FLOATS_PER_LINK}f")
@@ -894,7 +991,7 @@ class MotoJointTrajPtFullEx(Message, _FullEx):
         groups = tuple(message.groups)
         _check_records(owner, message.number_of_valid_groups, groups, JointTrajPtExData)
         _check_int(owner, "sequence", message.sequence, _I32)
-        return cast(Self, _tnew(cls, (message.number_of_valid_groups, message.sequence, groups)))
+        return _tnew(cls, (message.number_of_valid_groups, message.sequence, groups))
 
     @classmethod
     def for_groups(cls, sequence: int, groups: Iterable[JointTrajPtExData]) -> Self:
@@ -923,7 +1020,7 @@ class MotoJointTrajPtFullEx(Message, _FullEx):
             JointTrajPtExData.unpack(body[start : start + BODY_SIZE_GROUP_RECORD], order)
             for start in range(head.size, expected, BODY_SIZE_GROUP_RECORD)
         )
-        return cast(Self, _tnew(cls, (n, sequence, records)))
+        return _tnew(cls, (n, sequence, records))
 
 
 _EX_HEAD_STRUCTS: Final = _structs("ii")
@@ -945,7 +1042,7 @@ class MotoJointFeedbackEx(Message, _FeedbackEx):
     def _validated(cls, message: Self) -> Self:
         groups = tuple(message.groups)
         _check_records(cls.__name__, message.number_of_valid_groups, groups, JointFeedback)
-        return cast(Self, _tnew(cls, (message.number_of_valid_groups, groups)))
+        return _tnew(cls, (message.number_of_valid_groups, groups))
 
     @classmethod
     def for_groups(cls, groups: Iterable[JointFeedback]) -> Self:
@@ -971,7 +1068,7 @@ class MotoJointFeedbackEx(Message, _FeedbackEx):
             JointFeedback.unpack_from(body, start, start + BODY_SIZE_GROUP_RECORD, order)
             for start in range(head.size, end, BODY_SIZE_GROUP_RECORD)
         )
-        return cast(Self, _tnew(cls, (n, records)))
+        return _tnew(cls, (n, records))
 
 
 _EX_COUNT_STRUCTS: Final = _structs("i")
@@ -1125,7 +1222,7 @@ class IoErrorReply(Message, _ErrorReply):
         """60 bytes; the trailing 52 are not checked (MotoROS leaves them zero)."""
         if len(body) != BODY_SIZE_MOTION_REPLY:
             raise _size_error(cls, body, BODY_SIZE_MOTION_REPLY)
-        return cast(Self, _tnew(cls, _pick(cls._STRUCTS, order).unpack_from(body)))
+        return _tnew(cls, _pick(cls._STRUCTS, order).unpack_from(body))
 
 
 for _cls in (

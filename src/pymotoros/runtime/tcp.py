@@ -238,6 +238,9 @@ class FramedService(TcpService):
         super().__init__(capacity, motion_queued)
         self._order = order
         self._bad_prefix_reply = bad_prefix_reply
+        # Log as the concrete server's module (pymotoros.runtime.motion_server …), so that
+        # a user filtering by logger sees its protocol events where they belong.
+        self._log = logging.getLogger(type(self).__module__)
 
     async def frames(self, conn: Connection) -> AsyncGenerator[Frame, None]:
         """The whole frames ``conn`` sends, until EOF."""
@@ -250,7 +253,7 @@ class FramedService(TcpService):
                     frame = decoder.next_frame()
                 except RemoteProtocolError as exc:
                     dropped = decoder.discard()
-                    logger.warning(
+                    self._log.warning(
                         "%s: client %s: %s; %d bytes dropped, answered INVALID/3001",
                         self.name,
                         conn.peer,
@@ -263,7 +266,7 @@ class FramedService(TcpService):
                     break
                 if fragmented:
                     fragmented = False
-                    logger.debug(
+                    self._log.debug(
                         "%s: client %s: type %d arrived in several pieces and was "
                         "reassembled (a real controller would answer 3001)",
                         self.name,
