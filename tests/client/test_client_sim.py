@@ -103,9 +103,15 @@ async def test_not_ready_reasons(
     reason: NotReadySubcode,
     enable_refused: bool,
 ) -> None:
+    seen = robot.state.status_count
     sim.api(path, body)
+    # A status sent after the operator's action: the cached one may predate enable(), and
+    # MotoROS (like us) reads the controller's signals every 10 ms, so only a fresh
+    # "motion impossible" says that CHECK_MOTION_READY will give the reason.
     await robot.wait_until(
-        lambda s: s.status is not None and not s.status.motion_possible, 5.0, "motion impossible"
+        lambda s: s.status_count > seen and s.status is not None and not s.status.motion_possible,
+        5.0,
+        "a fresh status saying motion is impossible",
     )
     readiness = await robot.check_motion_ready()
     assert readiness.reason is reason

@@ -35,6 +35,9 @@ from pymotoros.controller.api import (
     StatusData,
 )
 from pymotoros.controller.cell import CellConfig, default_cell
+from pymotoros.controller.commands import MotionCommands
+from pymotoros.controller.connections import ConnectionEvents
+from pymotoros.controller.incmove_task import IncMoveTask
 from pymotoros.controller.inform import JobRunner, builtin_jobs, load_jobs
 from pymotoros.controller.io_image import IoImage
 from pymotoros.controller.machine import (
@@ -44,9 +47,13 @@ from pymotoros.controller.machine import (
     OperatorState,
     ServoPower,
 )
-from pymotoros.controller.motoros import DhTable, MotoRos
+from pymotoros.controller.motoros import MotoRos
 from pymotoros.controller.processes import ControllerClock, Scheduler
+from pymotoros.controller.queues import MotionQueues
+from pymotoros.controller.readiness import Readiness
 from pymotoros.controller.servo import IN_MOTION_PULSES, ServoGroup
+from pymotoros.controller.skillsnd import SkillListeners
+from pymotoros.controller.trajectory import DhTable, TrajectoryPoints
 from pymotoros.controller.units import RosConverter
 from pymotoros.models.controllers import M_REGISTER_BASE
 from pymotoros.motion import GroupAxes, GroupInterpolator, to_pulses
@@ -123,22 +130,39 @@ class VirtualController:
             )
             for g, axes in enumerate(self._axes)
         )
-        self._motoros = MotoRos(
+        # MotoROS (see motoros.py for the map of its parts)
+        num_groups = len(self._axes)
+        self._queues = queues = MotionQueues(self._interps)
+        self._readiness = readiness = Readiness(
+            cell, self._io, self._machine, self._runner, queues, num_groups
+        )
+        self._commands = commands = MotionCommands(
+            self._clock, self._io, self._machine, readiness, queues, self._axes
+        )
+        self._trajectory = trajectory = TrajectoryPoints(
+            cell, self._machine, readiness, commands, self._axes, self._interps, self._servos
+        )
+        self._inc_move = inc_move = IncMoveTask(
             cell,
             self._clock,
             self._io,
             self._machine,
             self._runner,
+            readiness,
+            queues,
             self._axes,
             self._interps,
             self._servos,
         )
+        self._skills = skills = SkillListeners(cell, readiness, num_groups)
+        self._connections = ConnectionEvents(self._io, queues)
+        self._motoros = MotoRos(readiness, inc_move, trajectory, skills)
         self._scheduler = Scheduler(self._clock)
         self._observers: list[SnapshotObserver] = []
         self._power_losses = 0
         self._eco_idle_ms = None if cell.servo.eco_idle_s is None else cell.servo.eco_idle_s * 1000
         self._machine.add_observer(self._on_operator_change)
-        self._motoros.boot()
+        readiness.boot()
 
     # ================================================================== time
 
@@ -171,15 +195,16 @@ class VirtualController:
         runner = self._runner
         if (now >= runner.wake_ms or self._io.changes != runner.seen_changes) and runner.step(now):
             machine.fire(Event.END_JOB, now)
-        motoros = self._motoros
-        if now >= motoros.next_monitor_ms:
-            motoros.monitor_tick(now)
+        readiness = self._readiness
+        if now >= readiness.next_monitor_ms:
+            readiness.monitor_tick(now)
             if self._eco_idle_ms is not None:
                 self._check_eco_idle(now, self._eco_idle_ms)
-        if not motoros.inc_move_tick():
+        inc_move = self._inc_move
+        if not inc_move.inc_move_tick():
             for servo in self._servos:
                 servo.idle()
-        motoros.fill_tick()
+        inc_move.fill_tick()
         scheduler = self._scheduler
         if scheduler.busy:
             scheduler.advance()
@@ -209,27 +234,27 @@ class VirtualController:
 
     def motion_ctrl(self, group_no: int, command: int) -> Outcome | Pending:
         return self._scheduler.run(
-            self._motoros.motion_ctrl(group_no, command),
+            self._commands.motion_ctrl(group_no, command),
             lambda: MotionCommand.describe(command),
         )
 
     def trajectory_point(self, sequence: int, point: PointData) -> Outcome | Pending:
         return self._scheduler.run(
-            self._motoros.trajectory_point(sequence, point),
+            self._trajectory.trajectory_point(sequence, point),
             lambda: f"JOINT_TRAJ_PT_FULL sequence {sequence} group {point.group_no}",
         )
 
     def trajectory_point_ex(self, sequence: int, points: Sequence[PointData]) -> Outcome | Pending:
         return self._scheduler.run(
-            self._motoros.trajectory_point_ex(sequence, points),
+            self._trajectory.trajectory_point_ex(sequence, points),
             lambda: f"JOINT_TRAJ_PT_FULL_EX sequence {sequence}",
         )
 
     def select_tool(self, group_no: int, tool: int) -> Outcome:
-        return self._motoros.select_tool(group_no, tool)
+        return self._trajectory.select_tool(group_no, tool)
 
     def dh_parameters(self) -> DhTable | None:
-        return self._motoros.dh_parameters()
+        return self._trajectory.dh_parameters()
 
     # ================================================================== IO
 
@@ -259,20 +284,20 @@ class VirtualController:
     # ================================================================== connections
 
     def motion_connected(self) -> None:
-        self._motoros.motion_connected()
+        self._connections.motion_connected()
 
     def motion_disconnected(self) -> None:
         """Clears the queues: our documented improvement over MotoROS (§2.2)."""
-        self._motoros.motion_disconnected()
+        self._connections.motion_disconnected()
 
     def state_clients_changed(self, count: int) -> None:
-        self._motoros.state_clients_changed(count)
+        self._connections.state_clients_changed(count)
 
     def io_connected(self) -> None:
-        self._motoros.io_connected()
+        self._connections.io_connected()
 
     def has_queued_motion(self) -> bool:
-        return self._motoros.has_queued_motion()
+        return self._queues.has_queued_motion()
 
     # ================================================================== state server
 
@@ -292,7 +317,7 @@ class VirtualController:
 
     def in_motion(self) -> bool:
         """Any queue holds increments, or |feedback − command| > 30 pulses on a valid axis."""
-        if self._motoros.has_queued_motion():
+        if self._queues.has_queued_motion():
             return True
         powered = self._machine.state.drives_powered
         tick = self._clock.tick_count
@@ -308,7 +333,7 @@ class VirtualController:
 
     def robot_status(self) -> StatusData:
         """§2.6, from the status monitor's last reading."""
-        mr = self._motoros
+        mr = self._readiness
         servo, eco = mr.servo_reading
         return StatusData(
             drives_powered=int(servo and not eco),
@@ -349,7 +374,7 @@ class VirtualController:
             estop=s.estopped,
             hold=s.hold,
             alarms=tuple(a.info for a in s.alarms),
-            motion_ready=self._motoros.motion_ready,
+            motion_ready=self._readiness.motion_ready,
             groups=tuple(groups),
             errors=tuple(e.info for e in s.errors),
         )
@@ -512,12 +537,12 @@ class VirtualController:
         s = self._machine.state
         if not s.servo_on or s.eco:
             return
-        if now - self._motoros.last_motion_ms >= idle_ms and now - s.servo_ready_at_ms >= idle_ms:
+        if now - self._inc_move.last_motion_ms >= idle_ms and now - s.servo_ready_at_ms >= idle_ms:
             logger.info("eco mode: no motion for %d s", idle_ms // 1000)
             self._fire(Event.ENTER_ECO)
 
     def _on_skill(self, slave: int, text: str) -> None:
-        self._motoros.on_skill(slave, text)
+        self._skills.on_skill(slave, text)
 
     def _on_operator_change(self, old: OperatorState, new: OperatorState, event: Event) -> None:
         if old.drives_powered and not new.drives_powered:
@@ -526,7 +551,7 @@ class VirtualController:
             self._runner.start()
         elif old.job_running and not new.job_running:
             self._runner.stop()
-            self._motoros.on_job_stopped()
+            self._skills.on_job_stopped()
         if self._observers:
             snap = self.snapshot()
             for observer in self._observers:

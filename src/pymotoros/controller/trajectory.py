@@ -1,0 +1,242 @@
+"""Trajectory points (reference §3.4, §3.5), SELECT_TOOL (§5.8) and GET_DH_PARAMETERS (§5.9).
+
+:class:`TrajectoryPoints` validates JOINT_TRAJ_PT_FULL (14) and JOINT_TRAJ_PT_FULL_EX
+(2016) in MotoROS's order and hands accepted points to the group's interpolator.
+Where the real code has an outright bug we do the safe thing (see
+``docs/fidelity.md``); quirks clients may rely on are kept.
+"""
+
+from __future__ import annotations
+
+import logging
+from collections.abc import Sequence
+from typing import Final
+
+from pymotoros.controller.api import Outcome, PointData
+from pymotoros.controller.cell import CellConfig
+from pymotoros.controller.commands import MotionCommands
+from pymotoros.controller.machine import OperatorMachine
+from pymotoros.controller.processes import Process
+from pymotoros.controller.readiness import Readiness
+from pymotoros.controller.replies import SUCCESS, reply
+from pymotoros.controller.servo import ServoGroup
+from pymotoros.motion import (
+    GroupAxes,
+    GroupInterpolator,
+    Refusal,
+    TrajPoint,
+    check_speed,
+    check_start,
+    check_time,
+)
+from pymotoros.protocol.constants import (
+    MAX_DH_LINKS,
+    MAX_GROUPS,
+    REQUIRED_POINT_FIELDS,
+    InvalidSubcode,
+    ResultCode,
+)
+
+logger = logging.getLogger(__name__)
+
+REQUIRED_FIELDS: Final = int(REQUIRED_POINT_FIELDS)
+"""time | position | velocity (7), as a plain int (IntFlag arithmetic is slow)."""
+
+DhTable = tuple[tuple[tuple[float, float, float, float], ...], ...]
+
+
+class TrajectoryPoints:
+    """Validation and acceptance of trajectory points; the tool and DH requests."""
+
+    def __init__(
+        self,
+        cell: CellConfig,
+        machine: OperatorMachine,
+        readiness: Readiness,
+        commands: MotionCommands,
+        axes: Sequence[GroupAxes],
+        interpolators: Sequence[GroupInterpolator],
+        servos: Sequence[ServoGroup],
+    ) -> None:
+        self._cell = cell
+        self._machine = machine
+        self._readiness = readiness
+        self._commands = commands
+        self._axes = tuple(axes)
+        self._interpolators = tuple(interpolators)
+        self._servos = tuple(servos)
+        self._num_groups = len(self._axes)
+        self._sets_jog_tool = cell.controller.sets_jog_tool
+        self.jog_tool = [0] * self._num_groups
+        """The pendant's jog tool per group (SELECT_TOOL sets it, except on FS100)."""
+        self._busy_replies = tuple(
+            reply(
+                ResultCode.BUSY,
+                detail=f"group {g}: the previous point is still being interpolated; send it again",
+            )
+            for g in range(self._num_groups)
+        )
+
+    # ================================================================== trajectory points
+
+    def _to_traj(self, point: PointData) -> TrajPoint:
+        return TrajPoint(point.time, tuple(point.pos[:8]), tuple(point.vel[:8]))
+
+    def _refused(self, refusal: Refusal, point_desc: str, group_no: int | None = None) -> Outcome:
+        return reply(
+            ResultCode.INVALID,
+            int(refusal.subcode),
+            f"{point_desc}: {refusal.message}",
+            group_no=group_no,
+        )
+
+    def trajectory_point(self, sequence: int, point: PointData) -> Process:
+        """JOINT_TRAJ_PT_FULL (14): §3.4, in its order."""
+        if not self._readiness.motion_ready:
+            return self._readiness.not_ready()
+        g = point.group_no
+        if not 0 <= g < self._num_groups:
+            return self._bad_group(g)
+        if point.valid_fields & REQUIRED_FIELDS != REQUIRED_FIELDS:
+            return self._insufficient(point)
+        traj = self._to_traj(point)
+        refusal = check_time(traj)
+        if refusal is not None:
+            return self._refused(refusal, f"point {sequence} of group {g}")
+        if sequence == 0:
+            if self._machine.state.eco:
+                yield from self._commands.eco_reenable()
+            return self._start_group(g, traj, sequence)
+        if sequence > 0:
+            return self._queue_point(g, traj, sequence)
+        return self._bad_sequence(sequence)
+
+    def trajectory_point_ex(self, sequence: int, points: Sequence[PointData]) -> Process:
+        """MOTO_JOINT_TRAJ_PT_FULL_EX (2016): §3.5, in its order."""
+        if not points:
+            return reply(
+                ResultCode.INVALID,
+                InvalidSubcode.DATA,
+                "JOINT_TRAJ_PT_FULL_EX with no group; MotoROS 1.9.12 would resend its "
+                "previous reply, we answer 3010 INVALID_DATA",
+                group_no=-1,
+            )
+        if not self._readiness.motion_ready:
+            return self._readiness.not_ready(group_no=points[-1].group_no)
+        for p in points:
+            g = p.group_no
+            if not 0 <= g < self._num_groups:
+                return self._bad_group(g, group_no=g)
+            if self._interpolators[g].pending:
+                return self._busy(g, sequence, group_no=g)
+            if p.valid_fields & REQUIRED_FIELDS != REQUIRED_FIELDS:
+                return self._insufficient(p, group_no=g)
+        last = points[-1].group_no
+        for p in points:
+            g = p.group_no
+            traj = self._to_traj(p)
+            if sequence == 0:
+                if self._machine.state.eco:
+                    yield from self._commands.eco_reenable()
+                outcome = self._start_group(g, traj, sequence, group_no=g)
+            elif sequence > 0:
+                outcome = self._queue_point(g, traj, sequence, group_no=g)
+            else:
+                return self._bad_sequence(sequence, group_no=g)
+            if not outcome.ok:
+                return outcome
+        return reply(ResultCode.SUCCESS, group_no=last)
+
+    def _bad_group(self, g: int, group_no: int | None = None) -> Outcome:
+        return reply(
+            ResultCode.INVALID,
+            InvalidSubcode.GROUPNO,
+            f"group {g} does not exist ({self._num_groups} group(s): 0..{self._num_groups - 1})",
+            group_no=group_no,
+        )
+
+    def _insufficient(self, point: PointData, group_no: int | None = None) -> Outcome:
+        return reply(
+            ResultCode.INVALID,
+            InvalidSubcode.DATA_INSUFFICIENT,
+            f"group {point.group_no}: valid_fields {point.valid_fields} lacks "
+            "time (1), position (2) or velocity (4); MotoROS needs all three",
+            group_no=group_no,
+        )
+
+    def _bad_sequence(self, sequence: int, group_no: int | None = None) -> Outcome:
+        return reply(
+            ResultCode.INVALID,
+            InvalidSubcode.SEQUENCE,
+            f"sequence {sequence} is negative; a trajectory starts at 0",
+            group_no=group_no,
+        )
+
+    def _busy(self, g: int, sequence: int, group_no: int | None = None) -> Outcome:
+        if group_no is None:
+            return self._busy_replies[g]
+        return reply(ResultCode.BUSY, detail=self._busy_replies[g].detail, group_no=group_no)
+
+    def _start_group(
+        self, g: int, traj: TrajPoint, sequence: int, group_no: int | None = None
+    ) -> Outcome:
+        """Sequence 0: initialise the group, then the interleaved start/speed checks."""
+        interp = self._interpolators[g]
+        queued = len(interp.queue)
+        if queued or interp.pending:
+            logger.warning(
+                "group %d: trajectory start (sequence 0) while %d increments are queued%s; "
+                "MotoROS makes no BUSY check here and re-initialises the group, the queued "
+                "motion still runs",
+                g,
+                queued,
+                " and a point is pending" if interp.pending else "",
+            )
+        commanded = tuple(self._servos[g].command)
+        interp.start(traj, commanded)
+        refusal = check_start(traj, commanded, self._axes[g])
+        if refusal is not None:
+            return self._refused(refusal, f"point 0 of group {g}", group_no=group_no)
+        return reply(ResultCode.SUCCESS, group_no=group_no)
+
+    def _queue_point(
+        self, g: int, traj: TrajPoint, sequence: int, group_no: int | None = None
+    ) -> Outcome:
+        interp = self._interpolators[g]
+        if interp.pending:
+            return self._busy(g, sequence, group_no=group_no)
+        refusal = check_speed(traj, self._axes[g])
+        if refusal is not None:
+            return self._refused(refusal, f"point {sequence} of group {g}", group_no=group_no)
+        interp.set_pending(traj)
+        return reply(ResultCode.SUCCESS, group_no=group_no)
+
+    # ================================================================== tools and DH
+
+    def select_tool(self, group_no: int, tool: int) -> Outcome:
+        """SELECT_TOOL (§5.8)."""
+        if not 0 <= group_no < self._num_groups:
+            return self._bad_group(group_no)
+        if not 0 <= tool <= 63:
+            return reply(
+                ResultCode.INVALID,
+                InvalidSubcode.DATA_TOOLNO,
+                f"tool {tool} is outside 0..63",
+            )
+        self._interpolators[group_no].tool = tool
+        if self._sets_jog_tool:
+            self.jog_tool[group_no] = tool
+        return SUCCESS
+
+    def dh_parameters(self) -> DhTable:
+        """GET_DH_PARAMETERS (§5.9): 4 groups × 8 links × (theta, d, a, alpha)."""
+        zero = (0.0, 0.0, 0.0, 0.0)
+        table = []
+        for g in range(MAX_GROUPS):
+            links: list[tuple[float, float, float, float]] = []
+            if g < self._num_groups:
+                model = self._cell.groups[g]
+                links = [(d.theta, d.d, d.a, d.alpha) for d in model.dh]
+            links += [zero] * (MAX_DH_LINKS - len(links))
+            table.append(tuple(links))
+        return tuple(table)
