@@ -17,6 +17,7 @@ from __future__ import annotations
 import csv
 import logging
 import math
+import sys
 from pathlib import Path
 from typing import IO, Final
 
@@ -218,7 +219,7 @@ def interpolate(
     except TrajectoryRejectedError as exc:
         raise _Rejected(f"MotoROS would refuse {exc}") from None
     if output is None:
-        write_increments(click.get_text_stream("stdout"), time_ms, increments)
+        write_increments(sys.stdout, time_ms, increments)
     else:
         with output.open("w", encoding="utf-8", newline="") as out:
             write_increments(out, time_ms, increments)
