@@ -7,6 +7,8 @@ from __future__ import annotations
 
 from typing import Final
 
+from pymotoros.protocol.constants import INT32_MAX as _INT32_MAX
+from pymotoros.protocol.constants import INT32_MIN as _INT32_MIN
 from pymotoros.protocol.constants import MAX_PULSE_AXES
 
 SLOTS: Final = MAX_PULSE_AXES
@@ -24,5 +26,6 @@ MAX_POINT_TIME_S: Final = 14400.0
 INVALID_AXIS_FACTOR: Final = 1.0
 """Pulse ratio MotoROS uses for a slot with no axis (§5.7, the default branch)."""
 
-INT32_MIN: Final = -(2**31)
-INT32_MAX: Final = 2**31 - 1
+INT32_MIN: Final = _INT32_MIN
+INT32_MAX: Final = _INT32_MAX
+"""C's int range, as on the wire (``protocol.constants``)."""

@@ -70,6 +70,18 @@ MAX_WIRE_MESSAGE_SIZE: Final = 552
 MAX_LENGTH_PREFIX: Final = MAX_WIRE_MESSAGE_SIZE - PREFIX_SIZE
 """Largest sane value of the length prefix (548)."""
 
+INT32_MIN: Final = -(2**31)
+"""Smallest value of a signed 32-bit wire field (every integer field but the IO values)."""
+
+INT32_MAX: Final = 2**31 - 1
+"""Largest value of a signed 32-bit wire field; also the bound of C's int conversions."""
+
+UINT32_MAX: Final = 2**32 - 1
+"""Largest value of an unsigned 32-bit wire field (IO and M-register values, §1.6)."""
+
+MAX_TOOL_NUMBER: Final = 63
+"""Highest tool file number: tools 0..63, anything else is refused with 3017 (§5.8)."""
+
 # --------------------------------------------------------------------------- byte order and ports
 
 

@@ -35,9 +35,12 @@ from typing import TYPE_CHECKING, Any, ClassVar, Final, NamedTuple, Self, TypeAl
 
 from pymotoros.errors import LocalProtocolError, RemoteProtocolError
 from pymotoros.protocol.constants import (
+    INT32_MAX,
+    INT32_MIN,
     MAX_DH_LINKS,
     MAX_GROUPS,
     MAX_JOINTS,
+    UINT32_MAX,
     ByteOrder,
     MsgType,
     ValidFields,
@@ -86,9 +89,6 @@ __all__ = [
 
 # --------------------------------------------------------------------------- ranges and sizes
 
-INT32_MIN: Final = -(2**31)
-INT32_MAX: Final = 2**31 - 1
-UINT32_MAX: Final = 2**32 - 1
 
 BODY_SIZE_GROUP_RECORD: Final = 132
 """groupNo, validFields, time, pos[10], vel[10], acc[10]: JOINT_FEEDBACK body and the
