@@ -177,10 +177,10 @@ def test_dx100_multi_group_pstart_tsync_pwait() -> None:
     assert outcome.ok, outcome.detail
     names = sorted(name for name, _ in vc.job_position)
     assert names == ["INIT_ROS", "ROS_R1", "ROS_R2"]  # parent at PWAIT, both subs at WAIT
-    assert vc.motoros.skill_flags == [True, True]
+    assert vc.motoros.skill_flags == (True, True)
     assert command(vc, CMD.STOP_TRAJ_MODE).ok
     tick_until(vc, lambda: vc.job_position == (), "all tasks ended")
-    assert vc.motoros.skill_flags == [False, False]
+    assert vc.motoros.skill_flags == (False, False)
     settle_monitor(vc)
     assert command(vc, CMD.CHECK_MOTION_READY).subcode == Nr.NOT_STARTED
 
@@ -231,4 +231,4 @@ def test_dx100_single_arm_needs_and_gets_the_skill_flag() -> None:
     assert command(vc, CMD.START_TRAJ_MODE).ok
     assert vc.motoros.skill_flags[0]
     vc.press_estop(True)  # the job is aborted: the skill command ends with it
-    assert vc.motoros.skill_flags == [False, False]
+    assert vc.motoros.skill_flags == (False, False)

@@ -21,7 +21,7 @@ def test_everything_wrong_peels_off_in_order() -> None:
     vc.force_io(PFL_STOP, 1)  # PFL event while the job is ready: latch set
     settle_monitor(vc)
     vc.force_io(PFL_STOP, 0)
-    vc.motoros.inc_move_error = True  # the latch the IncMove task sets
+    vc.motoros.latch_inc_move_error("test")  # the latch the IncMove task sets
     vc.set_hold(True)
     vc.raise_error(2010, 0, "error")
     vc.set_remote(False)
@@ -47,9 +47,9 @@ def test_everything_wrong_peels_off_in_order() -> None:
     vc.set_hold(False)
     # 5011 and 5012 come before 5008 NOT_STARTED although the job is not running
     assert subcode(vc) == Nr.PFL_ACTIVE
-    vc.motoros.pfl_during_move = False
+    vc.motoros.clear_pfl_latch()
     assert subcode(vc) == Nr.INC_MOVE_ERROR
-    vc.motoros.inc_move_error = False
+    vc.motoros.clear_inc_move_error()
     assert subcode(vc) == Nr.NOT_STARTED
 
 
@@ -79,7 +79,7 @@ def test_inc_move_error_before_waiting_ros() -> None:
 def test_skillsend_when_889_seen_without_edge() -> None:
     """OT#889 on without a rising edge the monitor saw: job-ready false → 5010."""
     vc = ready()
-    vc.motoros.job_ready = False
+    vc.motoros.forget_job_ready()
     vc.motoros.status_update()
     assert subcode(vc) == Nr.SKILLSEND
     assert "rising edge" in command(vc, CMD.CHECK_MOTION_READY).detail

@@ -203,6 +203,13 @@ class FakeController:
     def reset(self) -> None:
         self.alarms.clear()
 
+    # --- FaultInjection
+    def raise_error(self, code: int, subcode: int = 0, text: str = "") -> None:
+        self._record(f"error {code}")
+
+    def set_io_api_failure(self, *, reads: bool = False, writes: bool = False) -> None:
+        self._record(f"io failure reads={reads} writes={writes}")
+
     def force_io(self, address: int, value: int) -> None:
         if address >= 1_000_000:
             if not 0 <= value <= 0xFFFF:

@@ -13,6 +13,8 @@ from pymotoros.runtime.app import SimulatorApp
 from pymotoros.runtime.http_api import create_http_app
 from pymotoros.runtime.ticker import LatenessStats, TickStats
 
+from pymotoros.protocol.constants import MotionCommand
+
 from .support import LOCAL
 
 STATS = TickStats(4.0, 1000, 2, 0, 0, LatenessStats(0.05, 0.2, 1.5))
@@ -109,6 +111,56 @@ async def test_errors_are_4xx_with_a_message(
     doc = r.json()
     assert set(doc) == {"error"}
     assert fragment in doc["error"]
+
+
+# every POST endpoint, from a controller in trajectory mode; the expected motion_ready
+# is what CHECK_MOTION_READY answers once MotoROS's status monitor has seen the action
+_POSTS: list[tuple[str, dict[str, object] | None, bool]] = [
+    ("/api/estop", {"pressed": True}, False),
+    ("/api/estop", {"pressed": False}, True),
+    ("/api/hold", {"on": True}, False),
+    ("/api/hold", {"on": False}, True),
+    ("/api/mode", {"mode": "teach"}, False),
+    ("/api/mode", {"mode": "play"}, True),
+    ("/api/remote", {"on": False}, False),
+    ("/api/remote", {"on": True}, True),
+    ("/api/servo", {"on": False}, False),
+    ("/api/servo", {"on": True}, True),
+    ("/api/alarm", {"code": 4107, "subcode": 1, "text": "TEST"}, False),
+    ("/api/reset", None, True),
+    ("/api/error", {"code": 1234}, True),
+    ("/api/io", {"address": 50727, "value": 1}, True),  # eco mode: not tested by §4.1
+    ("/api/io", {"address": 81702, "value": 1}, False),  # PFL stop: 5011
+    ("/api/io", {"address": 50070, "value": 0}, False),  # the job stops
+    ("/api/io", {"address": 20010, "value": 1}, True),
+    ("/api/io/failure", {"reads": True, "writes": True}, True),
+    ("/api/tick/reset", None, True),
+]
+
+
+@pytest.mark.parametrize(("path", "body", "expected"), _POSTS)
+async def test_every_answer_has_the_motion_ready_of_a_fresh_read(
+    api: httpx.AsyncClient,
+    controller: VirtualController,
+    path: str,
+    body: dict[str, object] | None,
+    expected: bool,
+) -> None:
+    """No answer is stale: it agrees with GET /api/state and with CHECK_MOTION_READY."""
+    assert controller.wait_for(controller.motion_ctrl(0, MotionCommand.START_TRAJ_MODE)).ok
+    controller.run_ticks(5)
+    assert (await api.get("/api/state")).json()["motion_ready"] is True
+    # the action lands between two status-monitor runs
+    assert controller.motoros.next_monitor_ms > controller.time_ms
+    r = await api.post(path, json=body) if body is not None else await api.post(path)
+    assert r.status_code == 200, r.text
+    answer = r.json()["motion_ready"]
+    assert answer is expected
+    assert (await api.get("/api/state")).json()["motion_ready"] is answer
+    controller.motoros.status_update()  # the monitor's next run sees the action
+    check = controller.wait_for(controller.motion_ctrl(0, MotionCommand.CHECK_MOTION_READY))
+    assert check.ok is answer, check.detail
+    assert controller.snapshot().motion_ready is answer
 
 
 async def test_malformed_json_is_422(api: httpx.AsyncClient) -> None:

@@ -13,6 +13,7 @@ The contract with the servers is :mod:`pymotoros.controller.api`.
 from pymotoros.controller.api import (
     AlarmInfo,
     ControllerSnapshot,
+    FaultInjection,
     FeedbackData,
     GroupSnapshot,
     IoRead,
@@ -41,6 +42,7 @@ __all__ = [
     "CellConfig",
     "ControllerSnapshot",
     "EstopSource",
+    "FaultInjection",
     "FeedbackData",
     "GroupSnapshot",
     "InitialState",

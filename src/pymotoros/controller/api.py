@@ -164,6 +164,9 @@ class ControllerSnapshot:
     hold: bool
     alarms: tuple[AlarmInfo, ...]
     motion_ready: bool
+    """Motion-ready as of the current signals: what CHECK_MOTION_READY answers once
+    MotoROS's 10 ms status monitor has seen them (never a reading from before the
+    latest operator action)."""
     groups: tuple[GroupSnapshot, ...]
     errors: tuple[AlarmInfo, ...] = field(default=())
 
@@ -268,4 +271,17 @@ class OperatorPanel(Protocol):
         Unlike a client's write, any readable area may be forced (inputs, specific
         outputs, control status …): this is the operator simulating the cell.
         """
+        ...
+
+
+class FaultInjection(Protocol):
+    """Faults the operator can inject beyond the pendant's keys (HTTP ``/api/error``,
+    ``/api/io/failure``). ``VirtualController`` implements it."""
+
+    def raise_error(self, code: int, subcode: int = 0, text: str = "") -> None:
+        """An operator error (50014): refuses motion with 5002 until reset; not an alarm."""
+        ...
+
+    def set_io_api_failure(self, *, reads: bool = False, writes: bool = False) -> None:
+        """Make client IO reads (1004) and/or writes (1005) fail."""
         ...

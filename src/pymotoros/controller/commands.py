@@ -9,20 +9,17 @@ error cancel, job start and the OT#890 output.
 from __future__ import annotations
 
 import logging
-from collections.abc import Sequence
 from typing import Final
 
 from pymotoros.controller import signals
 from pymotoros.controller.api import Outcome
-from pymotoros.controller.io_image import IoImage
-from pymotoros.controller.machine import Event, OperatorMachine, ServoPower
+from pymotoros.controller.context import MotoRosContext
+from pymotoros.controller.machine import Event, ServoPower
 from pymotoros.controller.polling import POLL_LIMIT_MS, Waiting, wait_until
-from pymotoros.controller.processes import ControllerClock, Process
-from pymotoros.controller.queues import MotionQueues
+from pymotoros.controller.processes import Process
 from pymotoros.controller.readiness import Readiness
 from pymotoros.controller.replies import SUCCESS, reply
 from pymotoros.controller.stop_motion import stop_motion
-from pymotoros.motion import GroupAxes
 from pymotoros.protocol.constants import InvalidSubcode, MotionCommand, ResultCode
 
 logger = logging.getLogger(__name__)
@@ -37,21 +34,13 @@ QUEUE_COUNT_FAILURE: Final = -1
 class MotionCommands:
     """MOTO_MOTION_CTRL processing: trajectory mode, servos, alarm reset, stop, queue count."""
 
-    def __init__(
-        self,
-        clock: ControllerClock,
-        io: IoImage,
-        machine: OperatorMachine,
-        readiness: Readiness,
-        queues: MotionQueues,
-        axes: Sequence[GroupAxes],
-    ) -> None:
-        self._clock = clock
-        self._io = io
-        self._machine = machine
+    def __init__(self, ctx: MotoRosContext, readiness: Readiness) -> None:
+        self._clock = ctx.clock
+        self._io = ctx.io
+        self._machine = ctx.machine
         self._readiness = readiness
-        self._queues = queues
-        self._axes = tuple(axes)
+        self._queues = ctx.queues
+        self._axes = ctx.axes
         self._num_groups = len(self._axes)
 
     def motion_ctrl(self, group_no: int, command: int) -> Process:
@@ -143,9 +132,7 @@ class MotionCommands:
         readiness = self._readiness
         # 1. status update; clear the PFL and inc-move-error latches
         readiness.status_update()
-        readiness.pfl_during_move = False
-        readiness.inc_move_error = False
-        readiness.refresh_ready()
+        readiness.clear_latches()
         # 2. already ready
         if readiness.motion_ready:
             return SUCCESS

@@ -5,8 +5,7 @@ from __future__ import annotations
 import logging
 
 from pymotoros.controller import signals
-from pymotoros.controller.io_image import IoImage
-from pymotoros.controller.queues import MotionQueues
+from pymotoros.controller.context import MotoRosContext
 
 logger = logging.getLogger(__name__)
 
@@ -14,9 +13,9 @@ logger = logging.getLogger(__name__)
 class ConnectionEvents:
     """What MotoROS does when a client connects to or leaves one of its servers."""
 
-    def __init__(self, io: IoImage, queues: MotionQueues) -> None:
-        self._io = io
-        self._queues = queues
+    def __init__(self, ctx: MotoRosContext) -> None:
+        self._io = ctx.io
+        self._queues = ctx.queues
 
     def motion_connected(self) -> None:
         self._io.set(signals.MOTION_SERVER_CONNECTED, 1)

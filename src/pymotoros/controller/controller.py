@@ -37,6 +37,7 @@ from pymotoros.controller.api import (
 from pymotoros.controller.cell import CellConfig, default_cell
 from pymotoros.controller.commands import MotionCommands
 from pymotoros.controller.connections import ConnectionEvents
+from pymotoros.controller.context import MotoRosContext
 from pymotoros.controller.incmove_task import IncMoveTask
 from pymotoros.controller.inform import JobRunner, builtin_jobs, load_jobs
 from pymotoros.controller.io_image import IoImage
@@ -131,31 +132,24 @@ class VirtualController:
             for g, axes in enumerate(self._axes)
         )
         # MotoROS (see motoros.py for the map of its parts)
-        num_groups = len(self._axes)
         self._queues = queues = MotionQueues(self._interps)
-        self._readiness = readiness = Readiness(
-            cell, self._io, self._machine, self._runner, queues, num_groups
+        ctx = MotoRosContext(
+            cell=cell,
+            clock=self._clock,
+            io=self._io,
+            machine=self._machine,
+            runner=self._runner,
+            queues=queues,
+            axes=self._axes,
+            interpolators=self._interps,
+            servos=self._servos,
         )
-        self._commands = commands = MotionCommands(
-            self._clock, self._io, self._machine, readiness, queues, self._axes
-        )
-        self._trajectory = trajectory = TrajectoryPoints(
-            cell, self._machine, readiness, commands, self._axes, self._interps, self._servos
-        )
-        self._inc_move = inc_move = IncMoveTask(
-            cell,
-            self._clock,
-            self._io,
-            self._machine,
-            self._runner,
-            readiness,
-            queues,
-            self._axes,
-            self._interps,
-            self._servos,
-        )
-        self._skills = skills = SkillListeners(cell, readiness, num_groups)
-        self._connections = ConnectionEvents(self._io, queues)
+        self._readiness = readiness = Readiness(ctx)
+        self._commands = commands = MotionCommands(ctx, readiness)
+        self._trajectory = trajectory = TrajectoryPoints(ctx, readiness, commands)
+        self._inc_move = inc_move = IncMoveTask(ctx, readiness)
+        self._skills = skills = SkillListeners(ctx, readiness)
+        self._connections = ConnectionEvents(ctx)
         self._motoros = MotoRos(readiness, inc_move, trajectory, skills)
         self._scheduler = Scheduler(self._clock)
         self._observers: list[SnapshotObserver] = []
@@ -374,7 +368,7 @@ class VirtualController:
             estop=s.estopped,
             hold=s.hold,
             alarms=tuple(a.info for a in s.alarms),
-            motion_ready=self._readiness.motion_ready,
+            motion_ready=self._readiness.outlook(),
             groups=tuple(groups),
             errors=tuple(e.info for e in s.errors),
         )

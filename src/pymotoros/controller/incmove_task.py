@@ -12,20 +12,14 @@ from __future__ import annotations
 
 import enum
 import logging
-from collections.abc import Sequence
 
 from pymotoros.controller import signals
-from pymotoros.controller.cell import CellConfig
-from pymotoros.controller.inform import JobRunner
-from pymotoros.controller.io_image import IoImage
-from pymotoros.controller.machine import Event, OperatorMachine, OperatorState, ServoPower
+from pymotoros.controller.context import MotoRosContext
+from pymotoros.controller.machine import Event, OperatorState, ServoPower
 from pymotoros.controller.polling import POLL_LIMIT_MS, POLL_MS
-from pymotoros.controller.processes import ControllerClock
-from pymotoros.controller.queues import MotionQueues
 from pymotoros.controller.readiness import Readiness
-from pymotoros.controller.servo import ServoGroup
 from pymotoros.controller.stop_motion import stop_motion_now
-from pymotoros.motion import GroupAxes, GroupInterpolator, inc_move
+from pymotoros.motion import inc_move
 
 logger = logging.getLogger(__name__)
 
@@ -42,28 +36,17 @@ class IncMoveReturn(enum.Enum):
 class IncMoveTask:
     """The IncMove task (increments to the servos) and the AddToIncQueue tasks."""
 
-    def __init__(
-        self,
-        cell: CellConfig,
-        clock: ControllerClock,
-        io: IoImage,
-        machine: OperatorMachine,
-        runner: JobRunner,
-        readiness: Readiness,
-        queues: MotionQueues,
-        axes: Sequence[GroupAxes],
-        interpolators: Sequence[GroupInterpolator],
-        servos: Sequence[ServoGroup],
-    ) -> None:
-        self._clock = clock
-        self._io = io
-        self._machine = machine
-        self._runner = runner
+    def __init__(self, ctx: MotoRosContext, readiness: Readiness) -> None:
+        cell = ctx.cell
+        self._clock = ctx.clock
+        self._io = ctx.io
+        self._machine = ctx.machine
+        self._runner = ctx.runner
         self._readiness = readiness
-        self._queues = queues
-        self.axes = tuple(axes)
-        self.interpolators = tuple(interpolators)
-        self._servos = tuple(servos)
+        self._queues = ctx.queues
+        self.axes = ctx.axes
+        self.interpolators = ctx.interpolators
+        self._servos = ctx.servos
         self._num_groups = len(self.axes)
         self.last_motion_ms = 0
         """Controller time of the last increment the servos took (for the eco idle timer)."""
@@ -217,7 +200,7 @@ class IncMoveTask:
             and self._readiness.pfl_option
             and not (s.estop or s.hold or s.alarms or s.errors)
         ):
-            readiness.pfl_during_move = True
+            readiness.latch_pfl_event()
         if result is IncMoveReturn.UNDER_ENERGY_SAVING:
             now = self._clock.time_ms
             self._machine.fire(Event.WAKE_FROM_ECO, now)
@@ -228,8 +211,7 @@ class IncMoveTask:
             "until the next START_TRAJ_MODE",
             result.value,
         )
-        readiness.inc_move_error = True
-        readiness.inc_move_error_reason = f"an incremental move was refused: {result.value}"
+        readiness.latch_inc_move_error(f"an incremental move was refused: {result.value}")
         stop_motion_now(readiness, self._queues)
         return False
 

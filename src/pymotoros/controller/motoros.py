@@ -30,7 +30,11 @@ from pymotoros.motion import GroupAxes, GroupInterpolator
 
 
 class MotoRos:
-    """MotoROS's flags and per-group state, read (and for tests, set) through one object."""
+    """MotoROS's flags and per-group state, read (and for tests, changed) through one object.
+
+    Every change goes through a :class:`~pymotoros.controller.readiness.Readiness`
+    method, so the motion-ready flag it shows is never stale.
+    """
 
     def __init__(
         self,
@@ -47,39 +51,42 @@ class MotoRos:
     # ---------------------------------------------------------------- readiness
     @property
     def motion_ready(self) -> bool:
+        """MotoROS's flag, as its status monitor last saw the signals (§4.1)."""
         return self._readiness.motion_ready
 
     @property
     def job_ready(self) -> bool:
         return self._readiness.job_ready
 
-    @job_ready.setter
-    def job_ready(self, value: bool) -> None:
-        self._readiness.job_ready = value
-
     @property
     def inc_move_error(self) -> bool:
         return self._readiness.inc_move_error
-
-    @inc_move_error.setter
-    def inc_move_error(self, value: bool) -> None:
-        self._readiness.inc_move_error = value
 
     @property
     def pfl_during_move(self) -> bool:
         return self._readiness.pfl_during_move
 
-    @pfl_during_move.setter
-    def pfl_during_move(self, value: bool) -> None:
-        self._readiness.pfl_during_move = value
-
     @property
-    def skill_flags(self) -> list[bool]:
+    def skill_flags(self) -> tuple[bool, bool]:
         return self._readiness.skill_flags
 
     @property
     def next_monitor_ms(self) -> int:
         return self._readiness.next_monitor_ms
+
+    def latch_inc_move_error(self, reason: str) -> None:
+        """Set the 5012 latch as the IncMove task does (tests)."""
+        self._readiness.latch_inc_move_error(reason)
+
+    def clear_pfl_latch(self) -> None:
+        self._readiness.clear_pfl_latch()
+
+    def clear_inc_move_error(self) -> None:
+        self._readiness.clear_inc_move_error()
+
+    def forget_job_ready(self) -> None:
+        """Lose job-ready without an OT#889 edge (tests of the 5010 subcode)."""
+        self._readiness.forget_job_ready()
 
     def status_update(self) -> None:
         self._readiness.status_update()

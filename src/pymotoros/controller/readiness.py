@@ -14,11 +14,7 @@ from typing import Final
 
 from pymotoros.controller import signals
 from pymotoros.controller.api import Outcome
-from pymotoros.controller.cell import CellConfig
-from pymotoros.controller.inform import JobRunner
-from pymotoros.controller.io_image import IoImage
-from pymotoros.controller.machine import OperatorMachine
-from pymotoros.controller.queues import MotionQueues
+from pymotoros.controller.context import MotoRosContext
 from pymotoros.controller.replies import reply
 from pymotoros.protocol.constants import NotReadySubcode, ResultCode
 
@@ -27,39 +23,45 @@ logger = logging.getLogger(__name__)
 STATUS_PERIOD_MS: Final = 10
 """The status monitor reads the signals every 10 ms (§2.1 step 6, §5.1)."""
 
+_Reading = tuple[
+    tuple[int, ...], int, int, int, int, int, int, int, tuple[int, ...], int, int, tuple[int, ...]
+]
+"""alarm bits, error, play, teach, remote, operating, hold, servo, E-stop bits, OT#889,
+eco, PFL bits: one read of the monitored signals, in this order."""
+
 
 class Readiness:
-    """The status monitor's last reading, MotoROS's flags, and whether motion is possible."""
+    """The status monitor's last reading, MotoROS's flags, and whether motion is possible.
 
-    def __init__(
-        self,
-        cell: CellConfig,
-        io: IoImage,
-        machine: OperatorMachine,
-        runner: JobRunner,
-        queues: MotionQueues,
-        num_groups: int,
-    ) -> None:
-        self._io = io
-        self._machine = machine
-        self._runner = runner
-        self._queues = queues
-        self._num_groups = num_groups
+    The flags of ``Controller.h`` are read-only from outside: each change goes through
+    an intention-revealing method (:meth:`latch_pfl_event`, :meth:`latch_inc_move_error`,
+    :meth:`clear_latches`, :meth:`begin_stop` …) or through the status monitor, and every
+    one of them ends in :meth:`_refresh`, the single place :attr:`motion_ready` is
+    computed. The flag therefore always agrees with its inputs; no caller can leave it
+    stale. :meth:`outlook` answers what the flag will be once the monitor has seen the
+    current signals (the operator's view, between two 10 ms runs).
+    """
+
+    def __init__(self, ctx: MotoRosContext) -> None:
+        cell = ctx.cell
+        self._io = ctx.io
+        self._machine = ctx.machine
+        self._runner = ctx.runner
+        self._queues = ctx.queues
+        self._num_groups = ctx.num_groups
         self._dx100 = cell.controller.skillsnd
         self._pfl_signals = cell.controller.pfl_signals
-        self.pfl_option = cell.pfl
+        self.pfl_option: Final = cell.pfl
         """The PFL option flag read at start-up (GP_isPflEnabled)."""
 
-        # MotoROS flags (Controller.h)
-        self.motion_ready = False
-        self.job_ready = False
-        """Set on a rising edge of OT#889, cleared on its falling edge."""
-        self.stop_flag = False
-        self.pfl_during_move = False
-        self.inc_move_error = False
-        self.inc_move_error_reason = ""
-        self.skill_flags = [False, False]
-        """DX100 SKILLSND "ROS-START" flags for slave 1 and slave 2 (§4.3)."""
+        # MotoROS flags (Controller.h): change them only through the methods below
+        self._motion_ready = False
+        self._job_ready = False
+        self._stop_flag = False
+        self._pfl_during_move = False
+        self._inc_move_error = False
+        self._inc_move_error_reason = ""
+        self._skill_flags = (False, False)
         self.error_code = 0
         """ROBOT_STATUS error_code: the first active alarm's number (§2.6)."""
 
@@ -78,6 +80,129 @@ class Readiness:
         self.pfl: tuple[int, ...] = (0, 0, 0, 0, 0)
         self.next_monitor_ms = 0
         """Controller time of the status monitor's next run."""
+
+    # ================================================================== the flags, read-only
+
+    @property
+    def motion_ready(self) -> bool:
+        """§4.1, as of the status monitor's last reading and the current flags."""
+        return self._motion_ready
+
+    @property
+    def job_ready(self) -> bool:
+        """Set on a rising edge of OT#889, cleared on its falling edge."""
+        return self._job_ready
+
+    @property
+    def stop_flag(self) -> bool:
+        """StopMotion is in progress (§3.6)."""
+        return self._stop_flag
+
+    @property
+    def pfl_during_move(self) -> bool:
+        """The "PFL during ROS move" latch behind 5011 (§4.4)."""
+        return self._pfl_during_move
+
+    @property
+    def inc_move_error(self) -> bool:
+        """The inc-move-error latch behind 5012 (§5.6 step 6)."""
+        return self._inc_move_error
+
+    @property
+    def inc_move_error_reason(self) -> str:
+        return self._inc_move_error_reason
+
+    @property
+    def skill_flags(self) -> tuple[bool, bool]:
+        """DX100 SKILLSND "ROS-START" flags for slave 1 and slave 2 (§4.3)."""
+        return self._skill_flags
+
+    # ================================================================== changing them
+
+    def latch_pfl_event(self) -> None:
+        """An increment was refused for a PFL reason: 5011 until the next START_TRAJ_MODE."""
+        self._pfl_during_move = True
+        self._refresh()
+
+    def latch_inc_move_error(self, reason: str) -> None:
+        """An increment was refused: 5012 until the next START_TRAJ_MODE (§5.6 step 6)."""
+        self._inc_move_error = True
+        self._inc_move_error_reason = reason
+        self._refresh()
+
+    def clear_latches(self) -> None:
+        """START_TRAJ_MODE step 1: clear the PFL and inc-move-error latches (§3.2)."""
+        self._pfl_during_move = False
+        self._inc_move_error = False
+        self._refresh()
+
+    def clear_pfl_latch(self) -> None:
+        """Clear only the PFL latch (tests peel the NOT_READY conditions off one by one)."""
+        self._pfl_during_move = False
+        self._refresh()
+
+    def clear_inc_move_error(self) -> None:
+        """Clear only the inc-move-error latch (tests, as :meth:`clear_pfl_latch`)."""
+        self._inc_move_error = False
+        self._refresh()
+
+    def forget_job_ready(self) -> None:
+        """Lose the job-ready flag without an OT#889 edge (tests: the 5010 case of §4.2)."""
+        self._job_ready = False
+        self._refresh()
+
+    def begin_stop(self) -> None:
+        """StopMotion raises the stop flag: motion is not ready while it stops (§3.6)."""
+        self._stop_flag = True
+        self._refresh()
+
+    def end_stop(self) -> None:
+        """StopMotion is done: lower the stop flag."""
+        self._stop_flag = False
+        self._refresh()
+
+    def set_skill_flag(self, slave: int, on: bool) -> None:
+        """A SKILLSND "ROS-START" (on) or "ROS-STOP" (off) reached slave 1 or 2 (§4.3)."""
+        flags = list(self._skill_flags)
+        flags[slave - 1] = on
+        self._skill_flags = (flags[0], flags[1])
+        self._refresh()
+
+    def clear_skill_flags(self) -> None:
+        """The skill commands ended with the job (§4.3)."""
+        self._skill_flags = (False, False)
+        self._refresh()
+
+    def _refresh(self) -> None:
+        """The one place the motion-ready flag is computed (§4.1)."""
+        ready = self._ready(
+            self._job_ready, self.operating, self.remote, self._pfl_during_move, self.pfl
+        )
+        if ready != self._motion_ready:
+            logger.debug("motion ready: %s", ready)
+        self._motion_ready = ready
+
+    def _ready(
+        self,
+        job_ready: bool,
+        operating: int,
+        remote: int,
+        pfl_latched: bool,
+        pfl: tuple[int, ...],
+    ) -> bool:
+        """§4.1 for the given reading and latches, with the current stop and skill flags."""
+        ready = (
+            job_ready
+            and operating == 1
+            and remote == 1
+            and not (self.pfl_option and (pfl_latched or pfl_signals_active(pfl)))
+            and not self._inc_move_error
+            and not self._stop_flag
+        )
+        if ready and self._dx100:
+            skill = self._skill_flags
+            ready = skill[0] and (self._num_groups < 2 or skill[1])
+        return ready
 
     # ================================================================== start-up (§2.1)
 
@@ -101,23 +226,71 @@ class Readiness:
         if self._io.monitor_dirty:
             self.status_update()
 
+    def _read(self) -> _Reading:
+        """One read of every monitored signal."""
+        get = self._io.get
+        return (
+            tuple(get(a) for a in signals.ALARM_BITS),
+            get(signals.ERROR),
+            get(signals.PLAY),
+            get(signals.TEACH),
+            get(signals.REMOTE),
+            get(signals.OPERATING),
+            get(signals.HOLD),
+            get(signals.SERVO_ON),
+            tuple(get(a) for a in signals.ESTOP_BITS),
+            get(signals.ROS_READY),
+            get(signals.ECO_MODE),
+            tuple(get(a) for a in signals.PFL_BITS) if self._pfl_signals else (0, 0, 0, 0, 0),
+        )
+
+    def _edges(self, ros_ready: int, pfl: tuple[int, ...]) -> tuple[bool, bool]:
+        """(job-ready, PFL event) from the monitor's OT#889 and PFL edges (§2.6, §4.1).
+
+        OT#889's rising edge sets job-ready and its falling edge clears it; a PFL signal
+        that changes to active while the job is ready (PFL option on) is a PFL event.
+        """
+        job_ready = self._job_ready
+        if ros_ready != self.ros_ready:
+            job_ready = bool(ros_ready)
+        pfl_event = self.pfl_option and pfl != self.pfl and job_ready and pfl_signals_active(pfl)
+        return job_ready, pfl_event
+
+    def outlook(self) -> bool:
+        """The motion-ready flag once the monitor has seen the current signals.
+
+        MotoROS reads its inputs every 10 ms, so :attr:`motion_ready` may lag an
+        operator action by up to one monitor period. This is the same computation on
+        the signals as they are now, without the monitor's side effects: what a
+        CHECK_MOTION_READY will answer right after the monitor's next run.
+        """
+        if not self._io.monitor_dirty:
+            return self._motion_ready
+        reading = self._read()
+        pfl = reading[11]
+        job_ready, pfl_event = self._edges(reading[9], pfl)
+        latched = self._pfl_during_move or pfl_event
+        return self._ready(job_ready, reading[5], reading[4], latched, pfl)
+
     def status_update(self) -> None:
         """Ros_Controller_StatusUpdate: one read of every monitored signal, then the edges."""
         io = self._io
         io.monitor_dirty = False
-        get = io.get
-        alarm_bits = tuple(get(a) for a in signals.ALARM_BITS)
-        error = get(signals.ERROR)
-        play = get(signals.PLAY)
-        teach = get(signals.TEACH)
-        remote = get(signals.REMOTE)
-        operating = get(signals.OPERATING)
-        hold = get(signals.HOLD)
-        servo = get(signals.SERVO_ON)
-        estop_ok = tuple(get(a) for a in signals.ESTOP_BITS)
-        ros_ready = get(signals.ROS_READY)
-        eco = get(signals.ECO_MODE)
-        pfl = tuple(get(a) for a in signals.PFL_BITS) if self._pfl_signals else (0, 0, 0, 0, 0)
+        reading = self._read()
+        (
+            alarm_bits,
+            _error,
+            play,
+            teach,
+            remote,
+            operating,
+            _hold,
+            servo,
+            _estop_ok,
+            ros_ready,
+            _eco,
+            pfl,
+        ) = reading
 
         cleared: list[str] = []
         # alarm edge: refresh error_code; clear when at least one alarm is on
@@ -137,16 +310,14 @@ class Readiness:
             self.servo,
         ) and (remote != 1 or play != 1 or operating == 0 or servo == 0):
             cleared.append("mode/remote/operating/servo change")
-        # OT#889: rising edge sets job-ready, falling edge clears it and the queues
-        if ros_ready != self.ros_ready:
-            if ros_ready:
-                self.job_ready = True
-            else:
-                self.job_ready = False
-                cleared.append("OT#889 fell")
+        # OT#889: rising edge sets job-ready, falling edge clears it and the queues;
         # PFL: a signal changes while the job is ready and PFL is active
-        if self.pfl_option and pfl != self.pfl and self.job_ready and pfl_signals_active(pfl):
-            self.pfl_during_move = True
+        job_ready, pfl_event = self._edges(ros_ready, pfl)
+        if ros_ready != self.ros_ready and not ros_ready:
+            cleared.append("OT#889 fell")
+        self._job_ready = job_ready
+        if pfl_event:
+            self._pfl_during_move = True
             cleared.append("PFL event")
 
         (
@@ -162,48 +333,20 @@ class Readiness:
             self.ros_ready,
             self.eco,
             self.pfl,
-        ) = (
-            alarm_bits,
-            error,
-            play,
-            teach,
-            remote,
-            operating,
-            hold,
-            servo,
-            estop_ok,
-            ros_ready,
-            eco,
-            pfl,
-        )
+        ) = reading
         if cleared:
             queues = self._queues
             if queues.has_queued_motion() or queues.any_pending():
                 logger.info("queues cleared by the status monitor: %s", ", ".join(cleared))
             queues.clear()
-        self.refresh_ready()
-
-    def refresh_ready(self) -> None:
-        ready = (
-            self.job_ready
-            and self.operating == 1
-            and self.remote == 1
-            and not self.pfl_active
-            and not self.inc_move_error
-            and not self.stop_flag
-        )
-        if ready and self._dx100:
-            ready = self.skill_flags[0] and (self._num_groups < 2 or self.skill_flags[1])
-        if ready != self.motion_ready:
-            logger.debug("motion ready: %s", ready)
-        self.motion_ready = ready
+        self._refresh()
 
     @property
     def pfl_active(self) -> bool:
         """§4.1: only with the PFL option on YRC1000 / YRC1000micro builds."""
         if not self.pfl_option:
             return False
-        return self.pfl_during_move or pfl_signals_active(self.pfl)
+        return self._pfl_during_move or pfl_signals_active(self.pfl)
 
     @property
     def estopped(self) -> bool:
@@ -295,7 +438,7 @@ class Readiness:
             now = ", ".join(active) if active else "PFL signals clear, the event is latched"
             return f"{now}; START_TRAJ_MODE clears the latch"
         if sub is NotReadySubcode.INC_MOVE_ERROR:
-            return f"{self.inc_move_error_reason}; START_TRAJ_MODE clears it"
+            return f"{self._inc_move_error_reason}; START_TRAJ_MODE clears it"
         if sub is NotReadySubcode.NOT_STARTED:
             return "INIT_ROS is not running; START_TRAJ_MODE starts it"
         if sub is NotReadySubcode.WAITING_ROS:
@@ -307,13 +450,13 @@ class Readiness:
 
     def _skill_detail(self) -> str:
         reasons: list[str] = []
-        if self._dx100 and not self.skill_flags[0]:
+        if self._dx100 and not self._skill_flags[0]:
             reasons.append('SKILLSND "ROS-START" not received for slave 1')
-        if self._dx100 and self._num_groups > 1 and not self.skill_flags[1]:
+        if self._dx100 and self._num_groups > 1 and not self._skill_flags[1]:
             reasons.append('SKILLSND "ROS-START" not received for slave 2')
-        if not self.job_ready:
+        if not self._job_ready:
             reasons.append("OT#889 is on but its rising edge was not seen")
-        if self.stop_flag:
+        if self._stop_flag:
             reasons.append("a stop is in progress")
         return "; ".join(reasons)
 

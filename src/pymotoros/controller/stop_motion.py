@@ -16,19 +16,16 @@ STOP_WAIT_MS: Final = 20
 
 def stop_motion_now(readiness: Readiness, queues: MotionQueues) -> bool:
     """StopMotion from the IncMove task: no waiting (the task itself is the one stopping)."""
-    readiness.stop_flag = True
-    readiness.refresh_ready()
+    readiness.begin_stop()
     idle = not queues.any_pending()
     queues.clear()
-    readiness.stop_flag = False
-    readiness.refresh_ready()
+    readiness.end_stop()
     return idle
 
 
 def stop_motion(readiness: Readiness, queues: MotionQueues, clock: ControllerClock) -> Process:
     """StopMotion (§3.6): stop flag, wait ≤ 20 ms for the interpolators, clear, unflag."""
-    readiness.stop_flag = True
-    readiness.refresh_ready()
+    readiness.begin_stop()
     start = clock.time_ms
     while queues.any_pending():
         if clock.time_ms - start >= STOP_WAIT_MS:
@@ -36,8 +33,7 @@ def stop_motion(readiness: Readiness, queues: MotionQueues, clock: ControllerClo
         yield 1
     idle = not queues.any_pending()
     queues.clear()
-    readiness.stop_flag = False
-    readiness.refresh_ready()
+    readiness.end_stop()
     if idle:
         return SUCCESS
     return reply(

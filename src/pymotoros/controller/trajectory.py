@@ -13,16 +13,12 @@ from collections.abc import Sequence
 from typing import Final
 
 from pymotoros.controller.api import Outcome, PointData
-from pymotoros.controller.cell import CellConfig
 from pymotoros.controller.commands import MotionCommands
-from pymotoros.controller.machine import OperatorMachine
+from pymotoros.controller.context import MotoRosContext
 from pymotoros.controller.processes import Process
 from pymotoros.controller.readiness import Readiness
 from pymotoros.controller.replies import SUCCESS, reply
-from pymotoros.controller.servo import ServoGroup
 from pymotoros.motion import (
-    GroupAxes,
-    GroupInterpolator,
     Refusal,
     TrajPoint,
     check_speed,
@@ -48,23 +44,15 @@ DhTable = tuple[tuple[tuple[float, float, float, float], ...], ...]
 class TrajectoryPoints:
     """Validation and acceptance of trajectory points; the tool and DH requests."""
 
-    def __init__(
-        self,
-        cell: CellConfig,
-        machine: OperatorMachine,
-        readiness: Readiness,
-        commands: MotionCommands,
-        axes: Sequence[GroupAxes],
-        interpolators: Sequence[GroupInterpolator],
-        servos: Sequence[ServoGroup],
-    ) -> None:
+    def __init__(self, ctx: MotoRosContext, readiness: Readiness, commands: MotionCommands) -> None:
+        cell = ctx.cell
         self._cell = cell
-        self._machine = machine
+        self._machine = ctx.machine
         self._readiness = readiness
         self._commands = commands
-        self._axes = tuple(axes)
-        self._interpolators = tuple(interpolators)
-        self._servos = tuple(servos)
+        self._axes = ctx.axes
+        self._interpolators = ctx.interpolators
+        self._servos = ctx.servos
         self._num_groups = len(self._axes)
         self._sets_jog_tool = cell.controller.sets_jog_tool
         self.jog_tool = [0] * self._num_groups

@@ -1,8 +1,10 @@
 """The operator's hands over HTTP/JSON: state, E-stop, hold, mode, remote, servo, alarms, IO.
 
 :func:`create_http_app` builds a FastAPI application (OpenAPI schema at
-``/openapi.json``, interactive docs at ``/docs``) around an
-:class:`~pymotoros.controller.api.OperatorPanel`. Every endpoint is an ``async def``
+``/openapi.json``, interactive docs at ``/docs``) around a
+:class:`~pymotoros.runtime.target.SimulatedController` (its
+:class:`~pymotoros.controller.api.OperatorPanel` and
+:class:`~pymotoros.controller.api.FaultInjection` sides). Every endpoint is an ``async def``
 so it runs on the simulator's event loop, between two interpolation ticks, never in
 a worker thread: the controller is not thread-safe and does not need to be.
 
@@ -15,7 +17,7 @@ from __future__ import annotations
 
 import logging
 from collections.abc import Callable
-from typing import Literal, Protocol, runtime_checkable
+from typing import Literal
 
 from fastapi import FastAPI, Request
 from fastapi.exceptions import RequestValidationError
@@ -64,15 +66,6 @@ class IoFailureBody(BaseModel):
     model_config = _STRICT
     reads: bool = Field(default=False, description="client IO reads fail with 1004")
     writes: bool = Field(default=False, description="client IO writes fail with 1005")
-
-
-@runtime_checkable
-class _FaultInjection(Protocol):
-    """Extras of ``VirtualController`` beyond the OperatorPanel protocol."""
-
-    def raise_error(self, code: int, subcode: int = 0, text: str = "") -> None: ...
-
-    def set_io_api_failure(self, *, reads: bool = False, writes: bool = False) -> None: ...
 
 
 class IoBody(BaseModel):
@@ -312,22 +305,19 @@ def create_http_app(
         controller.force_io(body.address, body.value)
         return state()
 
-    if isinstance(controller, _FaultInjection):
-        extras = controller
+    @app.post("/api/error", response_model=StateModel, responses=_ERRORS, tags=["operator"])
+    async def raise_error(body: AlarmBody) -> StateModel:
+        """Raise an operator error (not an alarm): motion is refused with 5002 until reset."""
+        logger.info("operator: raise error %d/%d %r", body.code, body.subcode, body.text)
+        controller.raise_error(body.code, body.subcode, body.text)
+        return state()
 
-        @app.post("/api/error", response_model=StateModel, responses=_ERRORS, tags=["operator"])
-        async def raise_error(body: AlarmBody) -> StateModel:
-            """Raise an operator error (not an alarm): motion is refused with 5002 until reset."""
-            logger.info("operator: raise error %d/%d %r", body.code, body.subcode, body.text)
-            extras.raise_error(body.code, body.subcode, body.text)
-            return state()
-
-        @app.post("/api/io/failure", response_model=StateModel, responses=_ERRORS, tags=["io"])
-        async def io_failure(body: IoFailureBody) -> StateModel:
-            """Fault injection: make client IO reads (1004) and/or writes (1005) fail."""
-            logger.info("operator: IO API failure reads=%s writes=%s", body.reads, body.writes)
-            extras.set_io_api_failure(reads=body.reads, writes=body.writes)
-            return state()
+    @app.post("/api/io/failure", response_model=StateModel, responses=_ERRORS, tags=["io"])
+    async def io_failure(body: IoFailureBody) -> StateModel:
+        """Fault injection: make client IO reads (1004) and/or writes (1005) fail."""
+        logger.info("operator: IO API failure reads=%s writes=%s", body.reads, body.writes)
+        controller.set_io_api_failure(reads=body.reads, writes=body.writes)
+        return state()
 
     @app.post("/api/tick/reset", response_model=StateModel, tags=["state"])
     async def reset_tick() -> StateModel:

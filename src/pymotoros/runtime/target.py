@@ -4,10 +4,10 @@ from __future__ import annotations
 
 from typing import Protocol
 
-from pymotoros.controller.api import MotoRosController, OperatorPanel
+from pymotoros.controller.api import FaultInjection, MotoRosController, OperatorPanel
 
 __all__ = ["SimulatedController"]
 
 
-class SimulatedController(MotoRosController, OperatorPanel, Protocol):
-    """``VirtualController`` satisfies this: the servers use one side, the HTTP API the other."""
+class SimulatedController(MotoRosController, OperatorPanel, FaultInjection, Protocol):
+    """``VirtualController`` satisfies this: the servers use one side, the HTTP API the rest."""

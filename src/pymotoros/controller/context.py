@@ -1,0 +1,42 @@
+"""The shared parts every piece of MotoROS works with, handed over as one object.
+
+MotoROS's parts (:mod:`~pymotoros.controller.readiness`,
+:mod:`~pymotoros.controller.commands`, :mod:`~pymotoros.controller.trajectory`,
+:mod:`~pymotoros.controller.incmove_task`, :mod:`~pymotoros.controller.skillsnd`,
+:mod:`~pymotoros.controller.connections`) all reach the same controller through the
+same few objects. :class:`MotoRosContext` bundles them, so a part's constructor says
+only what is particular to it (usually the :class:`~pymotoros.controller.readiness.Readiness`
+it consults) and adding a shared part does not ripple through every signature.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from pymotoros.controller.cell import CellConfig
+from pymotoros.controller.inform import JobRunner
+from pymotoros.controller.io_image import IoImage
+from pymotoros.controller.machine import OperatorMachine
+from pymotoros.controller.processes import ControllerClock
+from pymotoros.controller.queues import MotionQueues
+from pymotoros.controller.servo import ServoGroup
+from pymotoros.motion import GroupAxes, GroupInterpolator
+
+
+@dataclass(frozen=True, slots=True)
+class MotoRosContext:
+    """What MotoPlus offers MotoROS on one controller (per-group tuples in group order)."""
+
+    cell: CellConfig
+    clock: ControllerClock
+    io: IoImage
+    machine: OperatorMachine
+    runner: JobRunner
+    queues: MotionQueues
+    axes: tuple[GroupAxes, ...]
+    interpolators: tuple[GroupInterpolator, ...]
+    servos: tuple[ServoGroup, ...]
+
+    @property
+    def num_groups(self) -> int:
+        return len(self.axes)
