@@ -9,11 +9,10 @@ import httpx
 import pytest
 
 from pymotoros.controller import VirtualController
+from pymotoros.protocol.constants import MotionCommand
 from pymotoros.runtime.app import SimulatorApp
 from pymotoros.runtime.http_api import create_http_app
 from pymotoros.runtime.ticker import LatenessStats, TickStats
-
-from pymotoros.protocol.constants import MotionCommand
 
 from .support import LOCAL
 
