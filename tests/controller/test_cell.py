@@ -10,6 +10,7 @@ import pytest
 from pymotoros.controller import VirtualController, cell_from_dict, default_cell, load_cell
 from pymotoros.controller.api import PendantMode
 from pymotoros.errors import ConfigError
+from pymotoros.models.robots import ROBOTS
 from pymotoros.protocol.constants import NotReadySubcode as Nr
 
 from .helpers import CMD, command
@@ -27,6 +28,16 @@ def test_default_cell_is_an_hc10_on_a_yrc1000() -> None:
     assert cell.initial.remote
     assert not cell.initial.servo
     assert cell.warnings == ()
+
+
+@pytest.mark.parametrize("robot", sorted(ROBOTS))
+def test_the_pfl_option_comes_from_the_robot_model(robot: str) -> None:
+    """PFL is a property of the (collaborative) arm, not of its name; only on YRC1000 builds."""
+    model = ROBOTS[robot]
+    assert model.pfl == (robot in {"hc10", "hc10dt"})
+    assert default_cell("yrc1000", robot).pfl == model.pfl
+    assert cell_from_dict({"robot": {"model": robot}}).pfl == model.pfl
+    assert not default_cell("dx200", robot).pfl  # the DX200 build has no PFL support
 
 
 def test_example_files_load() -> None:

@@ -20,7 +20,6 @@ from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Final
 
-from pymotoros.controller.alarms import alarm_class
 from pymotoros.controller.api import AlarmInfo, PendantMode
 from pymotoros.controller.inform import BUILTIN_VARIANTS, JobRunner, load_jobs
 from pymotoros.controller.io_image import IoImage
@@ -35,6 +34,7 @@ from pymotoros.models import (
     controller_model,
     robot_model,
 )
+from pymotoros.protocol.constants import MAX_TOOL_NUMBER
 
 logger = logging.getLogger(__name__)
 
@@ -48,8 +48,6 @@ MAX_NOISE_PULSES: Final = 10
 """Noise is encoder jitter; above this it would hide the 30-pulse in_motion threshold."""
 MAX_BRAKE_SAG_PULSES: Final = 1000
 """Brake sag is small: users report a few thousandths of a radian (ros-industrial/motoman#501)."""
-MAX_TOOL: Final = 63
-"""Tool numbers 0..63 (§5.8)."""
 
 
 @dataclass(frozen=True, slots=True)
@@ -127,10 +125,6 @@ class CellConfig:
         return "multi_group" if multi else "single_arm"
 
 
-def _is_hc(robot: str) -> bool:
-    return robot.lower().startswith("hc")
-
-
 def _rename(groups: Sequence[GroupModel]) -> tuple[GroupModel, ...]:
     """Number groups per kind in order (R1, R2, B1 …) as the controller does."""
     counters: dict[GroupKind, int] = {}
@@ -181,7 +175,7 @@ def default_cell(
         groups=groups,
         robots=robots,
         name=f"{model.name} on {ctrl.type.value}",
-        pfl=ctrl.pfl_signals and _is_hc(model.name),
+        pfl=ctrl.pfl_signals and model.pfl,
         warnings=tuple(warnings),
     )
 
@@ -366,7 +360,7 @@ def cell_from_dict(
     groups, robots = _combine(ctrl, parts, warnings)
 
     if pfl_value is None:
-        pfl = ctrl.pfl_signals and any(_is_hc(r) for r in robots)
+        pfl = ctrl.pfl_signals and any(robot_model(r).pfl for r in robots)
     elif isinstance(pfl_value, bool):
         pfl = pfl_value
         if pfl and not ctrl.pfl_signals:
@@ -380,9 +374,9 @@ def cell_from_dict(
     tools: list[ToolConfig] = []
     for i, entry in enumerate(top.array("tools")):
         t_t = _Table(entry, f"tools[{i}]", source)
-        number = t_t.integer("number", -1, 0, MAX_TOOL)
+        number = t_t.integer("number", -1, 0, MAX_TOOL_NUMBER)
         if number < 0:
-            raise t_t.error("number", "is required (0..63)")
+            raise t_t.error("number", f"is required (0..{MAX_TOOL_NUMBER})")
         tcp = t_t.array("tcp_m")
         xyz = [float(x) for x in tcp if isinstance(x, int | float) and not isinstance(x, bool)]
         if tcp and (len(tcp) != 3 or len(xyz) != 3):
@@ -455,7 +449,7 @@ def _initial(t: _Table, groups: tuple[GroupModel, ...], tool_numbers: set[int]) 
     tools_t = t.table("tool")
     tools: list[int] = []
     for g in groups:
-        n = tools_t.integer(g.name, 0, 0, MAX_TOOL)
+        n = tools_t.integer(g.name, 0, 0, MAX_TOOL_NUMBER)
         if n and g.kind is not GroupKind.ROBOT:
             raise tools_t.error(g.name, "only robot groups take tools")
         if n and tool_numbers and n not in tool_numbers:
@@ -471,7 +465,6 @@ def _initial(t: _Table, groups: tuple[GroupModel, ...], tool_numbers: set[int]) 
         code = a_t.integer("code", -1, 0, 9999)
         if code < 0:
             raise a_t.error("code", "is required (0..9999)")
-        alarm_class(code)
         subcode = a_t.integer("subcode", 0, 0, 2**31 - 1)
         alarms.append(AlarmInfo(code, subcode, a_t.string("text", "")))
         a_t.finish()

@@ -20,6 +20,7 @@ from pymotoros.controller.polling import POLL_LIMIT_MS, POLL_MS
 from pymotoros.controller.readiness import Readiness
 from pymotoros.controller.stop_motion import stop_motion_now
 from pymotoros.motion import inc_move
+from pymotoros.motion.constants import SLOTS
 
 logger = logging.getLogger(__name__)
 
@@ -65,8 +66,8 @@ class IncMoveTask:
                 for a in self.axes
             )
         )
-        self._to_process: list[list[int]] = [[0] * 8 for _ in self.axes]
-        self._processed: list[list[int]] = [[0] * 8 for _ in self.axes]
+        self._to_process: list[list[int]] = [[0] * SLOTS for _ in self.axes]
+        self._processed: list[list[int]] = [[0] * SLOTS for _ in self.axes]
         # IncMove retry while the controller leaves eco mode (§5.6 step 6.2)
         self._eco_retry: tuple[tuple[tuple[int, ...], ...], int, int] | None = None
 
@@ -117,8 +118,8 @@ class IncMoveTask:
 
     def _fsu_reset(self) -> None:
         for g in range(self._num_groups):
-            self._to_process[g] = [0] * 8
-            self._processed[g] = [0] * 8
+            self._to_process[g] = [0] * SLOTS
+            self._processed[g] = [0] * SLOTS
 
     def _inc_move_fsu(self, limits: tuple[tuple[int, ...], ...]) -> bool:
         """IncMove with the v1.9.12 FSU compensation, on a controller whose FSU clips.

@@ -31,7 +31,9 @@ from pymotoros.protocol.constants import IoResultCode
 logger = logging.getLogger(__name__)
 
 BIT_VALUES: Final = (0, 1)
-GROUP_MAX: Final = 0xFF
+GROUP_BITS: Final = 8
+"""An IO group is one byte: eight consecutive bit addresses (§6.1)."""
+GROUP_MAX: Final = (1 << GROUP_BITS) - 1
 """A group (byte) write must be ≤ 0xFF (§6.1)."""
 M_REGISTER_MAX: Final = 0xFFFF
 """M-registers hold 16 bits (§6.1)."""
@@ -139,7 +141,7 @@ class IoImage:
             return IoResultCode.WRITE_VALUE_INVALID
         if self.fail_writes:
             return IoResultCode.WRITE_API_ERROR
-        for k in range(8):
+        for k in range(GROUP_BITS):
             self.set(first + k, (value >> k) & 1)
         return IoResultCode.OK
 

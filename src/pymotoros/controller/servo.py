@@ -32,6 +32,17 @@ FOLD_EVERY: Final = 1024
 
 _MASK64: Final = (1 << 64) - 1
 
+# Salts of the deterministic noise and brake sag. Their values carry no meaning beyond
+# keeping the hashed streams apart: changing one changes every simulated encoder
+# jitter and sag, so recorded runs and tests that pin them would no longer match.
+SEED_STRIDE: Final = 1_000_003
+"""Seed × this + group index: a prime larger than any group count, so two (seed, group)
+pairs never give the same stream."""
+SAG_SALT: Final = 0x5A6
+"""Multiplies the power-loss count: brake-sag offsets never share a stream with noise."""
+TICK_SALT: Final = 0x100000001B3
+"""Multiplies the tick count (the 64-bit FNV prime): neighbouring ticks hash far apart."""
+
 
 def _mix(x: int) -> int:
     """splitmix64 finaliser: a cheap, well-spread deterministic hash."""
@@ -82,7 +93,7 @@ class ServoGroup:
         # feedback = command − Σ_m weight[m]·inc[t−m], weight[m] = (w−1−m)/w
         self._weights = tuple((w - 1 - m) / w for m in range(w))
         self._noise_pulses = noise_pulses
-        self._seed = _mix(seed * 1_000_003 + group_index)
+        self._seed = _mix(seed * SEED_STRIDE + group_index)
 
     @property
     def lag_ticks(self) -> int:
@@ -139,7 +150,7 @@ class ServoGroup:
     def sag_offsets(self, amplitude: int, event: int, valid: Sequence[bool]) -> list[int]:
         """Deterministic offsets within ±amplitude for the ``event``-th power loss."""
         span = 2 * amplitude + 1
-        base = _mix(self._seed ^ (0x5A6 * (event + 1)))
+        base = _mix(self._seed ^ (SAG_SALT * (event + 1)))
         return [(_mix(base + k) % span - amplitude) if valid[k] else 0 for k in range(SLOTS)]
 
     def settled(self) -> bool:
@@ -162,7 +173,7 @@ class ServoGroup:
             out.append(command[k] - int(lag))
         if powered and self._noise_pulses:
             span = 2 * self._noise_pulses + 1
-            base = _mix(self._seed ^ (tick * 0x100000001B3))
+            base = _mix(self._seed ^ (tick * TICK_SALT))
             for k in range(SLOTS):
                 out[k] += _mix(base + k) % span - self._noise_pulses
         return out

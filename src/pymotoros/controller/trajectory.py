@@ -25,9 +25,11 @@ from pymotoros.motion import (
     check_start,
     check_time,
 )
+from pymotoros.motion.constants import SLOTS
 from pymotoros.protocol.constants import (
     MAX_DH_LINKS,
     MAX_GROUPS,
+    MAX_TOOL_NUMBER,
     REQUIRED_POINT_FIELDS,
     InvalidSubcode,
     ResultCode,
@@ -68,7 +70,7 @@ class TrajectoryPoints:
     # ================================================================== trajectory points
 
     def _to_traj(self, point: PointData) -> TrajPoint:
-        return TrajPoint(point.time, tuple(point.pos[:8]), tuple(point.vel[:8]))
+        return TrajPoint(point.time, tuple(point.pos[:SLOTS]), tuple(point.vel[:SLOTS]))
 
     def _refused(self, refusal: Refusal, point_desc: str, group_no: int | None = None) -> Outcome:
         return reply(
@@ -205,11 +207,11 @@ class TrajectoryPoints:
         """SELECT_TOOL (§5.8)."""
         if not 0 <= group_no < self._num_groups:
             return self._bad_group(group_no)
-        if not 0 <= tool <= 63:
+        if not 0 <= tool <= MAX_TOOL_NUMBER:
             return reply(
                 ResultCode.INVALID,
                 InvalidSubcode.DATA_TOOLNO,
-                f"tool {tool} is outside 0..63",
+                f"tool {tool} is outside 0..{MAX_TOOL_NUMBER}",
             )
         self._interpolators[group_no].tool = tool
         if self._sets_jog_tool:

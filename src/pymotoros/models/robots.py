@@ -113,6 +113,9 @@ class RobotModel:
     groups: tuple[GroupModel, ...]
     controllers: frozenset[str]
     """Controller families this robot is really sold with (others get a warning)."""
+    pfl: bool = False
+    """A collaborative (HC) arm with Power and Force Limiting: on a YRC1000 /
+    YRC1000micro it enables MotoROS's PFL option (reference §4.4)."""
 
 
 def _deg(x: float) -> float:
@@ -226,10 +229,12 @@ def _single_arm(
     axes: tuple[AxisModel, ...],
     dh: tuple[DhLink, ...],
     controllers: frozenset[str],
+    *,
+    pfl: bool = False,
 ) -> RobotModel:
     slots = SEVEN_AXIS_SLOTS if len(axes) == 7 else _six_axis_slots()
     group = GroupModel("R1", GroupKind.ROBOT, axes, slots, (0.0,) * len(axes), dh)
-    return RobotModel(name, description, (group,), controllers)
+    return RobotModel(name, description, (group,), controllers, pfl=pfl)
 
 
 HC10: Final = RobotModel(
@@ -247,6 +252,7 @@ HC10: Final = RobotModel(
     ),
     # Sourced: HC10 on YRC1000 (motoros2#293) and YRC1000micro (motoman#284), §2.
     controllers=frozenset({"yrc1000", "yrc1000micro"}),
+    pfl=True,  # collaborative: Power and Force Limiting
 )
 
 # HC10DT (A1): the same kinematics, limits and speeds as the HC10 (robot-models.md §1.2);
@@ -258,6 +264,7 @@ HC10DT: Final = _single_arm(
     _hc10_dh(0.170),
     # Sourced for the HC10 family: YRC1000 and YRC1000micro (§2).
     frozenset({"yrc1000", "yrc1000micro"}),
+    pfl=True,  # collaborative: Power and Force Limiting
 )
 
 # GP7 / GP8 / GP12: limits and speeds from robot-models.md §1.3 (datasheets; manuals
