@@ -3,7 +3,7 @@
 ``batch.batch_increments`` (the offline engine) and ``batch.queued_targets`` (the tick
 engine's queued segments) compute many segments at once; ``GroupInterpolator``
 computes a lone segment of a few steps in plain Python floats. Both must give exactly what
-``segment.compute_segment`` gives one segment at a time, with the grid carried from
+``interpolator._compute_segment`` gives one segment at a time, with the grid carried from
 segment to segment as the real task carries it (leftover, its quirk, dropped points).
 """
 
@@ -16,9 +16,10 @@ from hypothesis import strategies as st
 
 from pymotoros.motion import GroupAxes, TrajPoint, batch, interpolate, numerics
 from pymotoros.motion.constants import SLOTS
+from pymotoros.motion.interpolator import _compute_segment as compute_segment
 from pymotoros.motion.numerics import LD, position_bound
 from pymotoros.motion.points import GroupPoint
-from pymotoros.motion.segment import compute_segment, plan_grid
+from pymotoros.motion.segment import plan_grid
 
 from .helpers import axes_for
 from .strategies import trajectories

@@ -26,10 +26,7 @@ def inc_move(groups: Sequence[GroupInterpolator]) -> tuple[Increment, ...] | Non
     out: list[Increment] = []
     moved = False
     for group in groups:
-        queue = group.queue
-        entries = queue._entries  # the deque itself: this runs every tick
-        if len(entries) < 2 and queue._lazy:
-            queue.realise()  # compute every queued segment in one go
+        entries = group.queue.due()
         if not entries:
             out.append(Increment(group.q_time, ZERO_PULSES, 0))
             continue

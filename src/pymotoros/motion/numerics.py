@@ -195,6 +195,8 @@ def coefficients_kernel(
     return out
 
 
+_SIGNIFICAND_SCALE: Final = float(1 << 53)
+"""frexp's mantissa (in [0.5, 1)) × 2⁵³ is the float64's 53-bit significand as an integer."""
 _LOW29: Final = (1 << 29) - 1
 _MID29: Final = 1 << 28
 RISK_FACTOR: Final = 33.0
@@ -240,10 +242,11 @@ def coefficients_x87_scalar(
         values.append(third + fourth)
         sizes.append(abs(third) + abs(fourth))
     frexp = math.frexp
+    scale = _SIGNIFICAND_SCALE
     for value, size in zip(values, sizes, strict=True):
         if size == 0.0:
             continue
-        low = int(frexp(value)[0] * 9007199254740992.0) & _LOW29  # the 29 bits past float32
+        low = int(frexp(value)[0] * scale) & _LOW29  # the 29 bits past float32
         distance = min(abs(low - _MID29), 1 << 27)
         if not distance * abs(value) > COEF_RISK_FACTOR * size:
             return None
@@ -290,6 +293,7 @@ def positions_x87_scalar(
         for p, s, h, c in zip(x0, v0, h1, a2, strict=True)
     ]
     frexp = math.frexp
+    scale = _SIGNIFICAND_SCALE
     out: list[tuple[float, ...]] = []
     for tau in taus:
         tau2 = tau * tau
@@ -299,7 +303,7 @@ def positions_x87_scalar(
             f += h * tau2
             f += ((c * tau2) * tau) / 6
             size = abs(f)
-            low = int(frexp(size)[0] * 9007199254740992.0) & _LOW29
+            low = int(frexp(size)[0] * scale) & _LOW29
             if not (min(abs(low - _MID29), 1 << 27) * size > bound and size < 1e30):
                 return None
             row.append(f)

@@ -90,6 +90,38 @@ class IncrementQueue:
         self._lazy_count += stop - start
         self._check()
 
+    def queue_segment(self, segment: LazyEntries, start: int, count: int) -> int:
+        """Queue entries ``start`` … of a segment, up to ``count``, as many as fit.
+
+        Returns the index after the last entry queued (``start`` when the queue is
+        full). Entries of the segment queued on the previous call are joined into one
+        chunk. The AddToIncQueue task calls this every tick, usually for one entry, so
+        it touches the fields directly.
+        """
+        lazy_count = self._lazy_count
+        room = QUEUE_SIZE - len(self._entries) - lazy_count
+        if room <= 0:
+            return start
+        stop = count if start + room >= count else start + room
+        lazy = self._lazy
+        if lazy and lazy[-1][0] is segment:  # extend the chunk queued on the last tick
+            lazy[-1] = (segment, lazy[-1][1], stop)
+        else:
+            lazy.append((segment, start, stop))
+        self._lazy_count = lazy_count + stop - start
+        return stop
+
+    def due(self) -> deque[Increment]:
+        """The computed entries, oldest first, for IncMove to pop from.
+
+        IncMove may join an entry with the next one, so when fewer than two are
+        computed every queued segment is computed first (in one go).
+        """
+        entries = self._entries
+        if len(entries) < 2 and self._lazy:
+            self.realise()
+        return entries
+
     def realise(self) -> None:
         """Compute the pulses of every queued entry."""
         if not self._lazy:
