@@ -81,8 +81,8 @@ class IncMoveTask:
         """The IncMove task's turn; True if increments reached the servos this tick."""
         if self._eco_retry is not None:
             return self._retry_eco()
-        readiness = self._readiness
-        if not readiness.motion_ready or readiness.stop_flag:
+        # motion-ready is false while the stop flag is up (Readiness computes it so)
+        if not self._readiness.motion_ready:
             if self._fsu_limit is not None:
                 self._fsu_reset()
             return False
