@@ -93,6 +93,10 @@ def test_invariants(cell: str, actions: list[tuple[str, int]]) -> None:
             assert not snap.servo
         if snap.estop or snap.hold or snap.mode is PendantMode.TEACH or not snap.servo:
             assert vc.job_position == ()
+        # the snapshot is never stale: it says what the monitor's next run will find
+        predicted = snap.motion_ready
+        vc.motoros.status_update()
+        assert vc.motoros.motion_ready == predicted, name
         settle_monitor(vc)
         status = vc.robot_status()
         mr = vc.motoros

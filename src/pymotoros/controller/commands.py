@@ -163,18 +163,19 @@ class MotionCommands:
         """Steps 3–6: refuse what needs an operator, cancel errors, reset alarms."""
         s = self._machine.state
         now = self._clock.time_ms
-        reading = self._readiness
+        readiness = self._readiness
+        reading = readiness.reading
         if reading.operating:
             logger.info("START_TRAJ_MODE: another job is running; MotoROS does not interrupt it")
             return False
-        if reading.estopped or reading.hold or not reading.remote:
+        if readiness.estopped or reading.hold or not reading.remote:
             return False
         if reading.error:
             self._machine.fire(Event.CANCEL_ERRORS, now)
         if any(reading.alarm_bits) or s.alarms:
             self._machine.fire(Event.RESET_ALARMS, now)
-            reading.status_update()
-            if any(reading.alarm_bits):
+            readiness.status_update()
+            if readiness.in_error:
                 return False
         return True
 

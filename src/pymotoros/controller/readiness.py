@@ -10,7 +10,7 @@ Everything that needs to know whether motion is possible asks it.
 from __future__ import annotations
 
 import logging
-from typing import Final
+from typing import Final, NamedTuple
 
 from pymotoros.controller import signals
 from pymotoros.controller.api import Outcome
@@ -23,11 +23,32 @@ logger = logging.getLogger(__name__)
 STATUS_PERIOD_MS: Final = 10
 """The status monitor reads the signals every 10 ms (§2.1 step 6, §5.1)."""
 
-_Reading = tuple[
-    tuple[int, ...], int, int, int, int, int, int, int, tuple[int, ...], int, int, tuple[int, ...]
-]
-"""alarm bits, error, play, teach, remote, operating, hold, servo, E-stop bits, OT#889,
-eco, PFL bits: one read of the monitored signals, in this order."""
+
+class StatusReading(NamedTuple):
+    """One read of every signal the status monitor watches (§2.6), as 0/1 values."""
+
+    alarm_bits: tuple[int, ...]
+    """Major, minor, system, user alarm outputs (50010..50013)."""
+    error: int
+    play: int
+    teach: int
+    remote: int
+    operating: int
+    hold: int
+    servo: int
+    estop_ok: tuple[int, ...]
+    """The three E-stop inputs; 1 = not pressed."""
+    ros_ready: int
+    """OT#889 (11120)."""
+    eco: int
+    pfl: tuple[int, ...]
+    """PFL stop, escape, avoiding, avoid joint, avoid translation (0 without PFL signals)."""
+
+
+BOOT_READING: Final = StatusReading(
+    (0, 0, 0, 0), 0, 0, 0, 0, 0, 0, 0, (1, 1, 1), 0, 0, (0, 0, 0, 0, 0)
+)
+"""What the monitor is taken to have read before its first run."""
 
 
 class Readiness:
@@ -62,26 +83,23 @@ class Readiness:
         self._inc_move_error = False
         self._inc_move_error_reason = ""
         self._skill_flags = (False, False)
-        self.error_code = 0
-        """ROBOT_STATUS error_code: the first active alarm's number (§2.6)."""
-
-        # the status monitor's last reading (§2.6)
-        self.alarm_bits: tuple[int, ...] = (0, 0, 0, 0)
-        self.error = 0
-        self.play = 0
-        self.teach = 0
-        self.remote = 0
-        self.operating = 0
-        self.hold = 0
-        self.servo = 0
-        self.estop_ok: tuple[int, ...] = (1, 1, 1)
-        self.ros_ready = 0
-        self.eco = 0
-        self.pfl: tuple[int, ...] = (0, 0, 0, 0, 0)
+        self._error_code = 0
+        self._r = BOOT_READING
+        """The status monitor's last reading (§2.6)."""
         self.next_monitor_ms = 0
         """Controller time of the status monitor's next run."""
 
     # ================================================================== the flags, read-only
+
+    @property
+    def reading(self) -> StatusReading:
+        """The status monitor's last reading (§2.6)."""
+        return self._r
+
+    @property
+    def error_code(self) -> int:
+        """ROBOT_STATUS error_code: the first active alarm's number (§2.6)."""
+        return self._error_code
 
     @property
     def motion_ready(self) -> bool:
@@ -176,7 +194,7 @@ class Readiness:
     def _refresh(self) -> None:
         """The one place the motion-ready flag is computed (§4.1)."""
         ready = self._ready(
-            self._job_ready, self.operating, self.remote, self._pfl_during_move, self.pfl
+            self._job_ready, self._r.operating, self._r.remote, self._pfl_during_move, self._r.pfl
         )
         if ready != self._motion_ready:
             logger.debug("motion ready: %s", ready)
@@ -226,10 +244,10 @@ class Readiness:
         if self._io.monitor_dirty:
             self.status_update()
 
-    def _read(self) -> _Reading:
+    def _read(self) -> StatusReading:
         """One read of every monitored signal."""
         get = self._io.get
-        return (
+        return StatusReading(
             tuple(get(a) for a in signals.ALARM_BITS),
             get(signals.ERROR),
             get(signals.PLAY),
@@ -251,9 +269,10 @@ class Readiness:
         that changes to active while the job is ready (PFL option on) is a PFL event.
         """
         job_ready = self._job_ready
-        if ros_ready != self.ros_ready:
+        last = self._r
+        if ros_ready != last.ros_ready:
             job_ready = bool(ros_ready)
-        pfl_event = self.pfl_option and pfl != self.pfl and job_ready and pfl_signals_active(pfl)
+        pfl_event = self.pfl_option and pfl != last.pfl and job_ready and pfl_signals_active(pfl)
         return job_ready, pfl_event
 
     def outlook(self) -> bool:
@@ -266,74 +285,46 @@ class Readiness:
         """
         if not self._io.monitor_dirty:
             return self._motion_ready
-        reading = self._read()
-        pfl = reading[11]
-        job_ready, pfl_event = self._edges(reading[9], pfl)
+        r = self._read()
+        job_ready, pfl_event = self._edges(r.ros_ready, r.pfl)
         latched = self._pfl_during_move or pfl_event
-        return self._ready(job_ready, reading[5], reading[4], latched, pfl)
+        return self._ready(job_ready, r.operating, r.remote, latched, r.pfl)
 
     def status_update(self) -> None:
         """Ros_Controller_StatusUpdate: one read of every monitored signal, then the edges."""
         io = self._io
         io.monitor_dirty = False
-        reading = self._read()
-        (
-            alarm_bits,
-            _error,
-            play,
-            teach,
-            remote,
-            operating,
-            _hold,
-            servo,
-            _estop_ok,
-            ros_ready,
-            _eco,
-            pfl,
-        ) = reading
+        r = self._read()
+        last = self._r
 
         cleared: list[str] = []
         # alarm edge: refresh error_code; clear when at least one alarm is on
-        if alarm_bits != self.alarm_bits:
-            if any(alarm_bits):
+        if r.alarm_bits != last.alarm_bits:
+            if any(r.alarm_bits):
                 alarms = self._machine.state.alarms
-                self.error_code = alarms[0].code if alarms else 0
+                self._error_code = alarms[0].code if alarms else 0
                 cleared.append("alarm")
             else:
-                self.error_code = 0
+                self._error_code = 0
         # mode, job or servo loss
-        if (play, teach, remote, operating, servo) != (
-            self.play,
-            self.teach,
-            self.remote,
-            self.operating,
-            self.servo,
-        ) and (remote != 1 or play != 1 or operating == 0 or servo == 0):
+        if (r.play, r.teach, r.remote, r.operating, r.servo) != (
+            last.play,
+            last.teach,
+            last.remote,
+            last.operating,
+            last.servo,
+        ) and (r.remote != 1 or r.play != 1 or r.operating == 0 or r.servo == 0):
             cleared.append("mode/remote/operating/servo change")
         # OT#889: rising edge sets job-ready, falling edge clears it and the queues;
         # PFL: a signal changes while the job is ready and PFL is active
-        job_ready, pfl_event = self._edges(ros_ready, pfl)
-        if ros_ready != self.ros_ready and not ros_ready:
+        job_ready, pfl_event = self._edges(r.ros_ready, r.pfl)
+        if r.ros_ready != last.ros_ready and not r.ros_ready:
             cleared.append("OT#889 fell")
         self._job_ready = job_ready
         if pfl_event:
             self._pfl_during_move = True
             cleared.append("PFL event")
-
-        (
-            self.alarm_bits,
-            self.error,
-            self.play,
-            self.teach,
-            self.remote,
-            self.operating,
-            self.hold,
-            self.servo,
-            self.estop_ok,
-            self.ros_ready,
-            self.eco,
-            self.pfl,
-        ) = reading
+        self._r = r
         if cleared:
             queues = self._queues
             if queues.has_queued_motion() or queues.any_pending():
@@ -346,50 +337,50 @@ class Readiness:
         """§4.1: only with the PFL option on YRC1000 / YRC1000micro builds."""
         if not self.pfl_option:
             return False
-        return self._pfl_during_move or pfl_signals_active(self.pfl)
+        return self._pfl_during_move or pfl_signals_active(self._r.pfl)
 
     @property
     def estopped(self) -> bool:
-        return not all(self.estop_ok)
+        return not all(self._r.estop_ok)
 
     @property
     def in_error(self) -> bool:
-        return any(self.alarm_bits)
+        return any(self._r.alarm_bits)
 
     @property
     def servo_reading(self) -> tuple[bool, bool]:
         """(50073, 50727) as the status monitor last read them."""
-        return bool(self.servo), bool(self.eco)
+        return bool(self._r.servo), bool(self._r.eco)
 
     @property
     def play_reading(self) -> bool:
-        return bool(self.play)
+        return bool(self._r.play)
 
     # ================================================================== NOT_READY (§4.2)
 
     def not_ready_subcode(self) -> NotReadySubcode:
         """§4.2: the first matching test wins, in this order."""
-        if any(self.alarm_bits):
+        if any(self._r.alarm_bits):
             return NotReadySubcode.ALARM
-        if self.error:
+        if self._r.error:
             return NotReadySubcode.ERROR
         if self.estopped:
             return NotReadySubcode.ESTOP
-        if not self.play:
+        if not self._r.play:
             return NotReadySubcode.NOT_PLAY
-        if not self.remote:
+        if not self._r.remote:
             return NotReadySubcode.NOT_REMOTE
-        if not self.servo or self.eco:
+        if not self._r.servo or self._r.eco:
             return NotReadySubcode.SERVO_OFF
-        if self.hold:
+        if self._r.hold:
             return NotReadySubcode.HOLD
         if self.pfl_active:
             return NotReadySubcode.PFL_ACTIVE
         if self.inc_move_error:
             return NotReadySubcode.INC_MOVE_ERROR
-        if not self.operating:
+        if not self._r.operating:
             return NotReadySubcode.NOT_STARTED
-        if not self.ros_ready:
+        if not self._r.ros_ready:
             return NotReadySubcode.WAITING_ROS
         if not self.motion_ready:
             return NotReadySubcode.SKILLSEND
@@ -422,7 +413,7 @@ class Readiness:
         if sub is NotReadySubcode.NOT_REMOTE:
             return "switch the controller to REMOTE"
         if sub is NotReadySubcode.SERVO_OFF:
-            return "eco mode" if self.eco else "START_TRAJ_MODE switches servo power on"
+            return "eco mode" if self._r.eco else "START_TRAJ_MODE switches servo power on"
         if sub is NotReadySubcode.HOLD:
             return "release HOLD, then START_TRAJ_MODE restarts INIT_ROS"
         if sub is NotReadySubcode.PFL_ACTIVE:
@@ -430,7 +421,7 @@ class Readiness:
                 name
                 for name, on in zip(
                     ("PFL stop", "PFL escape", "avoiding", "avoid joint", "avoid translation"),
-                    self.pfl,
+                    self._r.pfl,
                     strict=True,
                 )
                 if on
