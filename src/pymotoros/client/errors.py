@@ -32,6 +32,7 @@ from dataclasses import dataclass
 from typing import Final
 
 from pymotoros.errors import PymotorosError
+from pymotoros.models.rules import START_TOLERANCE_PULSES
 from pymotoros.protocol.constants import (
     InvalidSubcode,
     IoResultCode,
@@ -41,9 +42,6 @@ from pymotoros.protocol.constants import (
     ResultCode,
     subcode_meaning,
 )
-
-START_TOLERANCE_PULSES: Final = 30
-"""MotoROS refuses a first point further than this from the commanded position (§3.4, §5.1)."""
 
 
 class ClientError(PymotorosError):
@@ -134,7 +132,7 @@ class InvalidRequestError(ReplyError):
 
 
 class StartPositionError(InvalidRequestError):
-    """3011: the first point is more than 30 pulses from the commanded position.
+    """3011: the first point is beyond the start tolerance from the commanded position.
 
     :attr:`deviations` lists every axis beyond the tolerance (pulses and rad);
     the client computes them from the robot model and the latest feedback.
