@@ -40,6 +40,7 @@ from pymotoros.protocol.constants import (
     MsgType,
     NotReadySubcode,
     ResultCode,
+    reply_result,
     subcode_meaning,
 )
 
@@ -279,9 +280,7 @@ def describe_reply(result: int, subcode: int) -> str:
 
     CHECK_MOTION_READY answers FALSE with a NOT_READY subcode; it is described as one.
     """
-    if result == ResultCode.FALSE and 5000 <= subcode <= 5999:
-        result = ResultCode.NOT_READY
-    return subcode_meaning(result, subcode)
+    return subcode_meaning(reply_result(result, subcode), subcode)
 
 
 def _error_class(result: int, subcode: int) -> type[ReplyError]:
@@ -300,7 +299,7 @@ def _error_class(result: int, subcode: int) -> type[ReplyError]:
 
 def remedy_for(result: int, subcode: int, command: int) -> str:
     """The remedy sentence for a refusal."""
-    if result in (ResultCode.NOT_READY, ResultCode.FALSE) and subcode >= 5000:
+    if reply_result(result, subcode) == ResultCode.NOT_READY and subcode >= 5000:
         try:
             return NOT_READY_REMEDIES[NotReadySubcode(subcode)]
         except ValueError:
@@ -338,9 +337,7 @@ def reply_error(
 ) -> ReplyError:
     """Build the typed exception for a refused request (the one mapping of the client)."""
     # CHECK_MOTION_READY answers FALSE with a NOT_READY subcode: the same cause as result 5.
-    effective = (
-        ResultCode.NOT_READY if result == ResultCode.FALSE and 5000 <= subcode <= 5999 else result
-    )
+    effective = reply_result(result, subcode)
     cls = _error_class(effective, subcode)
     remedy = remedy_for(effective, subcode, command)
     where = describe_command(command) if point is None else f"point {point}"
