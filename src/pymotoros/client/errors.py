@@ -299,7 +299,7 @@ def _error_class(result: int, subcode: int) -> type[ReplyError]:
 
 def remedy_for(result: int, subcode: int, command: int) -> str:
     """The remedy sentence for a refusal."""
-    if reply_result(result, subcode) == ResultCode.NOT_READY and subcode >= 5000:
+    if reply_result(result, subcode) == ResultCode.NOT_READY:
         try:
             return NOT_READY_REMEDIES[NotReadySubcode(subcode)]
         except ValueError:
