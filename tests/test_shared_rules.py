@@ -20,6 +20,7 @@ import sys
 from collections.abc import Iterator
 from functools import cache
 from pathlib import Path
+from types import ModuleType
 
 import pytest
 from hypothesis import HealthCheck, event, given, settings
@@ -74,7 +75,7 @@ SRC = Path(__file__).resolve().parents[1] / "src" / "pymotoros"
         ("axis_speed_limit", (client_planning,)),
     ],
 )
-def test_point_rules_are_one_object_on_both_sides(name: str, homes: tuple[object, ...]) -> None:
+def test_point_rules_are_one_object_on_both_sides(name: str, homes: tuple[ModuleType, ...]) -> None:
     shared = getattr(rules, name)
     for module in homes:
         assert getattr(module, name) is shared, f"{module.__name__}.{name}"
@@ -108,11 +109,19 @@ def test_io_rules_are_one_object_on_both_sides(name: str) -> None:
     assert getattr(client_io_map, name) is shared
 
 
-def test_status_rules_are_one_object_on_both_sides() -> None:
-    assert client_state.StatusMode is protocol.StatusMode
-    assert controller_controller.StatusMode is protocol.StatusMode
-    assert client_errors.reply_result is protocol.reply_result
-    assert runtime_motion_server.reply_result is protocol.reply_result
+@pytest.mark.parametrize(
+    ("name", "homes"),
+    [
+        ("StatusMode", (client_state, controller_controller)),
+        ("reply_result", (client_errors, runtime_motion_server)),
+    ],
+)
+def test_status_rules_are_one_object_on_both_sides(
+    name: str, homes: tuple[ModuleType, ...]
+) -> None:
+    shared = getattr(protocol, name)
+    for module in homes:
+        assert getattr(module, name) is shared, f"{module.__name__}.{name}"
 
 
 def test_mode_and_not_ready_rules() -> None:
@@ -361,3 +370,75 @@ def test_preflight_agrees_with_the_controller_after_the_start(
     finally:
         # Clear the pending point and queue, so the next example starts at rest here.
         assert _complete(vc, vc.motion_ctrl(0, MotionCommand.STOP_MOTION)).ok
+
+
+MULTI_POSES = ((0.2, -0.3, 0.4, -0.5, 0.6, -0.7, 0.8), (-0.2, 0.3, -0.4, 0.5, -0.6, 0.7, -0.8))
+"""Start poses of the SDA10F's two arms (its base and station axes start at 0)."""
+
+
+@cache
+def _dual_arm() -> VirtualController:
+    """An SDA10F (arms R1, R2, base B1, station S1) on its FS100, in trajectory mode."""
+    base = default_cell("fs100", "sda10f")
+    joints = tuple(
+        MULTI_POSES[g] if g < len(MULTI_POSES) else (0.1,) * group.num_axes
+        for g, group in enumerate(base.groups)
+    )
+    vc = VirtualController(dataclasses.replace(base, initial=InitialState(joints=joints)))
+    assert _complete(vc, vc.motion_ctrl(0, MotionCommand.START_TRAJ_MODE)).ok
+    for _ in range(50):
+        vc.tick()
+    return vc
+
+
+@st.composite
+def _multi_case(
+    draw: st.DrawFn,
+) -> tuple[tuple[int, ...], list[tuple[float, ...]], list[tuple[float, ...]]]:
+    vc = _dual_arm()
+    groups = vc.cell.groups
+    order = tuple(draw(st.permutations(range(len(groups))))[: draw(st.integers(2, len(groups)))])
+    positions, velocities = [], []
+    for g in order:
+        rules_g = rules.group_rules(groups[g], vc.cell.controller)
+        commanded = rules.feedback_pulses(vc.snapshot().groups[g].command_rad, rules_g)
+        pos, vel = [], []
+        for i in range(rules_g.num_axes):
+            slot = rules_g.ros_to_slot[i]
+            offset = draw(st.integers(-40, 40)) if draw(st.integers(0, 5)) == 0 else 0
+            frac = draw(st.floats(0.0, 1.0, exclude_max=True))
+            pos.append((commanded[slot] + offset + frac) / rules_g.pulses_per_unit[slot])
+            moving = draw(st.integers(0, 5)) == 0
+            vel.append(draw(_velocity(rules_g.max_speed[i])) if moving else 0.0)
+        positions.append(tuple(pos))
+        velocities.append(tuple(vel))
+    return order, positions, velocities
+
+
+@settings(max_examples=100, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(case=_multi_case())
+def test_preflight_agrees_with_the_controller_on_a_multi_group_start(
+    case: tuple[tuple[int, ...], list[tuple[float, ...]], list[tuple[float, ...]]],
+) -> None:
+    order, positions, velocities = case
+    vc = _dual_arm()
+    models = [vc.cell.groups[g] for g in order]
+    feedback = tuple(v for g in order for v in vc.snapshot().groups[g].feedback_rad)
+    point = TrajectoryPoint(
+        0.0,
+        tuple(v for p in positions for v in p),
+        tuple(v for p in velocities for v in p),
+    )
+    predicted = client_preflight.first_refusal(point, 0, models, vc.cell.controller, feedback)
+    data = [
+        PointData(g, 7, 0.0, _pad(p), _pad(v), _pad(()))
+        for g, p, v in zip(order, positions, velocities, strict=True)
+    ]
+    outcome = _complete(vc, vc.trajectory_point_ex(0, data))
+    event(f"FULL_EX: {outcome.subcode or 'accepted'}")
+    if predicted is None:
+        assert outcome.ok, outcome.detail
+        return
+    g = order[predicted.group]
+    assert outcome.subcode == predicted.refusal.subcode
+    assert outcome.detail == f"point 0 of group {g}: {predicted.refusal.message}"
