@@ -13,11 +13,15 @@ from pymotoros.client.planning import (
     MIN_SAMPLE_PERIOD_S,
     JointLimits,
     PlanningError,
+    TrajectoryPoint,
     motoros_speed_limit,
-    passes_motoros_speed_check,
     plan_joint_move,
 )
-from pymotoros.models import ROBOTS, GroupModel, robot_model
+from pymotoros.client.preflight import speed_deviations
+from pymotoros.models import ROBOTS, FloatMode, GroupModel, controller_model, robot_model
+from pymotoros.models.rules import GroupRules
+
+YRC1000 = controller_model("yrc1000")
 
 HC10 = robot_model("hc10").groups[0]
 LIMITS = JointLimits.from_group(HC10)
@@ -74,13 +78,13 @@ def test_moves_respect_limits_and_are_near_optimal(
         assert b.time - a.time >= MIN_SAMPLE_PERIOD_S - EPS
         assert b.time - a.time <= max(period, 2 * MIN_SAMPLE_PERIOD_S) + EPS
     for p in pts:
+        assert speed_deviations(p, [group], YRC1000) == []
         for i, axis in enumerate(group.axes):
             lo, hi = min(start[i], goal[i]), max(start[i], goal[i])
             assert lo - 1e-9 <= p.positions[i] <= hi + 1e-9
             assert axis.lower - EPS <= p.positions[i] <= axis.upper + EPS
             assert abs(p.velocities[i]) <= limits.max_velocity[i] * vs * (1 + 1e-9)
             assert abs(p.velocities[i]) <= axis.max_velocity
-            assert passes_motoros_speed_check(p.velocities[i], motoros_speed_limit(axis, 4))
             if p.accelerations:
                 assert abs(p.accelerations[i]) <= axis.max_acceleration * acc * (1 + 1e-6)
 
@@ -100,7 +104,8 @@ def test_every_model_has_limits_motoros_accepts() -> None:
             limits = JointLimits.from_group(group)
             for axis, v in zip(group.axes, limits.max_velocity, strict=True):
                 assert 0 < v <= axis.max_velocity
-                assert passes_motoros_speed_check(v, motoros_speed_limit(axis, 4))
+            point = TrajectoryPoint(0.1, group.home, limits.max_velocity)
+            assert speed_deviations(point, [group], YRC1000) == []
 
 
 def test_same_start_and_goal_is_one_point() -> None:
@@ -137,9 +142,28 @@ def test_position_at_and_progress_follow_the_plan() -> None:
 
 
 def test_motoros_speed_check_truncates_like_the_controller() -> None:
-    assert passes_motoros_speed_check(3.9, 3.14)
-    assert not passes_motoros_speed_check(4.0, 3.14)
-    assert not passes_motoros_speed_check(-4.0, 3.14)
+    # S axis limit 2.2689 rad/s: trunc(|v|) > limit refuses only from 3 rad/s on
+    def refused(v: float) -> bool:
+        point = TrajectoryPoint(0.1, HC10.home, (v,) + (0.0,) * 5)
+        return bool(speed_deviations(point, [HC10], YRC1000))
+
+    assert not refused(2.9)
+    assert refused(3.0)
+    assert refused(-3.0)
+
+
+@pytest.mark.parametrize("controller", ["yrc1000", "fs100"])
+def test_speed_limit_is_the_controllers_float32_number(controller: str) -> None:
+    ctrl = controller_model(controller)
+    for model in ROBOTS.values():
+        for group in model.groups:
+            rules = GroupRules.from_model(group, ctrl)
+            for i, axis in enumerate(group.axes):
+                limit = motoros_speed_limit(axis, 4, ctrl.float_mode)
+                assert limit == rules.max_speed[i]
+    assert motoros_speed_limit(HC10.axes[0], 4) == motoros_speed_limit(
+        HC10.axes[0], 4, FloatMode.X87_EXTENDED
+    )
 
 
 def test_several_groups_are_planned_as_one_synchronised_move() -> None:

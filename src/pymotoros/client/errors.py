@@ -32,6 +32,7 @@ from dataclasses import dataclass
 from typing import Final
 
 from pymotoros.errors import PymotorosError
+from pymotoros.models.rules import START_TOLERANCE_PULSES
 from pymotoros.protocol.constants import (
     InvalidSubcode,
     IoResultCode,
@@ -39,11 +40,9 @@ from pymotoros.protocol.constants import (
     MsgType,
     NotReadySubcode,
     ResultCode,
+    reply_result,
     subcode_meaning,
 )
-
-START_TOLERANCE_PULSES: Final = 30
-"""MotoROS refuses a first point further than this from the commanded position (§3.4, §5.1)."""
 
 
 class ClientError(PymotorosError):
@@ -134,7 +133,7 @@ class InvalidRequestError(ReplyError):
 
 
 class StartPositionError(InvalidRequestError):
-    """3011: the first point is more than 30 pulses from the commanded position.
+    """3011: the first point is beyond the start tolerance from the commanded position.
 
     :attr:`deviations` lists every axis beyond the tolerance (pulses and rad);
     the client computes them from the robot model and the latest feedback.
@@ -281,9 +280,7 @@ def describe_reply(result: int, subcode: int) -> str:
 
     CHECK_MOTION_READY answers FALSE with a NOT_READY subcode; it is described as one.
     """
-    if result == ResultCode.FALSE and 5000 <= subcode <= 5999:
-        result = ResultCode.NOT_READY
-    return subcode_meaning(result, subcode)
+    return subcode_meaning(reply_result(result, subcode), subcode)
 
 
 def _error_class(result: int, subcode: int) -> type[ReplyError]:
@@ -302,7 +299,7 @@ def _error_class(result: int, subcode: int) -> type[ReplyError]:
 
 def remedy_for(result: int, subcode: int, command: int) -> str:
     """The remedy sentence for a refusal."""
-    if result in (ResultCode.NOT_READY, ResultCode.FALSE) and subcode >= 5000:
+    if reply_result(result, subcode) == ResultCode.NOT_READY:
         try:
             return NOT_READY_REMEDIES[NotReadySubcode(subcode)]
         except ValueError:
@@ -340,9 +337,7 @@ def reply_error(
 ) -> ReplyError:
     """Build the typed exception for a refused request (the one mapping of the client)."""
     # CHECK_MOTION_READY answers FALSE with a NOT_READY subcode: the same cause as result 5.
-    effective = (
-        ResultCode.NOT_READY if result == ResultCode.FALSE and 5000 <= subcode <= 5999 else result
-    )
+    effective = reply_result(result, subcode)
     cls = _error_class(effective, subcode)
     remedy = remedy_for(effective, subcode, command)
     where = describe_command(command) if point is None else f"point {point}"

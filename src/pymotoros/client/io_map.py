@@ -1,23 +1,28 @@
 """IO and M-register addresses checked on the PC, before anything is sent (reference §6).
 
 MotoROS refuses a bad address with a bare result code (1001/1002/1003); checking
-here lets the error say which range applies on the chosen controller model.
+here lets the error say which range applies on the chosen controller model. Whether a
+request passes is decided by :mod:`pymotoros.models.io`, the rules the virtual
+controller's IO server answers with; this module only explains a refusal.
 """
 
 from __future__ import annotations
 
-from typing import Final
-
 from pymotoros.client.errors import IoAddressError
 from pymotoros.models import ControllerModel, IoRange
-from pymotoros.models.controllers import M_REGISTER_BASE, M_REGISTER_COUNT, M_REGISTER_WRITABLE
+from pymotoros.models.controllers import M_REGISTER_COUNT, M_REGISTER_WRITABLE
+from pymotoros.models.io import (
+    GROUP_MAX,
+    M_REGISTER_MAX,
+    bit_address_result,
+    bit_value_result,
+    group_address_result,
+    group_value_result,
+    m_register_index,
+    mregister_address_result,
+    mregister_value_result,
+)
 from pymotoros.protocol.constants import IoResultCode
-
-BIT_VALUES: Final = (0, 1)
-GROUP_MAX: Final = 0xFF
-"""An IO group is one byte (§6.1)."""
-MREGISTER_MAX: Final = 0xFFFF
-"""M-registers hold 16 bits (§6.1)."""
 
 
 def _ranges_text(ranges: tuple[IoRange, ...]) -> str:
@@ -34,7 +39,10 @@ def _refuse(address: int, code: IoResultCode, text: str) -> IoAddressError:
 
 def check_bit_address(controller: ControllerModel, address: int, *, write: bool) -> IoRange:
     """The range holding a bit ``address``; raises :class:`IoAddressError` with the reason."""
-    code = IoResultCode.WRITE_ADDRESS_INVALID if write else IoResultCode.READ_ADDRESS_INVALID
+    code = bit_address_result(controller, address, write=write)
+    rng = controller.io_range(address)
+    if not code and rng is not None:
+        return rng
     if address < 0:
         raise _refuse(address, code, f"IO address {address} is negative")
     if address % 10 > 7:
@@ -44,7 +52,6 @@ def check_bit_address(controller: ControllerModel, address: int, *, write: bool)
             f"IO address {address}: the last digit is the bit number and must be 0..7 "
             f"(bits of byte {address // 10} are {address // 10 * 10}..{address // 10 * 10 + 7})",
         )
-    rng = controller.io_range(address)
     if rng is None:
         raise _refuse(
             address,
@@ -52,21 +59,19 @@ def check_bit_address(controller: ControllerModel, address: int, *, write: bool)
             f"IO address {address} is in no range of a {controller.type.value} controller; "
             f"ranges: {_ranges_text(controller.io_ranges)}",
         )
-    if write and not rng.writable:
-        raise _refuse(
-            address,
-            code,
-            f"IO address {address} is in the {rng.area.value} range ({rng.first}-{rng.last}), "
-            f"which MotoROS does not write; writable on {controller.type.value}: "
-            f"{_ranges_text(_writable(controller))}",
-        )
-    return rng
+    raise _refuse(
+        address,
+        code,
+        f"IO address {address} is in the {rng.area.value} range ({rng.first}-{rng.last}), "
+        f"which MotoROS does not write; writable on {controller.type.value}: "
+        f"{_ranges_text(_writable(controller))}",
+    )
 
 
 def check_group_address(controller: ControllerModel, address: int, *, write: bool) -> IoRange:
     """A group (byte) address n covers bits n×10..n×10+7; n×10 must be valid (§6.1)."""
-    if address < 0:
-        code = IoResultCode.WRITE_ADDRESS_INVALID if write else IoResultCode.READ_ADDRESS_INVALID
+    code = group_address_result(controller, address, write=write)
+    if code and address < 0:
         raise _refuse(address, code, f"IO group address {address} is negative")
     try:
         return check_bit_address(controller, address * 10, write=write)
@@ -79,25 +84,25 @@ def check_group_address(controller: ControllerModel, address: int, *, write: boo
 
 
 def check_bit_value(address: int, value: int) -> None:
-    if value not in BIT_VALUES:
+    if bit_value_result(value):
         raise _refuse(
             address, IoResultCode.WRITE_VALUE_INVALID, f"IO bit {address}: value must be 0 or 1"
         )
 
 
 def check_group_value(address: int, value: int) -> None:
-    if not 0 <= value <= GROUP_MAX:
+    if group_value_result(value):
         raise _refuse(
-            address, IoResultCode.WRITE_VALUE_INVALID, f"IO group {address}: value must be 0..255"
+            address,
+            IoResultCode.WRITE_VALUE_INVALID,
+            f"IO group {address}: value must be 0..{GROUP_MAX}",
         )
 
 
 def normalise_mregister(number: int, *, write: bool) -> int:
     """M-register number 0..999 (or 1000000+n, which MotoROS also accepts); returns n."""
-    n = number - M_REGISTER_BASE if number >= M_REGISTER_BASE else number
-    limit = M_REGISTER_WRITABLE if write else M_REGISTER_COUNT
-    if not 0 <= n < limit:
-        code = IoResultCode.WRITE_ADDRESS_INVALID if write else IoResultCode.READ_ADDRESS_INVALID
+    code = mregister_address_result(number, write=write)
+    if code:
         what = "written" if write else "read"
         raise _refuse(
             number,
@@ -106,11 +111,13 @@ def normalise_mregister(number: int, *, write: bool) -> int:
             f"write M000-M{M_REGISTER_WRITABLE - 1}; this one cannot be {what} "
             "(give the plain number, e.g. 10 for M010)",
         )
-    return n
+    return m_register_index(number)
 
 
 def check_mregister_value(number: int, value: int) -> None:
-    if not 0 <= value <= MREGISTER_MAX:
+    if mregister_value_result(value):
         raise _refuse(
-            number, IoResultCode.WRITE_VALUE_INVALID, f"M-register {number}: value must be 0..65535"
+            number,
+            IoResultCode.WRITE_VALUE_INVALID,
+            f"M-register {number}: value must be 0..{M_REGISTER_MAX}",
         )

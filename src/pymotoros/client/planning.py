@@ -20,7 +20,8 @@ from dataclasses import dataclass
 from typing import Final
 
 from pymotoros.client.errors import ClientError
-from pymotoros.models import AxisModel, GroupModel
+from pymotoros.models import AxisModel, FloatMode, GroupModel
+from pymotoros.models.rules import axis_speed_limit
 
 DEFAULT_SAMPLE_PERIOD_S: Final = 0.02
 """Default spacing of generated points: 5 interpolation ticks of 4 ms. MotoROS fits a
@@ -54,7 +55,12 @@ class JointLimits:
     max_jerk: tuple[float, ...]
 
     @classmethod
-    def from_group(cls, group: GroupModel, period_ms: int = 4) -> JointLimits:
+    def from_group(
+        cls,
+        group: GroupModel,
+        period_ms: int = 4,
+        float_mode: FloatMode = FloatMode.X87_EXTENDED,
+    ) -> JointLimits:
         """The limits of a model group; velocity capped at MotoROS's own speed check."""
         axes = group.axes
         return cls(
@@ -62,7 +68,7 @@ class JointLimits:
             lower=tuple(a.lower for a in axes),
             upper=tuple(a.upper for a in axes),
             max_velocity=tuple(
-                min(a.max_velocity, motoros_speed_limit(a, period_ms)) for a in axes
+                min(a.max_velocity, motoros_speed_limit(a, period_ms, float_mode)) for a in axes
             ),
             max_acceleration=tuple(a.max_acceleration for a in axes),
             max_jerk=tuple(a.max_jerk for a in axes),
@@ -85,19 +91,18 @@ class JointLimits:
         return len(self.names)
 
 
-def motoros_speed_limit(axis: AxisModel, period_ms: int) -> float:
+def motoros_speed_limit(
+    axis: AxisModel, period_ms: int, float_mode: FloatMode = FloatMode.X87_EXTENDED
+) -> float:
     """The speed (rad/s) above which MotoROS answers 3013 for this axis (§5.5).
 
+    The controller's own float32 number (:func:`pymotoros.models.rules.axis_speed_limit`):
     maxInc = trunc(pulses/s × period), then trunc(maxInc × 1000 / period) pulses/s,
-    converted back to rad/s. Always at or just below the datasheet speed.
+    converted back to rad/s as the ``float_mode`` build does. Always at or just below
+    the datasheet speed. MotoROS's test truncates the velocity first (the pre-flight,
+    :mod:`pymotoros.client.preflight`, applies it).
     """
-    max_inc = axis.max_increment(period_ms)
-    return int(max_inc * 1000 / period_ms) / axis.pulses_per_unit
-
-
-def passes_motoros_speed_check(velocity: float, limit: float) -> bool:
-    """MotoROS's own test: ``abs()`` on an int truncates, so trunc(|v|) > limit refuses (§5.5)."""
-    return not math.trunc(abs(velocity)) > limit
+    return axis_speed_limit(axis, period_ms, float_mode)[2]
 
 
 @dataclass(frozen=True, slots=True)

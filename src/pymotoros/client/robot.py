@@ -449,7 +449,9 @@ class RobotClient:
     def limits(self, group: int = 0) -> JointLimits:
         """Planning limits of ``group`` from the robot model."""
         return JointLimits.from_group(
-            self.robot.groups[group], self.controller.interpolation_period_ms
+            self.robot.groups[group],
+            self.controller.interpolation_period_ms,
+            self.controller.float_mode,
         )
 
     async def current_positions(

@@ -20,7 +20,7 @@ from types import MappingProxyType
 from typing import Final
 
 from pymotoros.client.errors import ConnectionLostError, RequestTimeoutError
-from pymotoros.protocol.constants import ValidFields
+from pymotoros.protocol.constants import StatusMode, ValidFields
 from pymotoros.protocol.messages import (
     JointFeedback,
     MotoJointFeedbackEx,
@@ -35,7 +35,7 @@ DEFAULT_STATE_TIMEOUT_S: Final = 2.0
 
 
 class Mode(enum.Enum):
-    """ROBOT_STATUS ``mode``: 2 when the pendant is in PLAY, else 1 (§2.6)."""
+    """ROBOT_STATUS ``mode`` as the client reports it (decoded by ``StatusMode.is_play``, §2.6)."""
 
     TEACH = "teach"
     PLAY = "play"
@@ -61,7 +61,7 @@ class Status:
             error_code=msg.error_code,
             in_error=msg.in_error == 1,
             in_motion=None if msg.in_motion < 0 else msg.in_motion == 1,
-            mode=Mode.PLAY if msg.mode == 2 else Mode.TEACH,
+            mode=Mode.PLAY if StatusMode.is_play(msg.mode) else Mode.TEACH,
             motion_possible=msg.motion_possible == 1,
         )
 

@@ -19,7 +19,6 @@ from __future__ import annotations
 
 import asyncio
 import logging
-import math
 import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
@@ -33,14 +32,11 @@ from pymotoros.client.errors import (
     ReplyError,
     reply_error,
 )
-from pymotoros.client.planning import (
-    JointTrajectory,
-    TrajectoryPoint,
-    motoros_speed_limit,
-    passes_motoros_speed_check,
-)
+from pymotoros.client.planning import JointTrajectory, TrajectoryPoint
+from pymotoros.client.preflight import speed_deviations, start_deviations
 from pymotoros.client.state import RobotState
 from pymotoros.models import GroupModel
+from pymotoros.models.rules import START_TOLERANCE_PULSES
 from pymotoros.protocol.constants import InvalidSubcode, MotionCommand, MsgType, ResultCode
 from pymotoros.protocol.messages import (
     JointTrajPtExData,
@@ -171,39 +167,11 @@ def build_message(
     )
 
 
-def start_deviations(
-    point: TrajectoryPoint, models: Sequence[GroupModel], current: Sequence[float] | None
-) -> list[AxisDeviation]:
-    """Axes of ``point`` more than 30 pulses from ``current`` (MotoROS truncates to pulses)."""
-    if current is None:
-        return []
-    axes = [a for m in models for a in m.axes]
-    out = []
-    for i, (axis, want, have) in enumerate(zip(axes, point.positions, current, strict=False)):
-        ppu = axis.pulses_per_unit
-        pulses = abs(math.trunc(want * ppu) - math.trunc(have * ppu))
-        if pulses > 30:
-            out.append(AxisDeviation(i, axis.name, want, have, pulses))
-    return out
-
-
-def speed_deviations(
-    point: TrajectoryPoint, models: Sequence[GroupModel], period_ms: int
-) -> list[AxisDeviation]:
-    """Axes of ``point`` whose velocity MotoROS's speed check refuses (§5.5)."""
-    axes = [a for m in models for a in m.axes]
-    out = []
-    for i, (axis, v) in enumerate(zip(axes, point.velocities, strict=False)):
-        limit = motoros_speed_limit(axis, period_ms)
-        if not passes_motoros_speed_check(v, limit):
-            out.append(AxisDeviation(i, axis.name, v, limit))
-    return out
-
-
 def _deviation_text(devs: Sequence[AxisDeviation], kind: str) -> str:
     if kind == "start":
         return "; ".join(
-            f"{d.name} {d.pulses} pulses ({d.difference:+.5f} rad) from the robot, tolerance 30"
+            f"{d.name} {d.pulses} pulses ({d.difference:+.5f} rad) from the robot, "
+            f"tolerance {START_TOLERANCE_PULSES}"
             for d in devs
         )
     return "; ".join(f"{d.name} {d.value:+.4f} > limit {d.reference:.4f}" for d in devs)
@@ -220,10 +188,11 @@ def _refusal(
     detail = ""
     if reply.result == ResultCode.INVALID and reply.subcode == InvalidSubcode.DATA_START_POS:
         groups = [client.robot.groups.index(m) for m in models]
-        devs = start_deviations(point, models, _joined_positions(client.state, groups))
+        current = _joined_positions(client.state, groups)
+        devs = start_deviations(point, models, current, client.controller)
         detail = _deviation_text(devs, "start") or "compared with the commanded position"
     elif reply.result == ResultCode.INVALID and reply.subcode == InvalidSubcode.DATA_SPEED:
-        devs = speed_deviations(point, models, client.controller.interpolation_period_ms)
+        devs = speed_deviations(point, models, client.controller)
         detail = _deviation_text(devs, "speed")
     return reply_error(
         reply.result, reply.subcode, reply.command, point=index, detail=detail, deviations=devs
@@ -272,12 +241,11 @@ async def send_points(
     """Stream every point of ``trajectory`` (joints of ``groups`` concatenated, in order)."""
     models = [client.robot.groups[g] for g in groups]
     sizes = [m.num_axes for m in models]
-    period = client.controller.interpolation_period_ms
     stats = StreamStats()
     started = time.monotonic()
     for index, point in enumerate(trajectory.points):
         if check_speed:
-            devs = speed_deviations(point, models, period)
+            devs = speed_deviations(point, models, client.controller)
             if devs:
                 raise reply_error(
                     ResultCode.INVALID,

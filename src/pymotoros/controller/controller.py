@@ -58,15 +58,18 @@ from pymotoros.controller.trajectory import DhTable, TrajectoryPoints
 from pymotoros.controller.units import RosConverter
 from pymotoros.models.controllers import M_REGISTER_BASE
 from pymotoros.motion import GroupAxes, GroupInterpolator, to_pulses
-from pymotoros.protocol.constants import MAX_JOINTS, IoResultCode, MotionCommand, ValidFields
+from pymotoros.protocol.constants import (
+    MAX_JOINTS,
+    IoResultCode,
+    MotionCommand,
+    StatusMode,
+    ValidFields,
+)
 
 logger = logging.getLogger(__name__)
 
 FEEDBACK_FIELDS: Final = int(ValidFields.POSITION | ValidFields.VELOCITY)
 """JOINT_FEEDBACK validFields: position and velocity, never time (§2.4)."""
-MODE_PLAY: Final = 2
-MODE_TEACH: Final = 1
-"""ROBOT_STATUS mode: 2 if PLAY, otherwise 1 (§2.6)."""
 MAX_ALARM_CODE: Final = 9999
 
 # Alarm numbers used when the operator forces an alarm output on (no alarm text exists).
@@ -335,7 +338,7 @@ class VirtualController:
             error_code=mr.error_code,
             in_error=int(mr.in_error),
             in_motion=int(self.in_motion()),
-            mode=MODE_PLAY if mr.play_reading else MODE_TEACH,
+            mode=int(StatusMode.encode(mr.play_reading)),
             motion_possible=int(mr.motion_ready),
         )
 

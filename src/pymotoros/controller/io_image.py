@@ -16,34 +16,25 @@ from __future__ import annotations
 
 import logging
 from array import array
-from typing import Final
 
 from pymotoros.controller.api import IoRead
 from pymotoros.controller.signals import MONITORED
 from pymotoros.models import ControllerModel, IoRange
-from pymotoros.models.controllers import (
-    M_REGISTER_BASE,
-    M_REGISTER_COUNT,
-    M_REGISTER_WRITABLE,
+from pymotoros.models.controllers import M_REGISTER_BASE, M_REGISTER_COUNT
+from pymotoros.models.io import (
+    GROUP_BITS,
+    M_REGISTER_MAX,
+    bit_address_result,
+    bit_value_result,
+    group_address_result,
+    group_value_result,
+    m_register_index,
+    mregister_address_result,
+    mregister_value_result,
 )
 from pymotoros.protocol.constants import IoResultCode
 
 logger = logging.getLogger(__name__)
-
-BIT_VALUES: Final = (0, 1)
-GROUP_BITS: Final = 8
-"""An IO group is one byte: eight consecutive bit addresses (§6.1)."""
-GROUP_MAX: Final = (1 << GROUP_BITS) - 1
-"""A group (byte) write must be ≤ 0xFF (§6.1)."""
-M_REGISTER_MAX: Final = 0xFFFF
-"""M-registers hold 16 bits (§6.1)."""
-
-
-def m_register_index(number: int) -> int:
-    """MotoROS's adjustment: numbers below 1000000 get 1000000 added (§6.1); index 0..."""
-    if number < M_REGISTER_BASE:
-        number += M_REGISTER_BASE
-    return number - M_REGISTER_BASE
 
 
 class IoImage:
@@ -102,23 +93,22 @@ class IoImage:
         return self._controller.io_range(address)
 
     def is_writable(self, address: int) -> bool:
-        rng = self._controller.io_range(address)
-        return rng is not None and rng.writable
+        return not bit_address_result(self._controller, address, write=True)
 
     # ------------------------------------------------------------------ client access (§6.1)
 
     def read_bit(self, address: int) -> IoRead:
-        if self._controller.io_range(address) is None:
-            return IoRead(0, IoResultCode.READ_ADDRESS_INVALID)
+        code = bit_address_result(self._controller, address, write=False)
+        if code:
+            return IoRead(0, code)
         if self.fail_reads:
             return IoRead(0, IoResultCode.READ_API_ERROR)
         return IoRead(self.get(address), IoResultCode.OK)
 
     def write_bit(self, address: int, value: int) -> IoResultCode:
-        if not self.is_writable(address):
-            return IoResultCode.WRITE_ADDRESS_INVALID
-        if value not in BIT_VALUES:
-            return IoResultCode.WRITE_VALUE_INVALID
+        code = bit_address_result(self._controller, address, write=True) or bit_value_result(value)
+        if code:
+            return code
         if self.fail_writes:
             return IoResultCode.WRITE_API_ERROR
         self.set(address, value)
@@ -126,42 +116,41 @@ class IoImage:
 
     def read_group(self, number: int) -> IoRead:
         """Byte ``number``: bits number×10+0..7, bit 0 least significant (§6.1)."""
-        first = number * 10
-        if number < 0 or self._controller.io_range(first) is None:
-            return IoRead(0, IoResultCode.READ_ADDRESS_INVALID)
+        code = group_address_result(self._controller, number, write=False)
+        if code:
+            return IoRead(0, code)
         if self.fail_reads:
             return IoRead(0, IoResultCode.READ_API_ERROR)
         return IoRead(self._bytes[number], IoResultCode.OK)
 
     def write_group(self, number: int, value: int) -> IoResultCode:
-        first = number * 10
-        if number < 0 or not self.is_writable(first):
-            return IoResultCode.WRITE_ADDRESS_INVALID
-        if not 0 <= value <= GROUP_MAX:
-            return IoResultCode.WRITE_VALUE_INVALID
+        code = group_address_result(self._controller, number, write=True) or group_value_result(
+            value
+        )
+        if code:
+            return code
         if self.fail_writes:
             return IoResultCode.WRITE_API_ERROR
+        first = number * 10
         for k in range(GROUP_BITS):
             self.set(first + k, (value >> k) & 1)
         return IoResultCode.OK
 
     def read_mregister(self, number: int) -> IoRead:
-        index = m_register_index(number)
-        if not 0 <= index < M_REGISTER_COUNT:
-            return IoRead(0, IoResultCode.READ_ADDRESS_INVALID)
+        code = mregister_address_result(number, write=False)
+        if code:
+            return IoRead(0, code)
         if self.fail_reads:
             return IoRead(0, IoResultCode.READ_API_ERROR)
-        return IoRead(self._mreg[index], IoResultCode.OK)
+        return IoRead(self._mreg[m_register_index(number)], IoResultCode.OK)
 
     def write_mregister(self, number: int, value: int) -> IoResultCode:
-        index = m_register_index(number)
-        if not 0 <= index < M_REGISTER_WRITABLE:
-            return IoResultCode.WRITE_ADDRESS_INVALID
-        if not 0 <= value <= M_REGISTER_MAX:
-            return IoResultCode.WRITE_VALUE_INVALID
+        code = mregister_address_result(number, write=True) or mregister_value_result(value)
+        if code:
+            return code
         if self.fail_writes:
             return IoResultCode.WRITE_API_ERROR
-        self._mreg[index] = value
+        self._mreg[m_register_index(number)] = value
         return IoResultCode.OK
 
     # ------------------------------------------------------------------ operator forcing
@@ -179,7 +168,7 @@ class IoImage:
                     f"M-register address {address}: only {M_REGISTER_BASE}.."
                     f"{M_REGISTER_BASE + M_REGISTER_COUNT - 1} (M000..M999) exist"
                 )
-            if not 0 <= value <= M_REGISTER_MAX:
+            if mregister_value_result(value):
                 raise ValueError(f"M{index:03d} holds 0..{M_REGISTER_MAX}, not {value}")
             return
         if self._controller.io_range(address) is None:
@@ -187,5 +176,5 @@ class IoImage:
                 f"address {address} is in no IO range of a {self._controller.type.value} "
                 "controller (or its last digit is 8 or 9)"
             )
-        if value not in BIT_VALUES:
+        if bit_value_result(value):
             raise ValueError(f"bit {address} takes 0 or 1, not {value}")

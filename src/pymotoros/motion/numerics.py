@@ -14,6 +14,10 @@ Two float modes exist (:class:`~pymotoros.models.FloatMode`):
     Every operation is rounded to float32 (numpy float32 arithmetic), so a product is
     rounded *before* it is truncated to an int.
 
+The scalar rules both the client and the controller need (:func:`f32`, :func:`c_int`,
+:func:`pulse`, :func:`from_pulse`) live in :mod:`pymotoros.models.rules`, numpy-free,
+and are re-exported here; this module adds their array forms and the interpolation.
+
 The operand order of each expression is the order the specification writes it; in
 extended precision it decides the last bit only in rare cases, in single precision
 more often, so it is kept everywhere. The functions here are the only place that
@@ -35,6 +39,10 @@ import numpy as np
 import numpy.typing as npt
 
 from pymotoros.models import FloatMode
+from pymotoros.models.rules import c_int as c_int
+from pymotoros.models.rules import f32 as f32
+from pymotoros.models.rules import from_pulse as from_pulse
+from pymotoros.models.rules import pulse as pulse
 from pymotoros.motion.constants import INT32_MAX, INT32_MIN
 
 F32Array = npt.NDArray[np.float32]
@@ -55,17 +63,6 @@ _INT32_LOW: Final = float(INT32_MIN) - 1.0
 _INT32_HIGH: Final = float(INT32_MAX) + 1.0
 
 
-_F32: Final = struct.Struct("<f")
-
-
-def f32(value: float) -> float:
-    """``value`` rounded to float32 (as a Python float). Overflow gives ±inf, as on the wire."""
-    try:
-        return float(_F32.unpack(_F32.pack(value))[0])
-    except OverflowError:
-        return math.copysign(math.inf, value)
-
-
 def f32_tuple(values: Sequence[float], size: int) -> tuple[float, ...]:
     """``values`` rounded to float32 and zero-filled to ``size`` entries."""
     padded = list(values) + [0.0] * (size - len(values))
@@ -73,21 +70,6 @@ def f32_tuple(values: Sequence[float], size: int) -> tuple[float, ...]:
         return struct.unpack(f"<{size}f", struct.pack(f"<{size}f", *padded))
     except OverflowError:
         return tuple(f32(v) for v in padded)
-
-
-def c_int(value: float, mode: FloatMode) -> int:
-    """C's ``(int)value``: truncation toward zero.
-
-    Out of the int32 range (or NaN) C leaves the result undefined; the x87 store gives
-    the "integer indefinite" value INT32_MIN, the PowerPC conversion saturates (NaN
-    gives 0). That is what the two builds' instructions do, not something the
-    reference states; it only matters for absurd inputs.
-    """
-    if _INT32_LOW < value < _INT32_HIGH:
-        return int(value)
-    if mode is FloatMode.X87_EXTENDED or math.isnan(value):
-        return INT32_MIN if mode is FloatMode.X87_EXTENDED else 0
-    return INT32_MAX if value > 0 else INT32_MIN
 
 
 def c_int_array(values: npt.NDArray[np.float64], mode: FloatMode) -> I64Array:
@@ -121,14 +103,6 @@ def float32_seconds_to_ms(t: float, mode: FloatMode) -> int:
     return c_int(product, mode)
 
 
-def pulse(value: float, factor: float, mode: FloatMode) -> int:
-    """``(int)(value * factor)`` for one float32 value and float32 pulse ratio (§5.7, §11)."""
-    product = value * factor  # exact: two float32 operands
-    if mode is FloatMode.STRICT_SINGLE:
-        product = f32(product)
-    return c_int(product, mode)
-
-
 def pulses(values: F32Array, factors: F32Array, mode: FloatMode) -> I64Array:
     """:func:`pulse` over arrays (``factors`` broadcasts over the last axis)."""
     if mode is FloatMode.X87_EXTENDED:
@@ -137,13 +111,6 @@ def pulses(values: F32Array, factors: F32Array, mode: FloatMode) -> I64Array:
         with np.errstate(over="ignore", invalid="ignore"):
             product = (values * factors).astype(np.float64)
     return c_int_array(product, mode)
-
-
-def from_pulse(count: int, factor: float, mode: FloatMode) -> float:
-    """ConvertToRosPos: ``pulse / factor`` stored as float32 (§5.7)."""
-    if mode is FloatMode.X87_EXTENDED:
-        return float(np.float32(LD(count) / LD(factor)))
-    return float(np.float32(count) / np.float32(factor))
 
 
 def ms_to_seconds(ms: AnyArray) -> F32Array:

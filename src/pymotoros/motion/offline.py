@@ -16,10 +16,10 @@ import numpy as np
 import numpy.typing as npt
 
 from pymotoros.models import FloatMode
+from pymotoros.models.rules import MAX_POINT_TIME_S, check_speed, check_start, check_time
 from pymotoros.motion.axes import GroupAxes, to_pulses
 from pymotoros.motion.batch import batch_increments
-from pymotoros.motion.checks import check_speed, check_start, check_time
-from pymotoros.motion.constants import INT32_MAX, MAX_POINT_TIME_S
+from pymotoros.motion.constants import INT32_MAX
 from pymotoros.motion.numerics import (
     c_int_array,
     pulses,

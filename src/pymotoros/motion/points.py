@@ -13,27 +13,9 @@ from dataclasses import dataclass, field
 from typing import Final
 
 from pymotoros.models import FloatMode
+from pymotoros.models.rules import TrajPoint as TrajPoint
 from pymotoros.motion.constants import SLOTS
 from pymotoros.motion.numerics import f32, f32_tuple, float32_seconds_to_ms
-
-
-@dataclass(frozen=True, slots=True)
-class TrajPoint:
-    """One trajectory point for one group, ROS order, up to 8 axes.
-
-    Missing trailing slots count as 0.0, as the unused slots of a wire message do.
-    """
-
-    time: float
-    """Seconds since the trajectory start (the point's ``time`` field)."""
-    pos: tuple[float, ...]
-    """Positions, rad (m for linear axes), ROS order."""
-    vel: tuple[float, ...]
-    """Velocities, rad/s (m/s), ROS order."""
-
-    def __post_init__(self) -> None:
-        if len(self.pos) > SLOTS or len(self.vel) > SLOTS:
-            raise ValueError(f"a group point has at most {SLOTS} positions and velocities")
 
 
 @dataclass(frozen=True, slots=True)

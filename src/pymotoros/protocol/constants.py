@@ -244,6 +244,39 @@ class NotReadySubcode(_Described):
     INC_MOVE_ERROR = 5012, "the controller rejected an increment; restart trajectory mode"
 
 
+NOT_READY_SUBCODES: Final = range(5000, 6000)
+"""Subcodes of the NOT_READY family (§1.7, §4.2): 5000..5999."""
+
+
+def reply_result(result: int, subcode: int) -> int:
+    """The result a MOTO_MOTION_REPLY stands for.
+
+    CHECK_MOTION_READY answers FALSE with a NOT_READY subcode (§3.1): the same cause as
+    result 5, so it is read as NOT_READY; every other pair is what it says.
+    """
+    if result == ResultCode.FALSE and subcode in NOT_READY_SUBCODES:
+        return int(ResultCode.NOT_READY)
+    return result
+
+
+@enum.unique
+class StatusMode(_Described):
+    """ROBOT_STATUS ``mode`` (§2.6): MotoROS sends 2 when the pendant is in PLAY, else 1."""
+
+    TEACH = 1, "the pendant is not in PLAY (TEACH)"
+    PLAY = 2, "the pendant is in PLAY"
+
+    @classmethod
+    def encode(cls, play: bool) -> StatusMode:
+        """What the state server sends for a pendant in PLAY (``play``) or not."""
+        return cls.PLAY if play else cls.TEACH
+
+    @classmethod
+    def is_play(cls, mode: int) -> bool:
+        """How a client reads the field: PLAY only for 2 (anything else is not PLAY)."""
+        return mode == cls.PLAY
+
+
 @enum.unique
 class IoResultCode(_Described):
     """``resultCode`` in IO reply bodies (§1.7, §6.1). Never a MOTION_REPLY subcode."""

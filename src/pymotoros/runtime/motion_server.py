@@ -33,9 +33,9 @@ from pymotoros.protocol.constants import (
     InvalidSubcode,
     MotionCommand,
     MsgType,
-    NotReadySubcode,
     Port,
     ResultCode,
+    reply_result,
     subcode_meaning,
 )
 from pymotoros.protocol.framing import Frame
@@ -66,9 +66,7 @@ _QUIET_COMMANDS = frozenset({MotionCommand.CHECK_QUEUE_CNT, MotionCommand.CHECK_
 
 def _meaning(result: int, subcode: int) -> str:
     """Subcode text; CHECK_MOTION_READY's FALSE carries a NOT_READY subcode too (§3.1)."""
-    if result == ResultCode.FAILURE and 5000 <= subcode < 6000:
-        return NotReadySubcode.describe(subcode)
-    return subcode_meaning(result, subcode)
+    return subcode_meaning(reply_result(result, subcode), subcode)
 
 
 def _describe_command(command: int) -> str:
