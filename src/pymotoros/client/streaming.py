@@ -28,6 +28,7 @@ from __future__ import annotations
 
 import asyncio
 import bisect
+import itertools
 import logging
 import math
 from collections.abc import Callable, Sequence
@@ -90,6 +91,9 @@ STALL_TIMEOUT_S: Final = 2.0
 LAG_WARNING_S: Final = 0.25
 """A robot this far behind the plan is being slowed (a safety speed limit, HOLD…)."""
 
+
+_SAME_POSITION: Final = 1e-12
+"""Squared distance under which start and goal coincide (as ``JointTrajectory.progress``)."""
 
 ARRIVED_PROGRESS: Final = 0.999
 """Progress from which the following monitor counts the robot as arrived (no lag)."""
@@ -401,6 +405,7 @@ class TrajectoryStreamer:
             timeout_s if timeout_s is not None else 10 * trajectory.duration + 30
         )
         rest = _RestDetector(groups)
+        progress_of = _Progress(trajectory)
         best_progress, best_at = -1.0, start
         state = states.state
         while True:
@@ -409,7 +414,7 @@ class TrajectoryStreamer:
             status = state.status
             if positions is not None and status is not None:
                 err = max(abs(p - g) for p, g in zip(positions, goal, strict=True))
-                progress = trajectory.progress(positions)
+                progress = progress_of(positions)
                 if progress > best_progress + 1e-4:
                     best_progress, best_at = progress, now
                 at_rest = rest.update(state)
@@ -514,15 +519,13 @@ class FollowingMonitor:
         self.report = FollowingReport()
         self.last: FollowingSample | None = None
         self._t0: float | None = None
-        # Per-point times and (running best) progress, computed once: every state
-        # message (40 Hz) looks the plan up, and a minute-long plan has thousands of points.
+        # Per-point times and progress, computed once: every state message (40 Hz) looks
+        # the plan up, and a minute-long plan has thousands of points.
+        self._progress = _Progress(trajectory)
         points = trajectory.points
         self._times = [p.time for p in points]
-        self._best: list[float] = []
-        best = 0.0
-        for p in points[1:]:
-            best = max(best, trajectory.progress(p.positions))
-            self._best.append(best)
+        self._raw = [self._progress(p.positions) for p in points]
+        self._best: list[float] = list(itertools.accumulate(self._raw[1:], max))
 
     def start(self, t0: float | None = None) -> None:
         if self._t0 is None:
@@ -546,7 +549,7 @@ class FollowingMonitor:
         traj = self.trajectory
         planned = self._planned_at(elapsed)
         error = max((abs(a - b) for a, b in zip(positions, planned, strict=False)), default=0.0)
-        progress = min(max(traj.progress(positions), 0.0), 1.0)
+        progress = min(max(self._progress(positions), 0.0), 1.0)
         reached = self._time_at_progress(progress)
         # Within 0.1 % of the goal the robot is there: its last pulses of settling are no lag.
         lag = max(0.0, elapsed - reached) if progress < ARRIVED_PROGRESS else 0.0
@@ -589,15 +592,34 @@ class FollowingMonitor:
         k = bisect.bisect_left(self._best, fraction)
         if k >= len(self._best):
             return pts[-1].time
-        i = k + 1  # index in points (the progress list starts at point 1)
-        f = self.trajectory.progress(pts[i].positions)
-        prev_t, prev_f = (0.0, 0.0) if i == 1 else (pts[i - 1].time, self._progress_of(i - 1))
+        i = k + 1  # index in points (the running best starts at point 1)
+        f = self._raw[i]
+        prev_t, prev_f = (0.0, 0.0) if i == 1 else (pts[i - 1].time, self._raw[i - 1])
         if f <= prev_f:
             return pts[i].time
         return prev_t + (fraction - prev_f) / (f - prev_f) * (pts[i].time - prev_t)
 
-    def _progress_of(self, index: int) -> float:
-        return self.trajectory.progress(self.trajectory.points[index].positions)
+
+class _Progress:
+    """``trajectory.progress`` with the start-to-goal line computed once."""
+
+    __slots__ = ("_dd", "_direction", "_start")
+
+    def __init__(self, trajectory: JointTrajectory) -> None:
+        self._start = trajectory.start
+        self._direction = [g - s for g, s in zip(trajectory.goal, trajectory.start, strict=True)]
+        self._dd = sum(x * x for x in self._direction)
+
+    def __call__(self, positions: Sequence[float]) -> float:
+        if self._dd <= _SAME_POSITION:
+            return 1.0
+        return (
+            sum(
+                (p - s) * x
+                for p, s, x in zip(positions, self._start, self._direction, strict=True)
+            )
+            / self._dd
+        )
 
 
 class _RestDetector:
