@@ -160,9 +160,7 @@ class _MemoryTransport(asyncio.Transport):
 _Streams = tuple[asyncio.StreamReader, asyncio.StreamWriter]
 
 
-def memory_stream_pair(
-    name_a: str = "a", name_b: str = "b"
-) -> tuple[_Streams, _Streams]:
+def memory_stream_pair(name_a: str = "a", name_b: str = "b") -> tuple[_Streams, _Streams]:
     """Two connected ``(reader, writer)`` pairs: bytes written on one side are read on the other.
 
     Call it inside a running event loop. Closing a writer gives the other side EOF.
@@ -216,8 +214,7 @@ class VirtualClock(ManualClock):
         """Ticks run so far (the tick at ``start`` is the first)."""
 
     def _tick_time(self, k: int) -> float:
-        assert self.period is not None
-        return self._start + k * self.period
+        return self._start + k * (self.period or 0.0)
 
     async def sleep(self, seconds: float) -> None:
         """Let ``seconds`` of virtual time pass (the controller ticks meanwhile)."""
@@ -411,10 +408,10 @@ async def twin(
     The client has received its first state; trajectory mode is not enabled yet
     (``await client.enable()``), as on a real controller at boot.
     """
-    async with Twin(cell, robot=robot, controller=controller) as the_twin:
-        async with the_twin.client(**client_options) as client:
-            await client.wait_for_state()
-            yield client, the_twin
+    the_twin = Twin(cell, robot=robot, controller=controller)
+    async with the_twin, the_twin.client(**client_options) as client:
+        await client.wait_for_state()
+        yield client, the_twin
 
 
 @contextlib.contextmanager
@@ -433,13 +430,13 @@ def sync_twin(
     the_twin = Twin(cell, robot=robot, controller=controller)
     facade = SyncRobotClient(TWIN_HOST, **the_twin.client_options(**client_options))
     try:
-        facade._run(the_twin.start())  # noqa: SLF001 - the facade's loop runs the twin too
+        facade._run(the_twin.start())  # the facade's loop runs the twin too
         try:
             facade.connect()
             facade.wait_for_state()
             yield facade, the_twin
         finally:
-            facade._run(facade.client.close())  # noqa: SLF001
-            facade._run(the_twin.stop())  # noqa: SLF001
+            facade._run(facade.client.close())
+            facade._run(the_twin.stop())
     finally:
         facade.close()

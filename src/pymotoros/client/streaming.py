@@ -546,7 +546,6 @@ class FollowingMonitor:
         if positions is None:
             return None
         elapsed = self.clock.now() - self._t0
-        traj = self.trajectory
         planned = self._planned_at(elapsed)
         error = max((abs(a - b) for a, b in zip(positions, planned, strict=False)), default=0.0)
         progress = min(max(self._progress(positions), 0.0), 1.0)
@@ -615,8 +614,7 @@ class _Progress:
             return 1.0
         return (
             sum(
-                (p - s) * x
-                for p, s, x in zip(positions, self._start, self._direction, strict=True)
+                (p - s) * x for p, s, x in zip(positions, self._start, self._direction, strict=True)
             )
             / self._dd
         )

@@ -166,6 +166,7 @@ class SyncRobotClient:
 
     wait_for_state = _forward(RobotClient.wait_for_state)
     wait_until = _forward(RobotClient.wait_until)
+    request_motion = _forward(RobotClient.request_motion)
     check_motion_ready = _forward(RobotClient.check_motion_ready)
     start_trajectory_mode = _forward(RobotClient.start_trajectory_mode)
     stop_trajectory_mode = _forward(RobotClient.stop_trajectory_mode)
