@@ -31,10 +31,13 @@ async def test_memory_streams_carry_bytes_both_ways_and_eof() -> None:
     await wb.wait_closed()
 
 
-async def test_virtual_clock_ticks_in_order_and_wakes_sleepers_after_the_tick() -> None:
+@pytest.mark.parametrize("watch_ready", [True, False])
+async def test_virtual_clock_ticks_in_order_and_wakes_sleepers_after_the_tick(
+    watch_ready: bool,
+) -> None:
     ticks: list[float] = []
     clock = VirtualClock(period=PERIOD_S, step=lambda: ticks.append(clock.now()))
-    driver = asyncio.create_task(clock.drive())
+    driver = asyncio.create_task(clock.drive(watch_ready=watch_ready))
     try:
         await clock.sleep(0.010)
         assert clock.now() == pytest.approx(0.010)
@@ -43,6 +46,33 @@ async def test_virtual_clock_ticks_in_order_and_wakes_sleepers_after_the_tick() 
         assert len(ticks) == 4  # the tick at 12 ms runs before the sleeper due with it
         assert ticks == pytest.approx([0.0, 0.004, 0.008, 0.012])
     finally:
+        driver.cancel()
+        with pytest.raises(asyncio.CancelledError):
+            await driver
+
+
+async def test_a_tick_that_wakes_someone_lets_it_run_before_the_next_tick() -> None:
+    """A reply completed in tick k is seen at tick k's time, not after a batch of ticks."""
+    done: asyncio.Future[float] | None = None
+    ticks = 0
+
+    def step() -> None:
+        nonlocal ticks
+        ticks += 1
+        if ticks == 3 and done is not None:
+            done.set_result(clock.now())
+
+    clock = VirtualClock(period=PERIOD_S, step=step)
+    far = asyncio.create_task(clock.sleep_until(1.0))  # ticks up to 1 s could run in a batch
+    driver = asyncio.create_task(clock.drive())
+    try:
+        done = asyncio.get_running_loop().create_future()
+        when = await done
+        assert clock.now() == pytest.approx(when)
+        assert when == pytest.approx(2 * PERIOD_S)
+        assert ticks == 3
+    finally:
+        far.cancel()
         driver.cancel()
         with pytest.raises(asyncio.CancelledError):
             await driver

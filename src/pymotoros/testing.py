@@ -220,8 +220,14 @@ class VirtualClock(ManualClock):
         """Let ``seconds`` of virtual time pass (the controller ticks meanwhile)."""
         await self.sleep_until(self.now() + max(seconds, 0.0))
 
-    def _run_ticks_until(self, target: float | None, ready: collections.abc.Sized) -> bool:
-        """Run the ticks due at or before ``target`` (one if None); False if one woke anyone."""
+    def _run_ticks_until(
+        self, target: float | None, ready: collections.abc.Sized, *, batch: bool
+    ) -> bool:
+        """Run the ticks due at or before ``target``: all of them if ``batch``, else one.
+
+        True once no tick is left before ``target`` and none woke anyone (the sleepers
+        due at ``target`` may wake); False to come back after the loop has run.
+        """
         step = self._step
         if step is None:
             return True
@@ -231,22 +237,25 @@ class VirtualClock(ManualClock):
                 self._now = when
             step()
             self.ticks += 1
-            if len(ready) or target is None:
-                return not len(ready)
+            if target is None or not batch or len(ready):
+                return False
         return True
 
-    async def drive(self, *, settle_turns: int = SETTLE_TURNS) -> None:
+    async def drive(self, *, settle_turns: int = SETTLE_TURNS, watch_ready: bool = True) -> None:
         """Move time whenever the loop is idle; run until cancelled.
 
         Idle means no callback but this one is ready to run. CPython's event loops keep
         their ready callbacks in ``_ready``: looking at it lets time jump the moment
         everything waits, so a round trip costs no virtual time and a jump no extra loop
-        turns. On a loop without it (uvloop…), ``settle_turns`` quiet turns stand in.
+        turns, and lets ticks run back to back until one wakes someone. On a loop
+        without it (uvloop…), or with ``watch_ready=False``, ``settle_turns`` turns
+        stand in for "idle" and time moves one tick or one deadline at a time.
         """
-        ready = getattr(asyncio.get_running_loop(), "_ready", None)
+        ready = getattr(asyncio.get_running_loop(), "_ready", None) if watch_ready else None
+        batch = isinstance(ready, collections.abc.Sized)
         quiet: collections.abc.Sized = ready if isinstance(ready, collections.abc.Sized) else ()
         while True:
-            if ready is quiet:
+            if batch:
                 await asyncio.sleep(0)
                 if len(quiet):
                     continue  # someone else has work to do at virtual "now"
@@ -254,7 +263,7 @@ class VirtualClock(ManualClock):
                 for _ in range(settle_turns):
                     await asyncio.sleep(0)
             target = self.next_deadline
-            if self._run_ticks_until(target, quiet) and target is not None:
+            if self._run_ticks_until(target, quiet, batch=batch) and target is not None:
                 self.advance_to(max(target, self.now()))
 
 
@@ -425,7 +434,9 @@ def sync_twin(
     """The blocking flavour: ``with sync_twin(robot="hc10") as (client, twin):``.
 
     The twin runs on the facade's event-loop thread; touch ``twin.controller`` only
-    between calls (the loop is idle then).
+    between calls. That loop is idle between calls, so virtual time runs on meanwhile,
+    as fast as the thread goes (the robot at rest, the state stream flowing): keep the
+    script's own work between calls short, or use the async :func:`twin`.
     """
     the_twin = Twin(cell, robot=robot, controller=controller)
     facade = SyncRobotClient(TWIN_HOST, **the_twin.client_options(**client_options))
