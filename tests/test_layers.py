@@ -9,10 +9,11 @@ import pytest
 
 SRC = Path(__file__).resolve().parents[1] / "src" / "pymotoros"
 
-# layer -> layers it must never import
+# layer -> layers it must never import. ``pymotoros.testing`` (the in-memory twin) is a
+# top layer like the CLI: it may import anything, and nothing imports it.
 FORBIDDEN: dict[str, tuple[str, ...]] = {
-    "protocol": ("models", "motion", "controller", "runtime", "client", "cli", "web"),
-    "models": ("motion", "controller", "runtime", "client", "cli", "web"),
+    "protocol": ("models", "motion", "controller", "runtime", "client", "cli", "web", "testing"),
+    "models": ("motion", "controller", "runtime", "client", "cli", "web", "testing"),
     "motion": (
         "controller",
         "runtime",
@@ -21,10 +22,20 @@ FORBIDDEN: dict[str, tuple[str, ...]] = {
         "web",
         "protocol.messages",
         "protocol.framing",
+        "testing",
     ),
-    "controller": ("runtime", "client", "cli", "web", "protocol.messages", "protocol.framing"),
-    "runtime": ("client", "cli", "web"),
-    "client": ("controller", "runtime", "motion", "cli", "web"),
+    "controller": (
+        "runtime",
+        "client",
+        "cli",
+        "web",
+        "protocol.messages",
+        "protocol.framing",
+        "testing",
+    ),
+    "runtime": ("client", "cli", "web", "testing"),
+    "client": ("controller", "runtime", "motion", "cli", "web", "testing"),
+    "cli": ("testing",),
 }
 
 
@@ -41,6 +52,18 @@ def _imports(path: Path) -> set[str]:
 
 def _modules(layer: str) -> list[Path]:
     return sorted((SRC / layer).rglob("*.py"))
+
+
+def test_nothing_in_the_package_imports_the_testing_module() -> None:
+    importers = [
+        str(path.relative_to(SRC))
+        for path in SRC.rglob("*.py")
+        if path.name != "testing.py"
+        and any(
+            n == "pymotoros.testing" or n.startswith("pymotoros.testing.") for n in _imports(path)
+        )
+    ]
+    assert not importers
 
 
 @pytest.mark.parametrize("layer", sorted(FORBIDDEN))

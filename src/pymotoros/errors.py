@@ -8,13 +8,17 @@
      |    +-- RemoteProtocolError       the peer sent bytes we cannot accept
      +-- ConfigError                    a cell file, model name or option is wrong (ValueError)
      +-- JobError                       an INFORM job cannot be loaded (ValueError)
-     +-- TrajectoryRejectedError             the offline engine refuses a point as MotoROS would
-     +-- ClientError                    (defined in pymotoros.client.errors, subclasses below it)
+     +-- TrajectoryRejectedError        the offline engine refuses a point as MotoROS would
+     +-- ClientError                    (pymotoros.client.errors: connection, reply, IO errors…)
+          +-- PlanningError             (ValueError) a move cannot be planned
+          +-- NamedPoseError            (ValueError) an SRDF or a named pose is wrong
 
 Expected refusals of the virtual controller (NOT_READY, INVALID …) are *values*
 returned by the domain, not exceptions; these classes are for what must stop the
 caller. Exceptions also inherit the matching builtin (``ValueError`` …) so plain
-``except ValueError`` keeps working.
+``except ValueError`` keeps working. Every class of the tree is importable from the
+front door (``pymotoros.PlanningError`` …); ``tests/test_front_door.py`` checks that
+each exception exported there derives from :class:`PymotorosError`.
 """
 
 from __future__ import annotations

@@ -1,7 +1,9 @@
 """Drive a MotoROS controller (a real robot or ``pymotoros sim``) from Python.
 
 Async first (:class:`RobotClient`), with a blocking facade (:class:`SyncRobotClient`)
-forwarding to it. The client speaks only the wire; see ``docs/client.md``.
+forwarding to it. The client speaks only the wire; see ``docs/client.md``. Every
+exception here is a :class:`ClientError`, itself a ``pymotoros.errors.PymotorosError``.
+The same names are at the front door (``import pymotoros``).
 """
 
 from pymotoros.client.connection import Ports
@@ -23,16 +25,32 @@ from pymotoros.client.errors import (
     SpeedLimitError,
     StartPositionError,
 )
-from pymotoros.client.planning import JointLimits, JointTrajectory, TrajectoryPoint, plan_joint_move
-from pymotoros.client.robot import Readiness, RobotClient, connect
-from pymotoros.client.srdf import NamedPose, parse_srdf
+from pymotoros.client.motion_port import MotionPort, MotionReadiness, StateSource
+from pymotoros.client.planning import (
+    JointLimits,
+    JointTrajectory,
+    PlanningError,
+    TrajectoryPoint,
+    plan_joint_move,
+)
+from pymotoros.client.robot import RobotClient, connect
+from pymotoros.client.srdf import NamedPose, NamedPoseError, parse_srdf
 from pymotoros.client.state import JointState, Mode, RobotState, Status
-from pymotoros.client.streaming import FollowingReport, FollowingSample, MoveResult
+from pymotoros.client.streaming import (
+    FollowingReport,
+    FollowingSample,
+    MoveResult,
+    StreamStats,
+    TrajectoryStreamer,
+)
 from pymotoros.client.sync import SyncRobotClient
+from pymotoros.client.timing import REAL_TIME, ClientClock
 
 __all__ = [
+    "REAL_TIME",
     "AxisDeviation",
     "BusyTimeoutError",
+    "ClientClock",
     "ClientError",
     "CommandFailedError",
     "ConnectError",
@@ -47,21 +65,27 @@ __all__ = [
     "JointTrajectory",
     "Mode",
     "MotionIncompleteError",
+    "MotionPort",
+    "MotionReadiness",
     "MotionTimeoutError",
     "MoveResult",
     "NamedPose",
+    "NamedPoseError",
     "NotReadyError",
+    "PlanningError",
     "Ports",
-    "Readiness",
     "ReplyError",
     "RequestTimeoutError",
     "RobotClient",
     "RobotState",
     "SpeedLimitError",
     "StartPositionError",
+    "StateSource",
     "Status",
+    "StreamStats",
     "SyncRobotClient",
     "TrajectoryPoint",
+    "TrajectoryStreamer",
     "connect",
     "parse_srdf",
     "plan_joint_move",

@@ -16,9 +16,9 @@ import contextlib
 import logging
 import socket
 import struct
-from collections.abc import Callable
+from collections.abc import Awaitable, Callable
 from dataclasses import dataclass
-from typing import Final
+from typing import Final, TypeAlias
 
 from pymotoros.client.errors import ConnectError, ConnectionLostError, RequestTimeoutError
 from pymotoros.errors import RemoteProtocolError
@@ -53,6 +53,12 @@ READ_CHUNK: Final = 4096
 DEFAULT_CONNECT_TIMEOUT_S: Final = 5.0
 DEFAULT_REQUEST_TIMEOUT_S: Final = 5.0
 CLOSE_TIMEOUT_S: Final = 2.0
+
+Connector: TypeAlias = Callable[
+    [str, int], Awaitable[tuple[asyncio.StreamReader, asyncio.StreamWriter]]
+]
+"""Opens the byte stream to ``host:port``; the default is ``asyncio.open_connection`` (TCP).
+The in-memory twin (:mod:`pymotoros.testing`) passes its own."""
 
 _PORT_HINT: Final[dict[Port, str]] = {
     Port.MOTION: "--motion-port",
@@ -164,12 +170,14 @@ class FrameConnection:
         timeout_s: float = DEFAULT_CONNECT_TIMEOUT_S,
         on_topic: Callable[[WireMessage], None] | None = None,
         on_lost: Callable[[ConnectionLostError], None] | None = None,
+        connector: Connector | None = None,
     ) -> FrameConnection:
         """Connect, or raise :class:`ConnectError` naming host:port and what to check."""
         what = f"the MotoROS {kind.value} port {host}:{port}"
+        open_stream = connector or asyncio.open_connection
         try:
             async with asyncio.timeout(timeout_s):
-                reader, writer = await asyncio.open_connection(host, port)
+                reader, writer = await open_stream(host, port)
         except TimeoutError:
             raise ConnectError(
                 f"cannot connect to {what}: no answer within {timeout_s:g} s; check the "

@@ -20,15 +20,15 @@ import itertools
 import logging
 import time
 from collections.abc import AsyncIterator, Callable, Mapping, Sequence
-from dataclasses import dataclass
 from pathlib import Path
 from types import TracebackType
 from typing import Final, Self, TypeVar
 
-from pymotoros.client import io_map, streaming
+from pymotoros.client import io_map
 from pymotoros.client.connection import (
     DEFAULT_CONNECT_TIMEOUT_S,
     DEFAULT_REQUEST_TIMEOUT_S,
+    Connector,
     FrameConnection,
     Ports,
 )
@@ -38,6 +38,7 @@ from pymotoros.client.errors import (
     io_error,
     reply_error,
 )
+from pymotoros.client.motion_port import MotionReadiness
 from pymotoros.client.planning import (
     DEFAULT_SAMPLE_PERIOD_S,
     JointLimits,
@@ -56,10 +57,11 @@ from pymotoros.client.state import (
 from pymotoros.client.streaming import (
     DEFAULT_BUSY_TIMEOUT_S,
     DEFAULT_GOAL_TOLERANCE,
-    FollowingMonitor,
     FollowingSample,
     MoveResult,
+    TrajectoryStreamer,
 )
+from pymotoros.client.timing import REAL_TIME, ClientClock
 from pymotoros.models import (
     DEFAULT_CONTROLLER,
     DEFAULT_ROBOT,
@@ -119,23 +121,16 @@ _SLOW_COMMANDS: Final = frozenset(
 )
 
 
-@dataclass(frozen=True, slots=True)
-class Readiness:
-    """Answer to CHECK_MOTION_READY: ready, or the reason it is not, with what to do."""
-
-    ready: bool
-    subcode: int
-    reason: NotReadySubcode | None
-    meaning: str
-    remedy: str
-
-
 class RobotClient:
     """Async client for one MotoROS controller.
 
     ``controller`` picks the byte order (FS100 is big-endian) and the IO map used to
     check addresses; ``robot`` gives joint names and limits for planning. Nothing is
     sent until :meth:`connect` (or ``async with``).
+
+    ``clock`` is where the motion logic gets "now" and "sleep" (default: real time);
+    ``connector`` opens a port's byte stream (default: TCP). The in-memory twin of
+    :mod:`pymotoros.testing` passes both.
     """
 
     def __init__(
@@ -150,6 +145,8 @@ class RobotClient:
         robot: str | RobotModel = DEFAULT_ROBOT,
         timeout_s: float = DEFAULT_REQUEST_TIMEOUT_S,
         connect_timeout_s: float = DEFAULT_CONNECT_TIMEOUT_S,
+        clock: ClientClock = REAL_TIME,
+        connector: Connector | None = None,
     ) -> None:
         base = ports or Ports()
         self.host = host
@@ -165,7 +162,15 @@ class RobotClient:
         self.order: ByteOrder = self.controller.byte_order
         self.timeout_s = timeout_s
         self.connect_timeout_s = connect_timeout_s
-        self.tracker = StateTracker({i: g.num_axes for i, g in enumerate(self.robot.groups)})
+        self.clock = clock
+        self.connector = connector
+        self.tracker = StateTracker(
+            {i: g.num_axes for i, g in enumerate(self.robot.groups)}, now=clock.now
+        )
+        self.streamer = TrajectoryStreamer(
+            self, self.tracker, self.robot, self.controller, clock=clock
+        )
+        """Streams trajectories through this client's motion port (see :meth:`execute`)."""
         self._motion: FrameConnection | None = None
         self._state_conn: FrameConnection | None = None
         self._io: FrameConnection | None = None
@@ -204,6 +209,7 @@ class RobotClient:
             timeout_s=self.connect_timeout_s,
             on_topic=on_topic,
             on_lost=on_lost,
+            connector=self.connector,
         )
 
     async def close(self) -> None:
@@ -294,17 +300,17 @@ class RobotClient:
         if reply.result != ResultCode.SUCCESS:
             raise reply_error(reply.result, reply.subcode, reply.command)
 
-    async def check_motion_ready(self) -> Readiness:
+    async def check_motion_ready(self) -> MotionReadiness:
         """CHECK_MOTION_READY: ready, or the NOT_READY reason (never raises for "not ready")."""
         reply = await self._command(MotionCommand.CHECK_MOTION_READY)
         if reply.result == ResultCode.SUCCESS:
-            return Readiness(True, 0, None, "ready", "")
+            return MotionReadiness(True, 0, None, "ready", "")
         err = reply_error(reply.result, reply.subcode, reply.command)
         try:
             reason: NotReadySubcode | None = NotReadySubcode(reply.subcode)
         except ValueError:
             reason = None
-        return Readiness(False, reply.subcode, reason, err.meaning, err.remedy)
+        return MotionReadiness(False, reply.subcode, reason, err.meaning, err.remedy)
 
     async def start_trajectory_mode(self) -> None:
         """START_TRAJ_MODE: servo on, start INIT_ROS, wait until motion is possible.
@@ -461,7 +467,7 @@ class RobotClient:
         groups = _groups(group)
         await self.wait_for_state()
         if at_rest:
-            return await streaming.wait_until_at_rest(self, groups, timeout_s=timeout_s)
+            return await self.streamer.wait_until_at_rest(groups, timeout_s=timeout_s)
         state = self.state
         return tuple(v for g in groups for v in (state.positions(g) or ()))
 
@@ -503,37 +509,14 @@ class RobotClient:
         goes as JOINT_TRAJ_PT_FULL, several as JOINT_TRAJ_PT_FULL_EX.
         """
         self._need(self._state_conn, Port.STATE)  # completion is judged from the state stream
-        groups = tuple(groups)
-        monitor = FollowingMonitor(trajectory, groups, on_sample=on_progress)
-        remove = self.tracker.add_listener(monitor.listen)
-        started = time.monotonic()
-
-        def accepted(index: int) -> None:
-            if index == 1:
-                monitor.start()
-
-        try:
-            stats = await streaming.send_points(
-                self,
-                trajectory,
-                groups,
-                busy_timeout_s=busy_timeout_s,
-                check_speed=check_speed,
-                on_accepted=accepted,
-            )
-            monitor.start()
-            final = await streaming.wait_for_completion(
-                self,
-                trajectory,
-                groups,
-                monitor,
-                goal_tolerance=goal_tolerance,
-                timeout_s=timeout_s,
-            )
-        finally:
-            remove()
-        return MoveResult(
-            trajectory, final, stats, monitor.report, time.monotonic() - started, groups
+        return await self.streamer.execute(
+            trajectory,
+            groups,
+            busy_timeout_s=busy_timeout_s,
+            goal_tolerance=goal_tolerance,
+            timeout_s=timeout_s,
+            check_speed=check_speed,
+            on_progress=on_progress,
         )
 
     async def move_joints(
@@ -625,4 +608,4 @@ async def connect(host: str = "127.0.0.1", **options: object) -> RobotClient:
     return await client.connect()
 
 
-__all__ = ["Readiness", "RobotClient", "connect"]
+__all__ = ["RobotClient", "connect"]

@@ -85,7 +85,7 @@ class JointState:
     positions: tuple[float, ...]
     velocities: tuple[float, ...] | None
     received: float
-    """``time.monotonic()`` when it arrived."""
+    """When it arrived, on the client's clock (``time.monotonic()`` unless one was injected)."""
 
 
 @dataclass(frozen=True, slots=True)
@@ -110,8 +110,14 @@ Listener = Callable[[RobotState], None]
 class StateTracker:
     """Latest state, listeners, iterators and waits; fed by the state connection."""
 
-    def __init__(self, axes_per_group: Mapping[int, int] | None = None) -> None:
+    def __init__(
+        self,
+        axes_per_group: Mapping[int, int] | None = None,
+        *,
+        now: Callable[[], float] = time.monotonic,
+    ) -> None:
         self._axes = dict(axes_per_group or {})
+        self._now = now
         self._state = RobotState()
         self._listeners: list[Listener] = []
         self._queues: set[asyncio.Queue[RobotState]] = set()
@@ -146,7 +152,7 @@ class StateTracker:
     def feed(self, message: WireMessage) -> None:
         """Take one state-port message (the state connection's topic callback)."""
         old = self._state
-        now = time.monotonic()
+        now = self._now()
         status, status_count = old.status, old.status_count
         joints = dict(old.joints)
         if isinstance(message, RobotStatus):

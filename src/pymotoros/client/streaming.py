@@ -1,28 +1,38 @@
 """Streaming a trajectory to MotoROS and watching the robot follow it.
 
-* :func:`send_points`: JOINT_TRAJ_PT_FULL (one group) or JOINT_TRAJ_PT_FULL_EX (several),
-  sequence 0..N-1. BUSY (the previous point is still being turned into increments, §3.4)
-  is retried with a short, growing back-off under a per-point time budget; any other
-  refusal raises the typed error with the point index and the numbers behind it.
-* :func:`wait_until_at_rest`: ``in_motion`` false and the feedback still; its positions
-  are the "start from current" point 0.
+:class:`TrajectoryStreamer` does it all, against a narrow interface (a
+:class:`~pymotoros.client.motion_port.MotionPort`, a
+:class:`~pymotoros.client.motion_port.StateSource`, the models and an injected
+:class:`~pymotoros.client.timing.ClientClock`):
+
+* :meth:`~TrajectoryStreamer.send_points`: JOINT_TRAJ_PT_FULL (one group) or
+  JOINT_TRAJ_PT_FULL_EX (several), sequence 0..N-1. BUSY (the previous point is still
+  being turned into increments, §3.4) is retried with a short, growing back-off under
+  a per-point time budget; any other refusal raises the typed error with the point
+  index and the numbers behind it.
+* :meth:`~TrajectoryStreamer.wait_until_at_rest`: ``in_motion`` false and the feedback
+  still; its positions are the "start from current" point 0.
 * :class:`FollowingMonitor`: compares feedback with the plan while the robot moves and
   reports how far behind it runs (how a safety speed limit shows up).
-* :func:`wait_for_completion`: queue empty, ``in_motion`` false, feedback settled within
-  a tolerance of the goal; judged against progress, not only the wall clock.
+* :meth:`~TrajectoryStreamer.wait_for_completion`: queue empty, ``in_motion`` false,
+  feedback settled within a tolerance of the goal; judged against progress, not only
+  the clock.
 
 Every wait ends: on success, on a typed error, on a timeout, or at once with
-:class:`ConnectionLostError` when a connection drops.
+:class:`ConnectionLostError` when a connection drops. The MotoROS rules used to
+explain a refusal (:func:`start_deviations`, :func:`speed_deviations`) are plain
+functions.
 """
 
 from __future__ import annotations
 
 import asyncio
+import bisect
+import itertools
 import logging
-import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Final
+from typing import Final
 
 from pymotoros.client.errors import (
     AxisDeviation,
@@ -32,10 +42,12 @@ from pymotoros.client.errors import (
     ReplyError,
     reply_error,
 )
+from pymotoros.client.motion_port import MotionPort, StateSource
 from pymotoros.client.planning import JointTrajectory, TrajectoryPoint
 from pymotoros.client.preflight import speed_deviations, start_deviations
 from pymotoros.client.state import RobotState
-from pymotoros.models import GroupModel
+from pymotoros.client.timing import REAL_TIME, ClientClock
+from pymotoros.models import ControllerModel, GroupModel, RobotModel
 from pymotoros.models.rules import START_TOLERANCE_PULSES
 from pymotoros.protocol.constants import InvalidSubcode, MotionCommand, MsgType, ResultCode
 from pymotoros.protocol.messages import (
@@ -44,9 +56,6 @@ from pymotoros.protocol.messages import (
     MotoJointTrajPtFullEx,
     MotoMotionReply,
 )
-
-if TYPE_CHECKING:
-    from pymotoros.client.robot import RobotClient
 
 logger = logging.getLogger(__name__)
 
@@ -78,6 +87,9 @@ STALL_TIMEOUT_S: Final = 2.0
 LAG_WARNING_S: Final = 0.25
 """A robot this far behind the plan is being slowed (a safety speed limit, HOLD…)."""
 
+
+_SAME_POSITION: Final = 1e-12
+"""Squared distance under which start and goal coincide (as ``JointTrajectory.progress``)."""
 
 ARRIVED_PROGRESS: Final = 0.999
 """Progress from which the following monitor counts the robot as arrived (no lag)."""
@@ -177,101 +189,271 @@ def _deviation_text(devs: Sequence[AxisDeviation], kind: str) -> str:
     return "; ".join(f"{d.name} {d.value:+.4f} > limit {d.reference:.4f}" for d in devs)
 
 
-def _refusal(
-    client: RobotClient,
-    reply: MotoMotionReply,
-    index: int,
-    point: TrajectoryPoint,
-    models: Sequence[GroupModel],
-) -> ReplyError:
-    devs: list[AxisDeviation] = []
-    detail = ""
-    if reply.result == ResultCode.INVALID and reply.subcode == InvalidSubcode.DATA_START_POS:
-        groups = [client.robot.groups.index(m) for m in models]
-        current = _joined_positions(client.state, groups)
-        devs = start_deviations(point, models, current, client.controller)
-        detail = _deviation_text(devs, "start") or "compared with the commanded position"
-    elif reply.result == ResultCode.INVALID and reply.subcode == InvalidSubcode.DATA_SPEED:
-        devs = speed_deviations(point, models, client.controller)
-        detail = _deviation_text(devs, "speed")
-    return reply_error(
-        reply.result, reply.subcode, reply.command, point=index, detail=detail, deviations=devs
-    )
+class TrajectoryStreamer:
+    """Streams trajectories to one controller and watches the robot follow them.
 
+    It depends only on a :class:`~pymotoros.client.motion_port.MotionPort` (request,
+    queue count, readiness), a :class:`~pymotoros.client.motion_port.StateSource`
+    (the state stream), the robot and controller models, and a
+    :class:`~pymotoros.client.timing.ClientClock` for every "now" and "sleep": a test
+    can drive it with an in-memory pair in virtual time. ``RobotClient`` builds one
+    around itself.
+    """
 
-async def send_point(
-    client: RobotClient,
-    message: JointTrajPtFull | MotoJointTrajPtFullEx,
-    *,
-    busy_timeout_s: float,
-    stats: StreamStats,
-) -> MotoMotionReply:
-    """Send one point, retrying BUSY; returns the final (non-BUSY) reply."""
-    backoff = BUSY_BACKOFF_FIRST_S
-    first_busy: float | None = None
-    while True:
-        lost = client.tracker.error
-        if lost is not None:  # the state stream is gone: the move could not be watched
-            raise ConnectionLostError(str(lost))
-        reply = await client.request_motion(message)
-        if reply.result != ResultCode.BUSY:
-            if first_busy is not None:
-                stats.max_busy_wait_s = max(stats.max_busy_wait_s, time.monotonic() - first_busy)
-            return reply
-        stats.busy_replies += 1
-        now = time.monotonic()
-        if first_busy is None:
-            first_busy = now
-        elif now - first_busy > busy_timeout_s:
-            stats.max_busy_wait_s = max(stats.max_busy_wait_s, now - first_busy)
-            return reply
-        await asyncio.sleep(backoff)
-        backoff = min(backoff * 2, BUSY_BACKOFF_MAX_S)
+    def __init__(
+        self,
+        port: MotionPort,
+        states: StateSource,
+        robot: RobotModel,
+        controller: ControllerModel,
+        *,
+        clock: ClientClock = REAL_TIME,
+    ) -> None:
+        self.port = port
+        self.states = states
+        self.robot = robot
+        self.controller = controller
+        self.clock = clock
 
+    # ------------------------------------------------------------------ sending
 
-async def send_points(
-    client: RobotClient,
-    trajectory: JointTrajectory,
-    groups: Sequence[int],
-    *,
-    busy_timeout_s: float = DEFAULT_BUSY_TIMEOUT_S,
-    check_speed: bool = True,
-    on_accepted: Callable[[int], None] | None = None,
-) -> StreamStats:
-    """Stream every point of ``trajectory`` (joints of ``groups`` concatenated, in order)."""
-    models = [client.robot.groups[g] for g in groups]
-    sizes = [m.num_axes for m in models]
-    stats = StreamStats()
-    started = time.monotonic()
-    for index, point in enumerate(trajectory.points):
-        if check_speed:
-            devs = speed_deviations(point, models, client.controller)
-            if devs:
+    def _refusal(
+        self,
+        reply: MotoMotionReply,
+        index: int,
+        point: TrajectoryPoint,
+        models: Sequence[GroupModel],
+    ) -> ReplyError:
+        devs: list[AxisDeviation] = []
+        detail = ""
+        if reply.result == ResultCode.INVALID and reply.subcode == InvalidSubcode.DATA_START_POS:
+            groups = [self.robot.groups.index(m) for m in models]
+            current = _joined_positions(self.states.state, groups)
+            devs = start_deviations(point, models, current, self.controller)
+            detail = _deviation_text(devs, "start") or "compared with the commanded position"
+        elif reply.result == ResultCode.INVALID and reply.subcode == InvalidSubcode.DATA_SPEED:
+            devs = speed_deviations(point, models, self.controller)
+            detail = _deviation_text(devs, "speed")
+        return reply_error(
+            reply.result, reply.subcode, reply.command, point=index, detail=detail, deviations=devs
+        )
+
+    async def send_point(
+        self,
+        message: JointTrajPtFull | MotoJointTrajPtFullEx,
+        *,
+        busy_timeout_s: float,
+        stats: StreamStats,
+    ) -> MotoMotionReply:
+        """Send one point, retrying BUSY; returns the final (non-BUSY) reply."""
+        clock = self.clock
+        backoff = BUSY_BACKOFF_FIRST_S
+        first_busy: float | None = None
+        while True:
+            lost = self.states.error
+            if lost is not None:  # the state stream is gone: the move could not be watched
+                raise ConnectionLostError(str(lost))
+            reply = await self.port.request_motion(message)
+            if reply.result != ResultCode.BUSY:
+                if first_busy is not None:
+                    stats.max_busy_wait_s = max(stats.max_busy_wait_s, clock.now() - first_busy)
+                return reply
+            stats.busy_replies += 1
+            now = clock.now()
+            if first_busy is None:
+                first_busy = now
+            elif now - first_busy > busy_timeout_s:
+                stats.max_busy_wait_s = max(stats.max_busy_wait_s, now - first_busy)
+                return reply
+            await clock.sleep(backoff)
+            backoff = min(backoff * 2, BUSY_BACKOFF_MAX_S)
+
+    async def send_points(
+        self,
+        trajectory: JointTrajectory,
+        groups: Sequence[int],
+        *,
+        busy_timeout_s: float = DEFAULT_BUSY_TIMEOUT_S,
+        check_speed: bool = True,
+        on_accepted: Callable[[int], None] | None = None,
+    ) -> StreamStats:
+        """Stream every point of ``trajectory`` (joints of ``groups`` concatenated, in order)."""
+        models = [self.robot.groups[g] for g in groups]
+        sizes = [m.num_axes for m in models]
+        stats = StreamStats()
+        started = self.clock.now()
+        for index, point in enumerate(trajectory.points):
+            if check_speed:
+                devs = speed_deviations(point, models, self.controller)
+                if devs:
+                    raise reply_error(
+                        ResultCode.INVALID,
+                        InvalidSubcode.DATA_SPEED,
+                        _message_type(groups),
+                        point=index,
+                        detail=_deviation_text(devs, "speed") + "; checked before sending",
+                        deviations=devs,
+                    )
+            message = build_message(point, index, groups, sizes)
+            reply = await self.send_point(message, busy_timeout_s=busy_timeout_s, stats=stats)
+            if reply.result == ResultCode.BUSY:
                 raise reply_error(
-                    ResultCode.INVALID,
-                    InvalidSubcode.DATA_SPEED,
-                    _message_type(groups),
+                    reply.result,
+                    reply.subcode,
+                    reply.command,
                     point=index,
-                    detail=_deviation_text(devs, "speed") + "; checked before sending",
-                    deviations=devs,
+                    detail=f"BUSY for {busy_timeout_s:g} s after {stats.busy_replies} retries",
                 )
-        message = build_message(point, index, groups, sizes)
-        reply = await send_point(client, message, busy_timeout_s=busy_timeout_s, stats=stats)
-        if reply.result == ResultCode.BUSY:
-            raise reply_error(
-                reply.result,
-                reply.subcode,
-                reply.command,
-                point=index,
-                detail=f"BUSY for {busy_timeout_s:g} s after {stats.busy_replies} retries",
+            if reply.result != ResultCode.SUCCESS:
+                raise self._refusal(reply, index, point, models)
+            stats.points += 1
+            if on_accepted is not None:
+                on_accepted(index)
+        stats.elapsed_s = self.clock.now() - started
+        return stats
+
+    # ------------------------------------------------------------------ watching
+
+    async def wait_until_at_rest(
+        self, groups: Sequence[int], *, timeout_s: float = 10.0
+    ) -> tuple[float, ...]:
+        """Wait until ``in_motion`` is false and the feedback is still; return its positions.
+
+        This is "start from current": MotoROS checks point 0 against the commanded
+        position with a 30-pulse tolerance, and right after a move, eco mode or a brake
+        release the feedback still moves (users meet 3011 here).
+        """
+        states = self.states
+        rest = _RestDetector(groups)
+        deadline = self.clock.now() + timeout_s
+        try:
+            # The loop's timeout bounds a silent stream; the clock's deadline bounds a
+            # robot that keeps moving (both: a twin in virtual time keeps its meaning).
+            async with asyncio.timeout(timeout_s):
+                state = states.state
+                while True:
+                    pos = _joined_positions(state, groups)
+                    if rest.update(state) and pos is not None:
+                        return pos
+                    if self.clock.now() > deadline:
+                        raise TimeoutError
+                    state = await states.next_state()
+        except TimeoutError:
+            status = states.state.status
+            raise MotionTimeoutError(
+                f"the robot did not come to rest within {timeout_s:g} s "
+                f"(in_motion={None if status is None else status.in_motion})"
+            ) from None
+
+    async def wait_for_completion(
+        self,
+        trajectory: JointTrajectory,
+        groups: Sequence[int],
+        monitor: FollowingMonitor,
+        *,
+        goal_tolerance: float = DEFAULT_GOAL_TOLERANCE,
+        settle_timeout_s: float = DEFAULT_SETTLE_TIMEOUT_S,
+        timeout_s: float | None = None,
+    ) -> tuple[float, ...]:
+        """Wait until the queue is empty, ``in_motion`` false and the feedback settled at the goal.
+
+        Past ``duration + settle_timeout_s`` the wait goes on while the robot still makes
+        progress (a safety speed limit slows it, it has not stopped) and fails when it
+        stalls for :data:`STALL_TIMEOUT_S` or passes ``timeout_s`` (default: 10 × duration
+        + 30 s). A robot that stops because motion became impossible (E-stop, HOLD, alarm)
+        raises :class:`NotReadyError` with the controller's reason.
+        """
+        states = self.states
+        port = self.port
+        clock = self.clock
+        goal = trajectory.goal
+        start = clock.now()
+        soft_deadline = start + trajectory.duration + settle_timeout_s
+        hard_deadline = start + (
+            timeout_s if timeout_s is not None else 10 * trajectory.duration + 30
+        )
+        rest = _RestDetector(groups)
+        progress_of = _Progress(trajectory)
+        best_progress, best_at = -1.0, start
+        state = states.state
+        while True:
+            now = clock.now()
+            positions = _joined_positions(state, groups)
+            status = state.status
+            if positions is not None and status is not None:
+                err = max(abs(p - g) for p, g in zip(positions, goal, strict=True))
+                progress = progress_of(positions)
+                if progress > best_progress + 1e-4:
+                    best_progress, best_at = progress, now
+                at_rest = rest.update(state)
+                if at_rest and err <= goal_tolerance:
+                    counts = [await port.queue_count(g) for g in groups]
+                    if not any(counts):
+                        return positions
+                if not status.motion_possible:
+                    readiness = await port.check_motion_ready()
+                    if not readiness.ready and err > goal_tolerance:
+                        raise reply_error(
+                            ResultCode.FALSE,
+                            readiness.subcode,
+                            MotionCommand.CHECK_MOTION_READY,
+                            detail=f"the robot stopped {err:.4f} from the goal",
+                        )
+                past_end = now > start + trajectory.duration + 1.0
+                if at_rest and past_end and now - best_at > STALL_TIMEOUT_S:
+                    raise MotionIncompleteError(
+                        f"the robot came to rest {err:.5f} from the goal and is not moving "
+                        "(was the motion stopped?)"
+                    )
+            if now > hard_deadline or (now > soft_deadline and now - best_at > STALL_TIMEOUT_S):
+                lag = monitor.report.max_lag_s
+                raise MotionTimeoutError(
+                    f"the move did not finish: planned {trajectory.duration:.2f} s, waited "
+                    f"{now - start:.2f} s, progress {max(best_progress, 0.0):.0%}, largest lag "
+                    f"{lag:.2f} s"
+                )
+            state = await states.next_state()
+
+    # ------------------------------------------------------------------ a whole move
+
+    async def execute(
+        self,
+        trajectory: JointTrajectory,
+        groups: Sequence[int],
+        *,
+        busy_timeout_s: float = DEFAULT_BUSY_TIMEOUT_S,
+        goal_tolerance: float = DEFAULT_GOAL_TOLERANCE,
+        timeout_s: float | None = None,
+        check_speed: bool = True,
+        on_progress: Callable[[FollowingSample], None] | None = None,
+    ) -> MoveResult:
+        """Stream ``trajectory``, follow the robot, and wait until it settled at the goal."""
+        groups = tuple(groups)
+        monitor = FollowingMonitor(trajectory, groups, on_sample=on_progress, clock=self.clock)
+        remove = self.states.add_listener(monitor.listen)
+        started = self.clock.now()
+
+        def accepted(index: int) -> None:
+            if index == 1:
+                monitor.start()
+
+        try:
+            stats = await self.send_points(
+                trajectory,
+                groups,
+                busy_timeout_s=busy_timeout_s,
+                check_speed=check_speed,
+                on_accepted=accepted,
             )
-        if reply.result != ResultCode.SUCCESS:
-            raise _refusal(client, reply, index, point, models)
-        stats.points += 1
-        if on_accepted is not None:
-            on_accepted(index)
-    stats.elapsed_s = time.monotonic() - started
-    return stats
+            monitor.start()
+            final = await self.wait_for_completion(
+                trajectory, groups, monitor, goal_tolerance=goal_tolerance, timeout_s=timeout_s
+            )
+        finally:
+            remove()
+        return MoveResult(
+            trajectory, final, stats, monitor.report, self.clock.now() - started, groups
+        )
 
 
 def _message_type(groups: Sequence[int]) -> int:
@@ -295,18 +477,27 @@ class FollowingMonitor:
         *,
         warn_lag_s: float = LAG_WARNING_S,
         on_sample: Callable[[FollowingSample], None] | None = None,
+        clock: ClientClock = REAL_TIME,
     ) -> None:
         self.trajectory = trajectory
+        self.clock = clock
         self.groups = tuple(groups)
         self.warn_lag_s = warn_lag_s
         self.on_sample = on_sample
         self.report = FollowingReport()
         self.last: FollowingSample | None = None
         self._t0: float | None = None
+        # Per-point times and progress, computed once: every state message (40 Hz) looks
+        # the plan up, and a minute-long plan has thousands of points.
+        self._progress = _Progress(trajectory)
+        points = trajectory.points
+        self._times = [p.time for p in points]
+        self._raw = [self._progress(p.positions) for p in points]
+        self._best: list[float] = list(itertools.accumulate(self._raw[1:], max))
 
     def start(self, t0: float | None = None) -> None:
         if self._t0 is None:
-            self._t0 = time.monotonic() if t0 is None else t0
+            self._t0 = self.clock.now() if t0 is None else t0
 
     @property
     def started(self) -> bool:
@@ -322,12 +513,11 @@ class FollowingMonitor:
         positions = _joined_positions(state, self.groups)
         if positions is None:
             return None
-        elapsed = time.monotonic() - self._t0
-        traj = self.trajectory
-        planned = traj.position_at(elapsed)
+        elapsed = self.clock.now() - self._t0
+        planned = self._planned_at(elapsed)
         error = max((abs(a - b) for a, b in zip(positions, planned, strict=False)), default=0.0)
-        progress = min(max(traj.progress(positions), 0.0), 1.0)
-        reached = traj.time_at_progress(progress)
+        progress = min(max(self._progress(positions), 0.0), 1.0)
+        reached = self._time_at_progress(progress)
         # Within 0.1 % of the goal the robot is there: its last pulses of settling are no lag.
         lag = max(0.0, elapsed - reached) if progress < ARRIVED_PROGRESS else 0.0
         sample = FollowingSample(elapsed, progress, lag, error)
@@ -347,6 +537,55 @@ class FollowingMonitor:
         if self.on_sample is not None:
             self.on_sample(sample)
         return sample
+
+    def _planned_at(self, t: float) -> tuple[float, ...]:
+        """``trajectory.position_at(t)``, finding the segment by bisection."""
+        pts = self.trajectory.points
+        if t <= 0.0 or len(pts) == 1:
+            return pts[0].positions
+        if t >= pts[-1].time:
+            return pts[-1].positions
+        i = bisect.bisect_right(self._times, t) - 1
+        if i < 0:  # a plan whose first point is not at 0: as the trajectory has it
+            return self.trajectory.position_at(t)
+        segment = JointTrajectory((pts[i], pts[i + 1]), pts[i + 1].time)
+        return segment.position_at(t)
+
+    def _time_at_progress(self, fraction: float) -> float:
+        """``trajectory.time_at_progress(fraction)``, by bisection on the running best."""
+        if fraction <= 0.0:
+            return 0.0
+        pts = self.trajectory.points
+        k = bisect.bisect_left(self._best, fraction)
+        if k >= len(self._best):
+            return pts[-1].time
+        i = k + 1  # index in points (the running best starts at point 1)
+        f = self._raw[i]
+        prev_t, prev_f = (0.0, 0.0) if i == 1 else (pts[i - 1].time, self._raw[i - 1])
+        if f <= prev_f:
+            return pts[i].time
+        return prev_t + (fraction - prev_f) / (f - prev_f) * (pts[i].time - prev_t)
+
+
+class _Progress:
+    """``trajectory.progress`` with the start-to-goal line computed once."""
+
+    __slots__ = ("_dd", "_direction", "_start")
+
+    def __init__(self, trajectory: JointTrajectory) -> None:
+        self._start = trajectory.start
+        self._direction = [g - s for g, s in zip(trajectory.goal, trajectory.start, strict=True)]
+        self._dd = sum(x * x for x in self._direction)
+
+    def __call__(self, positions: Sequence[float]) -> float:
+        if self._dd <= _SAME_POSITION:
+            return 1.0
+        return (
+            sum(
+                (p - s) * x for p, s, x in zip(positions, self._start, self._direction, strict=True)
+            )
+            / self._dd
+        )
 
 
 class _RestDetector:
@@ -371,95 +610,3 @@ class _RestDetector:
             self.quiet = self.quiet + 1 if still and state.status.in_motion is False else 0
             self._prev = pos
         return self.quiet >= SETTLE_SAMPLES
-
-
-async def wait_until_at_rest(
-    client: RobotClient, groups: Sequence[int], *, timeout_s: float = 10.0
-) -> tuple[float, ...]:
-    """Wait until ``in_motion`` is false and the feedback is still; return its positions.
-
-    This is "start from current": MotoROS checks point 0 against the commanded position
-    with a 30-pulse tolerance, and right after a move, eco mode or a brake release the
-    feedback still moves (users meet 3011 here).
-    """
-    tracker = client.tracker
-    rest = _RestDetector(groups)
-    try:
-        async with asyncio.timeout(timeout_s):
-            state = tracker.state
-            while True:
-                pos = _joined_positions(state, groups)
-                if rest.update(state) and pos is not None:
-                    return pos
-                state = await tracker.next_state()
-    except TimeoutError:
-        status = tracker.state.status
-        raise MotionTimeoutError(
-            f"the robot did not come to rest within {timeout_s:g} s "
-            f"(in_motion={None if status is None else status.in_motion})"
-        ) from None
-
-
-async def wait_for_completion(
-    client: RobotClient,
-    trajectory: JointTrajectory,
-    groups: Sequence[int],
-    monitor: FollowingMonitor,
-    *,
-    goal_tolerance: float = DEFAULT_GOAL_TOLERANCE,
-    settle_timeout_s: float = DEFAULT_SETTLE_TIMEOUT_S,
-    timeout_s: float | None = None,
-) -> tuple[float, ...]:
-    """Wait until the queue is empty, ``in_motion`` false and the feedback settled at the goal.
-
-    Past ``duration + settle_timeout_s`` the wait goes on while the robot still makes
-    progress (a safety speed limit slows it, it has not stopped) and fails when it
-    stalls for :data:`STALL_TIMEOUT_S` or passes ``timeout_s`` (default: 10 × duration +
-    30 s). A robot that stops because motion became impossible (E-stop, HOLD, alarm)
-    raises :class:`NotReadyError` with the controller's reason.
-    """
-    tracker = client.tracker
-    goal = trajectory.goal
-    start = time.monotonic()
-    soft_deadline = start + trajectory.duration + settle_timeout_s
-    hard_deadline = start + (timeout_s if timeout_s is not None else 10 * trajectory.duration + 30)
-    rest = _RestDetector(groups)
-    best_progress, best_at = -1.0, start
-    state = tracker.state
-    while True:
-        now = time.monotonic()
-        positions = _joined_positions(state, groups)
-        status = state.status
-        if positions is not None and status is not None:
-            err = max(abs(p - g) for p, g in zip(positions, goal, strict=True))
-            progress = trajectory.progress(positions)
-            if progress > best_progress + 1e-4:
-                best_progress, best_at = progress, now
-            at_rest = rest.update(state)
-            if at_rest and err <= goal_tolerance:
-                counts = [await client.queue_count(g) for g in groups]
-                if not any(counts):
-                    return positions
-            if not status.motion_possible:
-                readiness = await client.check_motion_ready()
-                if not readiness.ready and err > goal_tolerance:
-                    raise reply_error(
-                        ResultCode.FALSE,
-                        readiness.subcode,
-                        MotionCommand.CHECK_MOTION_READY,
-                        detail=f"the robot stopped {err:.4f} from the goal",
-                    )
-            past_end = now > start + trajectory.duration + 1.0
-            if at_rest and past_end and now - best_at > STALL_TIMEOUT_S:
-                raise MotionIncompleteError(
-                    f"the robot came to rest {err:.5f} from the goal and is not moving "
-                    "(was the motion stopped?)"
-                )
-        if now > hard_deadline or (now > soft_deadline and now - best_at > STALL_TIMEOUT_S):
-            lag = monitor.report.max_lag_s
-            raise MotionTimeoutError(
-                f"the move did not finish: planned {trajectory.duration:.2f} s, waited "
-                f"{now - start:.2f} s, progress {max(best_progress, 0.0):.0%}, largest lag "
-                f"{lag:.2f} s"
-            )
-        state = await tracker.next_state()

@@ -6,9 +6,12 @@
         robot.enable()
         robot.move_joints([0, 0, 0, 0, -1.57, 0])
 
-Every method forwards to the same :class:`RobotClient` method (there is one
-implementation); listeners run in the loop's thread. Interrupting a call (Ctrl-C)
-cancels the coroutine behind it.
+Every public method and property of :class:`RobotClient` has its twin here, with
+the same name and parameters: coroutines become blocking calls, plain methods and
+properties forward as they are (there is one implementation). A test compares the
+two classes, and :meth:`SyncRobotClient.__getattr__` forwards anything missed, so a
+new client method can never be silently absent. Listeners run in the loop's thread.
+Interrupting a call (Ctrl-C) cancels the coroutine behind it.
 """
 
 from __future__ import annotations
@@ -16,13 +19,17 @@ from __future__ import annotations
 import asyncio
 import concurrent.futures
 import contextlib
+import functools
+import inspect
 import threading
 from collections.abc import AsyncIterator, Callable, Coroutine, Iterator
 from types import TracebackType
 from typing import Any, Concatenate, Final, ParamSpec, Self, TypeVar
 
+from pymotoros.client.connection import Ports
 from pymotoros.client.robot import RobotClient
 from pymotoros.client.state import DEFAULT_STATE_TIMEOUT_S, JointState, RobotState, Status
+from pymotoros.models import ControllerModel, RobotModel
 
 _P = ParamSpec("_P")
 _R = TypeVar("_R")
@@ -33,15 +40,27 @@ _THREAD_JOIN_TIMEOUT_S: Final = 5.0
 def _forward(
     method: Callable[Concatenate[RobotClient, _P], Coroutine[Any, Any, _R]],
 ) -> Callable[Concatenate[SyncRobotClient, _P], _R]:
-    """The blocking twin of an async ``RobotClient`` method."""
+    """The blocking twin of an async ``RobotClient`` method (same name, parameters, doc)."""
 
+    @functools.wraps(method)
     def blocking(self: SyncRobotClient, /, *args: _P.args, **kwargs: _P.kwargs) -> _R:
         return self._run(method(self.client, *args, **kwargs))
 
-    blocking.__name__ = method.__name__
     blocking.__qualname__ = f"SyncRobotClient.{method.__name__}"
-    blocking.__doc__ = method.__doc__
     return blocking
+
+
+def _forward_plain(
+    method: Callable[Concatenate[RobotClient, _P], _R],
+) -> Callable[Concatenate[SyncRobotClient, _P], _R]:
+    """A plain (non-async) ``RobotClient`` method called on the client behind the facade."""
+
+    @functools.wraps(method)
+    def plain(self: SyncRobotClient, /, *args: _P.args, **kwargs: _P.kwargs) -> _R:
+        return method(self.client, *args, **kwargs)
+
+    plain.__qualname__ = f"SyncRobotClient.{method.__name__}"
+    return plain
 
 
 class SyncRobotClient:
@@ -125,12 +144,29 @@ class SyncRobotClient:
             with contextlib.suppress(concurrent.futures.TimeoutError, RuntimeError):
                 future.result(_THREAD_JOIN_TIMEOUT_S)
 
-    plan = RobotClient.plan
-    limits = RobotClient.limits
-    named_pose = RobotClient.named_pose
+    @property
+    def robot(self) -> RobotModel:
+        return self.client.robot
+
+    @property
+    def controller(self) -> ControllerModel:
+        return self.client.controller
+
+    @property
+    def host(self) -> str:
+        return self.client.host
+
+    @property
+    def ports(self) -> Ports:
+        return self.client.ports
+
+    plan = _forward_plain(RobotClient.plan)
+    limits = _forward_plain(RobotClient.limits)
+    named_pose = _forward_plain(RobotClient.named_pose)
 
     wait_for_state = _forward(RobotClient.wait_for_state)
     wait_until = _forward(RobotClient.wait_until)
+    request_motion = _forward(RobotClient.request_motion)
     check_motion_ready = _forward(RobotClient.check_motion_ready)
     start_trajectory_mode = _forward(RobotClient.start_trajectory_mode)
     stop_trajectory_mode = _forward(RobotClient.stop_trajectory_mode)
@@ -154,6 +190,22 @@ class SyncRobotClient:
     execute = _forward(RobotClient.execute)
     move_joints = _forward(RobotClient.move_joints)
     move_named = _forward(RobotClient.move_named)
+
+    def __getattr__(self, name: str) -> Any:
+        """Anything public of :class:`RobotClient` not listed above, forwarded (a safety net;
+        the API test makes sure the list above is complete)."""
+        if name.startswith("_") or name == "client":
+            raise AttributeError(name)
+        value = getattr(self.client, name)
+        if inspect.iscoroutinefunction(value):
+            method = value
+
+            @functools.wraps(method)
+            def blocking(*args: Any, **kwargs: Any) -> Any:
+                return self._run(method(*args, **kwargs))
+
+            return blocking
+        return value
 
 
 async def _next(iterator: AsyncIterator[RobotState]) -> RobotState:

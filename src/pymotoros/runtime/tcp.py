@@ -102,6 +102,18 @@ class TcpService(ABC):
         logger.info("%s server listening on port %d", self.name, self.port)
         return self.port
 
+    def attach(self, tg: asyncio.TaskGroup) -> None:
+        """Serve clients handed over by :meth:`accept` without listening on a socket.
+
+        The in-memory twin (``pymotoros.testing``) connects its clients this way; the
+        admission rules and the handlers are the same as for TCP clients.
+        """
+        self._tg = tg
+
+    def accept(self, reader: asyncio.StreamReader, writer: asyncio.StreamWriter) -> None:
+        """Take one client's byte streams, as if it had just connected over TCP."""
+        self._accept(reader, writer)
+
     def stop_accepting(self) -> None:
         if self._server is not None:
             self._server.close()

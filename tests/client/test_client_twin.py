@@ -1,0 +1,186 @@
+"""The client against the real virtual controller: in memory (the twin), and once over TCP.
+
+The twin (:mod:`pymotoros.testing`) runs the controller and the MotoROS server handlers
+in virtual time; the last test drives ``pymotoros sim`` over TCP, as users do.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable
+from pathlib import Path
+
+import pytest
+from client_sim import running_sim
+
+from pymotoros.client import JointTrajectory, NotReadyError, RobotClient, SyncRobotClient
+from pymotoros.client.planning import TrajectoryPoint
+from pymotoros.client.srdf import parse_srdf
+from pymotoros.controller import PendantMode, VirtualController
+from pymotoros.protocol.constants import NotReadySubcode
+from pymotoros.testing import Twin, sync_twin
+
+SRDF = Path(__file__).resolve().parents[2] / "examples" / "hc10.srdf"
+TOLERANCE = 1e-3
+LONG_MOVE_S = 60.0
+"""The issue's yardstick: a minute of motion."""
+LONG_MOVE_WALL_S = 1.0
+"""…tested in under a second of wall time."""
+
+
+def _off(goal: tuple[float, ...], actual: tuple[float, ...]) -> float:
+    return max(abs(a - b) for a, b in zip(goal, actual, strict=True))
+
+
+async def test_named_poses_in_order_end_within_a_milliradian(client: RobotClient) -> None:
+    await client.enable()
+    poses = parse_srdf(SRDF)
+    for pose in poses:
+        result = await client.move_named(pose.name, srdf=SRDF)
+        goal = pose.positions_for(client.robot.groups[0])
+        assert _off(goal, result.final_positions) < TOLERANCE
+        fb = client.feedback(0)
+        assert fb is not None
+        assert _off(goal, fb.positions) < TOLERANCE
+    result = await client.move_named("home")
+    assert _off((0.0,) * 6, result.final_positions) < TOLERANCE
+
+
+async def test_a_minute_long_trajectory_runs_in_under_a_second(
+    client: RobotClient, cell: Twin
+) -> None:
+    await client.enable()
+    here = await client.current_positions()
+    goal = (1.0, 0.5, 0.3, 0.2, -1.0, 0.5)
+    rest = (0.0,) * 6
+    # One 60 s segment: MotoROS fits a cubic between the two points (§5.4). (A plan
+    # sampled every 20 ms keeps the 0.8 s queue full and meets BUSY every few ms:
+    # the same minute, but thousands of round trips more.)
+    minute = JointTrajectory(
+        (TrajectoryPoint(0.0, here, rest), TrajectoryPoint(LONG_MOVE_S, goal, rest)), LONG_MOVE_S
+    )
+    virtual_start = cell.clock.now()
+    wall_start = time.perf_counter()
+    result = await client.execute(minute)
+    wall = time.perf_counter() - wall_start
+    assert _off(goal, result.final_positions) < TOLERANCE
+    assert cell.clock.now() - virtual_start >= LONG_MOVE_S
+    assert wall < LONG_MOVE_WALL_S
+
+
+async def test_a_long_planned_move_runs_much_faster_than_real_time(
+    client: RobotClient, cell: Twin
+) -> None:
+    await client.enable()
+    here = await client.current_positions()
+    goal = (0.6, 0.3, 0.2, 0.1, -0.6, 0.3)
+    plan = client.plan(here, goal, speed_scale=0.02)
+    assert plan.duration > 10.0
+    wall_start = time.perf_counter()
+    result = await client.execute(plan)
+    wall = time.perf_counter() - wall_start
+    assert _off(goal, result.final_positions) < TOLERANCE
+    assert result.stream.busy_replies > 0
+    assert not result.following.slowed
+    assert wall < plan.duration / 2
+
+
+def _estop(c: VirtualController) -> None:
+    c.press_estop(True)
+
+
+def _alarm(c: VirtualController) -> None:
+    c.raise_alarm(4100, 1, "test")
+
+
+def _teach(c: VirtualController) -> None:
+    c.set_mode(PendantMode.TEACH)
+
+
+def _remote_off(c: VirtualController) -> None:
+    c.set_remote(False)
+
+
+def _servo_off(c: VirtualController) -> None:
+    c.set_servo(False)
+
+
+def _hold(c: VirtualController) -> None:
+    c.set_hold(True)
+
+
+@pytest.mark.parametrize(
+    ("action", "reason", "enable_refused"),
+    [
+        (_estop, NotReadySubcode.ESTOP, True),
+        (_alarm, NotReadySubcode.ALARM, False),
+        (_teach, NotReadySubcode.NOT_PLAY, True),
+        (_remote_off, NotReadySubcode.NOT_REMOTE, True),
+        (_servo_off, NotReadySubcode.SERVO_OFF, False),
+        (_hold, NotReadySubcode.HOLD, True),
+    ],
+)
+async def test_not_ready_reasons(
+    client: RobotClient,
+    cell: Twin,
+    action: Callable[[VirtualController], None],
+    reason: NotReadySubcode,
+    enable_refused: bool,
+) -> None:
+    await client.enable()
+    seen = client.state.status_count
+    action(cell.controller)
+    # A status sent after the operator's action: the cached one may predate it, and
+    # MotoROS (like us) reads the controller's signals every 10 ms, so only a fresh
+    # "motion impossible" says that CHECK_MOTION_READY will give the reason.
+    await client.wait_until(
+        lambda s: s.status_count > seen and s.status is not None and not s.status.motion_possible,
+        5.0,
+        "a fresh status saying motion is impossible",
+    )
+    readiness = await client.check_motion_ready()
+    assert readiness.reason is reason
+    assert readiness.remedy
+    start = client.state.positions(0)
+    assert start is not None
+    traj = JointTrajectory((TrajectoryPoint(0.0, start, (0.0,) * 6),), 0.0)
+    with pytest.raises(NotReadyError) as info:
+        await client.execute(traj)
+    assert info.value.reason is reason
+    if enable_refused:
+        with pytest.raises(NotReadyError) as info:
+            await client.enable()
+        assert info.value.reason is reason
+    else:
+        await client.enable()  # START_TRAJ_MODE resets alarms and switches servo power on
+        assert (await client.check_motion_ready()).ready
+
+
+def test_blocking_facade_on_the_twin() -> None:
+    with sync_twin(robot="hc10") as (robot, the_twin):
+        robot.enable()
+        start = the_twin.clock.now()
+        result = robot.move_joints([0.0, 0.0, 0.0, 0.0, -1.57, 0.0])
+        assert abs(result.final_positions[4] + 1.57) < TOLERANCE
+        assert the_twin.clock.now() - start >= result.trajectory.duration
+        robot.write_io_bit(10020, 1)
+        assert robot.read_io_bit(10020) == 1
+        plan = robot.plan(robot.current_positions(), (0.0,) * 6)
+        assert robot.execute(plan).final_positions == pytest.approx((0.0,) * 6, abs=TOLERANCE)
+
+
+def test_blocking_facade_over_tcp() -> None:
+    with (
+        running_sim() as sim,
+        SyncRobotClient(**sim.client_options()) as robot,
+    ):
+        robot.wait_for_state()
+        robot.enable()
+        result = robot.move_joints([0.0, 0.0, 0.0, 0.0, -1.57, 0.0])
+        assert abs(result.final_positions[4] + 1.57) < TOLERANCE
+        robot.write_io_bit(10020, 1)
+        assert robot.read_io_bit(10020) == 1
+        states = robot.states()
+        assert next(states).count > 0
+        states.close()
+        robot.move_named("home")

@@ -1,0 +1,131 @@
+"""The front door (``import pymotoros``) and the blocking facade's completeness."""
+
+from __future__ import annotations
+
+import inspect
+import subprocess
+import sys
+
+import pytest
+
+import pymotoros
+from pymotoros import client as client_package
+from pymotoros.client import RobotClient, SyncRobotClient
+from pymotoros.errors import PymotorosError
+
+USER_NAMES = (
+    "RobotClient",
+    "SyncRobotClient",
+    "connect",
+    "MoveResult",
+    "JointTrajectory",
+    "MotionReadiness",
+    "VirtualController",
+    "RobotModel",
+    "GroupModel",
+    "DhLink",
+    "PymotorosError",
+    "ClientError",
+    "PlanningError",
+    "NamedPoseError",
+    "NotReadyError",
+)
+
+
+def test_front_door_exports_what_users_need() -> None:
+    for name in USER_NAMES:
+        assert name in pymotoros.__all__, name
+        assert name in dir(pymotoros), name
+        assert getattr(pymotoros, name) is not None
+    for name in pymotoros.__all__:
+        assert hasattr(pymotoros, name), name
+    assert len(set(pymotoros.__all__)) == len(pymotoros.__all__)
+
+
+def test_one_name_per_concept() -> None:
+    from pymotoros import models
+
+    assert pymotoros.GroupModel is models.GroupModel
+    assert pymotoros.DhLink is models.DhLink
+    assert pymotoros.MotionReadiness is client_package.MotionReadiness
+    assert not hasattr(client_package, "Readiness")
+
+
+def test_every_exception_is_in_the_one_tree() -> None:
+    exceptions = [
+        getattr(pymotoros, n)
+        for n in pymotoros.__all__
+        if inspect.isclass(getattr(pymotoros, n))
+        and issubclass(getattr(pymotoros, n), BaseException)
+    ]
+    assert pymotoros.PlanningError in exceptions
+    assert pymotoros.NamedPoseError in exceptions
+    for exc in exceptions:
+        assert issubclass(exc, PymotorosError), exc
+    for name in ("PlanningError", "NamedPoseError"):
+        assert getattr(client_package, name) is getattr(pymotoros, name)
+        assert issubclass(getattr(pymotoros, name), pymotoros.ClientError)
+
+
+def test_unknown_name_is_an_attribute_error() -> None:
+    with pytest.raises(AttributeError, match="no attribute 'Readiness'"):
+        _ = pymotoros.Readiness  # type: ignore[attr-defined]
+
+
+def test_the_front_door_imports_nothing_until_asked() -> None:
+    code = (
+        "import sys, pymotoros\n"
+        "print(','.join(m for m in ('asyncio', 'socket', 'pymotoros.client', "
+        "'pymotoros.controller', 'numpy') if m in sys.modules))\n"
+    )
+    done = subprocess.run(  # noqa: S603 - fixed interpreter and code
+        [sys.executable, "-c", code], capture_output=True, text=True, check=True, timeout=60
+    )
+    assert done.stdout.strip() == ""
+
+
+# ------------------------------------------------------------------ the blocking facade
+
+
+def _public(cls: type) -> dict[str, object]:
+    return {
+        name: inspect.getattr_static(cls, name) for name in dir(cls) if not name.startswith("_")
+    }
+
+
+def _parameters(function: object) -> list[tuple[str, object, object]]:
+    signature = inspect.signature(function)  # type: ignore[arg-type]
+    return [(p.name, p.kind, p.default) for p in signature.parameters.values()]
+
+
+def test_sync_client_has_every_public_member_of_the_async_client() -> None:
+    """Names and parameters match; coroutines become blocking calls; properties stay so."""
+    async_api = _public(RobotClient)
+    sync_api = _public(SyncRobotClient)
+    missing = sorted(set(async_api) - set(sync_api))
+    assert not missing, f"SyncRobotClient lacks {missing}"
+    for name, member in async_api.items():
+        twin = sync_api[name]
+        if isinstance(member, property):
+            assert isinstance(twin, property), name
+            continue
+        assert callable(member), name
+        assert callable(twin), name
+        assert not inspect.iscoroutinefunction(twin), f"{name} must block, not return a coroutine"
+        assert not inspect.isasyncgenfunction(twin), name
+        assert _parameters(twin) == _parameters(member), name
+
+
+def test_sync_client_plain_methods_work_on_the_facade() -> None:
+    """``plan``, ``limits`` and ``named_pose`` run on the client behind (no AttributeError)."""
+    robot = SyncRobotClient(robot="hc10")
+    try:
+        limits = robot.limits()
+        assert limits.dof == 6
+        home = robot.named_pose("home")
+        plan = robot.plan(home, (0.1, 0.0, 0.0, 0.0, 0.0, 0.0))
+        assert plan.goal[0] == pytest.approx(0.1)
+        assert robot.robot.name == "hc10"
+        assert robot.timeout_s == robot.client.timeout_s  # forwarded by __getattr__
+    finally:
+        robot.close()
