@@ -217,17 +217,23 @@ class Message:
             cls.BODY_SIZE = cls._STRUCTS[0].size
         if "OFFSETS" not in own:
             cls.OFFSETS = _offsets(cls.FIELDS)
-        for ports, tables in (
-            (own.get("REQUEST_ON", ()), _REQUESTS),
-            (own.get("REPLY_ON", ()), _REPLIES),
-        ):
-            for port in ports:
-                known = tables[port].setdefault(int(cls.MSG_TYPE), cls)
-                if known is not cls:
-                    raise TypeError(
-                        f"{cls.__name__}: {cls.MSG_TYPE.name} on the {port.value} port is "
-                        f"already {known.__name__}"
-                    )
+        entries = [
+            (tables[port], port)
+            for ports, tables in (
+                (own.get("REQUEST_ON", ()), _REQUESTS),
+                (own.get("REPLY_ON", ()), _REPLIES),
+            )
+            for port in ports
+        ]
+        for table, port in entries:  # every check before any entry: all or nothing
+            known = table.get(int(cls.MSG_TYPE))
+            if known is not None:
+                raise TypeError(
+                    f"{cls.__name__}: {cls.MSG_TYPE.name} on the {port.value} port is "
+                    f"already {known.__name__}"
+                )
+        for table, _port in entries:
+            table[int(cls.MSG_TYPE)] = cls
 
     if not TYPE_CHECKING:  # mypy keeps the typed NamedTuple constructor
 
