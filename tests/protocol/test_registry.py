@@ -16,6 +16,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from test_message_roundtrip import COVERED, MESSAGES
 
+from pymotoros.client.connection import expected_echo
 from pymotoros.protocol import (
     ByteOrder,
     FrameDecoder,
@@ -255,3 +256,15 @@ def test_subclassing_a_message_registers_nothing() -> None:
 
     assert {port: dict(table) for port, table in REQUEST_CLASSES.items()} == before
     assert _TracedPing().pack(ByteOrder.LITTLE) == b""
+
+
+@pytest.mark.parametrize("name", sorted(MESSAGES))
+@given(data=st.data())
+@settings(max_examples=10)
+def test_reply_echo_agrees_with_the_clients_hand_written_table(
+    name: str, data: st.DataObject
+) -> None:
+    """``Message.reply_echo`` (derived from the layout) says what the client's
+    ``expected_echo`` (one branch per request class) says, so the client can use it."""
+    message = data.draw(MESSAGES[name][0])
+    assert message.reply_echo() == expected_echo(message)

@@ -327,6 +327,21 @@ class Message:
             decode = decoders[order] = cls._bind_unpack_from(order)
         return cast(Self, decode(buffer, start, end))
 
+    def reply_echo(self) -> tuple[int, int] | None:
+        """(command, sequence) the MOTO_MOTION_REPLY to this request must echo (§1.6), or None.
+
+        Derived from the layout, so a new request needs no entry anywhere: a
+        request with a ``sequence`` field is answered with its sequence and its
+        ``command`` field (MOTION_CTRL) or else its type; any other message
+        (no sequence, or not a request) matches by type alone.
+        """
+        offsets = self.OFFSETS
+        if self.ROLE is not Role.REQUEST or "sequence" not in offsets:
+            return None
+        fields = cast(Any, self)
+        command = fields.command if "command" in offsets else self.MSG_TYPE
+        return int(command), int(fields.sequence)
+
     @classmethod
     def needed_body_size(cls, body: bytes, order: ByteOrder) -> int:
         """Body bytes MotoROS wants for this type, given what arrived (§1.5).
