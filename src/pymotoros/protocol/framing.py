@@ -20,7 +20,7 @@ import struct
 from collections.abc import Callable, Iterator, Mapping
 from dataclasses import dataclass
 from types import MappingProxyType
-from typing import Final, NamedTuple, TypeAlias
+from typing import Final, NamedTuple, TypeAlias, overload
 
 from pymotoros.errors import LocalProtocolError, RemoteProtocolError
 from pymotoros.protocol.constants import (
@@ -236,14 +236,21 @@ class FrameDecoder:
             self._pos = 0
         self._buf += data
 
-    def _next_span(self) -> tuple[int, int, int, bytes, int, int] | None:
+    @overload
+    def _next(self, table: None) -> Frame | None: ...
+
+    @overload
+    def _next(self, table: Mapping[int, _BoundUnpackFrom]) -> WireMessage | None: ...
+
+    def _next(self, table: Mapping[int, _BoundUnpackFrom] | None) -> Frame | WireMessage | None:
         """The framing every ``next_*`` method shares, and the one place the buffer advances.
 
-        Returns ``(msg_type, comm_type, reply_type, buffer, start, end)`` for the
-        next whole frame, its body being ``buffer[start:end]``, and consumes the
-        frame; None if more bytes are needed. ``buffer`` is returned because
-        consuming may already have replaced ``self._buf``. Slicing is left to
-        the caller: the typed paths decode straight from the buffer.
+        Consumes the next whole frame and returns it as a :class:`Frame` when
+        ``table`` is None, else decoded by ``table``'s bound decoder for its type
+        (:class:`UnknownMessage` for a type not in it); None if more bytes are
+        needed. One routine with a switch rather than a framing helper returning
+        a tuple: one call and no tuple per frame is what keeps ``next_reply``
+        fast now that JOINT_FEEDBACK has a single decoder (bench/bench_codec.py).
         """
         buf = self._buf
         pos = self._pos
@@ -262,7 +269,7 @@ class FrameDecoder:
             )
         end = pos + PREFIX_SIZE + length
         if end > size:
-            # A prefix alone never gets here: a legal length ends past the header.
+            # A prefix alone never gets past here: a legal length ends after the header.
             return None
         if end == size:
             self._buf = b""
@@ -272,15 +279,17 @@ class FrameDecoder:
             self._pos = 0
         else:
             self._pos = end
-        return msg_type, comm_type, reply_type, buf, pos + FRAME_OVERHEAD, end
+        start = pos + FRAME_OVERHEAD
+        if table is None:
+            return _new_frame(Frame, (msg_type, comm_type, reply_type, buf[start:end]))
+        unpack_from = table.get(msg_type)
+        if unpack_from is None:
+            return UnknownMessage(msg_type, buf[start:end])
+        return unpack_from(buf, start, end)
 
     def next_frame(self) -> Frame | None:
         """The next whole frame, or None if more bytes are needed."""
-        span = self._next_span()
-        if span is None:
-            return None
-        msg_type, comm_type, reply_type, buf, start, end = span
-        return _new_frame(Frame, (msg_type, comm_type, reply_type, buf[start:end]))
+        return self._next(None)
 
     def next_reply(self, port: Port) -> WireMessage | None:
         """:meth:`next_frame` then :func:`decode_reply` in one step: the client's hot path.
@@ -290,20 +299,13 @@ class FrameDecoder:
         A frame whose body does not fit its type is consumed, then reported as
         :class:`RemoteProtocolError`.
         """
-        span = self._next_span()
-        if span is None:
-            return None
-        msg_type, _, _, buf, start, end = span
-        unpack_from = (
+        return self._next(
             self._rep_state  # first: the state stream is what a client receives most
             if port is _STATE
             else self._rep_motion
             if port is _MOTION
             else self._rep_io
-        ).get(msg_type)
-        if unpack_from is None:
-            return UnknownMessage(msg_type, buf[start:end])
-        return unpack_from(buf, start, end)
+        )
 
     def next_request(self, port: Port) -> WireMessage | None:
         """:meth:`next_frame` then :func:`decode_request` in one step (exact sizes only).
@@ -311,20 +313,13 @@ class FrameDecoder:
         Servers that follow MotoROS's size rules use :meth:`next_frame` and
         :func:`sizes.check_request` instead.
         """
-        span = self._next_span()
-        if span is None:
-            return None
-        msg_type, _, _, buf, start, end = span
-        unpack_from = (
+        return self._next(
             self._req_motion
             if port is _MOTION
             else self._req_state
             if port is _STATE
             else self._req_io
-        ).get(msg_type)
-        if unpack_from is None:
-            return UnknownMessage(msg_type, buf[start:end])
-        return unpack_from(buf, start, end)
+        )
 
     def frames(self) -> Iterator[Frame]:
         """Every whole frame currently buffered (stops at the first incomplete one)."""
