@@ -64,6 +64,7 @@ __all__ = [
 
 
 def _sizes(port: Port) -> Mapping[int, int]:
+    """Total size per fixed-size type a server reads on ``port`` (FULL_EX aside)."""
     return MappingProxyType(
         {
             msg_type: FRAME_OVERHEAD + cls.BODY_SIZE
@@ -73,7 +74,7 @@ def _sizes(port: Port) -> Mapping[int, int]:
     )
 
 
-def _motion_requests(cls: type[Message]) -> bool:
+def _echoes_sequence(cls: type[Message]) -> bool:
     """A client's request MotoROS answers with an echo of its sequence (§1.5, §1.6)."""
     return cls.ROLE is Role.REQUEST and "sequence" in cls.OFFSETS
 
@@ -98,7 +99,7 @@ _SEQUENCE_OFFSET: Final[Mapping[int, int]] = MappingProxyType(
     {
         msg_type: cls.OFFSETS["sequence"]
         for msg_type, cls in REQUEST_CLASSES[Port.MOTION].items()
-        if _motion_requests(cls)
+        if _echoes_sequence(cls)
     }
 )
 """Body offset of the sequence echoed in a 3001 reply (SELECT_TOOL's comes third, §1.4)."""
@@ -111,7 +112,7 @@ _COMMAND_OFFSET: Final[Mapping[int, int]] = MappingProxyType(
     {
         msg_type: cls.OFFSETS["command"]
         for msg_type, cls in REQUEST_CLASSES[Port.MOTION].items()
-        if _motion_requests(cls) and "command" in cls.OFFSETS
+        if _echoes_sequence(cls) and "command" in cls.OFFSETS
     }
 )
 """Body offset of the command a 3001 reply echoes (MOTO_MOTION_CTRL's, §1.4); the others
