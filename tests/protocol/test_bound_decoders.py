@@ -1,8 +1,8 @@
 """The pre-bound fast paths agree with the generic decode, for every type and both orders.
 
 ``FrameDecoder`` and ``decode_request``/``decode_reply`` use decoders bound to one
-byte order (``Message._bind_unpack_from``), and ``next_reply`` decodes
-JOINT_FEEDBACK on the state port inline. The reference here is the generic
+byte order (``Message._bind_unpack_from``, the one decoder per type; for
+JOINT_FEEDBACK, the one every path uses). The reference here is the generic
 classmethod ``cls.unpack(body, order)`` of the class that REQUEST_CLASSES /
 REPLY_CLASSES name for the type on that port.
 """
@@ -154,9 +154,9 @@ def _state_frames(o: str) -> list[Frame]:
     status = Body(o, 28).i(0, 1).i(20, 2).bytes()
     return [
         Frame(15, 1, 0, _feedback_body(o, 0, 1.0)),  # the fast path
-        Frame(1, 3, 1, b""),  # 16 bytes: shorter than the fast path's first unpack
+        Frame(1, 3, 1, b""),  # 16 bytes: shorter than a JOINT_FEEDBACK
         Frame(15, 1, 0, _feedback_body(o, 1, -2.0)),
-        Frame(13, 1, 0, status),  # 44 bytes: the general inline path
+        Frame(13, 1, 0, status),  # 44 bytes: another type of the state table
         Frame(2017, 1, 0, Body(o, 532).i(0, 1).bytes()),
         Frame(15, 1, 0, bytes(136)),  # JOINT_FEEDBACK of the wrong size: refused
         Frame(15, 1, 0, bytes(128)),
@@ -168,7 +168,7 @@ def _state_frames(o: str) -> list[Frame]:
 @pytest.mark.parametrize("port", list(Port), ids=[p.value for p in Port])
 @pytest.mark.parametrize("o", ["<", ">"], ids=["le", "be"])
 def test_next_reply_fast_path_at_every_split(o: str, port: Port) -> None:
-    """Feedback inline (state port) or through the tables (other ports), any split."""
+    """Feedback through the state table (or unknown on other ports), any split."""
     order = ByteOrder(o)
     frames = _state_frames(o)
     data = b"".join(frame(o, *f) for f in frames)
@@ -185,7 +185,7 @@ def test_next_reply_fast_path_at_every_split(o: str, port: Port) -> None:
 
 @pytest.mark.parametrize("o", ["<", ">"], ids=["le", "be"])
 def test_next_reply_feedback_values_match_hand_built_bytes(o: str) -> None:
-    """The inline decode reads every field at its §1.4 offset."""
+    """The JOINT_FEEDBACK decoder reads every field at its §1.4 offset."""
     order = ByteOrder(o)
     body = _feedback_body(o, 2, 1.0)
     decoder = FrameDecoder(order)

@@ -16,7 +16,7 @@ def _loaded_after(prelude: str) -> list[str]:
         "import sys\n"
         f"{prelude}\n"
         "before = set(sys.modules)\n"
-        "import pymotoros.protocol, pymotoros.protocol.sizes, pymotoros.protocol.joint_order\n"
+        "import pymotoros.protocol, pymotoros.protocol.sizes\n"
         f"print(','.join(m for m in {FORBIDDEN!r} if m in sys.modules and m not in before))\n"
     )
     result = subprocess.run(  # noqa: S603 - fixed interpreter and code

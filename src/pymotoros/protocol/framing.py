@@ -20,52 +20,23 @@ import struct
 from collections.abc import Callable, Iterator, Mapping
 from dataclasses import dataclass
 from types import MappingProxyType
-from typing import Final, NamedTuple, TypeAlias
+from typing import Final, NamedTuple, TypeAlias, overload
 
 from pymotoros.errors import LocalProtocolError, RemoteProtocolError
 from pymotoros.protocol.constants import (
     HEADER_SIZE,
-    MAX_JOINTS,
     MAX_LENGTH_PREFIX,
     MAX_WIRE_MESSAGE_SIZE,
     PREFIX_SIZE,
     ByteOrder,
     CommType,
-    MsgType,
     Port,
     ReplyType,
 )
 from pymotoros.protocol.messages import (
-    _RECORD_ACC_AT,
-    _RECORD_POS_AT,
-    _RECORD_VEL_AT,
-    BODY_SIZE_GROUP_RECORD,
-    IoErrorReply,
-    JointFeedback,
-    JointTrajPtFull,
+    REPLY_CLASSES,
+    REQUEST_CLASSES,
     Message,
-    MotoGetDhParameters,
-    MotoGetDhParametersReply,
-    MotoJointFeedbackEx,
-    MotoJointTrajPtFullEx,
-    MotoMotionCtrl,
-    MotoMotionReply,
-    MotoReadIoBit,
-    MotoReadIoBitReply,
-    MotoReadIoGroup,
-    MotoReadIoGroupReply,
-    MotoReadMRegister,
-    MotoReadMRegisterReply,
-    MotoSelectTool,
-    MotoWriteIoBit,
-    MotoWriteIoBitReply,
-    MotoWriteIoGroup,
-    MotoWriteIoGroupReply,
-    MotoWriteMRegister,
-    MotoWriteMRegisterReply,
-    Ping,
-    PingReply,
-    RobotStatus,
     Role,
     UnknownMessage,
     WireMessage,
@@ -98,25 +69,6 @@ _HEAD_LE: Final = struct.Struct("<iiii")
 _HEAD_BE: Final = struct.Struct(">iiii")
 _PREFIX_LE: Final = struct.Struct("<i")
 _PREFIX_BE: Final = struct.Struct(">i")
-
-# next_reply's inline JOINT_FEEDBACK decode (reference §1.4; same layout as messages.py).
-_JOINT_FEEDBACK: Final = int(MsgType.JOINT_FEEDBACK)
-"""15 as a plain int: comparing with the IntEnum member costs more."""
-_FEEDBACK_LENGTH: Final = HEADER_SIZE + BODY_SIZE_GROUP_RECORD
-"""144: the length prefix of a JOINT_FEEDBACK frame."""
-_FEEDBACK_HEAD_LE: Final = struct.Struct("<iiiiiif")
-_FEEDBACK_HEAD_BE: Final = struct.Struct(">iiiiiif")
-"""Prefix, header, then groupNo, validFields, time of the group record."""
-_FEEDBACK_HEAD_SIZE: Final = _FEEDBACK_HEAD_LE.size
-_JOINTS_LE: Final = struct.Struct(f"<{MAX_JOINTS}f")
-_JOINTS_BE: Final = struct.Struct(f">{MAX_JOINTS}f")
-_FEEDBACK_POS_AT: Final = FRAME_OVERHEAD + _RECORD_POS_AT
-_FEEDBACK_VEL_AT: Final = FRAME_OVERHEAD + _RECORD_VEL_AT
-_FEEDBACK_ACC_AT: Final = FRAME_OVERHEAD + _RECORD_ACC_AT
-_new_feedback: Final[Callable[[type[JointFeedback], tuple[object, ...]], JointFeedback]] = (
-    tuple.__new__
-)
-"""Builds the message without validation, like JointFeedback.unpack_from."""
 
 
 class Frame(NamedTuple):
@@ -238,9 +190,7 @@ class FrameDecoder:
         "_req_io",
         "_req_motion",
         "_req_state",
-        "_unpack_feedback_head",
         "_unpack_head",
-        "_unpack_joints",
         "_unpack_prefix",
     )
 
@@ -253,8 +203,6 @@ class FrameDecoder:
         # JOINT_FEEDBACK decode).
         self._unpack_head = (_HEAD_BE if big else _HEAD_LE).unpack_from
         self._unpack_prefix = (_PREFIX_BE if big else _PREFIX_LE).unpack_from
-        self._unpack_feedback_head = (_FEEDBACK_HEAD_BE if big else _FEEDBACK_HEAD_LE).unpack_from
-        self._unpack_joints = (_JOINTS_BE if big else _JOINTS_LE).unpack_from
         tables = _BOUND_BE if big else _BOUND_LE
         self._req_motion = tables.req_motion
         self._req_io = tables.req_io
@@ -288,8 +236,22 @@ class FrameDecoder:
             self._pos = 0
         self._buf += data
 
-    def next_frame(self) -> Frame | None:
-        """The next whole frame, or None if more bytes are needed."""
+    @overload
+    def _next(self, table: None) -> Frame | None: ...
+
+    @overload
+    def _next(self, table: Mapping[int, _BoundUnpackFrom]) -> WireMessage | None: ...
+
+    def _next(self, table: Mapping[int, _BoundUnpackFrom] | None) -> Frame | WireMessage | None:
+        """The framing every ``next_*`` method shares, and the one place the buffer advances.
+
+        Consumes the next whole frame and returns it as a :class:`Frame` when
+        ``table`` is None, else decoded by ``table``'s bound decoder for its type
+        (:class:`UnknownMessage` for a type not in it); None if more bytes are
+        needed. One routine with a switch rather than a framing helper returning
+        a tuple: one call and no tuple per frame is what keeps ``next_reply``
+        fast now that JOINT_FEEDBACK has a single decoder (bench/bench_codec.py).
+        """
         buf = self._buf
         pos = self._pos
         size = len(buf)
@@ -307,131 +269,7 @@ class FrameDecoder:
             )
         end = pos + PREFIX_SIZE + length
         if end > size:
-            return None
-        body = buf[pos + FRAME_OVERHEAD : end]
-        if end == size:
-            self._buf = b""
-            self._pos = 0
-        elif end > _COMPACT_AFTER:
-            self._buf = buf[end:]
-            self._pos = 0
-        else:
-            self._pos = end
-        return _new_frame(Frame, (msg_type, comm_type, reply_type, body))
-
-    def next_reply(self, port: Port) -> WireMessage | None:
-        """:meth:`next_frame` then :func:`decode_reply` in one step: the client's hot path.
-
-        Faster because no :class:`Frame` or body copy is made; the header's comm
-        and reply types are not returned (use the two-step form to inspect them).
-        A frame whose body does not fit its type is consumed, then reported as
-        :class:`RemoteProtocolError`.
-        """
-        # The framing of _next_message, inlined: this path decodes every state
-        # message a client receives, and the extra call costs ~5 % of it.
-        buf = self._buf
-        pos = self._pos
-        size = len(buf)
-        if size - pos >= _FEEDBACK_HEAD_SIZE:
-            # One unpack reads prefix, header and what would be JOINT_FEEDBACK's groupNo,
-            # validFields and time; other types ignore the last three (they may be the
-            # next frame's bytes: harmless, any 4 bytes unpack as a float).
-            length, msg_type, _, _, group_no, valid_fields, time = self._unpack_feedback_head(
-                buf, pos
-            )
-            end = pos + PREFIX_SIZE + length
-            if (
-                msg_type == _JOINT_FEEDBACK
-                and length == _FEEDBACK_LENGTH  # within 12..548: no separate bounds test
-                and port is _STATE
-                and end <= size
-            ):
-                # The state stream (JOINT_FEEDBACK at 40 Hz per group and client), decoded
-                # right here exactly as JointFeedback.unpack_from does, without the call
-                # to it and without a second unpack for groupNo/validFields/time.
-                if end == size:
-                    self._buf = b""
-                    self._pos = 0
-                elif end > _COMPACT_AFTER:
-                    self._buf = buf[end:]
-                    self._pos = 0
-                else:
-                    self._pos = end
-                joints = self._unpack_joints
-                return _new_feedback(
-                    JointFeedback,
-                    (
-                        group_no,
-                        valid_fields,
-                        time,
-                        joints(buf, pos + _FEEDBACK_POS_AT),
-                        joints(buf, pos + _FEEDBACK_VEL_AT),
-                        joints(buf, pos + _FEEDBACK_ACC_AT),
-                    ),
-                )
-            if MIN_LENGTH_PREFIX <= length <= MAX_LENGTH_PREFIX and end <= size:
-                if end == size:
-                    self._buf = b""
-                    self._pos = 0
-                elif end > _COMPACT_AFTER:
-                    self._buf = buf[end:]
-                    self._pos = 0
-                else:
-                    self._pos = end
-                table = (  # inline, not _reply_table(): RobotStatus comes every cycle too
-                    self._rep_state
-                    if port is _STATE
-                    else self._rep_motion
-                    if port is _MOTION
-                    else self._rep_io
-                )
-                unpack_from = table.get(msg_type)
-                if unpack_from is None:
-                    return UnknownMessage(msg_type, buf[pos + FRAME_OVERHEAD : end])
-                return unpack_from(buf, pos + FRAME_OVERHEAD, end)
-        # partial, a bad prefix, or a frame too short to be JOINT_FEEDBACK (a 16-byte
-        # PING reply): the general path decides
-        return self._next_message(self._reply_table(port))
-
-    def _reply_table(self, port: Port) -> dict[int, _BoundUnpackFrom]:
-        """The bound decoders of ``port``'s replies (for next_reply's cold paths)."""
-        if port is _STATE:
-            return self._rep_state
-        return self._rep_motion if port is _MOTION else self._rep_io
-
-    def next_request(self, port: Port) -> WireMessage | None:
-        """:meth:`next_frame` then :func:`decode_request` in one step (exact sizes only).
-
-        Servers that follow MotoROS's size rules use :meth:`next_frame` and
-        :func:`sizes.check_request` instead.
-        """
-        table = (
-            self._req_motion
-            if port is _MOTION
-            else self._req_state
-            if port is _STATE
-            else self._req_io
-        )
-        return self._next_message(table)
-
-    def _next_message(self, table: Mapping[int, _BoundUnpackFrom]) -> WireMessage | None:
-        # Same framing as next_frame, kept inline: a helper call costs ~10 % here.
-        buf = self._buf
-        pos = self._pos
-        size = len(buf)
-        if size - pos >= FRAME_OVERHEAD:
-            length, msg_type, _, _ = self._unpack_head(buf, pos)
-        elif size - pos >= PREFIX_SIZE:
-            (length,) = self._unpack_prefix(buf, pos)
-        else:
-            return None
-        if length < MIN_LENGTH_PREFIX or length > MAX_LENGTH_PREFIX:
-            raise RemoteProtocolError(
-                f"length prefix {length} outside {MIN_LENGTH_PREFIX}..{MAX_LENGTH_PREFIX}",
-                data=buf[pos : pos + MAX_WIRE_MESSAGE_SIZE],
-            )
-        end = pos + PREFIX_SIZE + length
-        if end > size:
+            # A prefix alone never gets past here: a legal length ends after the header.
             return None
         if end == size:
             self._buf = b""
@@ -442,10 +280,46 @@ class FrameDecoder:
         else:
             self._pos = end
         start = pos + FRAME_OVERHEAD
+        if table is None:
+            return _new_frame(Frame, (msg_type, comm_type, reply_type, buf[start:end]))
         unpack_from = table.get(msg_type)
         if unpack_from is None:
             return UnknownMessage(msg_type, buf[start:end])
         return unpack_from(buf, start, end)
+
+    def next_frame(self) -> Frame | None:
+        """The next whole frame, or None if more bytes are needed."""
+        return self._next(None)
+
+    def next_reply(self, port: Port) -> WireMessage | None:
+        """:meth:`next_frame` then :func:`decode_reply` in one step: the client's hot path.
+
+        Faster because no :class:`Frame` or body copy is made; the header's comm
+        and reply types are not returned (use the two-step form to inspect them).
+        A frame whose body does not fit its type is consumed, then reported as
+        :class:`RemoteProtocolError`.
+        """
+        return self._next(
+            self._rep_state  # first: the state stream is what a client receives most
+            if port is _STATE
+            else self._rep_motion
+            if port is _MOTION
+            else self._rep_io
+        )
+
+    def next_request(self, port: Port) -> WireMessage | None:
+        """:meth:`next_frame` then :func:`decode_request` in one step (exact sizes only).
+
+        Servers that follow MotoROS's size rules use :meth:`next_frame` and
+        :func:`sizes.check_request` instead.
+        """
+        return self._next(
+            self._req_motion
+            if port is _MOTION
+            else self._req_state
+            if port is _STATE
+            else self._req_io
+        )
 
     def frames(self) -> Iterator[Frame]:
         """Every whole frame currently buffered (stops at the first incomplete one)."""
@@ -465,54 +339,6 @@ _new_frame: Final = tuple.__new__
 
 # --------------------------------------------------------------------------- typed decoding
 
-
-def _table(*classes: type[Message]) -> Mapping[int, type[Message]]:
-    return MappingProxyType({int(cls.MSG_TYPE): cls for cls in classes})
-
-
-_IO_BIT_GROUP_REQUESTS: Final = (MotoReadIoBit, MotoWriteIoBit, MotoReadIoGroup, MotoWriteIoGroup)
-_IO_BIT_GROUP_REPLIES: Final = (
-    MotoReadIoBitReply,
-    MotoWriteIoBitReply,
-    MotoReadIoGroupReply,
-    MotoWriteIoGroupReply,
-)
-
-REQUEST_CLASSES: Final[Mapping[Port, Mapping[int, type[Message]]]] = MappingProxyType(
-    {
-        # The motion port also decodes 13/15/2002/2017: MotoROS sizes them and then
-        # closes the connection (sizes.py decides that; here we only decode).
-        Port.MOTION: _table(
-            Ping,
-            JointTrajPtFull,
-            MotoMotionCtrl,
-            MotoJointTrajPtFullEx,
-            MotoSelectTool,
-            MotoGetDhParameters,
-            *_IO_BIT_GROUP_REQUESTS,
-            RobotStatus,
-            JointFeedback,
-            MotoMotionReply,
-            MotoJointFeedbackEx,
-        ),
-        Port.IO: _table(*_IO_BIT_GROUP_REQUESTS, MotoReadMRegister, MotoWriteMRegister),
-        Port.STATE: _table(),  # the state server never reads its sockets (§2.3)
-    }
-)
-"""Server side: what a client may send on each port, by msg_type."""
-
-REPLY_CLASSES: Final[Mapping[Port, Mapping[int, type[Message]]]] = MappingProxyType(
-    {
-        Port.MOTION: _table(
-            PingReply, MotoMotionReply, MotoGetDhParametersReply, *_IO_BIT_GROUP_REPLIES
-        ),
-        Port.STATE: _table(RobotStatus, JointFeedback, MotoJointFeedbackEx),
-        Port.IO: _table(
-            *_IO_BIT_GROUP_REPLIES, MotoReadMRegisterReply, MotoWriteMRegisterReply, IoErrorReply
-        ),
-    }
-)
-"""Client side: what the controller sends on each port, by msg_type."""
 
 _BoundUnpackFrom: TypeAlias = Callable[[bytes, int, int], Message]
 """A class's ``unpack_from`` with the byte order fixed: ``(buffer, start, end) -> message``."""

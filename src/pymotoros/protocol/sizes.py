@@ -24,7 +24,6 @@ from types import MappingProxyType
 from typing import Final, TypeAlias
 
 from pymotoros.protocol.constants import (
-    MAX_MESSAGE_SIZE,
     ByteOrder,
     CommType,
     InvalidSubcode,
@@ -34,11 +33,12 @@ from pymotoros.protocol.constants import (
 )
 from pymotoros.protocol.framing import FRAME_OVERHEAD, Frame, decode_request
 from pymotoros.protocol.messages import (
-    BODY_SIZE_FULL_EX_HEAD,
-    BODY_SIZE_GROUP_RECORD,
+    FULL_EX_SIZE_UNKNOWN_BELOW,
+    REQUEST_CLASSES,
     IoErrorReply,
     Message,
     MotoMotionReply,
+    Role,
     UnknownMessage,
 )
 
@@ -59,77 +59,64 @@ __all__ = [
 ]
 
 # --------------------------------------------------------------------------- the table (§1.5)
+# Derived from the message classes: what a server decodes on a port (REQUEST_ON) is
+# what MotoROS sizes there, and a class's BODY_SIZE is the size MotoROS expects.
 
-MOTION_SIZES: Final[Mapping[int, int]] = MappingProxyType(
-    {
-        MsgType.PING: 16,
-        MsgType.ROBOT_STATUS: 44,
-        MsgType.JOINT_TRAJ_PT_FULL: 152,
-        MsgType.JOINT_FEEDBACK: 148,
-        MsgType.MOTO_MOTION_CTRL: 68,
-        MsgType.MOTO_MOTION_REPLY: 76,
-        MsgType.MOTO_READ_IO_BIT: 20,
-        MsgType.MOTO_WRITE_IO_BIT: 24,
-        MsgType.MOTO_READ_IO_GROUP: 20,
-        MsgType.MOTO_WRITE_IO_GROUP: 24,
-        MsgType.MOTO_JOINT_FEEDBACK_EX: 548,
-        MsgType.MOTO_SELECT_TOOL: 28,
-        MsgType.MOTO_GET_DH_PARAMETERS: 16,
-    }
-)
+
+def _sizes(port: Port) -> Mapping[int, int]:
+    """Total size per fixed-size type a server reads on ``port`` (FULL_EX aside)."""
+    return MappingProxyType(
+        {
+            msg_type: FRAME_OVERHEAD + cls.BODY_SIZE
+            for msg_type, cls in REQUEST_CLASSES[port].items()
+            if cls.FIXED_SIZE
+        }
+    )
+
+
+def _echoes_sequence(cls: type[Message]) -> bool:
+    """A client's request MotoROS answers with an echo of its sequence (§1.5, §1.6)."""
+    return cls.ROLE is Role.REQUEST and "sequence" in cls.OFFSETS
+
+
+MOTION_SIZES: Final[Mapping[int, int]] = _sizes(Port.MOTION)
 """Motion port (§1.5): total size per known type, FULL_EX (2016) aside (computed from n).
 2, 2004..2011 and the M-register types 2012/2013 are *unknown* here."""
 
-IO_SIZES: Final[Mapping[int, int]] = MappingProxyType(
-    {
-        MsgType.MOTO_READ_IO_BIT: 20,
-        MsgType.MOTO_WRITE_IO_BIT: 24,
-        MsgType.MOTO_READ_IO_GROUP: 20,
-        MsgType.MOTO_WRITE_IO_GROUP: 24,
-        MsgType.MOTO_READ_MREGISTER: 20,
-        MsgType.MOTO_WRITE_MREGISTER: 24,
-    }
-)
+IO_SIZES: Final[Mapping[int, int]] = _sizes(Port.IO)
 """IO port (§1.5): only the six IO request types are known."""
 
 MOTION_CLOSE_TYPES: Final = frozenset(
-    {
-        MsgType.ROBOT_STATUS,
-        MsgType.JOINT_FEEDBACK,
-        MsgType.MOTO_MOTION_REPLY,
-        MsgType.MOTO_JOINT_FEEDBACK_EX,
-    }
+    msg_type
+    for msg_type, cls in REQUEST_CLASSES[Port.MOTION].items()
+    if cls.ROLE is not Role.REQUEST
 )
-"""Known sizes the motion server does not process: MotoROS drops the connection (§1.5)."""
+"""Known sizes the motion server does not process: MotoROS drops the connection (§1.5).
 
-ECHO_ON_SHORT: Final = frozenset(
-    {
-        MsgType.MOTO_MOTION_CTRL,
-        MsgType.JOINT_TRAJ_PT_FULL,
-        MsgType.MOTO_JOINT_TRAJ_PT_FULL_EX,
-        MsgType.MOTO_SELECT_TOOL,
-    }
-)
-"""Types whose 3001 reply has groupNo 0 and echoes sequence (and command) (§1.5, §1.6)."""
-
-FULL_EX_SIZE_UNKNOWN_BELOW: Final = 20
-"""With fewer bytes than this, MotoROS cannot read n and expects the full 552 (§1.5)."""
-
-_FULL_EX_BASE: Final = FRAME_OVERHEAD + BODY_SIZE_FULL_EX_HEAD
-"""24: the FULL_EX total size with n = 0 (24 + 132·n)."""
+These are the classes the motion port decodes that are not requests (13/15/2002/2017)."""
 
 _SEQUENCE_OFFSET: Final[Mapping[int, int]] = MappingProxyType(
     {
-        MsgType.MOTO_MOTION_CTRL: 4,
-        MsgType.JOINT_TRAJ_PT_FULL: 4,
-        MsgType.MOTO_JOINT_TRAJ_PT_FULL_EX: 4,
-        MsgType.MOTO_SELECT_TOOL: 8,  # groupNo, tool, sequence (§1.4)
+        msg_type: cls.OFFSETS["sequence"]
+        for msg_type, cls in REQUEST_CLASSES[Port.MOTION].items()
+        if _echoes_sequence(cls)
     }
 )
-"""Body offset of the sequence echoed in a 3001 reply."""
+"""Body offset of the sequence echoed in a 3001 reply (SELECT_TOOL's comes third, §1.4)."""
 
-_CTRL_COMMAND_OFFSET: Final = 8
-"""Body offset of MOTO_MOTION_CTRL's ``command`` (§1.4)."""
+ECHO_ON_SHORT: Final = frozenset(_SEQUENCE_OFFSET)
+"""Types whose 3001 reply has groupNo 0 and echoes sequence (and command) (§1.5, §1.6):
+the motion-port requests that carry a sequence."""
+
+_COMMAND_OFFSET: Final[Mapping[int, int]] = MappingProxyType(
+    {
+        msg_type: cls.OFFSETS["command"]
+        for msg_type, cls in REQUEST_CLASSES[Port.MOTION].items()
+        if _echoes_sequence(cls) and "command" in cls.OFFSETS
+    }
+)
+"""Body offset of the command a 3001 reply echoes (MOTO_MOTION_CTRL's, §1.4); the others
+echo their type."""
 
 _NO_GROUP: Final = -1
 """groupNo and sequence of a reply that belongs to no request (§1.6)."""
@@ -145,20 +132,15 @@ def _int_at(body: bytes, offset: int, order: ByteOrder) -> int:
 def expected_size(msg_type: int, port: Port, body: bytes, order: ByteOrder) -> int | None:
     """Total bytes MotoROS wants for this type on this port, or None if the type is unknown.
 
-    FULL_EX: 24 + 132·n with n read from the body; 552 when n is not there yet.
-    A negative n is clamped to 0 (MotoROS computes a size below the header and
-    then reads outside its buffer; we do not copy that).
+    FULL_EX: 24 + 132·n with n read from the body; 552 when n is not there yet
+    (see ``MotoJointTrajPtFullEx.needed_body_size``).
     """
-    if port is Port.IO:
-        return IO_SIZES.get(msg_type)
-    if port is not Port.MOTION:
+    if port is Port.STATE:
         raise ValueError(f"MotoROS reads no requests on the {port.value} port")
-    if msg_type == MsgType.MOTO_JOINT_TRAJ_PT_FULL_EX:
-        if FRAME_OVERHEAD + len(body) < FULL_EX_SIZE_UNKNOWN_BELOW:
-            return MAX_MESSAGE_SIZE
-        n = _int_at(body, 0, order)
-        return _FULL_EX_BASE + max(n, 0) * BODY_SIZE_GROUP_RECORD
-    return MOTION_SIZES.get(msg_type)
+    cls = REQUEST_CLASSES[port].get(msg_type)
+    if cls is None:
+        return None
+    return FRAME_OVERHEAD + cls.needed_body_size(body, order)
 
 
 # --------------------------------------------------------------------------- error replies
@@ -192,9 +174,8 @@ def short_message_reply(
             _NO_GROUP, _NO_GROUP, msg_type, ResultCode.INVALID, InvalidSubcode.MSGSIZE
         )
     sequence = _int_at(frame.body, offset, order)
-    command = msg_type
-    if msg_type == MsgType.MOTO_MOTION_CTRL:
-        command = _int_at(frame.body, _CTRL_COMMAND_OFFSET, order)
+    command_offset = _COMMAND_OFFSET.get(msg_type)
+    command = msg_type if command_offset is None else _int_at(frame.body, command_offset, order)
     return MotoMotionReply(0, sequence, command, ResultCode.INVALID, InvalidSubcode.MSGSIZE)
 
 

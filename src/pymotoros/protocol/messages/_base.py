@@ -1,0 +1,448 @@
+"""The machinery every message class shares: field kinds, checks, the codec and the registry.
+
+Why classes and not dicts: a message that exists is a message that can be sent.
+Construction checks what would make the bytes impossible (an array that is not
+10 floats long, an integer outside int32/uint32), so the servers and the client
+never discover a bad field halfway through a ``send``. Decoding does *not* check
+meaning: every integer stays a plain ``int`` because MotoROS itself accepts any
+value on the wire and answers nonsense with a result code (the server must be
+able to say INVALID/3004 to group 9, which it cannot if decoding refuses it).
+
+``pack(order)`` returns the body only; the header and length prefix are the
+business of :mod:`pymotoros.protocol.framing`. ``unpack(body, order)`` wants the
+exact body size; trimming surplus bytes the MotoROS way is the job of
+:mod:`pymotoros.protocol.sizes`.
+
+Decoding is on the hot path (the state stream is 40 Hz × groups × clients, and
+the client decodes every frame). Each message is therefore a ``NamedTuple``
+underneath, behind a :class:`Message` mixin: ``unpack`` builds it with one
+``tuple.__new__`` and no validation (the ``struct`` format already guarantees
+every shape that validation would check). A frozen slotted dataclass filled
+slot by slot measured clearly slower on JOINT_FEEDBACK (docs/benchmarks.md).
+The mixin makes equality typed (``Ping() != PingReply()``, a message never
+equals a plain tuple) and every message truthy; like any NamedTuple, messages
+also offer ``_replace`` and ``_asdict`` (``_replace`` skips validation).
+
+Each class says once what it is (:class:`Message` explains the class
+variables) and :meth:`Message.__init_subclass__` does the rest: it derives the
+``Struct`` pair and the body size from ``FIELDS`` and enters the class in
+:data:`REQUEST_CLASSES` / :data:`REPLY_CLASSES`, which the decoders in
+``framing`` and the size rules in ``sizes`` are built from. Layouts: reference
+§1.3 and §1.4.
+"""
+
+from __future__ import annotations
+
+import enum
+import struct
+from collections.abc import Callable, Iterable, Mapping
+from dataclasses import dataclass, field
+from types import MappingProxyType
+from typing import TYPE_CHECKING, Any, ClassVar, Final, NamedTuple, Self, TypeAlias, TypeVar, cast
+
+from pymotoros.errors import LocalProtocolError, RemoteProtocolError
+from pymotoros.protocol.constants import (
+    INT32_MAX,
+    INT32_MIN,
+    MAX_JOINTS,
+    UINT32_MAX,
+    ByteOrder,
+    MsgType,
+    Port,
+)
+
+__all__ = [
+    "REPLY_CLASSES",
+    "REQUEST_CLASSES",
+    "ZERO_JOINTS",
+    "Message",
+    "Role",
+    "UnknownMessage",
+    "WireMessage",
+]
+
+ZERO_JOINTS: Final[tuple[float, ...]] = (0.0,) * MAX_JOINTS
+"""A 10-slot float array of zeros: the unused ``data[]`` of motion messages, unused slots."""
+
+
+class Role(enum.Enum):
+    """Which way a message travels; it decides the default header (§1.2)."""
+
+    REQUEST = "request"
+    """Client → controller: comm SERVICE_REQUEST, reply INVALID."""
+    REPLY = "reply"
+    """Controller → client answer: comm SERVICE_REPLY, reply SUCCESS (or FAILURE)."""
+    TOPIC = "topic"
+    """State stream, nobody answers: comm TOPIC, reply INVALID."""
+
+
+class _Kind(enum.Enum):
+    """Wire type of one field, for construction-time checks and the generic codec."""
+
+    I32 = "i"
+    U32 = "I"
+    F32 = "f"
+    JOINTS = f"{MAX_JOINTS}f"
+
+
+_I32, _U32, _F32, _JOINTS = _Kind.I32, _Kind.U32, _Kind.F32, _Kind.JOINTS
+
+_T = TypeVar("_T")
+
+if TYPE_CHECKING:
+
+    def _tnew(cls: type[_T], values: Iterable[Any], /) -> _T:
+        """Typed view of ``tuple.__new__`` (see below)."""
+
+else:
+    # Builds a message from its field values without validation (decode path only).
+    # Typed above as returning ``cls``'s instance, so that decoders need no runtime
+    # ``typing.cast`` call (a Python-level call per message on the hot path).
+    _tnew = tuple.__new__
+
+_AnyTuple: TypeAlias = tuple[Any, ...]
+"""For ``cast``: naming the alias once avoids building ``tuple[Any, ...]`` on every call."""
+
+
+def _structs(body_format: str) -> tuple[struct.Struct, struct.Struct]:
+    """The (little-endian, big-endian) ``Struct`` pair for one body layout."""
+    return struct.Struct(ByteOrder.LITTLE + body_format), struct.Struct(ByteOrder.BIG + body_format)
+
+
+def _pick(pair: tuple[struct.Struct, struct.Struct], order: ByteOrder) -> struct.Struct:
+    """Select the Struct for ``order`` (a plain ``==`` on the struct prefix: cheap)."""
+    return pair[1] if order == ">" else pair[0]
+
+
+def _size_error(cls: type, body: bytes, expected: int | str) -> RemoteProtocolError:
+    return RemoteProtocolError(
+        f"{cls.__name__}: body of {len(body)} bytes, expected {expected}", data=bytes(body)
+    )
+
+
+def _check_int(owner: str, name: str, value: object, kind: _Kind) -> None:
+    if not isinstance(value, int):
+        raise LocalProtocolError(f"{owner}.{name} must be an int, not {type(value).__name__}")
+    low, high = (INT32_MIN, INT32_MAX) if kind is _I32 else (0, UINT32_MAX)
+    if not low <= value <= high:
+        kind_name = "int32" if kind is _I32 else "uint32"
+        raise LocalProtocolError(f"{owner}.{name} = {value} does not fit in {kind_name}")
+
+
+def _check_float(owner: str, name: str, value: object) -> None:
+    if not isinstance(value, (int, float)) or isinstance(value, bool):
+        raise LocalProtocolError(f"{owner}.{name} must be a float, not {type(value).__name__}")
+    try:
+        struct.pack("<f", value)
+    except OverflowError:
+        raise LocalProtocolError(f"{owner}.{name} = {value} does not fit in float32") from None
+
+
+def _pad_joints(owner: str, name: str, values: Iterable[float] | None) -> tuple[float, ...]:
+    """Pad a short joint list with zeros to the 10 slots of the wire."""
+    if values is None:
+        return ZERO_JOINTS
+    padded = tuple(values)
+    if len(padded) > MAX_JOINTS:
+        raise LocalProtocolError(f"{owner}: {name} has {len(padded)} values, at most {MAX_JOINTS}")
+    return padded + ZERO_JOINTS[len(padded) :]
+
+
+# --------------------------------------------------------------------------- base class
+
+
+class Message:
+    """Mixin of every typed message body (put it *first* in the bases).
+
+    A message class is ``class X(Message, _XFields)`` where ``_XFields`` is a
+    ``NamedTuple`` of the body's fields in wire order. ``X`` says once, as class
+    variables, everything the codec needs:
+
+    - ``MSG_TYPE``: its :class:`MsgType` (every wire code lives in constants.py);
+    - ``ROLE``: which way it travels, hence its default header;
+    - ``REQUEST_ON``: the ports whose server decodes it from a client, and
+      ``REPLY_ON``: the ports on which a client decodes it from the controller
+      (both empty for a record that only travels inside another message);
+    - ``FIELDS``: name and wire kind of each field. The ``Struct`` pair,
+      ``BODY_SIZE`` and the field ``OFFSETS`` follow from it; a class with a
+      hand-written layout declares ``BODY_SIZE`` (and ``OFFSETS``) itself, and
+      ``FIXED_SIZE = False`` when its size depends on its content.
+
+    :meth:`__init_subclass__` derives the rest and enters the class in
+    :data:`REQUEST_CLASSES` / :data:`REPLY_CLASSES`; a second class for the same
+    type, port and direction is a ``TypeError`` at import. Why this hook and not
+    a metaclass or a decorator: ``typing.NamedTuple`` accepts no other base, so
+    the fields cannot inherit registration; but the mixin is first in every
+    message's MRO, so its ``__init_subclass__`` sees each class as it is made,
+    adds nothing to decoding (it runs at import only), and unlike a decorator
+    cannot be forgotten. Only what a class declares in its *own* body is
+    registered, so subclassing a message never registers it twice.
+
+    Construction validates (``LocalProtocolError``) and turns joint lists into
+    tuples; fixed-size bodies get ``pack``/``unpack`` from here.
+    """
+
+    __slots__ = ()
+
+    MSG_TYPE: ClassVar[MsgType]
+    ROLE: ClassVar[Role]
+    REQUEST_ON: ClassVar[tuple[Port, ...]] = ()
+    """Ports on which a server decodes this class from what a client sent (decode_request)."""
+    REPLY_ON: ClassVar[tuple[Port, ...]] = ()
+    """Ports on which a client decodes this class from what the controller sent (decode_reply)."""
+    FIELDS: ClassVar[tuple[tuple[str, _Kind], ...]] = ()
+    BODY_SIZE: ClassVar[int] = 0
+    """Body bytes: derived from ``FIELDS`` unless declared (the minimum for FULL_EX)."""
+    FIXED_SIZE: ClassVar[bool] = True
+    """False when the body size depends on the body (FULL_EX: 8 + 132·n)."""
+    OFFSETS: ClassVar[Mapping[str, int]] = MappingProxyType({})
+    """Body offset of each scalar field (``sizes`` reads a short body's sequence there)."""
+    IO_RESULT: ClassVar[bool] = False
+    """True for IO replies: their header says FAILURE when ``result_code`` is non-zero."""
+
+    _STRUCTS: ClassVar[tuple[struct.Struct, struct.Struct]]
+    _FLAT: ClassVar[bool] = True
+    """No array field: the struct's values are the tuple's values."""
+    _DECODERS: ClassVar[dict[str, Callable[[bytes, int, int], Any]]]
+    """``_bind_unpack_from(order)`` per byte order, made on first use (see unpack_from)."""
+
+    def __init_subclass__(cls, **kwargs: Any) -> None:
+        """Derive the layout from ``FIELDS`` and register the class (see the class doc)."""
+        super().__init_subclass__(**kwargs)
+        own = cls.__dict__
+        cls._STRUCTS = _structs("".join(kind.value for _name, kind in cls.FIELDS))
+        cls._FLAT = all(kind is not _JOINTS for _name, kind in cls.FIELDS)
+        cls._DECODERS = {}
+        if "BODY_SIZE" not in own:
+            cls.BODY_SIZE = cls._STRUCTS[0].size
+        if "OFFSETS" not in own:
+            cls.OFFSETS = _offsets(cls.FIELDS)
+        entries = [
+            (tables[port], port)
+            for ports, tables in (
+                (own.get("REQUEST_ON", ()), _REQUESTS),
+                (own.get("REPLY_ON", ()), _REPLIES),
+            )
+            for port in ports
+        ]
+        for table, port in entries:  # every check before any entry: all or nothing
+            known = table.get(int(cls.MSG_TYPE))
+            if known is not None:
+                raise TypeError(
+                    f"{cls.__name__}: {cls.MSG_TYPE.name} on the {port.value} port is "
+                    f"already {known.__name__}"
+                )
+        for table, _port in entries:
+            table[int(cls.MSG_TYPE)] = cls
+
+    if not TYPE_CHECKING:  # mypy keeps the typed NamedTuple constructor
+
+        def __new__(cls, *args, **kwargs):
+            return cls._validated(super().__new__(cls, *args, **kwargs))
+
+    @classmethod
+    def _validated(cls, message: Self) -> Self:
+        """Check every field; return the message with joint arrays as tuples."""
+        owner = cls.__name__
+        values = list(cast(_AnyTuple, message))
+        changed = False
+        for index, (name, kind) in enumerate(cls.FIELDS):
+            value = values[index]
+            if kind is _JOINTS:
+                joints = tuple(value)
+                if len(joints) != MAX_JOINTS:
+                    raise LocalProtocolError(
+                        f"{owner}.{name} has {len(joints)} values; the wire carries exactly "
+                        f"{MAX_JOINTS} (use for_joints() to pad)"
+                    )
+                for slot, item in enumerate(joints):
+                    _check_float(owner, f"{name}[{slot}]", item)
+                if joints is not value:
+                    values[index] = joints
+                    changed = True
+            elif kind is _F32:
+                _check_float(owner, name, value)
+            else:
+                _check_int(owner, name, value, kind)
+        return _tnew(cls, values) if changed else message
+
+    def __eq__(self, other: object) -> bool:
+        return type(self) is type(other) and tuple.__eq__(cast(_AnyTuple, self), other)
+
+    def __ne__(self, other: object) -> bool:
+        return not self == other
+
+    def __hash__(self) -> int:
+        return tuple.__hash__(cast(_AnyTuple, self))
+
+    def __bool__(self) -> bool:
+        """A message is a message, even with an empty body (tuples would say False)."""
+        return True
+
+    def _flat(self) -> list[Any]:
+        flat: list[Any] = []
+        for (_name, kind), value in zip(self.FIELDS, cast(_AnyTuple, self), strict=True):
+            if kind is _JOINTS:
+                flat.extend(value)
+            else:
+                flat.append(value)
+        return flat
+
+    def pack(self, order: ByteOrder) -> bytes:
+        """The body bytes in ``order`` (no prefix, no header)."""
+        layout = _pick(self._STRUCTS, order)
+        try:
+            if self._FLAT:
+                return layout.pack(*cast(_AnyTuple, self))
+            return layout.pack(*self._flat())
+        except (struct.error, OverflowError, TypeError) as exc:  # only after _replace()
+            raise LocalProtocolError(f"cannot pack {self!r}: {exc}") from None
+
+    @classmethod
+    def unpack(cls, body: bytes, order: ByteOrder) -> Self:
+        """Decode exactly one body of this type; a wrong size is the peer's fault."""
+        layout = _pick(cls._STRUCTS, order)
+        if len(body) != layout.size:
+            raise _size_error(cls, body, layout.size)
+        raw = layout.unpack(body)
+        if cls._FLAT:
+            return _tnew(cls, raw)
+        values: list[object] = []
+        index = 0
+        for _name, kind in cls.FIELDS:
+            if kind is _JOINTS:
+                values.append(raw[index : index + MAX_JOINTS])
+                index += MAX_JOINTS
+            else:
+                values.append(raw[index])
+                index += 1
+        return _tnew(cls, values)
+
+    @classmethod
+    def unpack_from(cls, buffer: bytes, start: int, end: int, order: ByteOrder) -> Self:
+        """``unpack(buffer[start:end])``, through the same bound decoder the decoders use."""
+        decoders = cls._DECODERS
+        decode = decoders.get(order)
+        if decode is None:
+            decode = decoders[order] = cls._bind_unpack_from(order)
+        return cast(Self, decode(buffer, start, end))
+
+    def reply_echo(self) -> tuple[int, int] | None:
+        """(command, sequence) the MOTO_MOTION_REPLY to this request must echo (§1.6), or None.
+
+        Derived from the layout, so a new request needs no entry anywhere: a
+        request with a ``sequence`` field is answered with its sequence and its
+        ``command`` field (MOTION_CTRL) or else its type; any other message
+        (no sequence, or not a request) matches by type alone.
+        """
+        offsets = self.OFFSETS
+        if self.ROLE is not Role.REQUEST or "sequence" not in offsets:
+            return None
+        fields = cast(Any, self)
+        command = fields.command if "command" in offsets else self.MSG_TYPE
+        return int(command), int(fields.sequence)
+
+    @classmethod
+    def needed_body_size(cls, body: bytes, order: ByteOrder) -> int:
+        """Body bytes MotoROS wants for this type, given what arrived (§1.5).
+
+        ``BODY_SIZE`` for fixed layouts; a class whose size depends on its
+        content (``FIXED_SIZE = False``) overrides this.
+        """
+        return cls.BODY_SIZE
+
+    @classmethod
+    def _bind_unpack_from(cls, order: ByteOrder) -> Callable[[bytes, int, int], Message]:
+        """The one decoder of this type for ``order``: ``(buffer, start, end) -> message``.
+
+        Decoding is that of :meth:`unpack`; only the per-message work that
+        depends on the byte order alone (``order == ">"``, picking the
+        ``Struct``, looking up its method) moves out of the hot path into this
+        call, made once per type and order (the decoders' tables at import,
+        :meth:`unpack_from` on first use). Flat fixed layouts decoded by
+        :meth:`Message.unpack` get a closure over their ``Struct``; the hot
+        JOINT_FEEDBACK and JOINT_TRAJ_PT_FULL override this; any other type
+        slices and calls its own :meth:`unpack`.
+        """
+        if cls._FLAT and cls.unpack.__func__ is Message.unpack.__func__:  # type: ignore[attr-defined]
+            layout = _pick(cls._STRUCTS, order)
+            size = layout.size
+            unpack_fields = layout.unpack_from  # bound once: no attribute lookup per message
+
+            def unpack_flat(buffer: bytes, start: int, end: int) -> Message:
+                if end - start != size:
+                    raise _size_error(cls, buffer[start:end], size)
+                return _tnew(cls, unpack_fields(buffer, start))
+
+            return unpack_flat
+
+        unpack = cls.unpack
+
+        def unpack_other(buffer: bytes, start: int, end: int) -> Message:
+            return unpack(buffer[start:end], order)
+
+        return unpack_other
+
+
+def _offsets(fields: tuple[tuple[str, _Kind], ...]) -> Mapping[str, int]:
+    """Body offset of each scalar field of a ``FIELDS`` layout (arrays are skipped)."""
+    offsets: dict[str, int] = {}
+    at = 0
+    for name, kind in fields:
+        if kind is not _JOINTS:
+            offsets[name] = at
+        at += struct.calcsize(ByteOrder.LITTLE + kind.value)
+    return MappingProxyType(offsets)
+
+
+_REQUESTS: Final[dict[Port, dict[int, type[Message]]]] = {port: {} for port in Port}
+_REPLIES: Final[dict[Port, dict[int, type[Message]]]] = {port: {} for port in Port}
+
+REQUEST_CLASSES: Final[Mapping[Port, Mapping[int, type[Message]]]] = MappingProxyType(
+    {port: MappingProxyType(table) for port, table in _REQUESTS.items()}
+)
+"""Server side: what a client may send on each port, by msg_type (filled from ``REQUEST_ON``).
+
+The motion port also decodes 13/15/2002/2017: MotoROS sizes them and then
+closes the connection (``sizes`` decides that; here we only decode). The state
+server never reads its sockets (§2.3), so the state port's table stays empty.
+"""
+
+REPLY_CLASSES: Final[Mapping[Port, Mapping[int, type[Message]]]] = MappingProxyType(
+    {port: MappingProxyType(table) for port, table in _REPLIES.items()}
+)
+"""Client side: what the controller sends on each port, by msg_type (filled from ``REPLY_ON``)."""
+
+
+# --------------------------------------------------------------------------- unknown
+
+
+@dataclass(frozen=True, slots=True)
+class UnknownMessage:
+    """A frame whose type this port does not know; kept raw so a server can answer 3003.
+
+    ``encode`` sends it as a request, which is how tests and tools provoke the
+    unknown-type path (e.g. GET_VERSION, type 2).
+    """
+
+    ROLE: ClassVar[Role] = Role.REQUEST
+    IO_RESULT: ClassVar[bool] = False
+
+    msg_type: int
+    body: bytes = field(default=b"")
+
+    def __post_init__(self) -> None:
+        _check_int(type(self).__name__, "msg_type", self.msg_type, _I32)
+        object.__setattr__(self, "body", bytes(self.body))
+
+    def pack(self, order: ByteOrder) -> bytes:
+        """The raw body: it is already bytes, byte order does not apply."""
+        return self.body
+
+
+WireMessage: TypeAlias = Message | UnknownMessage
+"""Anything the decoders return and ``encode`` accepts."""
+
+
+class _NoFields(NamedTuple):
+    """The field tuple of an empty body (PING, the GET_DH_PARAMETERS request)."""

@@ -1,0 +1,265 @@
+"""The state port's topics: ROBOT_STATUS, JOINT_FEEDBACK and JOINT_FEEDBACK_EX (§1.4, §2).
+
+The state server sends them every cycle and never reads its sockets; the motion
+server decodes them too, only to size them and close the connection (§1.5).
+The 132-byte group record of JOINT_FEEDBACK is also one slot of FEEDBACK_EX and
+of JOINT_TRAJ_PT_FULL_EX (:mod:`.trajectory`).
+"""
+
+from __future__ import annotations
+
+import struct
+from collections.abc import Callable, Iterable
+from typing import ClassVar, Final, NamedTuple, Self
+
+from pymotoros.errors import LocalProtocolError
+from pymotoros.protocol.constants import MAX_GROUPS, ByteOrder, MsgType, Port, ValidFields
+from pymotoros.protocol.messages._base import (
+    _F32,
+    _I32,
+    _JOINTS,
+    ZERO_JOINTS,
+    Message,
+    Role,
+    _check_int,
+    _Kind,
+    _pad_joints,
+    _pick,
+    _size_error,
+    _structs,
+    _tnew,
+)
+
+__all__ = [
+    "BODY_SIZE_FEEDBACK_EX",
+    "BODY_SIZE_GROUP_RECORD",
+    "JointFeedback",
+    "MotoJointFeedbackEx",
+    "RobotStatus",
+]
+
+
+class _Status(NamedTuple):
+    drives_powered: int
+    e_stopped: int
+    error_code: int
+    in_error: int
+    in_motion: int
+    mode: int
+    motion_possible: int
+
+
+class RobotStatus(Message, _Status):
+    """ROBOT_STATUS (13): seven int32 status fields, sent every state cycle (§2.6).
+
+    Tri-state fields are 1/0 (-1 "unknown" only for a rare ``in_motion``);
+    ``mode`` is 1 (manual/teach) or 2 (auto/play).
+    """
+
+    __slots__ = ()
+    MSG_TYPE: ClassVar[MsgType] = MsgType.ROBOT_STATUS
+    ROLE: ClassVar[Role] = Role.TOPIC
+    REQUEST_ON: ClassVar[tuple[Port, ...]] = (Port.MOTION,)
+    REPLY_ON: ClassVar[tuple[Port, ...]] = (Port.STATE,)
+    FIELDS: ClassVar[tuple[tuple[str, _Kind], ...]] = tuple(
+        (name, _I32) for name in _Status._fields
+    )
+
+
+class _GroupRecord(NamedTuple):
+    group_no: int
+    valid_fields: int
+    time: float
+    pos: tuple[float, ...]
+    vel: tuple[float, ...]
+    acc: tuple[float, ...] = ZERO_JOINTS
+
+
+_GROUP_RECORD_FIELDS: Final[tuple[tuple[str, _Kind], ...]] = (
+    ("group_no", _I32),
+    ("valid_fields", _I32),
+    ("time", _F32),
+    ("pos", _JOINTS),
+    ("vel", _JOINTS),
+    ("acc", _JOINTS),
+)
+
+_RECORD_POS_AT: Final = 12
+_RECORD_VEL_AT: Final = 52
+_RECORD_ACC_AT: Final = 92
+"""Offsets of pos, vel and acc in the 132-byte group record (§1.4)."""
+
+
+class JointFeedback(Message, _GroupRecord):
+    """JOINT_FEEDBACK (15): one group's feedback position (rad or m) and speed.
+
+    MotoROS sends ``valid_fields`` 6 (position + velocity), ``time`` 0.0 and ``acc``
+    zeros (§2.4). Arrays are in ROS joint order, 10 slots, slots 8 and 9 zero.
+    The same 132-byte layout is one slot of JOINT_FEEDBACK_EX.
+    """
+
+    __slots__ = ()
+    MSG_TYPE: ClassVar[MsgType] = MsgType.JOINT_FEEDBACK
+    ROLE: ClassVar[Role] = Role.TOPIC
+    REQUEST_ON: ClassVar[tuple[Port, ...]] = (Port.MOTION,)
+    REPLY_ON: ClassVar[tuple[Port, ...]] = (Port.STATE,)
+    FIELDS: ClassVar[tuple[tuple[str, _Kind], ...]] = _GROUP_RECORD_FIELDS
+
+    @classmethod
+    def for_joints(
+        cls,
+        group_no: int,
+        pos: Iterable[float],
+        vel: Iterable[float] | None = None,
+        *,
+        time: float = 0.0,
+        acc: Iterable[float] | None = None,
+        valid_fields: int | None = None,
+    ) -> Self:
+        """Build from joint lists of any length ≤ 10 (zero-padded).
+
+        ``valid_fields`` defaults to what MotoROS sends: POSITION, plus VELOCITY
+        when ``vel`` is given.
+        """
+        if valid_fields is None:
+            valid_fields = ValidFields.POSITION | (ValidFields.VELOCITY if vel is not None else 0)
+        name = cls.__name__
+        return cls(
+            group_no,
+            int(valid_fields),
+            time,
+            _pad_joints(name, "pos", pos),
+            _pad_joints(name, "vel", vel),
+            _pad_joints(name, "acc", acc),
+        )
+
+    def pack(self, order: ByteOrder) -> bytes:
+        """Hand-unrolled: the state server packs one per group every cycle."""
+        group_no, valid_fields, time, pos, vel, acc = self
+        try:
+            return (_RECORD_BE if order == ">" else _RECORD_LE).pack(
+                group_no, valid_fields, time, *pos, *vel, *acc
+            )
+        except (struct.error, OverflowError, TypeError) as exc:  # only after _replace()
+            raise LocalProtocolError(f"cannot pack {self!r}: {exc}") from None
+
+    @classmethod
+    def unpack(cls, body: bytes, order: ByteOrder) -> Self:
+        return cls.unpack_from(body, 0, len(body), order)
+
+    @classmethod
+    def _bind_unpack_from(cls, order: ByteOrder) -> Callable[[bytes, int, int], JointFeedback]:
+        """The only JOINT_FEEDBACK decoder: the client's per-frame work on the state port.
+
+        ``next_reply``, ``decode_reply``, :meth:`unpack_from`, :meth:`unpack` and
+        FEEDBACK_EX's slots all come here. Hand-unrolled, no validation (see
+        :mod:`._base`); three 10-float unpacks are cheaper than one 33-value
+        unpack plus slicing, and the Structs' bound methods are picked once here,
+        so each message costs no byte-order test and no attribute lookup.
+        """
+        head, joints = (
+            (_RECORD_HEAD_BE, _JOINTS_BE) if order == ">" else (_RECORD_HEAD_LE, _JOINTS_LE)
+        )
+        unpack_head = head.unpack_from
+        unpack_joints = joints.unpack_from
+
+        def unpack_feedback(buffer: bytes, start: int, end: int) -> JointFeedback:
+            if end - start != BODY_SIZE_GROUP_RECORD:
+                raise _size_error(cls, buffer[start:end], BODY_SIZE_GROUP_RECORD)
+            group_no, valid_fields, time = unpack_head(buffer, start)
+            return _tnew(
+                cls,
+                (
+                    group_no,
+                    valid_fields,
+                    time,
+                    unpack_joints(buffer, start + _RECORD_POS_AT),
+                    unpack_joints(buffer, start + _RECORD_VEL_AT),
+                    unpack_joints(buffer, start + _RECORD_ACC_AT),
+                ),
+            )
+
+        return unpack_feedback
+
+
+_RECORD_LE, _RECORD_BE = JointFeedback._STRUCTS
+_RECORD_HEAD_LE, _RECORD_HEAD_BE = _structs("iif")  # groupNo, validFields, time
+_JOINTS_LE, _JOINTS_BE = _structs(_JOINTS.value)
+
+BODY_SIZE_GROUP_RECORD: Final = JointFeedback.BODY_SIZE
+"""132: groupNo, validFields, time, pos[10], vel[10], acc[10]: the JOINT_FEEDBACK body and
+the per-group record of FULL_EX / FEEDBACK_EX (§1.4)."""
+
+
+def _group_count(n: int) -> int:
+    """How many 132-byte records a message with ``numberOfValidGroups = n`` carries."""
+    return min(max(n, 0), MAX_GROUPS)
+
+
+def _check_records(owner: str, n: int, groups: tuple[object, ...], kind: type) -> None:
+    _check_int(owner, "number_of_valid_groups", n, _I32)
+    if len(groups) != _group_count(n):
+        raise LocalProtocolError(
+            f"{owner}: number_of_valid_groups {n} needs {_group_count(n)} records, "
+            f"got {len(groups)}"
+        )
+    if not all(isinstance(g, kind) for g in groups):
+        raise LocalProtocolError(f"{owner}.groups must hold {kind.__name__} records")
+
+
+class _FeedbackEx(NamedTuple):
+    number_of_valid_groups: int
+    groups: tuple[JointFeedback, ...]
+
+
+_EX_COUNT_STRUCTS: Final = _structs("i")
+
+BODY_SIZE_FEEDBACK_EX: Final = _EX_COUNT_STRUCTS[0].size + MAX_GROUPS * BODY_SIZE_GROUP_RECORD
+"""532: numberOfValidGroups + always four 132-byte slots (§1.3)."""
+
+
+class MotoJointFeedbackEx(Message, _FeedbackEx):
+    """MOTO_JOINT_FEEDBACK_EX (2017): every group's feedback in one message.
+
+    Always 4 slots on the wire (532-byte body); slots past ``groups`` are zero.
+    ``groups`` holds ``clamp(n, 0, 4)`` :class:`JointFeedback` records.
+    """
+
+    __slots__ = ()
+    MSG_TYPE: ClassVar[MsgType] = MsgType.MOTO_JOINT_FEEDBACK_EX
+    ROLE: ClassVar[Role] = Role.TOPIC
+    REQUEST_ON: ClassVar[tuple[Port, ...]] = (Port.MOTION,)
+    REPLY_ON: ClassVar[tuple[Port, ...]] = (Port.STATE,)
+    BODY_SIZE: ClassVar[int] = BODY_SIZE_FEEDBACK_EX
+
+    @classmethod
+    def _validated(cls, message: Self) -> Self:
+        groups = tuple(message.groups)
+        _check_records(cls.__name__, message.number_of_valid_groups, groups, JointFeedback)
+        return _tnew(cls, (message.number_of_valid_groups, groups))
+
+    @classmethod
+    def for_groups(cls, groups: Iterable[JointFeedback]) -> Self:
+        """n = the number of records given (at most 4)."""
+        records = tuple(groups)
+        if len(records) > MAX_GROUPS:
+            raise LocalProtocolError(f"{cls.__name__}: {len(records)} groups, at most {MAX_GROUPS}")
+        return cls(len(records), records)
+
+    def pack(self, order: ByteOrder) -> bytes:
+        head = _pick(_EX_COUNT_STRUCTS, order).pack(self.number_of_valid_groups)
+        slots = b"".join(record.pack(order) for record in self.groups)
+        return head + slots + bytes(BODY_SIZE_FEEDBACK_EX - len(head) - len(slots))
+
+    @classmethod
+    def unpack(cls, body: bytes, order: ByteOrder) -> Self:
+        if len(body) != BODY_SIZE_FEEDBACK_EX:
+            raise _size_error(cls, body, BODY_SIZE_FEEDBACK_EX)
+        head = _pick(_EX_COUNT_STRUCTS, order)
+        (n,) = head.unpack_from(body)
+        end = head.size + _group_count(n) * BODY_SIZE_GROUP_RECORD
+        records = tuple(
+            JointFeedback.unpack_from(body, start, start + BODY_SIZE_GROUP_RECORD, order)
+            for start in range(head.size, end, BODY_SIZE_GROUP_RECORD)
+        )
+        return _tnew(cls, (n, records))
