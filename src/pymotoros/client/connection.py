@@ -31,17 +31,13 @@ from pymotoros.protocol.constants import (
     TCP_PORT_STATE,
     ByteOrder,
     CommType,
-    MsgType,
     Port,
 )
 from pymotoros.protocol.framing import FrameDecoder, decode_reply, encode
 from pymotoros.protocol.messages import (
     IoErrorReply,
-    JointTrajPtFull,
-    MotoJointTrajPtFullEx,
-    MotoMotionCtrl,
+    Message,
     MotoMotionReply,
-    MotoSelectTool,
     UnknownMessage,
     WireMessage,
 )
@@ -80,16 +76,12 @@ class Ports:
 
 
 def expected_echo(request: WireMessage) -> tuple[int, int] | None:
-    """(command, sequence) a MOTO_MOTION_REPLY must echo for ``request`` (§1.6), if any."""
-    if isinstance(request, MotoMotionCtrl):
-        return request.command, request.sequence
-    if isinstance(request, JointTrajPtFull):
-        return int(MsgType.JOINT_TRAJ_PT_FULL), request.sequence
-    if isinstance(request, MotoJointTrajPtFullEx):
-        return int(MsgType.MOTO_JOINT_TRAJ_PT_FULL_EX), request.sequence
-    if isinstance(request, MotoSelectTool):
-        return int(MsgType.MOTO_SELECT_TOOL), request.sequence
-    return None
+    """(command, sequence) a MOTO_MOTION_REPLY must echo for ``request`` (§1.6), if any.
+
+    Derived from the message's own layout (``Message.reply_echo``), so a new request
+    type needs no entry here.
+    """
+    return request.reply_echo() if isinstance(request, Message) else None
 
 
 def reply_matches(request: WireMessage, reply: WireMessage, expected: type | None) -> bool:
