@@ -34,7 +34,12 @@ from pymotoros.client.state import RobotState
 from pymotoros.client.streaming import FollowingSample, MoveResult
 from pymotoros.errors import ConfigError, PymotorosError
 from pymotoros.models import DEFAULT_CONTROLLER, DEFAULT_ROBOT, ControllerType
-from pymotoros.protocol.constants import TCP_PORT_IO, TCP_PORT_MOTION, TCP_PORT_STATE
+from pymotoros.protocol.constants import (
+    MAX_TOOL_NUMBER,
+    TCP_PORT_IO,
+    TCP_PORT_MOTION,
+    TCP_PORT_STATE,
+)
 
 EXIT_OK: Final = 0
 EXIT_REFUSED: Final = 1
@@ -313,10 +318,10 @@ def stop(**kwargs: Any) -> None:
 
 @click.command(epilog=EXIT_CODES_HELP)
 @robot_options
-@click.argument("number", type=click.IntRange(0, 63))
+@click.argument("number", type=click.IntRange(0, MAX_TOOL_NUMBER))
 @click.option("--group", type=click.IntRange(0, 3), default=0, show_default=True)
 def tool(number: int, group: int, **kwargs: Any) -> None:
-    """Select the tool file NUMBER (0..63) a group moves with: MOTO_SELECT_TOOL."""
+    """Select the tool file NUMBER (0..63, §5.8) a group moves with: MOTO_SELECT_TOOL."""
     target = _target(kwargs)
 
     async def work() -> None:

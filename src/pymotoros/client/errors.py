@@ -34,6 +34,7 @@ from typing import Final
 from pymotoros.errors import PymotorosError
 from pymotoros.models.rules import START_TOLERANCE_PULSES
 from pymotoros.protocol.constants import (
+    MAX_TOOL_NUMBER,
     InvalidSubcode,
     IoResultCode,
     MotionCommand,
@@ -247,7 +248,7 @@ INVALID_REMEDIES: Final[Mapping[InvalidSubcode, str]] = {
     InvalidSubcode.DATA_ACCEL: "report this: MotoROS 1.9.12 never sends it",
     InvalidSubcode.DATA_INSUFFICIENT: "every point needs time, positions and velocities",
     InvalidSubcode.DATA_TIME: "point times must stay below 4 hours (14400 s): split the motion",
-    InvalidSubcode.DATA_TOOLNO: "tool numbers are 0..63",
+    InvalidSubcode.DATA_TOOLNO: f"tool numbers are 0..{MAX_TOOL_NUMBER}",
 }
 
 FAILURE_REMEDIES: Final[Mapping[int, str]] = {

@@ -72,6 +72,7 @@ from pymotoros.models import (
     robot_model,
 )
 from pymotoros.protocol.constants import (
+    MAX_TOOL_NUMBER,
     ByteOrder,
     IoResultCode,
     MotionCommand,
@@ -349,8 +350,8 @@ class RobotClient:
 
     async def select_tool(self, tool: int, group: int = 0) -> None:
         """MOTO_SELECT_TOOL: the tool file ``group`` moves with from its next segment on."""
-        if not 0 <= tool <= 63:
-            raise ValueError(f"tool {tool}: tool numbers are 0..63")
+        if not 0 <= tool <= MAX_TOOL_NUMBER:
+            raise ValueError(f"tool {tool}: tool numbers are 0..{MAX_TOOL_NUMBER}")
         sequence = next(self._sequence) % 2**31
         reply = await self.request_motion(MotoSelectTool(group, tool, sequence))
         if reply.result != ResultCode.SUCCESS:
