@@ -116,6 +116,24 @@ def test_sync_client_has_every_public_member_of_the_async_client() -> None:
         assert _parameters(twin) == _parameters(member), name
 
 
+ASYNC_ONLY_ATTRIBUTES = {"tracker", "streamer", "clock", "connector"}
+"""Instance attributes of RobotClient that belong to its event loop (the facade's users
+reach them, if at all, through ``SyncRobotClient.client``)."""
+
+
+def test_sync_client_offers_the_public_instance_attributes_too() -> None:
+    """Plain attributes (set in ``__init__``) are not in ``dir(cls)``: compare instances."""
+    robot = SyncRobotClient(robot="hc10")
+    try:
+        attributes = {n for n in vars(robot.client) if not n.startswith("_")}
+        missing = sorted(attributes - ASYNC_ONLY_ATTRIBUTES - set(dir(SyncRobotClient)))
+        assert not missing, f"SyncRobotClient lacks {missing}"
+        for name in attributes - ASYNC_ONLY_ATTRIBUTES:
+            assert getattr(robot, name) is getattr(robot.client, name), name
+    finally:
+        robot.close()
+
+
 def test_sync_client_plain_methods_work_on_the_facade() -> None:
     """``plan``, ``limits`` and ``named_pose`` run on the client behind (no AttributeError)."""
     robot = SyncRobotClient(robot="hc10")
@@ -126,6 +144,6 @@ def test_sync_client_plain_methods_work_on_the_facade() -> None:
         plan = robot.plan(home, (0.1, 0.0, 0.0, 0.0, 0.0, 0.0))
         assert plan.goal[0] == pytest.approx(0.1)
         assert robot.robot.name == "hc10"
-        assert robot.timeout_s == robot.client.timeout_s  # forwarded by __getattr__
+        assert robot.timeout_s == robot.client.timeout_s
     finally:
         robot.close()

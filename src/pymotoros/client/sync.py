@@ -9,8 +9,9 @@
 Every public method and property of :class:`RobotClient` has its twin here, with
 the same name and parameters: coroutines become blocking calls, plain methods and
 properties forward as they are (there is one implementation). A test compares the
-two classes, and :meth:`SyncRobotClient.__getattr__` forwards anything missed, so a
-new client method can never be silently absent. Listeners run in the loop's thread.
+two classes (``tests/test_front_door.py``), so a new client method cannot be silently
+absent. There is deliberately no ``__getattr__`` fallback: it would make every attribute
+of this class type-check as ``Any``. Listeners run in the loop's thread.
 Interrupting a call (Ctrl-C) cancels the coroutine behind it.
 """
 
@@ -20,7 +21,6 @@ import asyncio
 import concurrent.futures
 import contextlib
 import functools
-import inspect
 import threading
 from collections.abc import AsyncIterator, Callable, Coroutine, Iterator
 from types import TracebackType
@@ -30,6 +30,7 @@ from pymotoros.client.connection import Ports
 from pymotoros.client.robot import RobotClient
 from pymotoros.client.state import DEFAULT_STATE_TIMEOUT_S, JointState, RobotState, Status
 from pymotoros.models import ControllerModel, RobotModel
+from pymotoros.protocol.constants import ByteOrder
 
 _P = ParamSpec("_P")
 _R = TypeVar("_R")
@@ -160,6 +161,18 @@ class SyncRobotClient:
     def ports(self) -> Ports:
         return self.client.ports
 
+    @property
+    def order(self) -> ByteOrder:
+        return self.client.order
+
+    @property
+    def timeout_s(self) -> float:
+        return self.client.timeout_s
+
+    @property
+    def connect_timeout_s(self) -> float:
+        return self.client.connect_timeout_s
+
     plan = _forward_plain(RobotClient.plan)
     limits = _forward_plain(RobotClient.limits)
     named_pose = _forward_plain(RobotClient.named_pose)
@@ -190,22 +203,6 @@ class SyncRobotClient:
     execute = _forward(RobotClient.execute)
     move_joints = _forward(RobotClient.move_joints)
     move_named = _forward(RobotClient.move_named)
-
-    def __getattr__(self, name: str) -> Any:
-        """Anything public of :class:`RobotClient` not listed above, forwarded (a safety net;
-        the API test makes sure the list above is complete)."""
-        if name.startswith("_") or name == "client":
-            raise AttributeError(name)
-        value = getattr(self.client, name)
-        if inspect.iscoroutinefunction(value):
-            method = value
-
-            @functools.wraps(method)
-            def blocking(*args: Any, **kwargs: Any) -> Any:
-                return self._run(method(*args, **kwargs))
-
-            return blocking
-        return value
 
 
 async def _next(iterator: AsyncIterator[RobotState]) -> RobotState:
