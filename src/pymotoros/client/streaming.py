@@ -69,6 +69,15 @@ BUSY_BACKOFF_MAX_S: Final = 0.002
 at an interpolation tick (4 ms, §5.3), so with points one tick apart a longer back-off
 (the ROS driver waits ~5 ms) cannot keep the 200-entry queue fed and the robot lags."""
 
+BUSY_KEEP_AHEAD_S: Final = 0.2
+"""Motion the client keeps queued ahead of the robot before it waits longer than the
+back-off above: with more than this buffered, a BUSY retry waits up to one segment's
+duration instead (the pending slot frees once the segment before it is queued, §5.3),
+so a full queue costs about one BUSY per point instead of one every millisecond."""
+
+BUSY_RELAXED_MAX_S: Final = 0.1
+"""Longest single wait between BUSY retries, so a lost connection is still noticed fast."""
+
 DEFAULT_GOAL_TOLERANCE: Final = 1e-4
 """rad (m): how close every joint must come to the goal (a few pulses on most arms)."""
 
@@ -189,6 +198,32 @@ def _deviation_text(devs: Sequence[AxisDeviation], kind: str) -> str:
     return "; ".join(f"{d.name} {d.value:+.4f} > limit {d.reference:.4f}" for d in devs)
 
 
+@dataclass(slots=True)
+class _Pacing:
+    """How much accepted motion is still ahead of the robot, estimated from the clock.
+
+    The robot cannot be ahead of the trajectory's own time since point 0 was accepted
+    (it can only be behind, under HOLD or a safety speed limit), so ``last point's time
+    − time since point 0`` never overstates what MotoROS still has queued.
+    """
+
+    start: float
+    """Clock time at which point 0 was accepted."""
+    last_time: float
+    """Trajectory time of the last accepted point."""
+    last_segment: float = 0.0
+    """Duration of the last accepted segment."""
+
+    def accepted(self, time_s: float) -> None:
+        self.last_segment = time_s - self.last_time
+        self.last_time = time_s
+
+    def relaxed_wait(self, now: float) -> float:
+        """How long a BUSY retry may wait without letting the queue run low (0: don't)."""
+        spare = self.last_time - (now - self.start) - BUSY_KEEP_AHEAD_S
+        return max(0.0, min(spare, self.last_segment, BUSY_RELAXED_MAX_S))
+
+
 class TrajectoryStreamer:
     """Streams trajectories to one controller and watches the robot follow them.
 
@@ -244,8 +279,13 @@ class TrajectoryStreamer:
         *,
         busy_timeout_s: float,
         stats: StreamStats,
+        pacing: _Pacing | None = None,
     ) -> MotoMotionReply:
-        """Send one point, retrying BUSY; returns the final (non-BUSY) reply."""
+        """Send one point, retrying BUSY; returns the final (non-BUSY) reply.
+
+        With ``pacing`` (what is known to be queued ahead of the robot), a retry waits
+        longer while plenty of motion is buffered; otherwise it backs off from 0.5 ms.
+        """
         clock = self.clock
         backoff = BUSY_BACKOFF_FIRST_S
         first_busy: float | None = None
@@ -265,6 +305,10 @@ class TrajectoryStreamer:
             elif now - first_busy > busy_timeout_s:
                 stats.max_busy_wait_s = max(stats.max_busy_wait_s, now - first_busy)
                 return reply
+            relaxed = 0.0 if pacing is None else pacing.relaxed_wait(now)
+            if relaxed > backoff:
+                await clock.sleep(relaxed)
+                continue
             await clock.sleep(backoff)
             backoff = min(backoff * 2, BUSY_BACKOFF_MAX_S)
 
@@ -282,6 +326,7 @@ class TrajectoryStreamer:
         sizes = [m.num_axes for m in models]
         stats = StreamStats()
         started = self.clock.now()
+        pacing: _Pacing | None = None
         for index, point in enumerate(trajectory.points):
             if check_speed:
                 devs = speed_deviations(point, models, self.controller)
@@ -295,7 +340,9 @@ class TrajectoryStreamer:
                         deviations=devs,
                     )
             message = build_message(point, index, groups, sizes)
-            reply = await self.send_point(message, busy_timeout_s=busy_timeout_s, stats=stats)
+            reply = await self.send_point(
+                message, busy_timeout_s=busy_timeout_s, stats=stats, pacing=pacing
+            )
             if reply.result == ResultCode.BUSY:
                 raise reply_error(
                     reply.result,
@@ -307,6 +354,10 @@ class TrajectoryStreamer:
             if reply.result != ResultCode.SUCCESS:
                 raise self._refusal(reply, index, point, models)
             stats.points += 1
+            if pacing is None:
+                pacing = _Pacing(self.clock.now(), point.time)
+            else:
+                pacing.accepted(point.time)
             if on_accepted is not None:
                 on_accepted(index)
         stats.elapsed_s = self.clock.now() - started
