@@ -37,7 +37,12 @@ async def test_state_document_has_exactly_the_contract_keys(api: httpx.AsyncClie
     assert doc["mode"] == "play"
     assert set(doc["groups"][0]) == {
         "name", "joint_names", "command_rad", "feedback_rad", "command_pulse", "queue", "tool",
+        "tcp",
     }  # fmt: skip
+    tcp = doc["groups"][0]["tcp"]
+    assert set(tcp) == {"command", "feedback", "speed_mm_s"}
+    assert len(tcp["command"]) == len(tcp["feedback"]) == 6
+    assert set(tcp["speed_mm_s"]) == {"command", "feedback"}
     assert doc["tick"] == {
         "period_ms": 4.0,
         "count": 1000,

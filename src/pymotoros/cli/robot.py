@@ -188,10 +188,19 @@ def _status_data(client: RobotClient, state: RobotState) -> dict[str, Any]:
                 "joints": list(group.joint_names),
                 "positions": list(fb.positions) if fb else None,
                 "velocities": list(fb.velocities) if fb and fb.velocities else None,
+                "tcp": _tcp_or_none(client, index),
             }
         )
     status = state.status.as_dict() if state.status else None
     return {"status": status, "groups": groups}
+
+
+def _tcp_or_none(client: RobotClient, group: int) -> list[float] | None:
+    """The TCP pose in base coordinates (m, rad), or None without feedback or chain."""
+    try:
+        return list(client.tcp_pose(group))
+    except PymotorosError:
+        return None
 
 
 def _yes(value: bool | None, yes: str = "yes", no: str = "no") -> str:
@@ -222,6 +231,14 @@ def _status_table(client: RobotClient, state: RobotState) -> str:
             pos = fb.positions[j]
             vel = fb.velocities[j] if fb.velocities else math.nan
             lines.append(f"    {name:<{width}}{pos:>10.4f}{math.degrees(pos):>10.2f}{vel:>10.4f}")
+        tcp = _tcp_or_none(client, index)
+        if tcp is not None:
+            x, y, z, rx, ry, rz = tcp
+            lines.append(
+                f"    {'TCP (base)':<{width}}x {x * 1000:.1f} y {y * 1000:.1f} z {z * 1000:.1f} mm"
+                f"  Rx {math.degrees(rx):.2f} Ry {math.degrees(ry):.2f} Rz {math.degrees(rz):.2f}"
+                " deg"
+            )
     return "\n".join(lines)
 
 

@@ -62,6 +62,8 @@ from pymotoros.client.streaming import (
     TrajectoryStreamer,
 )
 from pymotoros.client.timing import REAL_TIME, ClientClock
+from pymotoros.client.tools import ToolTable
+from pymotoros.kinematics.chain import FrameName, Reference
 from pymotoros.models import (
     DEFAULT_CONTROLLER,
     DEFAULT_ROBOT,
@@ -175,6 +177,8 @@ class RobotClient:
         self._state_conn: FrameConnection | None = None
         self._io: FrameConnection | None = None
         self._sequence = itertools.count(1)
+        self.tools = ToolTable(self.robot)
+        """Tool offsets the client knows (:meth:`ToolTable.define`) and the selected ones."""
 
     # ------------------------------------------------------------------ connection
 
@@ -355,6 +359,7 @@ class RobotClient:
         reply = await self.request_motion(MotoSelectTool(group, tool, sequence))
         if reply.result != ResultCode.SUCCESS:
             raise reply_error(reply.result, reply.subcode, reply.command)
+        self.tools.selected[group] = tool
 
     async def get_dh_parameters(self) -> tuple[tuple[DhLink, ...], ...]:
         """DH parameters (theta, d, a, alpha) of each of the robot's groups."""
@@ -555,6 +560,17 @@ class RobotClient:
             busy_timeout_s=busy_timeout_s,
             timeout_s=timeout_s,
         )
+
+    def tcp_pose(
+        self, group: int = 0, *, frame: FrameName = "tcp", reference: Reference = "base"
+    ) -> tuple[float, float, float, float, float, float]:
+        """The selected tool's TCP from the latest joint feedback: (x, y, z, rx, ry, rz) in
+        m and rad, R = Rz·Ry·Rx, in base coordinates (``reference="base_link"``: the
+        mounting surface). Raises ClientError before the first feedback has arrived."""
+        positions = self.state.positions(group)
+        if positions is None:
+            raise ClientError(f"no joint feedback for group {group} yet: wait_for_state() first")
+        return self.tools.chain(group).pose(positions, frame, reference)
 
     def named_pose(
         self, name: str, *, srdf: str | Path | None = None, group: int = 0
