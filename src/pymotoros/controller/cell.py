@@ -34,6 +34,7 @@ from pymotoros.models import (
     controller_model,
     robot_model,
 )
+from pymotoros.models.s1cxg import S1cxgTable, parse_s1cxg
 from pymotoros.protocol.constants import MAX_TOOL_NUMBER
 
 logger = logging.getLogger(__name__)
@@ -108,6 +109,9 @@ class CellConfig:
     initial: InitialState = field(default_factory=InitialState)
     group_tools: tuple[tuple[ToolConfig, ...], ...] = ()
     """Per group, the tool files of ``[[groups.tools]]`` (empty: none beyond ``[[tools]]``)."""
+    s1cxg: tuple[S1cxgTable | None, ...] = ()
+    """Per group, the S1CxG register output parameters of ``[groups.s1cxg]`` (empty or
+    None: no register outputs, the default)."""
     servo: ServoConfig = field(default_factory=ServoConfig)
     pfl: bool = False
     """The PFL option is enabled (HC robots on YRC1000 / YRC1000micro)."""
@@ -344,6 +348,7 @@ def cell_from_dict(
 
     parts: list[tuple[str, GroupModel]] = []
     entry_tools: list[tuple[ToolConfig, ...]] = []
+    entry_s1cxg: list[S1cxgTable | None] = []
     """Per element of ``parts``, the ``[[groups.tools]]`` of the entry it came from."""
     if "groups" in data and "robot" in data:
         raise top.error("groups", "give either [robot] or [[groups]], not both")
@@ -369,6 +374,7 @@ def cell_from_dict(
             if own and not any(g.kind is GroupKind.ROBOT for _, g in parts[before:]):
                 raise g_t.error("tools", "only robot groups take tools")
             entry_tools.extend(own if g.kind is GroupKind.ROBOT else () for _, g in parts[before:])
+            entry_s1cxg.extend(_s1cxg(g_t, [g for _, g in parts[before:]]))
             g_t.finish()
     else:
         r_t = top.table("robot")
@@ -376,6 +382,7 @@ def cell_from_dict(
         r_t.finish()
         parts.extend((model.name, g) for g in model.groups)
         entry_tools.extend(() for _ in model.groups)
+        entry_s1cxg.extend(None for _ in model.groups)
 
     warnings: list[str] = []
     groups, robots = _combine(ctrl, parts, warnings)
@@ -396,6 +403,7 @@ def cell_from_dict(
     tools = _tools(top, "tools", source)
     numbers = {t.number for t in tools}
     group_tools = tuple(entry_tools[i] for i in kept_entries)
+    s1cxg = tuple(entry_s1cxg[i] for i in kept_entries)
     for gt in group_tools:
         numbers.update(t.number for t in gt)
 
@@ -411,12 +419,30 @@ def cell_from_dict(
         tools=tools,
         initial=initial,
         group_tools=group_tools if any(group_tools) else (),
+        s1cxg=s1cxg if any(t is not None for t in s1cxg) else (),
         servo=servo,
         pfl=pfl,
         jobs=jobs,
         warnings=tuple(warnings),
         source=source,
     )
+
+
+def _s1cxg(g_t: _Table, groups: Sequence[GroupModel]) -> list[S1cxgTable | None]:
+    """The entry's ``[groups.s1cxg]`` table (seed 003 Appendix A), for its one group."""
+    if g_t.get("s1cxg") is None:
+        return [None] * len(groups)
+    table = g_t.table("s1cxg")
+    if len(groups) != 1:
+        raise g_t.error("s1cxg", 'applies to one group: add group = "R1" (or the group meant)')
+    group = groups[0]
+    parsed = parse_s1cxg(
+        table.data,
+        num_axes=group.num_axes,
+        robot=group.kind is GroupKind.ROBOT,
+        where=f"{g_t.source}: {table.path}",
+    )
+    return [parsed]
 
 
 def _triple(t: _Table, name: str, unit: str) -> tuple[float, float, float]:

@@ -52,6 +52,7 @@ from pymotoros.controller.motoros import MotoRos
 from pymotoros.controller.processes import ControllerClock, Scheduler
 from pymotoros.controller.queues import MotionQueues
 from pymotoros.controller.readiness import Readiness
+from pymotoros.controller.registers import RegisterOutputs
 from pymotoros.controller.servo import IN_MOTION_PULSES, ServoGroup
 from pymotoros.controller.skillsnd import SkillListeners
 from pymotoros.controller.tcp import TcpTracker
@@ -125,6 +126,7 @@ class VirtualController:
             interp.tool = tool
         self._to_ros = tuple(RosConverter(a) for a in self._axes)
         self._tcp = TcpTracker(cell)
+        self._registers = RegisterOutputs(cell, self._io, self._tcp, ctrl.interpolation_period_ms)
         self._servos = tuple(
             ServoGroup(
                 to_pulses(init.joints[g] if init.joints else (), axes),
@@ -204,6 +206,13 @@ class VirtualController:
             for servo in self._servos:
                 servo.idle()
         inc_move.fill_tick()
+        if self._registers.active:  # S1CxG register outputs: only when configured
+            self._registers.refresh(
+                self._servos,
+                [i.tool for i in self._interps],
+                clock.tick_count,
+                machine.state.drives_powered,
+            )
         scheduler = self._scheduler
         if scheduler.busy:
             scheduler.advance()
