@@ -45,6 +45,7 @@ from pymotoros.client.planning import (
     JointTrajectory,
     plan_joint_move,
 )
+from pymotoros.client.registers import RegisterValues, read_register_outputs, s1cxg_table
 from pymotoros.client.srdf import NamedPose, find_pose, parse_srdf
 from pymotoros.client.state import (
     DEFAULT_STATE_TIMEOUT_S,
@@ -73,6 +74,7 @@ from pymotoros.models import (
     controller_model,
     robot_model,
 )
+from pymotoros.models.s1cxg import S1cxgTable
 from pymotoros.protocol.constants import (
     ByteOrder,
     IoResultCode,
@@ -560,6 +562,16 @@ class RobotClient:
             busy_timeout_s=busy_timeout_s,
             timeout_s=timeout_s,
         )
+
+    async def read_register_outputs(
+        self, table: S1cxgTable | Mapping[str, object] | str | Path, group: int = 0
+    ) -> RegisterValues:
+        """The S1CxG register outputs (TCP speed, Cartesian position, axis speeds and
+        positions, pulses) decoded with ``table``: an :class:`S1cxgTable`, a
+        ``{"330": 1, ...}`` mapping or a cell file with ``[groups.s1cxg]``."""
+        if not isinstance(table, S1cxgTable):
+            table = s1cxg_table(table, self.robot.groups[group], index=group)
+        return await read_register_outputs(self, table, group)
 
     def tcp_pose(
         self, group: int = 0, *, frame: FrameName = "tcp", reference: Reference = "base"
