@@ -22,9 +22,10 @@ import time
 from collections.abc import AsyncIterator, Callable, Mapping, Sequence
 from pathlib import Path
 from types import TracebackType
-from typing import Final, Self, TypeVar
+from typing import Final, Literal, Self, TypeVar
 
 from pymotoros.client import io_map
+from pymotoros.client.cartesian import DEFAULT_TCP_SPEED_MM_S, plan_linear_move, relative_target
 from pymotoros.client.connection import (
     DEFAULT_CONNECT_TIMEOUT_S,
     DEFAULT_REQUEST_TIMEOUT_S,
@@ -43,6 +44,7 @@ from pymotoros.client.planning import (
     DEFAULT_SAMPLE_PERIOD_S,
     JointLimits,
     JointTrajectory,
+    PlanningError,
     plan_joint_move,
 )
 from pymotoros.client.registers import RegisterValues, read_register_outputs, s1cxg_table
@@ -64,6 +66,8 @@ from pymotoros.client.streaming import (
 )
 from pymotoros.client.timing import REAL_TIME, ClientClock
 from pymotoros.client.tools import ToolTable
+from pymotoros.errors import KinematicsError
+from pymotoros.kinematics import matrix_to_pose
 from pymotoros.kinematics.chain import FrameName, Reference
 from pymotoros.models import (
     DEFAULT_CONTROLLER,
@@ -561,6 +565,96 @@ class RobotClient:
             goal_tolerance=goal_tolerance,
             busy_timeout_s=busy_timeout_s,
             timeout_s=timeout_s,
+        )
+
+    async def move_linear(
+        self,
+        pose: Sequence[float],
+        *,
+        group: int = 0,
+        tcp_speed_mm_s: float = DEFAULT_TCP_SPEED_MM_S,
+        speed_scale: float = 1.0,
+        accel_scale: float = 1.0,
+        on_progress: Callable[[FollowingSample], None] | None = None,
+        timeout_s: float | None = None,
+    ) -> MoveResult:
+        """Move the selected tool's TCP in a straight line to ``pose`` = (x, y, z, rx, ry,
+        rz) in base coordinates (m, rad, R = Rz·Ry·Rx), at most ``tcp_speed_mm_s`` and
+        within every joint limit (scaled as :meth:`move_joints`). A line through a
+        singularity, out of reach or past a joint limit is refused before anything is sent
+        (:class:`PlanningError` with the joint and the numbers)."""
+        start = await self.current_positions(group)
+        trajectory = plan_linear_move(
+            self.tools.chain(group),
+            start,
+            pose,
+            self.limits(group),
+            tcp_speed_mm_s=tcp_speed_mm_s,
+            velocity_scaling=speed_scale,
+            acceleration_scaling=accel_scale,
+        )
+        return await self.execute(
+            trajectory, groups=(group,), on_progress=on_progress, timeout_s=timeout_s
+        )
+
+    async def move_relative(
+        self,
+        dx: float = 0.0,
+        dy: float = 0.0,
+        dz: float = 0.0,
+        drx: float = 0.0,
+        dry: float = 0.0,
+        drz: float = 0.0,
+        *,
+        frame: Literal["base", "tool"] = "base",
+        group: int = 0,
+        linear: bool = True,
+        tcp_speed_mm_s: float = DEFAULT_TCP_SPEED_MM_S,
+        speed_scale: float = 1.0,
+        accel_scale: float = 1.0,
+        on_progress: Callable[[FollowingSample], None] | None = None,
+    ) -> MoveResult:
+        """Move the TCP by (dx, dy, dz) m and (drx, dry, drz) rad in the ``base`` frame or
+        the ``tool`` frame, in a straight line (``linear=False``: a joint move)."""
+        start = await self.current_positions(group)
+        chain = self.tools.chain(group)
+        current = chain.fk(start)
+        target = matrix_to_pose(relative_target(current, (dx, dy, dz, drx, dry, drz), frame))
+        if linear:
+            return await self.move_linear(
+                target,
+                group=group,
+                tcp_speed_mm_s=tcp_speed_mm_s,
+                speed_scale=speed_scale,
+                accel_scale=accel_scale,
+                on_progress=on_progress,
+            )
+        return await self.move_pose(
+            target, group=group, speed_scale=speed_scale, accel_scale=accel_scale
+        )
+
+    async def move_pose(
+        self,
+        pose: Sequence[float],
+        *,
+        group: int = 0,
+        speed_scale: float = 1.0,
+        accel_scale: float = 1.0,
+        on_progress: Callable[[FollowingSample], None] | None = None,
+    ) -> MoveResult:
+        """A joint move to the joint values nearest the current ones that put the TCP at
+        ``pose`` (base coordinates): not a straight line (see :meth:`move_linear`)."""
+        start = await self.current_positions(group)
+        try:
+            goal = self.tools.chain(group).ik(pose, start).q
+        except KinematicsError as exc:
+            raise PlanningError(f"cannot reach the pose: {exc}") from None
+        return await self.move_joints(
+            tuple(goal.tolist()),
+            group=group,
+            speed_scale=speed_scale,
+            accel_scale=accel_scale,
+            on_progress=on_progress,
         )
 
     async def read_register_outputs(

@@ -16,8 +16,10 @@ from pymotoros.kinematics.chain import (
     BASE_LINK,
     Chain,
     chain_for,
+    interpolate_pose,
     matrix_to_pose,
     pose_to_matrix,
+    rotation_angle,
 )
 from pymotoros.kinematics.urdf import urdf_for
 
@@ -26,7 +28,9 @@ __all__ = [
     "BASE_LINK",
     "Chain",
     "chain_for",
+    "interpolate_pose",
     "matrix_to_pose",
     "pose_to_matrix",
+    "rotation_angle",
     "urdf_for",
 ]

@@ -86,6 +86,21 @@ def matrix_to_pose(m: FloatArray) -> tuple[float, float, float, float, float, fl
     )
 
 
+def interpolate_pose(start: FloatArray, goal: FloatArray, s: float) -> FloatArray:
+    """The 4×4 pose at ``s`` ∈ [0, 1] on the straight line from ``start`` to ``goal``:
+    position linear, orientation along the shortest rotation (constant angular rate)."""
+    m = np.eye(4)
+    m[:3, 3] = start[:3, 3] + s * (goal[:3, 3] - start[:3, 3])
+    rel = pin.log3(start[:3, :3].T @ goal[:3, :3])
+    m[:3, :3] = start[:3, :3] @ pin.exp3(s * rel)
+    return m
+
+
+def rotation_angle(a: FloatArray, b: FloatArray) -> float:
+    """The angle (rad) of the rotation from orientation ``a`` to ``b`` (4×4 or 3×3)."""
+    return float(np.linalg.norm(pin.log3(a[:3, :3].T @ b[:3, :3])))
+
+
 def _se3(frame: Frame) -> Any:
     return pin.SE3(pin.rpy.rpyToMatrix(*frame.rpy), np.array(frame.xyz, dtype=float))
 
@@ -263,10 +278,12 @@ class Chain:
     # --- inverse kinematics -------------------------------------------------------------
 
     def _solve_from(
-        self, start: FloatArray, target: Any, fid: int
+        self, start: FloatArray, target: Any, fid: int, limits: bool = True
     ) -> tuple[FloatArray, float, float]:
         model, data = self.model, self._data
-        q = np.clip(start, self.lower, self.upper)
+        lower = self.lower if limits else np.full_like(self.lower, -np.inf)
+        upper = self.upper if limits else np.full_like(self.upper, np.inf)
+        q = np.clip(start, lower, upper)
         pos_err = rot_err = math.inf
         for _ in range(IK_MAX_ITERATIONS):
             pin.framesForwardKinematics(model, data, q)
@@ -284,7 +301,7 @@ class Chain:
             biggest = float(np.max(np.abs(step)))
             if biggest > IK_MAX_STEP_RAD:
                 step *= IK_MAX_STEP_RAD / biggest
-            q = np.clip(q + step, self.lower, self.upper)
+            q = np.clip(q + step, lower, upper)
         return q, pos_err, rot_err
 
     def _nearest_turn(self, q: FloatArray, seed: FloatArray) -> FloatArray:
@@ -310,6 +327,7 @@ class Chain:
         reference: Reference = BASE,
         *,
         restarts: int = IK_RESTARTS,
+        limits: bool = True,
     ) -> IkResult:
         """Joint values inside the limits that put ``frame`` at ``pose`` (a 6-tuple or a 4×4
         matrix in ``reference``), nearest ``seed``.
@@ -318,6 +336,8 @@ class Chain:
         branch (the nearest one for a seed near the pose); only if that fails are random
         starts tried, and of all the solutions they reach the one nearest the seed wins.
         Raises :class:`KinematicsError` saying how far the best attempt stayed from the pose.
+        With ``limits=False`` the joint limits are ignored (to say which joint a pose
+        would push past its limit, and by how much); no restarts are tried then.
         """
         target_m = np.asarray(pose, dtype=float)
         if target_m.shape != (4, 4):
@@ -327,10 +347,12 @@ class Chain:
         target = pin.SE3(target_m[:3, :3], target_m[:3, 3])
         fid = self._frame_id(frame)
         seed_q = self._q(seed)
-        q, pe, re = self._solve_from(seed_q, target, fid)
+        q, pe, re = self._solve_from(seed_q, target, fid, limits)
         if pe < IK_ACCEPT_M and re < IK_ACCEPT_RAD:
-            q = self._nearest_turn(q, seed_q)
+            q = self._nearest_turn(q, seed_q) if limits else q
             return IkResult(q, pe, re)
+        if not limits:
+            restarts = 0
         best: IkResult | None = None
         closest = (pe, re)
         for _ in range(restarts):
