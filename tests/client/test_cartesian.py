@@ -11,7 +11,7 @@ from pymotoros.client.cartesian import plan_linear_move, relative_target
 from pymotoros.client.planning import JointLimits, PlanningError
 from pymotoros.kinematics import chain_for, pose_to_matrix
 from pymotoros.models import robot_model
-from pymotoros.testing import twin
+from pymotoros.testing import Twin, twin
 
 START = (0.0, 0.5, 1.9, 0.0, 0.9, 0.0)
 """An HC10 pose with the tool well inside the workspace, away from singularities."""
@@ -27,6 +27,25 @@ def _distance_to_segment(p: np.ndarray, a: np.ndarray, b: np.ndarray) -> float:
     return float(np.linalg.norm(p - (a + t * ab)))
 
 
+class _LineWatch:
+    """At each progress report: distance of the command and feedback TCP to the line, and
+    the command TCP speed, from the twin's controller."""
+
+    def __init__(self, tw: Twin, a: np.ndarray, b: np.ndarray) -> None:
+        self.tw, self.a, self.b = tw, a, b
+        self.chain = chain_for("hc10")
+        self.deviations: list[float] = []
+        self.speeds: list[float] = []
+
+    def __call__(self, _: object) -> None:
+        snap = self.tw.controller.snapshot().groups[0]
+        assert snap.tcp is not None
+        for q in (snap.command_rad, snap.feedback_rad):
+            p = self.chain.fk(list(q))[:3, 3]
+            self.deviations.append(_distance_to_segment(p, self.a, self.b))
+        self.speeds.append(snap.tcp.command_speed_mm_s)
+
+
 async def test_linear_moves_stay_on_the_line_and_end_on_target() -> None:
     rng = np.random.default_rng(10)
     async with twin(robot="hc10") as (client, tw):
@@ -36,23 +55,11 @@ async def test_linear_moves_stay_on_the_line_and_end_on_target() -> None:
             start_pose = np.array(client.tcp_pose())
             offset = rng.uniform(-0.12, 0.12, size=3)
             goal = (*(start_pose[:3] + offset), *start_pose[3:])
-            deviations: list[float] = []
-            speeds: list[float] = []
-            chain = chain_for("hc10")
-
-            def watch(
-                _: object, a: np.ndarray = start_pose[:3], b: np.ndarray = np.array(goal[:3])
-            ) -> None:
-                snap = tw.controller.snapshot().groups[0]
-                assert snap.tcp is not None
-                for q in (snap.command_rad, snap.feedback_rad):
-                    p = chain.fk(list(q))[:3, 3]
-                    deviations.append(_distance_to_segment(p, a, b))
-                speeds.append(snap.tcp.command_speed_mm_s)
-
+            watch = _LineWatch(tw, start_pose[:3], np.array(goal[:3]))
             result = await client.move_linear(
                 goal, tcp_speed_mm_s=TCP_SPEED_MM_S, on_progress=watch
             )
+            deviations, speeds = watch.deviations, watch.speeds
             end = np.array(client.tcp_pose())
             assert np.linalg.norm(end[:3] - np.array(goal[:3])) < END_TOLERANCE_M
             assert len(deviations) > 10
