@@ -324,3 +324,50 @@ def test_no_table_no_outputs() -> None:
     vc = VirtualController(cell_from_dict({"initial": {"joints": {"R1": POSE}}}))
     vc.run_ticks(3)
     assert all(_m(vc, n) == 0 for n in range(1, 100))
+
+
+def test_vectorised_outputs_match_the_reference_rules() -> None:
+    """controller/registers.py's compiled path writes the words of models/s1cxg.py's
+    reference ``write_outputs`` for the same values, on random tables."""
+    from pymotoros.controller.registers import RegisterOutputs, _Plan
+    from pymotoros.models.s1cxg import GroupValues, parse_s1cxg, write_outputs
+
+    rng = np.random.default_rng(7)
+    for _ in range(20):  # bounded
+        table: dict[str, int] = {}
+        for p in ("330", "332", "334", "335", "336", "337"):
+            table[p] = int(rng.integers(0, 3))
+        table["331"], table["333"] = (int(v) for v in rng.integers(1, 40, size=2))
+        for base in (1270, 1280, 1290, 1300):
+            for k in range(6):
+                table[str(base + k)] = int(rng.integers(0, 40))
+        table |= {"217": 1, "218": int(rng.integers(0, 2))}
+        table |= {str(219 + k): int(rng.integers(0, 40)) for k in range(7)}
+        table |= {"202": int(rng.integers(0, 64)), "203": int(rng.integers(0, 64))}
+        table |= {"204": int(rng.integers(0, 64))}
+        table |= {str(1090 + k): int(rng.integers(0, 40)) for k in range(6)}
+        table |= {str(1100 + k): int(rng.integers(0, 9)) for k in range(6)}
+        table |= {str(1110 + k): int(rng.integers(-50, 50)) for k in range(6)}
+        vc = _moving(table)
+        parsed = parse_s1cxg(table, num_axes=6)
+        outputs = RegisterOutputs(vc.cell, vc.io, vc._tcp, 4)
+        plan = _Plan(vc.cell, 0, parsed)
+        v = outputs.values(plan, vc._servos[0], 0, vc.tick_count, True).tolist()
+        n = 6
+        values = GroupValues(
+            cartesian_command=v[0:7],
+            cartesian_feedback=v[7:14],
+            axis_position_command=v[14 : 14 + n],
+            axis_position_feedback=v[14 + n : 14 + 2 * n],
+            axis_speed_command=v[14 + 2 * n : 14 + 3 * n],
+            axis_speed_feedback=v[14 + 3 * n : 14 + 4 * n],
+            tcp_speed_command=v[14 + 4 * n],
+            tcp_speed_feedback=v[15 + 4 * n],
+            pulse_command=[int(x) for x in v[16 + 4 * n : 16 + 5 * n]],
+            pulse_feedback=[int(x) for x in v[16 + 5 * n : 16 + 6 * n]],
+            linear=[False] * n,
+        )
+        reference: dict[int, int] = {}
+        write_outputs(parsed, values, reference.__setitem__)
+        fast = dict(zip(plan.registers.tolist(), plan.words(np.array(v)).tolist(), strict=True))
+        assert fast == reference, table

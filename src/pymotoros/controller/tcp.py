@@ -24,7 +24,9 @@ class TcpTracker:
 
     def __init__(self, cell: CellConfig) -> None:
         self._cell = cell
+        self._period_s = cell.controller.interpolation_period_ms / 1000.0
         self._chains: list[Chain | None] = []
+        self._with_tool: dict[tuple[int, int], Chain | None] = {}
         for group in cell.groups:
             try:
                 self._chains.append(chain_for(group))
@@ -33,6 +35,12 @@ class TcpTracker:
 
     def chain(self, group_index: int, tool: int) -> Chain | None:
         """The group's chain with tool file ``tool`` on tool0 (None: no chain)."""
+        key = (group_index, tool)
+        if key not in self._with_tool:
+            self._with_tool[key] = self._build(group_index, tool)
+        return self._with_tool[key]
+
+    def _build(self, group_index: int, tool: int) -> Chain | None:
         base = self._chains[group_index]
         if base is None:
             return None
@@ -51,13 +59,19 @@ class TcpTracker:
         feedback_velocity: Sequence[float],
     ) -> TcpSnapshot | None:
         """TCP pose in base coordinates and TCP speed (mm/s) from joint values (rad) and
-        joint velocities (rad/s), ROS order."""
+        joint velocities (rad/s), ROS order. The speed is the distance the TCP travelled
+        over the last period at these joint velocities (as the register outputs give it)."""
         chain = self.chain(group_index, tool)
         if chain is None:
             return None
+        q_cmd = np.asarray(command, dtype=float)
+        q_fb = np.asarray(feedback, dtype=float)
+        d_cmd = np.asarray(command_velocity, dtype=float) * self._period_s
+        d_fb = np.asarray(feedback_velocity, dtype=float) * self._period_s
+        dt = self._period_s
         return TcpSnapshot(
-            command=chain.pose(np.asarray(command, dtype=float)),
-            feedback=chain.pose(np.asarray(feedback, dtype=float)),
-            command_speed_mm_s=chain.tcp_velocity(command, command_velocity) * MM_PER_M,
-            feedback_speed_mm_s=chain.tcp_velocity(feedback, feedback_velocity) * MM_PER_M,
+            command=chain.pose(q_cmd),
+            feedback=chain.pose(q_fb),
+            command_speed_mm_s=chain.tcp_speed(q_cmd - d_cmd, d_cmd, dt) * MM_PER_M,
+            feedback_speed_mm_s=chain.tcp_speed(q_fb - d_fb, d_fb, dt) * MM_PER_M,
         )

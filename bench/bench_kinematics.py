@@ -1,0 +1,138 @@
+"""Kinematics and register outputs: IK solves per second, and the cost per tick of the
+S1CxG register output functions.
+
+1. Forward kinematics, Jacobian and inverse kinematics of several models on random
+   reachable poses, the IK seeded 0.3 rad (σ) away from a solution (a client's Cartesian
+   move seeds each solve with the previous one, far closer). Calls per second, best of
+   ``--repeat``.
+2. A 20 s trajectory streamed tick by tick (as bench_controller.py) to an HC10 cell
+   without S1CxG table (baseline) and to the same cell with every register output
+   function enabled (Cartesian command and feedback, both pulse functions, TCP speed,
+   axis speeds and positions, command and feedback, all 4-byte), run in alternation;
+   µs per ``tick()``, × real time, and the difference: the per-tick cost of the outputs.
+
+Run: ``python bench/bench_kinematics.py [--repeat 5] [--seconds 20]``
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import time
+
+import numpy as np
+
+from pymotoros.controller import PointData, VirtualController
+from pymotoros.controller.cell import cell_from_dict
+from pymotoros.kinematics import chain_for
+from pymotoros.protocol.constants import MotionCommand, ResultCode
+
+MODELS = ("hc10", "gp7", "sia20d")
+POSES = 300
+SPACING_S = 0.02
+
+
+def ik_rates(model: str, repeat: int) -> tuple[float, float, float, int]:
+    chain = chain_for(model)
+    rng = np.random.default_rng(1)
+    qs = [rng.uniform(chain.lower, chain.upper) * 0.9 for _ in range(POSES)]
+    targets = [chain.fk(q) for q in qs]
+    seeds = [np.clip(q + rng.normal(0, 0.3, q.shape), chain.lower, chain.upper) for q in qs]
+    best_fk = best_j = best_ik = math.inf
+    failures = 0
+    for _ in range(repeat):
+        t0 = time.perf_counter()
+        for q in qs:
+            chain.fk(q)
+        best_fk = min(best_fk, time.perf_counter() - t0)
+        t0 = time.perf_counter()
+        for q in qs:
+            chain.jacobian(q)
+        best_j = min(best_j, time.perf_counter() - t0)
+        failures = 0
+        t0 = time.perf_counter()
+        for target, seed in zip(targets, seeds, strict=True):
+            try:
+                chain.ik(target, seed)
+            except ValueError:
+                failures += 1
+        best_ik = min(best_ik, time.perf_counter() - t0)
+    return POSES / best_fk, POSES / best_j, POSES / best_ik, failures
+
+
+ALL_FUNCTIONS: dict[str, int] = (
+    {"208": 1, "209": 1, "217": 1, "218": 1}
+    | {str(210 + k): 100 + 2 * k for k in range(7)}
+    | {str(219 + k): 120 + 2 * k for k in range(7)}
+    | {"202": 63, "204": 63, "205": 63, "206": 0, "207": 0}
+    | {str(1090 + k): 140 + 2 * k for k in range(6)}
+    | {str(1120 + k): 160 + k for k in range(6)}
+    | {"330": 2, "331": 170, "332": 2, "333": 172}
+    | {"334": 2, "335": 2, "336": 2, "337": 2}
+    | {str(1270 + k): 200 + 2 * k for k in range(6)}
+    | {str(1280 + k): 220 + 2 * k for k in range(6)}
+    | {str(1290 + k): 240 + 2 * k for k in range(6)}
+    | {str(1300 + k): 260 + 2 * k for k in range(6)}
+)
+
+
+def trajectory(seconds: float) -> list[PointData]:
+    n = round(seconds / SPACING_S)
+    w = 2 * math.pi / seconds
+    pts = []
+    for k in range(n + 1):
+        t = k * SPACING_S
+        pos = [0.3 * (1 - math.cos(w * t)) * (1 + 0.1 * i) for i in range(6)]
+        vel = [0.3 * w * math.sin(w * t) * (1 + 0.1 * i) for i in range(6)]
+        pts.append(PointData(0, 7, t, (*pos, 0.0, 0.0, 0.0, 0.0), (*vel, 0.0, 0.0, 0.0, 0.0),
+                             (0.0,) * 10))  # fmt: skip
+    return pts
+
+
+def tick_cost(seconds: float, registers: bool) -> float:
+    """µs per tick (CPU time inside tick()) while the trajectory streams."""
+    group: dict[str, object] = {"robot": "hc10"}
+    if registers:
+        group["s1cxg"] = ALL_FUNCTIONS
+    vc = VirtualController(cell_from_dict({"groups": [group]}))
+    vc.wait_for(vc.motion_ctrl(0, MotionCommand.START_TRAJ_MODE))
+    points = trajectory(seconds)
+    clock = time.process_time
+    spent = 0.0
+    ticks = seq = 0
+    while seq < len(points) or vc.has_queued_motion():
+        if seq < len(points):
+            outcome = vc.wait_for(vc.trajectory_point(seq, points[seq]))
+            if outcome.result != ResultCode.BUSY:
+                seq += 1
+        t0 = clock()
+        vc.tick()
+        spent += clock() - t0
+        ticks += 1
+    return spent / ticks * 1e6
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--repeat", type=int, default=5)
+    parser.add_argument("--seconds", type=float, default=20.0)
+    args = parser.parse_args()
+    print(f"kinematics, {POSES} random poses, best of {args.repeat}")
+    print(f"{'model':>8} {'FK/s':>9} {'Jacobian/s':>11} {'IK/s':>8} {'IK failures':>12}")
+    for model in MODELS:
+        fk, jac, ik, failures = ik_rates(model, args.repeat)
+        print(f"{model:>8} {fk:>9.0f} {jac:>11.0f} {ik:>8.0f} {failures:>12}")
+    print(f"\nregister outputs: {args.seconds:g} s HC10 trajectory, points every 20 ms, "
+          f"best of {args.repeat}, alternating")  # fmt: skip
+    base, full = math.inf, math.inf
+    for _ in range(args.repeat):
+        base = min(base, tick_cost(args.seconds, False))
+        full = min(full, tick_cost(args.seconds, True))
+    period_us = 4000.0
+    print(f"  no S1CxG table:          {base:7.2f} µs/tick  {period_us / base:6.0f}× real time")
+    print(f"  every function enabled:  {full:7.2f} µs/tick  {period_us / full:6.0f}× real time")
+    print(f"  cost of the outputs:     {full - base:7.2f} µs/tick  ({full / base:.2f}× the tick)")
+
+
+if __name__ == "__main__":
+    main()
