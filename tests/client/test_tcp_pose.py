@@ -42,3 +42,16 @@ def test_tool_numbers_are_checked() -> None:
         table.define(64, TCP)
     with pytest.raises(PymotorosError, match="6 joints, got 5"):
         table.chain(0).pose([0.0] * 5)
+
+
+def test_the_blocking_client_has_the_cartesian_calls() -> None:
+    from pymotoros.testing import sync_twin
+
+    with sync_twin(robot="hc10") as (robot, _):
+        robot.enable()
+        robot.move_joints((0.0, 0.5, 1.9, 0.0, 0.9, 0.0))
+        before = robot.tcp_pose()
+        robot.move_relative(dz=-0.02)
+        assert robot.tcp_pose()[2] == pytest.approx(before[2] - 0.02, abs=1e-4)
+        regs = robot.read_register_outputs({"336": 1})
+        assert regs.axis_positions() == (None,) * 8  # no register given: nothing output
