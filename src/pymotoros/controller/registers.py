@@ -16,6 +16,7 @@ last 4 ms increment, and the feedback's averaged speed over one period.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 from typing import Final
 
@@ -49,6 +50,7 @@ class _Plan:
         axes = [group.axes[slot_axis[k]] for k in range(n)]
         self.ppu_list = [a.pulses_per_unit for a in axes]
         self.ros_slot_list = list(group.moto_slots)
+        self.identity = self.ros_slot_list == list(range(n))
         self.e_slot = 6 if n == 7 else None  # Re: a 7-axis arm's elbow (E) angle
         base = {
             (Quantity.CARTESIAN, Source.COMMAND): 0,
@@ -156,8 +158,11 @@ class RegisterOutputs:
             chain = self._tcp.chain(plan.index, tool)
             if chain is not None:
                 slots = plan.ros_slot_list
-                q_cmd = np.array([pos_cmd[s] for s in slots])
-                q_fb = np.array([pos_fb[s] for s in slots])
+                if plan.identity:
+                    q_cmd, q_fb = np.array(pos_cmd), np.array(pos_fb)
+                else:
+                    q_cmd = np.array([pos_cmd[s] for s in slots])
+                    q_fb = np.array([pos_fb[s] for s in slots])
                 m_cmd = chain.fk(q_cmd, "tcp", "base_link")
                 m_fb = chain.fk(q_fb, "tcp", "base_link")
                 e = plan.e_slot
@@ -170,9 +175,9 @@ class RegisterOutputs:
                     d_cmd = np.array([step_cmd[s] for s in slots])
                     d_fb = np.array([spd_fb[s] for s in slots]) * self._period_s
                     p0 = chain.position(q_cmd - d_cmd)
-                    tcp_cmd = float(np.linalg.norm(m_cmd[:3, 3] - p0)) * per_s
+                    tcp_cmd = math.dist(m_cmd[:3, 3].tolist(), p0.tolist()) * per_s
                     p0 = chain.position(q_fb - d_fb)
-                    tcp_fb = float(np.linalg.norm(m_fb[:3, 3] - p0)) * per_s
+                    tcp_fb = math.dist(m_fb[:3, 3].tolist(), p0.tolist()) * per_s
         return np.array(
             [
                 *cart_cmd,
