@@ -33,15 +33,13 @@ from pymotoros.client.planning import (
     _ruckig_plan,
     sample_count,
 )
+from pymotoros.client.tools import DEFAULT_TCP_SPEED_MM_S
 from pymotoros.errors import KinematicsError
 from pymotoros.kinematics import Chain, interpolate_pose, pose_to_matrix, rotation_angle
 
 FloatArray = npt.NDArray[np.float64]
 Frame = Literal["base", "tool"]
 
-DEFAULT_TCP_SPEED_MM_S: Final = 250.0
-"""Default TCP speed of a Cartesian move: the 250 mm/s of reduced-speed (T1) operation
-in ISO 10218-1, a speed every robot programmer knows as "safe to watch"."""
 PATH_STEP_M: Final = 0.001
 """Spacing of the IK nodes along the line (1 mm): the joint-space derivatives used for
 the timing are taken between these nodes."""
@@ -158,7 +156,8 @@ def plan_linear_move(
             f"{rate[worst] / _MM_PER_M:.3f} rad per mm of TCP motion; "
             "move in joint space (move_joints) or choose another line"
         )
-    dd = np.diff(d, axis=0) / ds if nodes > 2 else np.zeros((1, n))  # d²q/ds²
+    # d²q/ds² between nodes (a two-node line has one segment and no curvature term)
+    dd = np.diff(d, axis=0) / ds if len(d) > 1 else np.zeros((1, n))
     d_max = np.maximum(np.abs(d).max(axis=0), 1e-12)
     dd_max = np.abs(dd).max(axis=0)
     vmax = np.array(limits.max_velocity) * velocity_scaling

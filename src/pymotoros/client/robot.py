@@ -25,7 +25,6 @@ from types import TracebackType
 from typing import Final, Literal, Self, TypeVar
 
 from pymotoros.client import io_map
-from pymotoros.client.cartesian import DEFAULT_TCP_SPEED_MM_S, plan_linear_move, relative_target
 from pymotoros.client.connection import (
     DEFAULT_CONNECT_TIMEOUT_S,
     DEFAULT_REQUEST_TIMEOUT_S,
@@ -65,10 +64,8 @@ from pymotoros.client.streaming import (
     TrajectoryStreamer,
 )
 from pymotoros.client.timing import REAL_TIME, ClientClock
-from pymotoros.client.tools import ToolTable
+from pymotoros.client.tools import DEFAULT_TCP_SPEED_MM_S, ToolTable
 from pymotoros.errors import KinematicsError
-from pymotoros.kinematics import matrix_to_pose
-from pymotoros.kinematics.chain import FrameName, Reference
 from pymotoros.models import (
     DEFAULT_CONTROLLER,
     DEFAULT_ROBOT,
@@ -583,6 +580,8 @@ class RobotClient:
         within every joint limit (scaled as :meth:`move_joints`). A line through a
         singularity, out of reach or past a joint limit is refused before anything is sent
         (:class:`PlanningError` with the joint and the numbers)."""
+        from pymotoros.client.cartesian import plan_linear_move  # numpy, Pinocchio: lazily
+
         start = await self.current_positions(group)
         trajectory = plan_linear_move(
             self.tools.chain(group),
@@ -616,6 +615,9 @@ class RobotClient:
     ) -> MoveResult:
         """Move the TCP by (dx, dy, dz) m and (drx, dry, drz) rad in the ``base`` frame or
         the ``tool`` frame, in a straight line (``linear=False``: a joint move)."""
+        from pymotoros.client.cartesian import relative_target
+        from pymotoros.kinematics import matrix_to_pose
+
         start = await self.current_positions(group)
         chain = self.tools.chain(group)
         current = chain.fk(start)
@@ -668,7 +670,11 @@ class RobotClient:
         return await read_register_outputs(self, table, group)
 
     def tcp_pose(
-        self, group: int = 0, *, frame: FrameName = "tcp", reference: Reference = "base"
+        self,
+        group: int = 0,
+        *,
+        frame: Literal["flange", "tool0", "tcp"] = "tcp",
+        reference: Literal["base", "base_link"] = "base",
     ) -> tuple[float, float, float, float, float, float]:
         """The selected tool's TCP from the latest joint feedback: (x, y, z, rx, ry, rz) in
         m and rad, R = Rz·Ry·Rx, in base coordinates (``reference="base_link"``: the

@@ -9,10 +9,17 @@ selected after connecting, as after a controller boot (reference §5.8).
 from __future__ import annotations
 
 from collections.abc import Sequence
+from typing import TYPE_CHECKING, Final
 
-from pymotoros.kinematics import Chain, chain_for
 from pymotoros.models.robots import Frame, RobotModel
 from pymotoros.protocol.constants import MAX_TOOL_NUMBER
+
+if TYPE_CHECKING:  # the kinematics import numpy and Pinocchio: loaded when first used
+    from pymotoros.kinematics import Chain
+
+DEFAULT_TCP_SPEED_MM_S: Final = 250.0
+"""Default TCP speed of a Cartesian move: the 250 mm/s of reduced-speed (T1) operation
+in ISO 10218-1, a speed every robot programmer knows as "safe to watch"."""
 
 
 class ToolTable:
@@ -44,6 +51,8 @@ class ToolTable:
     def chain(self, group: int = 0, tool: int | None = None) -> Chain:
         """The group's chain with ``tool`` (default: the selected one) on tool0; a tool
         never defined is empty (TCP = tool0), as an unset tool file on the controller."""
+        from pymotoros.kinematics import chain_for
+
         number = self.selected.get(group, 0) if tool is None else tool
         frame = self._frames.get((group, number), Frame())
         return chain_for(self._robot.groups[group], frame)
