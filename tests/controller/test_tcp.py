@@ -79,3 +79,19 @@ def test_tcp_speed_while_moving_matches_the_pose_change() -> None:
     assert after.tcp.command_speed_mm_s > 10.0
     assert after.tcp.command_speed_mm_s == pytest.approx(per_tick_mm_s, rel=0.02)
     assert after.tcp.feedback_speed_mm_s > 0.0
+
+
+def test_increment_speed_for_an_fsu_limit() -> None:
+    from pymotoros.controller.tcp import TcpTracker
+
+    vc = _cell()
+    tracker = TcpTracker(vc.cell)
+    group = vc.cell.groups[0]
+    pulses = [0] * 8
+    # 100 pulses of the S axis in 4 ms: the TCP turns about the S axis at radius r.
+    inc = [100, 0, 0, 0, 0, 0, 0, 0]
+    omega = 100 / group.axes[0].pulses_per_unit / 0.004
+    radius = math.hypot(0.0, 0.162)  # folded HC10: tool0 0.162 m off the S axis
+    speed = tracker.increment_speed_mm_s(0, 0, pulses, inc)
+    assert speed == pytest.approx(omega * radius * 1000, rel=1e-3)
+    assert tracker.increment_speed_mm_s(0, 0, pulses, [0] * 8) == 0.0

@@ -49,6 +49,30 @@ class TcpTracker:
         t = self._cell.tool(group_index, tool)
         return chain_for(base.group, Frame(t.tcp_m, t.rpy_rad))
 
+    def increment_speed_mm_s(
+        self,
+        group_index: int,
+        tool: int,
+        command_pulses: Sequence[int],
+        increment: Sequence[int],
+    ) -> float:
+        """TCP speed (mm/s) of one tick that adds ``increment`` (controller-order pulses)
+        to ``command_pulses``: the hook for an FSU TCP-speed limit, which can scale a
+        tick's increments until this is within its limit. 0 for a group without a chain."""
+        chain = self.chain(group_index, tool)
+        if chain is None:
+            return 0.0
+        group = self._cell.groups[group_index]
+        q = [
+            command_pulses[s] / a.pulses_per_unit
+            for a, s in zip(group.axes, group.moto_slots, strict=True)
+        ]
+        dq = [
+            increment[s] / a.pulses_per_unit
+            for a, s in zip(group.axes, group.moto_slots, strict=True)
+        ]
+        return chain.tcp_speed(q, dq, self._period_s) * MM_PER_M
+
     def snapshot(
         self,
         group_index: int,
