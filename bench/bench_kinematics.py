@@ -123,6 +123,18 @@ def tick_cost(seconds: float, registers: dict[str, int] | None) -> float:
     return spent / ticks * 1e6
 
 
+def idle_cost(ticks: int, registers: dict[str, int] | None) -> float:
+    """µs per tick of a robot at rest with servo on (the common case between moves)."""
+    group: dict[str, object] = {"robot": "hc10"}
+    if registers:
+        group["s1cxg"] = registers
+    vc = VirtualController(cell_from_dict({"groups": [group], "initial": {"servo": True}}))
+    vc.run_ticks(200)
+    t0 = time.process_time()
+    vc.run_ticks(ticks)
+    return (time.process_time() - t0) / ticks * 1e6
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--repeat", type=int, default=5)
@@ -141,6 +153,11 @@ def main() -> None:
         seed = min(seed, tick_cost(args.seconds, SEED_CELL))
         full = min(full, tick_cost(args.seconds, ALL_FUNCTIONS))
     period_us = 4000.0
+    idle_base = min(idle_cost(5000, None) for _ in range(args.repeat))
+    idle_full = min(idle_cost(5000, ALL_FUNCTIONS) for _ in range(args.repeat))
+    print(
+        f"  at rest: {idle_base:.2f} µs/tick without a table, {idle_full:.2f} with every function"
+    )
     print(f"  no S1CxG table:          {base:7.2f} µs/tick  {period_us / base:6.0f}× real time")
     for label, cost in (("the seed cell's outputs:", seed), ("every function enabled: ", full)):
         print(

@@ -371,3 +371,13 @@ def test_vectorised_outputs_match_the_reference_rules() -> None:
         write_outputs(parsed, values, reference.__setitem__)
         fast = dict(zip(plan.registers.tolist(), plan.words(np.array(v)).tolist(), strict=True))
         assert fast == reference, table
+
+
+def test_outputs_at_rest_are_rewritten_every_tick() -> None:
+    # At rest the values are not recomputed, but a client's write is still overwritten.
+    vc = _cell({"336": 1, "1290": 10})
+    expected = _m(vc, 10)
+    assert expected == _lo(_r(POSE[0] * DEG))
+    vc.write_mregister(10, 4321)
+    vc.tick()
+    assert _m(vc, 10) == expected

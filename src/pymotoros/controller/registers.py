@@ -102,6 +102,8 @@ class _Plan:
         self.kinematics = any(q in (Quantity.CARTESIAN, Quantity.TCP_SPEED) for q, _ in uses)
         self.feedback = any(s is Source.FEEDBACK for _, s in uses)
         self.speeds = any(q in (Quantity.AXIS_SPEED, Quantity.TCP_SPEED) for q, _ in uses)
+        self.rest_key: tuple[int, tuple[int, ...]] | None = None
+        self.rest_words: npt.NDArray[np.int64] | None = None
 
     def words(self, values: npt.NDArray[np.float64]) -> npt.NDArray[np.int64]:
         """The register words (in ``registers`` order) for a value vector."""
@@ -126,6 +128,8 @@ class RegisterOutputs:
         self._mreg = np.frombuffer(io.mregister_buffer(), dtype=np.uint16)
         self._tcp = tcp
         self._period_s = period_ms / _MS_PER_S
+        self._quiet_feedback = cell.servo.noise_pulses == 0
+        """Without encoder noise a group at rest has constant outputs (see refresh)."""
 
     @property
     def active(self) -> bool:
@@ -197,7 +201,20 @@ class RegisterOutputs:
     def refresh(
         self, servos: Sequence[ServoGroup], tools: Sequence[int], tick: int, powered: bool
     ) -> None:
-        """Compute and write every output from the servos' state now."""
+        """Compute and write every output from the servos' state now.
+
+        A group at rest (no increment in the feedback window, no feedback noise) has the
+        same values as at its previous tick: its words are rewritten from the last
+        computation (a client may have written over them) instead of recomputed."""
         for plan in self._plans:
-            values = self.values(plan, servos[plan.index], tools[plan.index], tick, powered)
-            self._mreg[plan.registers] = plan.words(values)
+            servo = servos[plan.index]
+            tool = tools[plan.index]
+            key = None
+            if self._quiet_feedback and servo.settled():
+                key = (tool, tuple(servo.command[: plan.num_axes]))
+                if key == plan.rest_key and plan.rest_words is not None:
+                    self._mreg[plan.registers] = plan.rest_words
+                    continue
+            words = plan.words(self.values(plan, servo, tool, tick, powered))
+            self._mreg[plan.registers] = words
+            plan.rest_key, plan.rest_words = key, words if key is not None else None
