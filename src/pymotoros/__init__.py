@@ -65,12 +65,14 @@ if TYPE_CHECKING:
     from pymotoros.errors import (
         ConfigError,
         JobError,
+        KinematicsError,
         LocalProtocolError,
         ProtocolError,
         PymotorosError,
         RemoteProtocolError,
         TrajectoryRejectedError,
     )
+    from pymotoros.kinematics import Chain, chain_for
     from pymotoros.models import (
         AxisModel,
         ControllerModel,
@@ -103,6 +105,9 @@ _WHERE: dict[str, str] = {
     "plan_joint_move": "pymotoros.client.planning",
     "NamedPose": "pymotoros.client.srdf",
     "parse_srdf": "pymotoros.client.srdf",
+    # kinematics
+    "Chain": "pymotoros.kinematics",
+    "chain_for": "pymotoros.kinematics",
     # the virtual controller
     "VirtualController": "pymotoros.controller",
     "CellConfig": "pymotoros.controller",
@@ -124,6 +129,7 @@ _WHERE: dict[str, str] = {
     "RemoteProtocolError": "pymotoros.errors",
     "ConfigError": "pymotoros.errors",
     "JobError": "pymotoros.errors",
+    "KinematicsError": "pymotoros.errors",
     "TrajectoryRejectedError": "pymotoros.errors",
     "ClientError": "pymotoros.client.errors",
     "ConnectError": "pymotoros.client.errors",
@@ -150,6 +156,7 @@ __all__ = [
     "AxisModel",
     "BusyTimeoutError",
     "CellConfig",
+    "Chain",
     "ClientClock",
     "ClientError",
     "CommandFailedError",
@@ -169,6 +176,7 @@ __all__ = [
     "JointLimits",
     "JointState",
     "JointTrajectory",
+    "KinematicsError",
     "LocalProtocolError",
     "Mode",
     "MotionIncompleteError",
@@ -196,6 +204,7 @@ __all__ = [
     "TrajectoryRejectedError",
     "VirtualController",
     "__version__",
+    "chain_for",
     "connect",
     "controller_model",
     "default_cell",

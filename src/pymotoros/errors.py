@@ -83,3 +83,8 @@ class TrajectoryRejectedError(PymotorosError, ValueError):
         self.axis = axis
         self.value = value
         self.limit = limit
+
+
+class KinematicsError(PymotorosError, ValueError):
+    """A pose no joint values reach (out of reach, at a singularity, outside a joint limit),
+    or a group without a kinematic chain. The message says which and by how much."""

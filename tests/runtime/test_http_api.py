@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 from collections.abc import AsyncIterator
 from dataclasses import replace
 
@@ -9,6 +10,7 @@ import httpx
 import pytest
 
 from pymotoros.controller import VirtualController
+from pymotoros.controller.cell import cell_from_dict
 from pymotoros.protocol.constants import MotionCommand
 from pymotoros.runtime.app import SimulatorApp
 from pymotoros.runtime.http_api import create_http_app
@@ -37,7 +39,12 @@ async def test_state_document_has_exactly_the_contract_keys(api: httpx.AsyncClie
     assert doc["mode"] == "play"
     assert set(doc["groups"][0]) == {
         "name", "joint_names", "command_rad", "feedback_rad", "command_pulse", "queue", "tool",
+        "tcp",
     }  # fmt: skip
+    tcp = doc["groups"][0]["tcp"]
+    assert set(tcp) == {"command", "feedback", "speed_mm_s"}
+    assert len(tcp["command"]) == len(tcp["feedback"]) == 6
+    assert set(tcp["speed_mm_s"]) == {"command", "feedback"}
     assert doc["tick"] == {
         "period_ms": 4.0,
         "count": 1000,
@@ -191,3 +198,20 @@ async def test_served_by_uvicorn_in_the_simulators_loop(controller: VirtualContr
             assert r.status_code == 404
             assert "error" in r.json()
     assert controller.snapshot().hold is True
+
+
+async def test_register_outputs_read_through_the_api() -> None:
+    cell = cell_from_dict(
+        {
+            "groups": [{"robot": "hc10", "s1cxg": {"336": 1, "1290": 12}}],
+            "initial": {"joints": {"R1": [0.5, 0.0, 0.0, 0.0, 0.0, 0.0]}},
+        }
+    )
+    vc = VirtualController(cell)
+    vc.tick()
+    app = create_http_app(vc, lambda: STATS)
+    transport = httpx.ASGITransport(app=app)
+    async with httpx.AsyncClient(transport=transport, base_url="http://sim") as client:
+        r = await client.get("/api/io/1000012")
+    assert r.status_code == 200
+    assert r.json()["value"] == round(math.degrees(0.5))  # S axis position in whole degrees

@@ -31,6 +31,7 @@ _COMMANDS: Final[dict[str, tuple[str, str]]] = {
     "io": ("pymotoros.cli.robot:io", "Read or write an IO bit or group."),
     "mreg": ("pymotoros.cli.robot:mreg", "Read or write an M-register."),
     "tool": ("pymotoros.cli.robot:tool", "Select the tool file a group moves with."),
+    "urdf": ("pymotoros.cli.urdf:urdf", "Write a robot model's URDF (base_link to tool0)."),
 }
 
 

@@ -20,6 +20,7 @@ from typing import Any, Final, TypeVar
 
 import click
 
+from pymotoros.cli.cartesian import cartesian_move, parse_relative, pose_from_args
 from pymotoros.client import (
     ClientError,
     ConnectError,
@@ -193,10 +194,19 @@ def _status_data(client: RobotClient, state: RobotState) -> dict[str, Any]:
                 "joints": list(group.joint_names),
                 "positions": list(fb.positions) if fb else None,
                 "velocities": list(fb.velocities) if fb and fb.velocities else None,
+                "tcp": _tcp_or_none(client, index),
             }
         )
     status = state.status.as_dict() if state.status else None
     return {"status": status, "groups": groups}
+
+
+def _tcp_or_none(client: RobotClient, group: int) -> list[float] | None:
+    """The TCP pose in base coordinates (m, rad), or None without feedback or chain."""
+    try:
+        return list(client.tcp_pose(group))
+    except PymotorosError:
+        return None
 
 
 def _yes(value: bool | None, yes: str = "yes", no: str = "no") -> str:
@@ -227,6 +237,14 @@ def _status_table(client: RobotClient, state: RobotState) -> str:
             pos = fb.positions[j]
             vel = fb.velocities[j] if fb.velocities else math.nan
             lines.append(f"    {name:<{width}}{pos:>10.4f}{math.degrees(pos):>10.2f}{vel:>10.4f}")
+        tcp = _tcp_or_none(client, index)
+        if tcp is not None:
+            x, y, z, rx, ry, rz = tcp
+            lines.append(
+                f"    {'TCP (base)':<{width}}x {x * 1000:.1f} y {y * 1000:.1f} z {z * 1000:.1f} mm"
+                f"  Rx {math.degrees(rx):.2f} Ry {math.degrees(ry):.2f} Rz {math.degrees(rz):.2f}"
+                " deg"
+            )
     return "\n".join(lines)
 
 
@@ -375,6 +393,36 @@ def _move_data(result: MoveResult) -> dict[str, Any]:
 @click.option("--group", type=click.IntRange(0, 3), default=0, show_default=True)
 @click.option("--enable", "enable_first", is_flag=True, help="Enter trajectory mode first.")
 @click.option("--json", "as_json", is_flag=True, help="Print the result as JSON.")
+@click.option(
+    "--pose",
+    "as_pose",
+    is_flag=True,
+    help="The values are a TCP pose X Y Z (m) RX RY RZ (rad; deg with --deg) in base "
+    "coordinates, R = Rz·Ry·Rx; a joint move unless --linear.",
+)
+@click.option("--linear", is_flag=True, help="With --pose: move the TCP in a straight line.")
+@click.option(
+    "--relative",
+    multiple=True,
+    metavar="KEY=VALUE",
+    help="Move the TCP by dx, dy, dz (m) / drx, dry, drz (rad; deg with --deg) in a "
+    "straight line, e.g. --relative dz=-0.05 (repeatable).",
+)
+@click.option(
+    "--frame",
+    type=click.Choice(["base", "tool"]),
+    default="base",
+    show_default=True,
+    help="Frame of --relative: base coordinates or the tool's own axes.",
+)
+@click.option(
+    "--tcp-speed",
+    "tcp_speed_mm_s",
+    type=click.FloatRange(0.0, min_open=True),
+    default=250.0,
+    show_default=True,
+    help="Maximum TCP speed of a straight-line move, mm/s.",
+)
 def move(
     joints: tuple[float, ...],
     name: str | None,
@@ -385,6 +433,11 @@ def move(
     group: int,
     enable_first: bool,
     as_json: bool,
+    as_pose: bool = False,
+    linear: bool = False,
+    relative: tuple[str, ...] = (),
+    frame: str = "base",
+    tcp_speed_mm_s: float = 250.0,
     **kwargs: Any,
 ) -> None:
     """Move to joint positions J1 ... Jn (rad) or to a named pose, with a progress bar.
@@ -394,14 +447,25 @@ def move(
     Ctrl-C stops the robot (STOP_MOTION).
     """
     target = _target(kwargs)
-    if (name is None) == (not joints):
+    cartesian = as_pose or bool(relative)
+    if linear and not as_pose:
+        raise click.UsageError("--linear goes with --pose (--relative moves are always straight)")
+    if as_pose and (relative or name is not None):
+        raise click.UsageError("give one target: --pose, --relative or --named")
+    if relative and joints:
+        raise click.UsageError("--relative takes no positional values")
+    rel = parse_relative(relative, deg) if relative else None
+    pose = pose_from_args(joints, deg) if as_pose else None
+    if not cartesian and (name is None) == (not joints):
         raise click.UsageError("give either joint values J1 ... Jn or --named NAME")
     if srdf is not None and name is None:
         raise click.UsageError("--srdf goes with --named")
 
     async def work() -> MoveResult:
         async with connected(target, motion=True, state=True, io=False) as client:
-            if name is not None:
+            if cartesian:
+                goal: tuple[float, ...] = ()
+            elif name is not None:
                 goal = client.named_pose(name, srdf=srdf, group=group)
             else:
                 axes = client.robot.groups[group].num_axes
@@ -426,13 +490,27 @@ def move(
 
             with bar if bar is not None else contextlib.nullcontext():
                 try:
-                    result = await client.move_joints(
-                        goal,
-                        group=group,
-                        speed_scale=speed_scale,
-                        accel_scale=accel_scale,
-                        on_progress=progress,
-                    )
+                    if cartesian:
+                        result = await cartesian_move(
+                            client,
+                            pose=pose,
+                            relative=rel,
+                            linear=linear or rel is not None,
+                            frame="tool" if frame == "tool" else "base",
+                            tcp_speed_mm_s=tcp_speed_mm_s,
+                            group=group,
+                            speed_scale=speed_scale,
+                            accel_scale=accel_scale,
+                            on_progress=progress,
+                        )
+                    else:
+                        result = await client.move_joints(
+                            goal,
+                            group=group,
+                            speed_scale=speed_scale,
+                            accel_scale=accel_scale,
+                            on_progress=progress,
+                        )
                 except asyncio.CancelledError:
                     with contextlib.suppress(PymotorosError):
                         await asyncio.shield(client.stop_motion())

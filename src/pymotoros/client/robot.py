@@ -22,7 +22,7 @@ import time
 from collections.abc import AsyncIterator, Callable, Mapping, Sequence
 from pathlib import Path
 from types import TracebackType
-from typing import Final, Self, TypeVar
+from typing import Final, Literal, Self, TypeVar
 
 from pymotoros.client import io_map
 from pymotoros.client.connection import (
@@ -43,8 +43,10 @@ from pymotoros.client.planning import (
     DEFAULT_SAMPLE_PERIOD_S,
     JointLimits,
     JointTrajectory,
+    PlanningError,
     plan_joint_move,
 )
+from pymotoros.client.registers import RegisterValues, read_register_outputs, s1cxg_table
 from pymotoros.client.srdf import NamedPose, find_pose, parse_srdf
 from pymotoros.client.state import (
     DEFAULT_STATE_TIMEOUT_S,
@@ -62,6 +64,8 @@ from pymotoros.client.streaming import (
     TrajectoryStreamer,
 )
 from pymotoros.client.timing import REAL_TIME, ClientClock
+from pymotoros.client.tools import DEFAULT_TCP_SPEED_MM_S, ToolTable
+from pymotoros.errors import KinematicsError
 from pymotoros.models import (
     DEFAULT_CONTROLLER,
     DEFAULT_ROBOT,
@@ -71,6 +75,7 @@ from pymotoros.models import (
     controller_model,
     robot_model,
 )
+from pymotoros.models.s1cxg import S1cxgTable
 from pymotoros.protocol.constants import (
     MAX_TOOL_NUMBER,
     ByteOrder,
@@ -176,6 +181,8 @@ class RobotClient:
         self._state_conn: FrameConnection | None = None
         self._io: FrameConnection | None = None
         self._sequence = itertools.count(1)
+        self.tools = ToolTable(self.robot)
+        """Tool offsets the client knows (:meth:`ToolTable.define`) and the selected ones."""
 
     # ------------------------------------------------------------------ connection
 
@@ -356,6 +363,7 @@ class RobotClient:
         reply = await self.request_motion(MotoSelectTool(group, tool, sequence))
         if reply.result != ResultCode.SUCCESS:
             raise reply_error(reply.result, reply.subcode, reply.command)
+        self.tools.selected[group] = tool
 
     async def get_dh_parameters(self) -> tuple[tuple[DhLink, ...], ...]:
         """DH parameters (theta, d, a, alpha) of each of the robot's groups."""
@@ -556,6 +564,126 @@ class RobotClient:
             busy_timeout_s=busy_timeout_s,
             timeout_s=timeout_s,
         )
+
+    async def move_linear(
+        self,
+        pose: Sequence[float],
+        *,
+        group: int = 0,
+        tcp_speed_mm_s: float = DEFAULT_TCP_SPEED_MM_S,
+        speed_scale: float = 1.0,
+        accel_scale: float = 1.0,
+        on_progress: Callable[[FollowingSample], None] | None = None,
+        timeout_s: float | None = None,
+    ) -> MoveResult:
+        """Move the selected tool's TCP in a straight line to ``pose`` = (x, y, z, rx, ry,
+        rz) in base coordinates (m, rad, R = Rz·Ry·Rx), at most ``tcp_speed_mm_s`` and
+        within every joint limit (scaled as :meth:`move_joints`). A line through a
+        singularity, out of reach or past a joint limit is refused before anything is sent
+        (:class:`PlanningError` with the joint and the numbers)."""
+        from pymotoros.client.cartesian import plan_linear_move  # numpy, Pinocchio: lazily
+
+        start = await self.current_positions(group)
+        trajectory = plan_linear_move(
+            self.tools.chain(group),
+            start,
+            pose,
+            self.limits(group),
+            tcp_speed_mm_s=tcp_speed_mm_s,
+            velocity_scaling=speed_scale,
+            acceleration_scaling=accel_scale,
+        )
+        return await self.execute(
+            trajectory, groups=(group,), on_progress=on_progress, timeout_s=timeout_s
+        )
+
+    async def move_relative(
+        self,
+        dx: float = 0.0,
+        dy: float = 0.0,
+        dz: float = 0.0,
+        drx: float = 0.0,
+        dry: float = 0.0,
+        drz: float = 0.0,
+        *,
+        frame: Literal["base", "tool"] = "base",
+        group: int = 0,
+        linear: bool = True,
+        tcp_speed_mm_s: float = DEFAULT_TCP_SPEED_MM_S,
+        speed_scale: float = 1.0,
+        accel_scale: float = 1.0,
+        on_progress: Callable[[FollowingSample], None] | None = None,
+    ) -> MoveResult:
+        """Move the TCP by (dx, dy, dz) m and (drx, dry, drz) rad in the ``base`` frame or
+        the ``tool`` frame, in a straight line (``linear=False``: a joint move)."""
+        from pymotoros.client.cartesian import relative_target
+        from pymotoros.kinematics import matrix_to_pose
+
+        start = await self.current_positions(group)
+        chain = self.tools.chain(group)
+        current = chain.fk(start)
+        target = matrix_to_pose(relative_target(current, (dx, dy, dz, drx, dry, drz), frame))
+        if linear:
+            return await self.move_linear(
+                target,
+                group=group,
+                tcp_speed_mm_s=tcp_speed_mm_s,
+                speed_scale=speed_scale,
+                accel_scale=accel_scale,
+                on_progress=on_progress,
+            )
+        return await self.move_pose(
+            target, group=group, speed_scale=speed_scale, accel_scale=accel_scale
+        )
+
+    async def move_pose(
+        self,
+        pose: Sequence[float],
+        *,
+        group: int = 0,
+        speed_scale: float = 1.0,
+        accel_scale: float = 1.0,
+        on_progress: Callable[[FollowingSample], None] | None = None,
+    ) -> MoveResult:
+        """A joint move to the joint values nearest the current ones that put the TCP at
+        ``pose`` (base coordinates): not a straight line (see :meth:`move_linear`)."""
+        start = await self.current_positions(group)
+        try:
+            goal = self.tools.chain(group).ik(pose, start).q
+        except KinematicsError as exc:
+            raise PlanningError(f"cannot reach the pose: {exc}") from None
+        return await self.move_joints(
+            tuple(goal.tolist()),
+            group=group,
+            speed_scale=speed_scale,
+            accel_scale=accel_scale,
+            on_progress=on_progress,
+        )
+
+    async def read_register_outputs(
+        self, table: S1cxgTable | Mapping[str, object] | str | Path, group: int = 0
+    ) -> RegisterValues:
+        """The S1CxG register outputs (TCP speed, Cartesian position, axis speeds and
+        positions, pulses) decoded with ``table``: an :class:`S1cxgTable`, a
+        ``{"330": 1, ...}`` mapping or a cell file with ``[groups.s1cxg]``."""
+        if not isinstance(table, S1cxgTable):
+            table = s1cxg_table(table, self.robot.groups[group], index=group)
+        return await read_register_outputs(self, table, group)
+
+    def tcp_pose(
+        self,
+        group: int = 0,
+        *,
+        frame: Literal["flange", "tool0", "tcp"] = "tcp",
+        reference: Literal["base", "base_link"] = "base",
+    ) -> tuple[float, float, float, float, float, float]:
+        """The selected tool's TCP from the latest joint feedback: (x, y, z, rx, ry, rz) in
+        m and rad, R = Rz·Ry·Rx, in base coordinates (``reference="base_link"``: the
+        mounting surface). Raises ClientError before the first feedback has arrived."""
+        positions = self.state.positions(group)
+        if positions is None:
+            raise ClientError(f"no joint feedback for group {group} yet: wait_for_state() first")
+        return self.tools.chain(group).pose(positions, frame, reference)
 
     def named_pose(
         self, name: str, *, srdf: str | Path | None = None, group: int = 0

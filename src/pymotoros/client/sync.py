@@ -203,6 +203,11 @@ class SyncRobotClient:
     execute = _forward(RobotClient.execute)
     move_joints = _forward(RobotClient.move_joints)
     move_named = _forward(RobotClient.move_named)
+    move_linear = _forward(RobotClient.move_linear)
+    move_relative = _forward(RobotClient.move_relative)
+    move_pose = _forward(RobotClient.move_pose)
+    read_register_outputs = _forward(RobotClient.read_register_outputs)
+    tcp_pose = _forward_plain(RobotClient.tcp_pose)
 
 
 async def _next(iterator: AsyncIterator[RobotState]) -> RobotState:

@@ -141,6 +141,17 @@ class AlarmInfo:
 
 
 @dataclass(frozen=True, slots=True)
+class TcpSnapshot:
+    """The active tool's TCP in base coordinates (m, rad; R = Rz·Ry·Rx), command and
+    feedback, and its speed in mm/s (docs/kinematics.md)."""
+
+    command: tuple[float, float, float, float, float, float]
+    feedback: tuple[float, float, float, float, float, float]
+    command_speed_mm_s: float
+    feedback_speed_mm_s: float
+
+
+@dataclass(frozen=True, slots=True)
 class GroupSnapshot:
     name: str
     joint_names: tuple[str, ...]
@@ -149,6 +160,8 @@ class GroupSnapshot:
     command_pulse: tuple[int, ...]
     queue: int
     tool: int
+    tcp: TcpSnapshot | None = None
+    """None for a group without a kinematic chain."""
 
 
 @dataclass(frozen=True, slots=True)

@@ -34,6 +34,7 @@ from pymotoros.models import (
     controller_model,
     robot_model,
 )
+from pymotoros.models.s1cxg import S1cxgTable, parse_s1cxg
 from pymotoros.protocol.constants import MAX_TOOL_NUMBER
 
 logger = logging.getLogger(__name__)
@@ -58,6 +59,8 @@ class ToolConfig:
     name: str = ""
     mass_kg: float = 0.0
     tcp_m: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    rpy_rad: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    """The TCP's orientation on tool0: fixed-axis roll, pitch, yaw (R = Rz·Ry·Rx)."""
 
 
 @dataclass(frozen=True, slots=True)
@@ -104,6 +107,11 @@ class CellConfig:
     name: str = "cell"
     tools: tuple[ToolConfig, ...] = ()
     initial: InitialState = field(default_factory=InitialState)
+    group_tools: tuple[tuple[ToolConfig, ...], ...] = ()
+    """Per group, the tool files of ``[[groups.tools]]`` (empty: none beyond ``[[tools]]``)."""
+    s1cxg: tuple[S1cxgTable | None, ...] = ()
+    """Per group, the S1CxG register output parameters of ``[groups.s1cxg]`` (empty or
+    None: no register outputs, the default)."""
     servo: ServoConfig = field(default_factory=ServoConfig)
     pfl: bool = False
     """The PFL option is enabled (HC robots on YRC1000 / YRC1000micro)."""
@@ -111,6 +119,15 @@ class CellConfig:
     """A built-in INIT_ROS variant name, "auto", or job files/directories."""
     warnings: tuple[str, ...] = ()
     source: str = "<default cell>"
+
+    def tool(self, group_index: int, number: int) -> ToolConfig:
+        """Tool file ``number`` of a group: its own ``[[groups.tools]]`` entry, else the
+        cell-wide ``[[tools]]`` one, else an empty tool (all zero, as an unset tool file)."""
+        own = self.group_tools[group_index] if group_index < len(self.group_tools) else ()
+        for t in (*own, *self.tools):
+            if t.number == number:
+                return t
+        return ToolConfig(number)
 
     @property
     def job_variant(self) -> str | None:
@@ -330,6 +347,9 @@ def cell_from_dict(
     ctrl_t.finish()
 
     parts: list[tuple[str, GroupModel]] = []
+    entry_tools: list[tuple[ToolConfig, ...]] = []
+    entry_s1cxg: list[S1cxgTable | None] = []
+    """Per element of ``parts``, the ``[[groups.tools]]`` of the entry it came from."""
     if "groups" in data and "robot" in data:
         raise top.error("groups", "give either [robot] or [[groups]], not both")
     if "groups" in data:
@@ -341,6 +361,7 @@ def cell_from_dict(
             robot_name = _model(g_t, "robot", DEFAULT_ROBOT, "robot")
             model = robot_model(robot_name)
             wanted = g_t.get("group")
+            before = len(parts)
             if wanted is None:
                 parts.extend((model.name, g) for g in model.groups)
             else:
@@ -349,15 +370,23 @@ def cell_from_dict(
                     names = ", ".join(g.name for g in model.groups)
                     raise g_t.error("group", f"{model.name} has no group {wanted!r} ({names})")
                 parts.append((model.name, match[0]))
+            own = _tools(g_t, "tools", source)
+            if own and not any(g.kind is GroupKind.ROBOT for _, g in parts[before:]):
+                raise g_t.error("tools", "only robot groups take tools")
+            entry_tools.extend(own if g.kind is GroupKind.ROBOT else () for _, g in parts[before:])
+            entry_s1cxg.extend(_s1cxg(g_t, [g for _, g in parts[before:]]))
             g_t.finish()
     else:
         r_t = top.table("robot")
         model = robot_model(_model(r_t, "model", DEFAULT_ROBOT, "robot"))
         r_t.finish()
         parts.extend((model.name, g) for g in model.groups)
+        entry_tools.extend(() for _ in model.groups)
+        entry_s1cxg.extend(None for _ in model.groups)
 
     warnings: list[str] = []
     groups, robots = _combine(ctrl, parts, warnings)
+    kept_entries = range(len(groups))  # _combine keeps the first max_groups parts, in order
 
     if pfl_value is None:
         pfl = ctrl.pfl_signals and any(robot_model(r).pfl for r in robots)
@@ -371,30 +400,14 @@ def cell_from_dict(
     else:
         raise ConfigError(f"{source}: controller.pfl: must be true or false, not {pfl_value!r}")
 
-    tools: list[ToolConfig] = []
-    for i, entry in enumerate(top.array("tools")):
-        t_t = _Table(entry, f"tools[{i}]", source)
-        number = t_t.integer("number", -1, 0, MAX_TOOL_NUMBER)
-        if number < 0:
-            raise t_t.error("number", f"is required (0..{MAX_TOOL_NUMBER})")
-        tcp = t_t.array("tcp_m")
-        xyz = [float(x) for x in tcp if isinstance(x, int | float) and not isinstance(x, bool)]
-        if tcp and (len(tcp) != 3 or len(xyz) != 3):
-            raise t_t.error("tcp_m", "must be three numbers [x, y, z] in metres")
-        tools.append(
-            ToolConfig(
-                number,
-                t_t.string("name", ""),
-                t_t.number("mass_kg", 0.0),
-                (xyz[0], xyz[1], xyz[2]) if xyz else (0.0, 0.0, 0.0),
-            )
-        )
-        t_t.finish()
-    numbers = [t.number for t in tools]
-    if len(set(numbers)) != len(numbers):
-        raise top.error("tools", "a tool number appears twice")
+    tools = _tools(top, "tools", source)
+    numbers = {t.number for t in tools}
+    group_tools = tuple(entry_tools[i] for i in kept_entries)
+    s1cxg = tuple(entry_s1cxg[i] for i in kept_entries)
+    for gt in group_tools:
+        numbers.update(t.number for t in gt)
 
-    initial = _initial(top.table("initial"), groups, set(numbers))
+    initial = _initial(top.table("initial"), groups, numbers)
     top.finish()
     for w in warnings:
         logger.warning("%s: %s", source, w)
@@ -403,14 +416,70 @@ def cell_from_dict(
         groups=groups,
         robots=robots,
         name=name,
-        tools=tuple(tools),
+        tools=tools,
         initial=initial,
+        group_tools=group_tools if any(group_tools) else (),
+        s1cxg=s1cxg if any(t is not None for t in s1cxg) else (),
         servo=servo,
         pfl=pfl,
         jobs=jobs,
         warnings=tuple(warnings),
         source=source,
     )
+
+
+def _s1cxg(g_t: _Table, groups: Sequence[GroupModel]) -> list[S1cxgTable | None]:
+    """The entry's ``[groups.s1cxg]`` table (seed 003 Appendix A), for its one group."""
+    if g_t.get("s1cxg") is None:
+        return [None] * len(groups)
+    table = g_t.table("s1cxg")
+    if len(groups) != 1:
+        raise g_t.error("s1cxg", 'applies to one group: add group = "R1" (or the group meant)')
+    group = groups[0]
+    parsed = parse_s1cxg(
+        table.data,
+        num_axes=group.num_axes,
+        robot=group.kind is GroupKind.ROBOT,
+        where=f"{g_t.source}: {table.path}",
+    )
+    return [parsed]
+
+
+def _triple(t: _Table, name: str, unit: str) -> tuple[float, float, float]:
+    values = t.array(name)
+    nums = [float(x) for x in values if isinstance(x, int | float) and not isinstance(x, bool)]
+    if values and (len(values) != 3 or len(nums) != 3 or not all(map(math.isfinite, nums))):
+        raise t.error(name, f"must be three numbers in {unit}")
+    return (nums[0], nums[1], nums[2]) if nums else (0.0, 0.0, 0.0)
+
+
+def _tools(parent: _Table, key: str, source: str) -> tuple[ToolConfig, ...]:
+    """The tool files of ``[[tools]]`` or ``[[groups.tools]]``: number 0..63, name, mass,
+    TCP offset ``tcp_m = [x, y, z]`` and orientation ``rpy_rad = [r, p, y]`` on tool0."""
+    tools: list[ToolConfig] = []
+    for i, entry in enumerate(parent.array(key)):
+        t_t = _Table(entry, f"{parent.key(key)}[{i}]", source)
+        number = t_t.integer("number", -1, 0, MAX_TOOL_NUMBER)
+        if number < 0:
+            raise t_t.error("number", f"is required (0..{MAX_TOOL_NUMBER})")
+        mass = t_t.number("mass_kg", 0.0)
+        if mass < 0:
+            raise t_t.error("mass_kg", f"must not be negative, not {mass}")
+        tools.append(
+            ToolConfig(
+                number,
+                t_t.string("name", ""),
+                mass,
+                _triple(t_t, "tcp_m", "metres [x, y, z]"),
+                _triple(t_t, "rpy_rad", "radians [roll, pitch, yaw]"),
+            )
+        )
+        t_t.finish()
+    numbers = [t.number for t in tools]
+    if len(set(numbers)) != len(numbers):
+        dup = next(n for n in numbers if numbers.count(n) > 1)
+        raise parent.error(key, f"tool {dup} appears twice")
+    return tuple(tools)
 
 
 def _initial(t: _Table, groups: tuple[GroupModel, ...], tool_numbers: set[int]) -> InitialState:

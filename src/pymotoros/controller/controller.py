@@ -52,8 +52,10 @@ from pymotoros.controller.motoros import MotoRos
 from pymotoros.controller.processes import ControllerClock, Scheduler
 from pymotoros.controller.queues import MotionQueues
 from pymotoros.controller.readiness import Readiness
+from pymotoros.controller.registers import RegisterOutputs
 from pymotoros.controller.servo import IN_MOTION_PULSES, ServoGroup
 from pymotoros.controller.skillsnd import SkillListeners
+from pymotoros.controller.tcp import TcpTracker
 from pymotoros.controller.trajectory import DhTable, TrajectoryPoints
 from pymotoros.controller.units import RosConverter
 from pymotoros.models.controllers import M_REGISTER_BASE
@@ -123,6 +125,8 @@ class VirtualController:
         for interp, tool in zip(self._interps, init.tools, strict=False):
             interp.tool = tool
         self._to_ros = tuple(RosConverter(a) for a in self._axes)
+        self._tcp = TcpTracker(cell)
+        self._registers = RegisterOutputs(cell, self._io, self._tcp, ctrl.interpolation_period_ms)
         self._servos = tuple(
             ServoGroup(
                 to_pulses(init.joints[g] if init.joints else (), axes),
@@ -202,6 +206,13 @@ class VirtualController:
             for servo in self._servos:
                 servo.idle()
         inc_move.fill_tick()
+        if self._registers.active:  # S1CxG register outputs: only when configured
+            self._registers.refresh(
+                self._servos,
+                [i.tool for i in self._interps],
+                clock.tick_count,
+                machine.state.drives_powered,
+            )
         scheduler = self._scheduler
         if scheduler.busy:
             scheduler.advance()
@@ -351,15 +362,28 @@ class VirtualController:
         ):
             n = axes.num_axes
             cmd = servo.command
+            command_rad = self._to_ros[g](cmd)[:n]
+            feedback_rad = self._to_ros[g](servo.feedback(tick, s.drives_powered))[:n]
             groups.append(
                 GroupSnapshot(
                     name=self.cell.groups[g].name,
                     joint_names=axes.joint_names,
-                    command_rad=self._to_ros[g](cmd)[:n],
-                    feedback_rad=self._to_ros[g](servo.feedback(tick, s.drives_powered))[:n],
+                    command_rad=command_rad,
+                    feedback_rad=feedback_rad,
                     command_pulse=tuple(cmd[axes.ros_to_slot[i]] for i in range(n)),
                     queue=len(interp.queue),
                     tool=interp.tool,
+                    tcp=self._tcp.snapshot(
+                        g,
+                        interp.tool,
+                        command_rad,
+                        feedback_rad,
+                        [
+                            v * 1000.0 / self._clock.period_ms
+                            for v in self._to_ros[g](servo.last_increment)[:n]
+                        ],
+                        self._to_ros[g](servo.speed())[:n],
+                    ),
                 )
             )
         return ControllerSnapshot(

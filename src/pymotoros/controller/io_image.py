@@ -88,6 +88,11 @@ class IoImage:
     def set_mregister(self, index: int, value: int) -> None:
         self._mreg[index] = value
 
+    def mregister_buffer(self) -> array[int]:
+        """M000..M999 as the live 16-bit array (for the register output functions, which
+        write many words per tick in one vectorised assignment)."""
+        return self._mreg
+
     def readable_range(self, address: int) -> IoRange | None:
         """The IO range holding ``address``, or None if no readable range holds it."""
         return self._controller.io_range(address)

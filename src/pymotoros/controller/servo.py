@@ -178,6 +178,11 @@ class ServoGroup:
                 out[k] += _mix(base + k) % span - self._noise_pulses
         return out
 
+    @property
+    def last_increment(self) -> Sequence[int]:
+        """The increments of the latest tick (zeros when idle): the command speed."""
+        return self._history[-1] if self._history else ZERO_INCREMENT
+
     def speed(self) -> list[int]:
         """Feedback speed in whole pulses/s (controller order), truncated as MotoROS does."""
         hist = self._history

@@ -14,6 +14,7 @@ the pulse. Each choice is commented where it is made.
 
 from __future__ import annotations
 
+import dataclasses
 import enum
 import math
 from dataclasses import dataclass, field
@@ -28,6 +29,27 @@ class GroupKind(enum.Enum):
     ROBOT = "R"
     BASE = "B"
     STATION = "S"
+
+
+Vec3 = tuple[float, float, float]
+
+
+@dataclass(frozen=True, slots=True)
+class Frame:
+    """A fixed transform as URDF writes it: translation (m), then fixed-axis roll, pitch,
+    yaw (rad) applied about X, then Y, then Z (R = Rz·Ry·Rx)."""
+
+    xyz: Vec3 = (0.0, 0.0, 0.0)
+    rpy: Vec3 = (0.0, 0.0, 0.0)
+
+
+@dataclass(frozen=True, slots=True)
+class JointGeometry:
+    """Where a joint sits in its parent link (URDF ``origin``) and the axis it turns about,
+    in the joint's own frame (URDF ``axis``): the data of robot-models.md §1."""
+
+    origin: Frame
+    axis: Vec3
 
 
 @dataclass(frozen=True, slots=True)
@@ -46,6 +68,8 @@ class AxisModel:
     max_jerk: float
     """rad/s³ used by the client's motion generator (chosen)."""
     linear: bool = False
+    geometry: JointGeometry | None = None
+    """Joint origin and axis for the kinematics (None: the group has no kinematic chain)."""
 
     @property
     def max_pulse_rate(self) -> int:
@@ -81,6 +105,13 @@ class GroupModel:
     """The built-in ``home`` pose, ROS order."""
     dh: tuple[DhLink, ...] = field(default=())
     """Up to 8 DH links for GET_DH_PARAMETERS."""
+    mount: Frame = Frame()
+    """Where the first joint's parent link sits in ``base_link`` (SDA10F arms: the torso)."""
+    tool0: Frame | None = None
+    """``tool0`` in the last link's frame (None: no tool0, the chain ends at the flange)."""
+    base_height: float = 0.0
+    """Height of the ROS-Industrial ``base`` frame (Yaskawa robot coordinates) above
+    ``base_link``: the S-axis height of robot-models.md (0: the two frames coincide)."""
 
     def __post_init__(self) -> None:
         n = len(self.axes)
@@ -237,127 +268,295 @@ def _single_arm(
     return RobotModel(name, description, (group,), controllers, pfl=pfl)
 
 
-HC10: Final = RobotModel(
-    name="hc10",
-    description="Yaskawa HC10 (A0) collaborative robot, 10 kg, 6 axes",
-    groups=(
-        GroupModel(
-            name="R1",
-            kind=GroupKind.ROBOT,
-            axes=_HC10_AXES,
-            moto_slots=_six_axis_slots(),
-            home=(0.0,) * 6,
-            dh=_hc10_dh(0.130),
+# --- Geometry: joint origins and axes, tool0 and the ``base`` frame (robot-models.md §1) ---
+
+_X: Final = (1.0, 0.0, 0.0)
+_Y: Final = (0.0, 1.0, 0.0)
+_Z: Final = (0.0, 0.0, 1.0)
+_NX: Final = (-1.0, 0.0, 0.0)
+_NY: Final = (0.0, -1.0, 0.0)
+_NZ: Final = (0.0, 0.0, -1.0)
+_HALF_PI: Final = math.pi / 2
+# tool0 of the GP-family URDFs: the flange frame turned so that z points out of the flange
+# and x up (rpy (π, −π/2, 0), robot-models.md §1.3).
+_GP_TOOL0_RPY: Final = (math.pi, -_HALF_PI, 0.0)
+
+
+@dataclass(frozen=True, slots=True)
+class _GroupGeometry:
+    joints: tuple[tuple[Vec3, Vec3] | tuple[Vec3, Vec3, Vec3], ...]
+    """Per ROS-order joint: (origin xyz, axis) or (origin xyz, axis, origin rpy)."""
+    tool0: Frame | None
+    base_height: float
+    mount: Frame = Frame()
+
+
+def _with_geometry(robot: RobotModel, *geometries: _GroupGeometry) -> RobotModel:
+    """The robot with each group's joint origins, axes, tool0 and base height attached."""
+    groups = []
+    for group, geo in zip(robot.groups, geometries, strict=True):
+        if len(geo.joints) != group.num_axes:
+            raise ConfigError(f"{robot.name} {group.name}: geometry for {len(geo.joints)} joints")
+        axes = tuple(
+            dataclasses.replace(
+                axis,
+                geometry=JointGeometry(
+                    Frame(joint[0], joint[2] if len(joint) == 3 else (0.0, 0.0, 0.0)), joint[1]
+                ),
+            )
+            for axis, joint in zip(group.axes, geo.joints, strict=True)
+        )
+        groups.append(
+            dataclasses.replace(
+                group,
+                axes=axes,
+                tool0=geo.tool0,
+                base_height=geo.base_height,
+                mount=geo.mount,
+            )
+        )
+    return dataclasses.replace(robot, groups=tuple(groups))
+
+
+# HC10 (A0) / HC10DT (A1): robot-models.md §1.2; tool0 on the T axis, rolled by π.
+def _hc10_geometry(flange: float) -> _GroupGeometry:
+    return _GroupGeometry(
+        (
+            ((0.0, 0.0, 0.275), _Z),
+            ((0.0, 0.0, 0.0), _Y),
+            ((0.0, 0.0, 0.700), _NY),
+            ((0.0, 0.0, -0.500), _Z),
+            ((0.0, 0.162, 0.0), _NY),
+            ((0.0, 0.0, 0.0), _Z),
         ),
+        Frame((0.0, 0.0, -flange), (math.pi, 0.0, 0.0)),
+        0.275,
+    )
+
+
+def _gp_geometry(
+    s: float, l_x: float, u_z: float, r_x: float, r_z: float, tool: float
+) -> _GroupGeometry:
+    """The GP-family chain of robot-models.md §1.3 (S, L, U, R origins; B and T at R)."""
+    return _GroupGeometry(
+        (
+            ((0.0, 0.0, s), _Z),
+            ((l_x, 0.0, 0.0), _Y),
+            ((0.0, 0.0, u_z), _NY),
+            ((r_x, 0.0, r_z), _NX),
+            ((0.0, 0.0, 0.0), _NY),
+            ((0.0, 0.0, 0.0), _NX),
+        ),
+        Frame((tool, 0.0, 0.0), _GP_TOOL0_RPY),
+        s,
+    )
+
+
+# MH5: the ROS2 origins (robot-models.md §1.4: S z 0.330, L x 0.088, U z 0.310, R z 0.040,
+# B x 0.305, T x 0.080) with the Motoman axis pattern of §1.1. Neither package gives the MH5
+# a tool0 (ROS1 ends at link_t): chosen as the GP family's, on the T axis.
+_MH5_GEOMETRY: Final = _GroupGeometry(
+    (
+        ((0.0, 0.0, 0.330), _Z),
+        ((0.088, 0.0, 0.0), _Y),
+        ((0.0, 0.0, 0.310), _NY),
+        ((0.0, 0.0, 0.040), _NX),
+        ((0.305, 0.0, 0.0), _NY),
+        ((0.080, 0.0, 0.0), _NX),
     ),
-    # Sourced: HC10 on YRC1000 (motoros2#293) and YRC1000micro (motoman#284), §2.
-    controllers=frozenset({"yrc1000", "yrc1000micro"}),
-    pfl=True,  # collaborative: Power and Force Limiting
+    Frame((0.0, 0.0, 0.0), _GP_TOOL0_RPY),
+    0.330,
+)
+
+# SIA20D: robot-models.md §1.5; tool0 = link_t turned −π about z; base at 0.41 m.
+_SIA20D_GEOMETRY: Final = _GroupGeometry(
+    (
+        ((0.0, 0.0, 0.41), _Z),
+        ((0.0, 0.0, 0.0), _Y),
+        ((0.0, 0.0, 0.49), _Z),
+        ((0.0, 0.0, 0.0), _NY),
+        ((0.0, 0.0, 0.420), _NZ),
+        ((0.0, 0.0, 0.0), _NY),
+        ((0.0, 0.0, 0.18), _NZ),
+    ),
+    Frame((0.0, 0.0, 0.0), (0.0, 0.0, -math.pi)),
+    0.41,
+)
+
+# SDA10F torso: torso_link_b1 1.2 m above base_link (robot-models.md §1.6).
+_SDA10F_TORSO_HEIGHT: Final = 1.2
+
+
+def _sda10f_arm_geometry(reflect: float) -> _GroupGeometry:
+    """One SDA10F arm (robot-models.md §1.6; reflect +1 left, −1 right). Its chain hangs off
+    the torso, taken at its zero: the arm groups' kinematics do not follow the B1 axis."""
+    neg = (0.0, 0.0, -reflect)
+    pos = (0.0, 0.0, reflect)
+    first_rpy = (_HALF_PI, 0.0, 0.0) if reflect > 0 else (_HALF_PI, 0.0, -math.pi)
+    up = (_HALF_PI, 0.0, 0.0)
+    down = (-_HALF_PI, 0.0, 0.0)
+    return _GroupGeometry(
+        (
+            ((0.100, 0.265 * reflect, 0.0), neg, first_rpy),
+            ((0.0, 0.0, 0.0), neg, down),
+            ((0.0, 0.360, 0.0), neg, up),
+            ((0.0, 0.0, 0.0), pos, down),
+            ((0.0, 0.360, 0.0), pos, up),
+            ((0.0, 0.0, 0.0), pos, down),
+            ((0.0, 0.155, 0.0), neg, down),
+        ),
+        Frame((0.0, 0.0, 0.0), (0.0, 0.0, math.pi)),
+        # robot-models.md names no `base` frame for the SDA10F: base = base_link (chosen).
+        0.0,
+        Frame((0.0, 0.0, _SDA10F_TORSO_HEIGHT)),
+    )
+
+
+_SDA10F_TORSO_GEOMETRY: Final = _GroupGeometry((((0.0, 0.0, _SDA10F_TORSO_HEIGHT), _Z),), None, 0.0)
+
+
+HC10: Final = _with_geometry(
+    RobotModel(
+        name="hc10",
+        description="Yaskawa HC10 (A0) collaborative robot, 10 kg, 6 axes",
+        groups=(
+            GroupModel(
+                name="R1",
+                kind=GroupKind.ROBOT,
+                axes=_HC10_AXES,
+                moto_slots=_six_axis_slots(),
+                home=(0.0,) * 6,
+                dh=_hc10_dh(0.130),
+            ),
+        ),
+        # Sourced: HC10 on YRC1000 (motoros2#293) and YRC1000micro (motoman#284), §2.
+        controllers=frozenset({"yrc1000", "yrc1000micro"}),
+        pfl=True,  # collaborative: Power and Force Limiting
+    ),
+    _hc10_geometry(0.130),
 )
 
 # HC10DT (A1): the same kinematics, limits and speeds as the HC10 (robot-models.md §1.2);
 # only the flange is longer (tool0 at 0.170 m instead of 0.130 m).
-HC10DT: Final = _single_arm(
-    "hc10dt",
-    "Yaskawa HC10DT (A1) collaborative robot, dust/drip-proof, 10 kg, 6 axes",
-    _HC10_AXES,
-    _hc10_dh(0.170),
-    # Sourced for the HC10 family: YRC1000 and YRC1000micro (§2).
-    frozenset({"yrc1000", "yrc1000micro"}),
-    pfl=True,  # collaborative: Power and Force Limiting
+HC10DT: Final = _with_geometry(
+    _single_arm(
+        "hc10dt",
+        "Yaskawa HC10DT (A1) collaborative robot, dust/drip-proof, 10 kg, 6 axes",
+        _HC10_AXES,
+        _hc10_dh(0.170),
+        # Sourced for the HC10 family: YRC1000 and YRC1000micro (§2).
+        frozenset({"yrc1000", "yrc1000micro"}),
+        pfl=True,  # collaborative: Power and Force Limiting
+    ),
+    _hc10_geometry(0.170),
 )
 
 # GP7 / GP8 / GP12: limits and speeds from robot-models.md §1.3 (datasheets; manuals
 # HW1486547, HW1484060; GP8 L 385°/s from the manual, the ROS1 URDF's 6.7495 rad/s is
 # 386.7°/s). Pulses/degree chosen: whole pulses per tick at the datasheet speed.
-GP7: Final = _single_arm(
-    "gp7",
-    "Yaskawa GP7 industrial robot, 7 kg, 6 axes",
-    (
-        _axis("joint_1_s", -170, 170, 375, 1400),
-        _axis("joint_2_l", -65, 145, 315, 1400),
-        _axis("joint_3_u", -70, 190, 410, 1200),
-        _axis("joint_4_r", -190, 190, 550, 800),
-        _axis("joint_5_b", -135, 135, 550, 800),
-        _axis("joint_6_t", -360, 360, 1000, 480),
+GP7: Final = _with_geometry(
+    _single_arm(
+        "gp7",
+        "Yaskawa GP7 industrial robot, 7 kg, 6 axes",
+        (
+            _axis("joint_1_s", -170, 170, 375, 1400),
+            _axis("joint_2_l", -65, 145, 315, 1400),
+            _axis("joint_3_u", -70, 190, 410, 1200),
+            _axis("joint_4_r", -190, 190, 550, 800),
+            _axis("joint_5_b", -135, 135, 550, 800),
+            _axis("joint_6_t", -360, 360, 1000, 480),
+        ),
+        # OPW geometry of robot-models.md §1.3: c1 0.330, a1 0.040, c2 0.445, a2 0.040,
+        # c3 0.440, c4 0.080.
+        _dh_6axis(0.330, 0.040, 0.445, 0.040, 0.440, 0.080),
+        # Not in the stored sources: the GP7 is sold with the YRC1000micro (and YRC1000).
+        frozenset({"yrc1000micro", "yrc1000"}),
     ),
-    # OPW geometry of robot-models.md §1.3: c1 0.330, a1 0.040, c2 0.445, a2 0.040,
-    # c3 0.440, c4 0.080.
-    _dh_6axis(0.330, 0.040, 0.445, 0.040, 0.440, 0.080),
-    # Not in the stored sources: the GP7 is sold with the YRC1000micro (and YRC1000).
-    frozenset({"yrc1000micro", "yrc1000"}),
+    _gp_geometry(0.330, 0.040, 0.445, 0.440, 0.040, 0.080),
 )
 
-GP8: Final = _single_arm(
-    "gp8",
-    "Yaskawa GP8 industrial robot, 8 kg, 6 axes",
-    (
-        _axis("joint_1_s", -170, 170, 455, 1150),
-        _axis("joint_2_l", -65, 145, 385, 1150),
-        _axis("joint_3_u", -70, 190, 520, 1000),
-        _axis("joint_4_r", -190, 190, 550, 800),
-        _axis("joint_5_b", -135, 135, 550, 800),
-        _axis("joint_6_t", -360, 360, 1000, 480),
+GP8: Final = _with_geometry(
+    _single_arm(
+        "gp8",
+        "Yaskawa GP8 industrial robot, 8 kg, 6 axes",
+        (
+            _axis("joint_1_s", -170, 170, 455, 1150),
+            _axis("joint_2_l", -65, 145, 385, 1150),
+            _axis("joint_3_u", -70, 190, 520, 1000),
+            _axis("joint_4_r", -190, 190, 550, 800),
+            _axis("joint_5_b", -135, 135, 550, 800),
+            _axis("joint_6_t", -360, 360, 1000, 480),
+        ),
+        _dh_6axis(0.330, 0.040, 0.345, 0.040, 0.340, 0.080),
+        # Not in the stored sources: the GP8 is sold with the YRC1000micro (and YRC1000).
+        frozenset({"yrc1000micro", "yrc1000"}),
     ),
-    _dh_6axis(0.330, 0.040, 0.345, 0.040, 0.340, 0.080),
-    # Not in the stored sources: the GP8 is sold with the YRC1000micro (and YRC1000).
-    frozenset({"yrc1000micro", "yrc1000"}),
+    _gp_geometry(0.330, 0.040, 0.345, 0.340, 0.040, 0.080),
 )
 
-GP12: Final = _single_arm(
-    "gp12",
-    "Yaskawa GP12 industrial robot, 12 kg, 6 axes",
-    (
-        _axis("joint_1_s", -170, 170, 260, 1600),
-        _axis("joint_2_l", -90, 155, 230, 1700),
-        _axis("joint_3_u", -85, 150, 260, 1450),
-        _axis("joint_4_r", -200, 200, 470, 975),
-        _axis("joint_5_b", -150, 150, 470, 975),
-        _axis("joint_6_t", -455, 455, 700, 650),
+GP12: Final = _with_geometry(
+    _single_arm(
+        "gp12",
+        "Yaskawa GP12 industrial robot, 12 kg, 6 axes",
+        (
+            _axis("joint_1_s", -170, 170, 260, 1600),
+            _axis("joint_2_l", -90, 155, 230, 1700),
+            _axis("joint_3_u", -85, 150, 260, 1450),
+            _axis("joint_4_r", -200, 200, 470, 975),
+            _axis("joint_5_b", -150, 150, 470, 975),
+            _axis("joint_6_t", -455, 455, 700, 650),
+        ),
+        _dh_6axis(0.450, 0.155, 0.614, 0.200, 0.640, 0.100),
+        # Not in the stored sources: the GP12 is a YRC1000 robot.
+        frozenset({"yrc1000"}),
     ),
-    _dh_6axis(0.450, 0.155, 0.614, 0.200, 0.640, 0.100),
-    # Not in the stored sources: the GP12 is a YRC1000 robot.
-    frozenset({"yrc1000"}),
+    _gp_geometry(0.450, 0.155, 0.614, 0.640, 0.200, 0.100),
 )
 
 # MH5: joint names of the ROS1 package (older joint_s naming); limits and speeds of the
 # ROS2 package, which rebuilt them from the Yaskawa manuals (robot-models.md §1.4). The
 # ROS1 URDF's 2.96–6.97 rad/s come from an old datasheet and are half the manual's.
-MH5: Final = _single_arm(
-    "mh5",
-    "Yaskawa MH5 industrial robot, 5 kg, 6 axes",
-    (
-        _axis("joint_s", -170, 170, 376, 1250),
-        _axis("joint_l", -65, 150, 350, 1250),
-        _axis("joint_u", -70, 190, 400, 1100),
-        _axis("joint_r", -190, 190, 450, 700),
-        _axis("joint_b", -135, 135, 450, 700),
-        _axis("joint_t", -360, 360, 720, 475),
+MH5: Final = _with_geometry(
+    _single_arm(
+        "mh5",
+        "Yaskawa MH5 industrial robot, 5 kg, 6 axes",
+        (
+            _axis("joint_s", -170, 170, 376, 1250),
+            _axis("joint_l", -65, 150, 350, 1250),
+            _axis("joint_u", -70, 190, 400, 1100),
+            _axis("joint_r", -190, 190, 450, 700),
+            _axis("joint_b", -135, 135, 450, 700),
+            _axis("joint_t", -360, 360, 720, 475),
+        ),
+        # ROS2 origins: S z 0.330, L x 0.088, U z 0.310, R z 0.040, B x 0.305, T x 0.080.
+        _dh_6axis(0.330, 0.088, 0.310, 0.040, 0.305, 0.080),
+        # Partly sourced: the ROS1 package's U limits were measured on an MH5F, the FS100
+        # variant (§1.4); DX100 and DX200 are the MH5's controllers of its time (not sourced).
+        frozenset({"dx100", "dx200", "fs100"}),
     ),
-    # ROS2 origins: S z 0.330, L x 0.088, U z 0.310, R z 0.040, B x 0.305, T x 0.080.
-    _dh_6axis(0.330, 0.088, 0.310, 0.040, 0.305, 0.080),
-    # Partly sourced: the ROS1 package's U limits were measured on an MH5F, the FS100
-    # variant (§1.4); DX100 and DX200 are the MH5's controllers of its time (not sourced).
-    frozenset({"dx100", "dx200", "fs100"}),
+    _MH5_GEOMETRY,
 )
 
 # SIA20D: 7 axes, ROS order S-L-E-U-R-B-T, limits and speeds from robot-models.md §1.5
 # (manual HW0485536). Pulses/degree chosen.
-SIA20D: Final = _single_arm(
-    "sia20d",
-    "Yaskawa SIA20D 7-axis robot, 20 kg",
-    (
-        _axis("joint_s", -180, 180, 130, 1525),
-        _axis("joint_l", -110, 110, 130, 1525),
-        _axis("joint_e", -170, 170, 170, 1225),
-        _axis("joint_u", -130, 130, 170, 1225),
-        _axis("joint_r", -180, 180, 200, 900),
-        _axis("joint_b", -110, 110, 200, 900),
-        _axis("joint_t", -180, 180, 400, 600),
+SIA20D: Final = _with_geometry(
+    _single_arm(
+        "sia20d",
+        "Yaskawa SIA20D 7-axis robot, 20 kg",
+        (
+            _axis("joint_s", -180, 180, 130, 1525),
+            _axis("joint_l", -110, 110, 130, 1525),
+            _axis("joint_e", -170, 170, 170, 1225),
+            _axis("joint_u", -130, 130, 170, 1225),
+            _axis("joint_r", -180, 180, 200, 900),
+            _axis("joint_b", -110, 110, 200, 900),
+            _axis("joint_t", -180, 180, 400, 600),
+        ),
+        _dh_7axis(0.41, 0.49, 0.42, 0.18),
+        # Not in the stored sources: the "D" suffix is the DX100 generation (SIA20F: FS100).
+        frozenset({"dx100"}),
     ),
-    _dh_7axis(0.41, 0.49, 0.42, 0.18),
-    # Not in the stored sources: the "D" suffix is the DX100 generation (SIA20F: FS100).
-    frozenset({"dx100"}),
+    _SIA20D_GEOMETRY,
 )
 
 
@@ -385,32 +584,38 @@ def _torso(name: str) -> GroupModel:
 
 # SDA10F: dual arm + torso in four groups, R1 left arm, R2 right arm, B1/B2 the torso
 # (robot-models.md §1.6; Yaskawa says B1 and B2 must get the same data, motoman#343).
-SDA10F: Final = RobotModel(
-    name="sda10f",
-    description="Yaskawa SDA10F dual-arm robot: two 7-axis arms (R1, R2) and a torso (B1, B2)",
-    groups=(
-        GroupModel(
-            "R1",
-            GroupKind.ROBOT,
-            _sda10f_arm("left"),
-            SEVEN_AXIS_SLOTS,
-            (0.0,) * 7,
-            _dh_7axis(0.0, 0.36, 0.36, 0.155),
+SDA10F: Final = _with_geometry(
+    RobotModel(
+        name="sda10f",
+        description="Yaskawa SDA10F dual-arm robot: two 7-axis arms (R1, R2) and a torso (B1, B2)",
+        groups=(
+            GroupModel(
+                "R1",
+                GroupKind.ROBOT,
+                _sda10f_arm("left"),
+                SEVEN_AXIS_SLOTS,
+                (0.0,) * 7,
+                _dh_7axis(0.0, 0.36, 0.36, 0.155),
+            ),
+            GroupModel(
+                "R2",
+                GroupKind.ROBOT,
+                _sda10f_arm("right"),
+                SEVEN_AXIS_SLOTS,
+                (0.0,) * 7,
+                _dh_7axis(0.0, 0.36, 0.36, 0.155),
+            ),
+            _torso("torso_joint_b1"),
+            _torso("torso_joint_b2"),
         ),
-        GroupModel(
-            "R2",
-            GroupKind.ROBOT,
-            _sda10f_arm("right"),
-            SEVEN_AXIS_SLOTS,
-            (0.0,) * 7,
-            _dh_7axis(0.0, 0.36, 0.36, 0.155),
-        ),
-        _torso("torso_joint_b1"),
-        _torso("torso_joint_b2"),
+        # Sourced: model YR-SDA010F-A00 is an FS100 robot (§1.6). MotoROS's SDA job folder also
+        # covers DX200 and YRC1000 SDA cells, but not necessarily this model.
+        controllers=frozenset({"fs100"}),
     ),
-    # Sourced: model YR-SDA010F-A00 is an FS100 robot (§1.6). MotoROS's SDA job folder also
-    # covers DX200 and YRC1000 SDA cells, but not necessarily this model.
-    controllers=frozenset({"fs100"}),
+    _sda10f_arm_geometry(1.0),
+    _sda10f_arm_geometry(-1.0),
+    _SDA10F_TORSO_GEOMETRY,
+    _SDA10F_TORSO_GEOMETRY,
 )
 
 ROBOTS: Final[dict[str, RobotModel]] = {

@@ -26,7 +26,7 @@ from pydantic import BaseModel, ConfigDict, Field
 from starlette.exceptions import HTTPException as StarletteHTTPException
 
 from pymotoros import __version__
-from pymotoros.controller.api import ControllerSnapshot, PendantMode
+from pymotoros.controller.api import ControllerSnapshot, PendantMode, TcpSnapshot
 from pymotoros.runtime.target import SimulatedController
 from pymotoros.runtime.ticker import TickStats
 
@@ -86,6 +86,20 @@ class AlarmModel(BaseModel):
     text: str
 
 
+class TcpSpeedModel(BaseModel):
+    command: float
+    feedback: float
+
+
+class TcpModel(BaseModel):
+    command: list[float] = Field(
+        description="TCP of the active tool in base coordinates: x, y, z (m), rx, ry, rz "
+        "(rad, R = Rz·Ry·Rx), from the command"
+    )
+    feedback: list[float] = Field(description="the same from the encoder feedback")
+    speed_mm_s: TcpSpeedModel
+
+
 class GroupModel(BaseModel):
     name: str
     joint_names: list[str]
@@ -94,6 +108,7 @@ class GroupModel(BaseModel):
     command_pulse: list[int]
     queue: int = Field(description="increments queued for the group")
     tool: int
+    tcp: TcpModel | None = Field(default=None, description="null: no kinematic chain")
 
 
 class LatenessModel(BaseModel):
@@ -131,6 +146,16 @@ class IoValueModel(BaseModel):
     result_code: int
 
 
+def _tcp_model(tcp: TcpSnapshot | None) -> TcpModel | None:
+    if tcp is None:
+        return None
+    return TcpModel(
+        command=list(tcp.command),
+        feedback=list(tcp.feedback),
+        speed_mm_s=TcpSpeedModel(command=tcp.command_speed_mm_s, feedback=tcp.feedback_speed_mm_s),
+    )
+
+
 def state_model(snapshot: ControllerSnapshot, tick: TickStats) -> StateModel:
     """The ``GET /api/state`` document for a controller snapshot and the loop's statistics."""
     return StateModel(
@@ -150,6 +175,7 @@ def state_model(snapshot: ControllerSnapshot, tick: TickStats) -> StateModel:
                 command_pulse=list(g.command_pulse),
                 queue=g.queue,
                 tool=g.tool,
+                tcp=_tcp_model(g.tcp),
             )
             for g in snapshot.groups
         ],
