@@ -29,6 +29,7 @@ from typing import Any, Concatenate, Final, ParamSpec, Self, TypeVar
 from pymotoros.client.connection import Ports
 from pymotoros.client.robot import RobotClient
 from pymotoros.client.state import DEFAULT_STATE_TIMEOUT_S, JointState, RobotState, Status
+from pymotoros.client.tools import ToolTable
 from pymotoros.models import ControllerModel, RobotModel
 from pymotoros.protocol.constants import ByteOrder
 
@@ -172,6 +173,11 @@ class SyncRobotClient:
     @property
     def connect_timeout_s(self) -> float:
         return self.client.connect_timeout_s
+
+    @property
+    def tools(self) -> ToolTable:
+        """The tool table ``tcp_pose`` uses (a plain object: safe from this thread)."""
+        return self.client.tools
 
     plan = _forward_plain(RobotClient.plan)
     limits = _forward_plain(RobotClient.limits)
