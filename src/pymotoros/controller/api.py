@@ -169,6 +169,13 @@ class ControllerSnapshot:
     latest operator action)."""
     groups: tuple[GroupSnapshot, ...]
     errors: tuple[AlarmInfo, ...] = field(default=())
+    fsu_joint_speed_pct: int | None = None
+    """The FSU joint-speed limit in force (None: off)."""
+    fsu_tcp_speed_mm_s: float | None = None
+    """The FSU TCP-speed limit in force (None: off)."""
+    pfl: str = "off"
+    """The PFL function: "off" (no PFL in this cell), "idle", "stop" (81702 on) or
+    "escape" (81703 on, retreating after a clamping)."""
 
 
 class MotoRosController(Protocol):
@@ -284,4 +291,24 @@ class FaultInjection(Protocol):
 
     def set_io_api_failure(self, *, reads: bool = False, writes: bool = False) -> None:
         """Make client IO reads (1004) and/or writes (1005) fail."""
+        ...
+
+
+class SafetyPanel(Protocol):
+    """The cell's safety functions as the operator drives them (HTTP ``/api/pfl``,
+    ``/api/fsu``). ``VirtualController`` implements it; refusals raise ``ValueError``
+    saying why."""
+
+    def pfl_event(self, event: str, *, retreat_ms: int = ..., stop_ms: int = ...) -> None:
+        """A PFL "contact" or "clamping" (retreating ``retreat_ms``) now."""
+        ...
+
+    def set_fsu(
+        self,
+        *,
+        joint_speed_pct: int | None = None,
+        tcp_speed_mm_s: float | None = None,
+        off: bool = False,
+    ) -> None:
+        """Switch the FSU speed limits at run time."""
         ...

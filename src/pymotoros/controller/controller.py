@@ -52,10 +52,12 @@ from pymotoros.controller.motoros import MotoRos
 from pymotoros.controller.processes import ControllerClock, Scheduler
 from pymotoros.controller.queues import MotionQueues
 from pymotoros.controller.readiness import Readiness
+from pymotoros.controller.safety import DEFAULT_RETREAT_MS, PFL_STOP_MS, SafetyUnit
 from pymotoros.controller.servo import IN_MOTION_PULSES, ServoGroup
 from pymotoros.controller.skillsnd import SkillListeners
 from pymotoros.controller.trajectory import DhTable, TrajectoryPoints
 from pymotoros.controller.units import RosConverter
+from pymotoros.models import robot_model
 from pymotoros.models.controllers import M_REGISTER_BASE
 from pymotoros.motion import GroupAxes, GroupInterpolator, to_pulses
 from pymotoros.protocol.constants import (
@@ -81,6 +83,17 @@ _FORCED_ALARM_CODE: Final = {
 }
 
 SnapshotObserver = Callable[[ControllerSnapshot], None]
+
+
+def _why_no_pfl(cell: CellConfig) -> str:
+    """Why a cell has no PFL function ("" when it has one)."""
+    if cell.pfl:
+        return ""
+    if not cell.controller.pfl_signals:
+        return f"the {cell.controller.type.value} has no PFL (only YRC1000 / YRC1000micro)"
+    if not any(robot_model(r).pfl for r in cell.robots):
+        return f"{', '.join(cell.robots)} is not an HC (collaborative) robot"
+    return "the cell's PFL option is off (controller.pfl = false)"
 
 
 def _pad(values: Sequence[float]) -> tuple[float, ...]:
@@ -134,6 +147,15 @@ class VirtualController:
             )
             for g, axes in enumerate(self._axes)
         )
+        self._safety = safety = SafetyUnit(
+            self._io,
+            self._axes,
+            self._servos,
+            period_ms=ctrl.interpolation_period_ms,
+            pfl_enabled=cell.pfl,
+            pfl_why_disabled=_why_no_pfl(cell),
+            fsu_boot_pct=cell.servo.fsu_speed_limit_pct,
+        )
         # MotoROS (see motoros.py for the map of its parts)
         self._queues = queues = MotionQueues(self._interps)
         ctx = MotoRosContext(
@@ -146,6 +168,7 @@ class VirtualController:
             axes=self._axes,
             interpolators=self._interps,
             servos=self._servos,
+            increment_clip=safety.fsu.limits,
         )
         self._readiness = readiness = Readiness(ctx)
         self._commands = commands = MotionCommands(ctx, readiness)
@@ -189,6 +212,7 @@ class VirtualController:
         timer = machine.next_timer_ms
         if timer is not None and now >= timer:
             machine.advance(now)
+        safety_moved = self._safety.tick(now)
         runner = self._runner
         if (now >= runner.wake_ms or self._io.changes != runner.seen_changes) and runner.step(now):
             machine.fire(Event.END_JOB, now)
@@ -198,7 +222,7 @@ class VirtualController:
             if self._eco_idle_ms is not None:
                 self._check_eco_idle(now, self._eco_idle_ms)
         inc_move = self._inc_move
-        if not inc_move.inc_move_tick():
+        if not inc_move.inc_move_tick() and not safety_moved:
             for servo in self._servos:
                 servo.idle()
         inc_move.fill_tick()
@@ -374,6 +398,9 @@ class VirtualController:
             motion_ready=self._readiness.outlook(),
             groups=tuple(groups),
             errors=tuple(e.info for e in s.errors),
+            fsu_joint_speed_pct=self._safety.fsu.active.joint_speed_pct,
+            fsu_tcp_speed_mm_s=self._safety.fsu.active.tcp_speed_mm_s,
+            pfl=self._safety.pfl.status.phase if self._safety.pfl.enabled else "off",
         )
 
     @property
@@ -512,6 +539,37 @@ class VirtualController:
         for cls in AlarmClass:
             handlers[cls.address] = alarm_output(cls)
         return handlers
+
+    # ================================================================== safety functions
+
+    @property
+    def safety(self) -> SafetyUnit:
+        """The cell's safety functions (PFL, FSU), for the control API and tests."""
+        return self._safety
+
+    def pfl_event(
+        self, event: str, *, retreat_ms: int = DEFAULT_RETREAT_MS, stop_ms: int = PFL_STOP_MS
+    ) -> None:
+        """A PFL contact or clamping now (ValueError when the cell cannot have one)."""
+        self._safety.pfl.event(
+            event,
+            self._clock.time_ms,
+            moving=self.in_motion(),
+            stop_ms=stop_ms,
+            retreat_ms=retreat_ms if event == "clamping" else 0,
+        )
+
+    def set_fsu(
+        self,
+        *,
+        joint_speed_pct: int | None = None,
+        tcp_speed_mm_s: float | None = None,
+        off: bool = False,
+    ) -> None:
+        """Switch the FSU speed limits at run time (ValueError for a bad request)."""
+        self._safety.fsu.set(
+            joint_speed_pct=joint_speed_pct, tcp_speed_mm_s=tcp_speed_mm_s, off=off
+        )
 
     def _force_error(self, on: bool) -> None:
         if on:

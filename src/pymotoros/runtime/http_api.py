@@ -77,6 +77,30 @@ class IoBody(BaseModel):
     value: int = Field(ge=0, le=0xFFFF, description="0/1 for a bit, 0..65535 for an M-register")
 
 
+class PflBody(BaseModel):
+    model_config = _STRICT
+    event: Literal["contact", "clamping"] = Field(
+        description="contact: PFL stop; clamping: PFL stop, then retreat with PFL escape"
+    )
+    retreat_ms: int | None = Field(
+        default=None, ge=1, description="clamping only: how much of the last motion to retreat"
+    )
+    stop_ms: int | None = Field(
+        default=None, ge=0, le=60_000, description="how long PFL stop stays on (default 500)"
+    )
+
+
+class FsuBody(BaseModel):
+    model_config = _STRICT
+    joint_speed_pct: int | None = Field(
+        default=None, ge=1, le=100, description="share of each axis's maximum speed"
+    )
+    tcp_speed_mm_s: float | None = Field(
+        default=None, gt=0, description="TCP speed limit (needs the kinematics model)"
+    )
+    off: bool = Field(default=False, description="switch every FSU speed limit off")
+
+
 # --------------------------------------------------------------------------- answers
 
 
@@ -109,6 +133,11 @@ class TickModel(BaseModel):
     lateness_ms: LatenessModel
 
 
+class FsuModel(BaseModel):
+    joint_speed_pct: int | None
+    tcp_speed_mm_s: float | None
+
+
 class StateModel(BaseModel):
     mode: Literal["play", "teach"]
     remote: bool
@@ -119,6 +148,13 @@ class StateModel(BaseModel):
     motion_ready: bool
     groups: list[GroupModel]
     tick: TickModel
+    fsu: FsuModel = Field(
+        default_factory=lambda: FsuModel(joint_speed_pct=None, tcp_speed_mm_s=None),
+        description="the FSU speed limits in force (null: off)",
+    )
+    pfl: Literal["off", "idle", "stop", "escape"] = Field(
+        default="off", description="the PFL function: off (not in this cell), idle, stop, escape"
+    )
 
 
 class ErrorModel(BaseModel):
@@ -153,6 +189,11 @@ def state_model(snapshot: ControllerSnapshot, tick: TickStats) -> StateModel:
             )
             for g in snapshot.groups
         ],
+        fsu=FsuModel(
+            joint_speed_pct=snapshot.fsu_joint_speed_pct,
+            tcp_speed_mm_s=snapshot.fsu_tcp_speed_mm_s,
+        ),
+        pfl=snapshot.pfl,  # type: ignore[arg-type]
         tick=TickModel(
             period_ms=tick.period_ms,
             count=tick.count,
@@ -317,6 +358,29 @@ def create_http_app(
         """Fault injection: make client IO reads (1004) and/or writes (1005) fail."""
         logger.info("operator: IO API failure reads=%s writes=%s", body.reads, body.writes)
         controller.set_io_api_failure(reads=body.reads, writes=body.writes)
+        return state()
+
+    @app.post("/api/pfl", response_model=StateModel, responses=_ERRORS, tags=["safety"])
+    async def pfl(body: PflBody) -> StateModel:
+        """A PFL contact (PFL stop) or clamping (stop, then retreat with PFL escape)."""
+        logger.info("operator: PFL %s", body.event)
+        kwargs: dict[str, int] = {}
+        if body.retreat_ms is not None:
+            if body.event != "clamping":
+                raise ValueError("retreat_ms applies to a clamping only")
+            kwargs["retreat_ms"] = body.retreat_ms
+        if body.stop_ms is not None:
+            kwargs["stop_ms"] = body.stop_ms
+        controller.pfl_event(body.event, **kwargs)
+        return state()
+
+    @app.post("/api/fsu", response_model=StateModel, responses=_ERRORS, tags=["safety"])
+    async def fsu(body: FsuBody) -> StateModel:
+        """Switch the FSU speed limits at run time (the cell file's value is the boot value)."""
+        logger.info("operator: FSU %s", body.model_dump(exclude_defaults=True))
+        controller.set_fsu(
+            joint_speed_pct=body.joint_speed_pct, tcp_speed_mm_s=body.tcp_speed_mm_s, off=body.off
+        )
         return state()
 
     @app.post("/api/tick/reset", response_model=StateModel, tags=["state"])
