@@ -33,7 +33,7 @@ async def test_state_document_has_exactly_the_contract_keys(api: httpx.AsyncClie
     doc = r.json()
     assert set(doc) == {
         "mode", "remote", "servo", "estop", "hold", "alarms", "motion_ready", "groups", "tick",
-        "fsu", "pfl",
+        "fsu", "pfl", "motoros", "ports",
     }  # fmt: skip
     assert doc["mode"] == "play"
     assert set(doc["groups"][0]) == {

@@ -32,9 +32,15 @@ logger = logging.getLogger(__name__)
 _PORT = click.IntRange(0, 65535)
 
 
-def ready_line(motion: int, state: int, io: int, http: int | None) -> str:
-    """The line ``pymotoros sim`` prints when it is ready (an external contract)."""
-    return f"pymotoros sim ready motion={motion} state={state} io={io} http={http}"
+def ready_line(motion: int | None, state: int | None, io: int | None, http: int | None) -> str:
+    """The line ``pymotoros sim`` prints when it is ready (an external contract); a
+    MotoROS port that is not listening yet (start-up checks) is printed as ``-``."""
+
+    def show(port: int | None) -> str:
+        return "-" if port is None else str(port)
+
+    shown = f"motion={show(motion)} state={show(state)} io={show(io)}"
+    return f"pymotoros sim ready {shown} http={http}"
 
 
 async def run_simulator(app: SimulatorApp) -> None:
@@ -53,7 +59,8 @@ async def run_simulator(app: SimulatorApp) -> None:
     try:
         async with app:
             ports = app.ports
-            sys.stdout.write(ready_line(ports.motion, ports.state, ports.io, ports.http) + "\n")
+            motion, state, io = app.listening_ports()
+            sys.stdout.write(ready_line(motion, state, io, ports.http) + "\n")
             sys.stdout.flush()
             await app.wait_stopped()
     finally:

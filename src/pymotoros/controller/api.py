@@ -176,6 +176,8 @@ class ControllerSnapshot:
     pfl: str = "off"
     """The PFL function: "off" (no PFL in this cell), "idle", "stop" (81702 on) or
     "escape" (81703 on, retreating after a clamping)."""
+    motoros: str = "running"
+    """MotoROS's start-up: "running", what it waits for, or why it halted (§2.1, §8)."""
 
 
 class MotoRosController(Protocol):
@@ -292,6 +294,13 @@ class FaultInjection(Protocol):
     def set_io_api_failure(self, *, reads: bool = False, writes: bool = False) -> None:
         """Make client IO reads (1004) and/or writes (1005) fail."""
         ...
+
+
+class StartupView(Protocol):
+    """Whether MotoROS passed its start-up checks (the runtime starts its servers then)."""
+
+    @property
+    def motoros_started(self) -> bool: ...
 
 
 class SafetyPanel(Protocol):

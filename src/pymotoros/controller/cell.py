@@ -23,6 +23,7 @@ from typing import Final
 from pymotoros.controller.api import AlarmInfo, PendantMode
 from pymotoros.controller.inform import BUILTIN_VARIANTS, JobRunner, load_jobs
 from pymotoros.controller.io_image import IoImage
+from pymotoros.controller.safety.startup import StartupConfig, check_parameters
 from pymotoros.errors import ConfigError, JobError
 from pymotoros.models import (
     DEFAULT_CONTROLLER,
@@ -111,6 +112,9 @@ class CellConfig:
     """A built-in INIT_ROS variant name, "auto", or job files/directories."""
     warnings: tuple[str, ...] = ()
     source: str = "<default cell>"
+    startup: StartupConfig = field(default_factory=StartupConfig)
+    """What MotoROS's start-up checks read: software version, conveyor tracking, set-up
+    parameters (``[controller]``, ``[controller.parameters]``)."""
 
     @property
     def job_variant(self) -> str | None:
@@ -327,6 +331,7 @@ def cell_from_dict(
         ),
     )
     pfl_value = ctrl_t.get("pfl")
+    startup = _startup(ctrl_t)
     ctrl_t.finish()
 
     parts: list[tuple[str, GroupModel]] = []
@@ -410,6 +415,32 @@ def cell_from_dict(
         jobs=jobs,
         warnings=tuple(warnings),
         source=source,
+        startup=startup,
+    )
+
+
+def _startup(ctrl_t: _Table) -> StartupConfig:
+    software = ctrl_t.get("software")
+    if software is not None and not isinstance(software, str):
+        raise ctrl_t.error(
+            "software", f"must be a string such as 'YAS2.80.00-00', not {software!r}"
+        )
+    params_t = ctrl_t.table("parameters")
+    problems = check_parameters(params_t.data)
+    if problems:
+        raise params_t.error(problems[0].split(":", 1)[0], problems[0].split(":", 1)[1].strip())
+    code = ctrl_t.get("validation_code")
+    if code is not None and (
+        not isinstance(code, int) or isinstance(code, bool) or not (code in (9, 10) or code > 11)
+    ):
+        raise ctrl_t.error(
+            "validation_code", f"must be 9, 10 or an integer above 11 (e.g. 102), not {code!r}"
+        )
+    return StartupConfig(
+        software=software,
+        conveyor_tracking=ctrl_t.boolean("conveyor_tracking", False),
+        parameters={k: int(v) for k, v in params_t.data.items() if isinstance(v, int)},
+        validation_code=code,
     )
 
 

@@ -53,6 +53,7 @@ from pymotoros.controller.processes import ControllerClock, Scheduler
 from pymotoros.controller.queues import MotionQueues
 from pymotoros.controller.readiness import Readiness
 from pymotoros.controller.safety import DEFAULT_RETREAT_MS, PFL_STOP_MS, SafetyUnit
+from pymotoros.controller.safety.startup import MotoRosStartup, setup_validation
 from pymotoros.controller.servo import IN_MOTION_PULSES, ServoGroup
 from pymotoros.controller.skillsnd import SkillListeners
 from pymotoros.controller.trajectory import DhTable, TrajectoryPoints
@@ -182,7 +183,14 @@ class VirtualController:
         self._power_losses = 0
         self._eco_idle_ms = None if cell.servo.eco_idle_s is None else cell.servo.eco_idle_s * 1000
         self._machine.add_observer(self._on_operator_change)
-        readiness.boot()
+        readiness.init_read()
+        self._startup = MotoRosStartup(
+            setup_validation(ctrl, any(robot_model(r).pfl for r in cell.robots), cell.startup),
+            alarms_on=lambda: any(self._io.get(a) for a in signals.ALARM_BITS),
+            raise_alarm=self.raise_alarm,
+            boot=readiness.init_done,
+        )
+        self._starting = not self._startup.settled
 
     # ================================================================== time
 
@@ -212,6 +220,9 @@ class VirtualController:
         timer = machine.next_timer_ms
         if timer is not None and now >= timer:
             machine.advance(now)
+        if self._starting:
+            self._startup.tick(now)
+            self._starting = not self._startup.settled
         safety_moved = self._safety.tick(now)
         runner = self._runner
         if (now >= runner.wake_ms or self._io.changes != runner.seen_changes) and runner.step(now):
@@ -401,6 +412,7 @@ class VirtualController:
             fsu_joint_speed_pct=self._safety.fsu.active.joint_speed_pct,
             fsu_tcp_speed_mm_s=self._safety.fsu.active.tcp_speed_mm_s,
             pfl=self._safety.pfl.status.phase if self._safety.pfl.enabled else "off",
+            motoros=self._startup.phase,
         )
 
     @property
@@ -541,6 +553,16 @@ class VirtualController:
         return handlers
 
     # ================================================================== safety functions
+
+    @property
+    def motoros_started(self) -> bool:
+        """MotoROS passed its start-up checks: INIT_DONE is on, its servers may listen."""
+        return self._startup.started
+
+    @property
+    def motoros_phase(self) -> str:
+        """Where MotoROS's start-up is: "running", waiting (for what), or halted (why)."""
+        return self._startup.phase
 
     @property
     def safety(self) -> SafetyUnit:

@@ -138,6 +138,12 @@ class FsuModel(BaseModel):
     tcp_speed_mm_s: float | None
 
 
+class PortsModel(BaseModel):
+    motion: int | None
+    state: int | None
+    io: int | None
+
+
 class StateModel(BaseModel):
     mode: Literal["play", "teach"]
     remote: bool
@@ -155,6 +161,14 @@ class StateModel(BaseModel):
     pfl: Literal["off", "idle", "stop", "escape"] = Field(
         default="off", description="the PFL function: off (not in this cell), idle, stop, escape"
     )
+    motoros: str = Field(
+        default="running",
+        description="MotoROS's start-up: running, what it waits for, or why it halted",
+    )
+    ports: PortsModel = Field(
+        default_factory=lambda: PortsModel(motion=None, state=None, io=None),
+        description="MotoROS's ports that accept connections (null: not listening)",
+    )
 
 
 class ErrorModel(BaseModel):
@@ -167,7 +181,11 @@ class IoValueModel(BaseModel):
     result_code: int
 
 
-def state_model(snapshot: ControllerSnapshot, tick: TickStats) -> StateModel:
+def state_model(
+    snapshot: ControllerSnapshot,
+    tick: TickStats,
+    ports: tuple[int | None, int | None, int | None] = (None, None, None),
+) -> StateModel:
     """The ``GET /api/state`` document for a controller snapshot and the loop's statistics."""
     return StateModel(
         mode="play" if snapshot.mode is PendantMode.PLAY else "teach",
@@ -194,6 +212,8 @@ def state_model(snapshot: ControllerSnapshot, tick: TickStats) -> StateModel:
             tcp_speed_mm_s=snapshot.fsu_tcp_speed_mm_s,
         ),
         pfl=snapshot.pfl,  # type: ignore[arg-type]
+        motoros=snapshot.motoros,
+        ports=PortsModel(motion=ports[0], state=ports[1], io=ports[2]),
         tick=TickModel(
             period_ms=tick.period_ms,
             count=tick.count,
@@ -268,6 +288,8 @@ def create_http_app(
     controller: SimulatedController,
     tick_stats: Callable[[], TickStats],
     reset_tick_stats: Callable[[], None] | None = None,
+    *,
+    ports: Callable[[], tuple[int | None, int | None, int | None]] | None = None,
 ) -> FastAPI:
     """The control API of one simulated controller."""
     app = FastAPI(
@@ -283,7 +305,8 @@ def create_http_app(
     app.add_exception_handler(ValueError, _value_error)
 
     def state() -> StateModel:
-        return state_model(controller.snapshot(), tick_stats())
+        listening = ports() if ports is not None else (None, None, None)
+        return state_model(controller.snapshot(), tick_stats(), listening)
 
     @app.get("/api/state", response_model=StateModel, tags=["state"])
     async def get_state() -> StateModel:

@@ -59,6 +59,22 @@ def bind_socket(host: str, port: int) -> socket.socket:
     return sock
 
 
+def bind_unlistened(host: str, port: int) -> socket.socket:
+    """A TCP socket bound to ``host:port`` but not listening: connections are refused
+    until a server starts on it (MotoROS before its start-up checks pass)."""
+    family = socket.AF_INET6 if ":" in host else socket.AF_INET
+    sock = socket.socket(family, socket.SOCK_STREAM)
+    try:
+        if hasattr(socket, "SO_REUSEADDR"):
+            sock.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
+        sock.bind((host, port))
+    except BaseException:
+        sock.close()
+        raise
+    sock.setblocking(False)
+    return sock
+
+
 class Connection:
     """One accepted client."""
 
