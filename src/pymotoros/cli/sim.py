@@ -117,6 +117,14 @@ def _cell(
     metavar="CELL.toml",
     help="Cell file (controller, robots, tools, boot state); replaces --controller/--robot.",
 )
+@click.option(
+    "--scenario",
+    "scenario_path",
+    type=click.Path(exists=True, dir_okay=False, path_type=Path),
+    default=None,
+    metavar="FILE.toml",
+    help="Fault scenario: timed [[events]] (E-stop, PFL, FSU, alarms ...), see docs/sim.md.",
+)
 @click.pass_context
 def sim(
     ctx: click.Context,
@@ -128,6 +136,7 @@ def sim(
     controller_name: str,
     robot_name: str,
     config_path: Path | None,
+    scenario_path: Path | None,
 ) -> None:
     """Run the virtual controller (MotoROS on 50240/50241/50242, control API on --http-port).
 
@@ -136,6 +145,10 @@ def sim(
     try:
         cell = _cell(ctx, controller_name, robot_name, config_path)
         controller = VirtualController(cell)
+        if scenario_path is not None:
+            from pymotoros.controller.scenario import load_scenario
+
+            controller.load_scenario(load_scenario(scenario_path))
     except ConfigError as exc:
         raise click.UsageError(str(exc)) from exc
     order = cell.controller.byte_order  # FS100 speaks big-endian (reference §1.1)

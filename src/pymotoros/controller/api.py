@@ -17,9 +17,12 @@ from __future__ import annotations
 import enum
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
-from typing import Protocol
+from typing import TYPE_CHECKING, Protocol
 
 from pymotoros.protocol.constants import IoResultCode, ResultCode
+
+if TYPE_CHECKING:
+    from pymotoros.controller.scenario import Scenario
 
 
 @dataclass(frozen=True, slots=True)
@@ -141,6 +144,16 @@ class AlarmInfo:
 
 
 @dataclass(frozen=True, slots=True)
+class FiredEventInfo:
+    """A scenario event that fired: seconds since boot, action, its parameters, refusal."""
+
+    t: float
+    action: str
+    params: tuple[tuple[str, object], ...]
+    error: str = ""
+
+
+@dataclass(frozen=True, slots=True)
 class GroupSnapshot:
     name: str
     joint_names: tuple[str, ...]
@@ -176,6 +189,8 @@ class ControllerSnapshot:
     pfl: str = "off"
     """The PFL function: "off" (no PFL in this cell), "idle", "stop" (81702 on) or
     "escape" (81703 on, retreating after a clamping)."""
+    events: tuple[FiredEventInfo, ...] = ()
+    """Scenario events fired so far."""
     motoros: str = "running"
     """MotoROS's start-up: "running", what it waits for, or why it halted (§2.1, §8)."""
 
@@ -305,8 +320,12 @@ class StartupView(Protocol):
 
 class SafetyPanel(Protocol):
     """The cell's safety functions as the operator drives them (HTTP ``/api/pfl``,
-    ``/api/fsu``). ``VirtualController`` implements it; refusals raise ``ValueError``
-    saying why."""
+    ``/api/fsu``, ``/api/scenario``). ``VirtualController`` implements it; refusals raise
+    ``ValueError`` saying why."""
+
+    def load_scenario(self, scenario: Scenario) -> None:
+        """Run a scenario's timed events from the next tick."""
+        ...
 
     def pfl_event(self, event: str, *, retreat_ms: int = ..., stop_ms: int = ...) -> None:
         """A PFL "contact" or "clamping" (retreating ``retreat_ms``) now."""

@@ -26,6 +26,7 @@ from pymotoros.controller.alarms import Alarm, AlarmClass, AlarmHistory
 from pymotoros.controller.api import (
     ControllerSnapshot,
     FeedbackData,
+    FiredEventInfo,
     GroupSnapshot,
     IoRead,
     Outcome,
@@ -54,6 +55,7 @@ from pymotoros.controller.queues import MotionQueues
 from pymotoros.controller.readiness import Readiness
 from pymotoros.controller.safety import DEFAULT_RETREAT_MS, PFL_STOP_MS, SafetyUnit
 from pymotoros.controller.safety.startup import MotoRosStartup, setup_validation
+from pymotoros.controller.scenario import FiredEvent, Scenario, ScenarioDriver, ScenarioEvent
 from pymotoros.controller.servo import IN_MOTION_PULSES, ServoGroup
 from pymotoros.controller.skillsnd import SkillListeners
 from pymotoros.controller.trajectory import DhTable, TrajectoryPoints
@@ -191,6 +193,10 @@ class VirtualController:
             boot=readiness.init_done,
         )
         self._starting = not self._startup.settled
+        self._scenario: ScenarioDriver | None = None
+        self._fired: list[FiredEvent] = []
+        self.drop_motion_hook: Callable[[], None] | None = None
+        """Closes the motion connection (set by the runtime; a scenario's drop_motion)."""
 
     # ================================================================== time
 
@@ -233,10 +239,13 @@ class VirtualController:
             if self._eco_idle_ms is not None:
                 self._check_eco_idle(now, self._eco_idle_ms)
         inc_move = self._inc_move
-        if not inc_move.inc_move_tick() and not safety_moved:
+        moved = inc_move.inc_move_tick()
+        if not moved and not safety_moved:
             for servo in self._servos:
                 servo.idle()
         inc_move.fill_tick()
+        if self._scenario is not None:
+            self._scenario.tick(now, moved)
         scheduler = self._scheduler
         if scheduler.busy:
             scheduler.advance()
@@ -413,6 +422,10 @@ class VirtualController:
             fsu_tcp_speed_mm_s=self._safety.fsu.active.tcp_speed_mm_s,
             pfl=self._safety.pfl.status.phase if self._safety.pfl.enabled else "off",
             motoros=self._startup.phase,
+            events=tuple(
+                FiredEventInfo(f.t, f.action, tuple(f.params.items()), f.error)
+                for f in self._fired
+            ),
         )
 
     @property
@@ -551,6 +564,66 @@ class VirtualController:
         for cls in AlarmClass:
             handlers[cls.address] = alarm_output(cls)
         return handlers
+
+    # ================================================================== scenarios
+
+    def load_scenario(self, scenario: Scenario) -> None:
+        """Run ``scenario``'s events from the next tick (replacing events not fired yet)."""
+        driver = ScenarioDriver(
+            scenario, perform=self._perform, read_io=self._read_any_io, now_ms=self.time_ms
+        )
+        driver.fired = self._fired
+        self._scenario = driver
+        logger.info("scenario %s: %d events", scenario.source, len(scenario.events))
+
+    @property
+    def fired_events(self) -> tuple[FiredEvent, ...]:
+        """Scenario events fired so far (time since boot, action, parameters, refusal)."""
+        return tuple(self._fired)
+
+    def _read_any_io(self, address: int) -> int:
+        if address >= M_REGISTER_BASE:
+            return self._io.read_mregister(address - M_REGISTER_BASE).value
+        return self._io.get(address)
+
+    def _perform(self, event: ScenarioEvent) -> None:
+        p = event.params
+        action = event.action
+        if action == "estop":
+            self.press_estop(bool(p["pressed"]))
+        elif action in ("hold", "remote", "servo", "eco"):
+            setter = {
+                "hold": self.set_hold,
+                "remote": self.set_remote,
+                "servo": self.set_servo,
+                "eco": self.set_eco,
+            }[action]
+            setter(bool(p["on"]))
+        elif action == "mode":
+            self.set_mode(PendantMode(str(p["mode"])))
+        elif action == "alarm":
+            self.raise_alarm(int(p["code"]), int(p.get("subcode", 0)), str(p.get("text", "")))  # type: ignore[call-overload]
+        elif action == "reset":
+            self.reset()
+        elif action == "pfl":
+            kwargs = {k: int(v) for k, v in p.items() if k in ("retreat_ms", "stop_ms")}  # type: ignore[call-overload]
+            self.pfl_event(str(p["event"]), **kwargs)
+        elif action == "fsu":
+            pct = p.get("joint_speed_pct")
+            tcp = p.get("tcp_speed_mm_s")
+            self.set_fsu(
+                joint_speed_pct=int(pct) if isinstance(pct, int) else None,
+                tcp_speed_mm_s=float(tcp) if isinstance(tcp, int | float) else None,
+                off=bool(p.get("off", False)),
+            )
+        elif action == "io":
+            self.force_io(int(p["address"]), int(p["value"]))  # type: ignore[call-overload]
+        elif action == "drop_motion":
+            if self.drop_motion_hook is None:
+                raise ValueError("drop_motion: no motion server is attached to this controller")
+            self.drop_motion_hook()
+        else:  # parse_scenario refuses unknown actions; a new one must be added here
+            raise ValueError(f"unknown scenario action {action!r}")
 
     # ================================================================== safety functions
 

@@ -116,6 +116,8 @@ class SimulatorApp:
             message_gap=self.config.state_message_gap,
         )
         self.io = IoServer(controller, order)
+        if hasattr(controller, "drop_motion_hook"):  # a scenario's drop_motion
+            controller.drop_motion_hook = self.motion.drop_clients
         self._ports: BoundPorts | None = None
         self._ready = asyncio.Event()
         self._stop = asyncio.Event()

@@ -17,7 +17,7 @@ from __future__ import annotations
 
 import logging
 from collections.abc import Callable
-from typing import Literal
+from typing import Any, Literal
 
 from fastapi import FastAPI, Request
 from fastapi.exceptions import RequestValidationError
@@ -27,6 +27,7 @@ from starlette.exceptions import HTTPException as StarletteHTTPException
 
 from pymotoros import __version__
 from pymotoros.controller.api import ControllerSnapshot, PendantMode
+from pymotoros.controller.scenario import parse_scenario
 from pymotoros.runtime.target import SimulatedController
 from pymotoros.runtime.ticker import TickStats
 
@@ -133,6 +134,13 @@ class TickModel(BaseModel):
     lateness_ms: LatenessModel
 
 
+class ScenarioBody(BaseModel):
+    model_config = ConfigDict(extra="forbid", frozen=True)
+    events: list[dict[str, Any]] = Field(
+        description="timed events, the keys of a scenario file's [[events]] tables"
+    )
+
+
 class FsuModel(BaseModel):
     joint_speed_pct: int | None
     tcp_speed_mm_s: float | None
@@ -160,6 +168,10 @@ class StateModel(BaseModel):
     )
     pfl: Literal["off", "idle", "stop", "escape"] = Field(
         default="off", description="the PFL function: off (not in this cell), idle, stop, escape"
+    )
+    events: list[dict[str, Any]] = Field(
+        default_factory=list,
+        description='scenario events fired: {"t": seconds since boot, "action": ..., params}',
     )
     motoros: str = Field(
         default="running",
@@ -213,6 +225,15 @@ def state_model(
         ),
         pfl=snapshot.pfl,  # type: ignore[arg-type]
         motoros=snapshot.motoros,
+        events=[
+            {
+                "t": e.t,
+                "action": e.action,
+                **dict(e.params),
+                **({"error": e.error} if e.error else {}),
+            }
+            for e in snapshot.events
+        ],
         ports=PortsModel(motion=ports[0], state=ports[1], io=ports[2]),
         tick=TickModel(
             period_ms=tick.period_ms,
@@ -404,6 +425,14 @@ def create_http_app(
         controller.set_fsu(
             joint_speed_pct=body.joint_speed_pct, tcp_speed_mm_s=body.tcp_speed_mm_s, off=body.off
         )
+        return state()
+
+    @app.post("/api/scenario", response_model=StateModel, responses=_ERRORS, tags=["safety"])
+    async def scenario(body: ScenarioBody) -> StateModel:
+        """Run timed events (same keys as a scenario file); replaces events not fired yet."""
+        parsed = parse_scenario({"events": body.events}, source="POST /api/scenario")
+        logger.info("operator: scenario with %d events", len(parsed.events))
+        controller.load_scenario(parsed)
         return state()
 
     @app.post("/api/tick/reset", response_model=StateModel, tags=["state"])

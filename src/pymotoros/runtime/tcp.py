@@ -134,6 +134,11 @@ class TcpService(ABC):
         if self._server is not None:
             self._server.close()
 
+    def drop_clients(self) -> None:
+        """Close every client's connection now, as a cable pulled (fault injection)."""
+        for conn in list(self._tasks):
+            conn.close()
+
     async def close_clients(self) -> None:
         """Close every client and wait for its task to finish."""
         tasks = list(self._tasks.values())
