@@ -306,6 +306,7 @@ class Twin:
             self.controller, order, self.clock, period=state_period, message_gap=state_message_gap
         )
         self.io = IoServer(self.controller, order)
+        self.controller.drop_motion_hook = self.motion.drop_clients  # a scenario's drop_motion
         self._services: dict[int, TcpService] = {
             TCP_PORT_MOTION: self.motion,
             TCP_PORT_STATE: self.state,
