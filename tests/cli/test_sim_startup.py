@@ -39,3 +39,18 @@ def test_fatal_startup_alarm_prints_dashes_and_the_api_says_why(tmp_path: Path) 
         assert proc.wait(timeout=20) == 0
         if proc.stdout is not None:
             proc.stdout.close()
+
+
+def test_a_bad_scenario_file_is_refused_before_the_sim_starts(tmp_path: Path) -> None:
+    bad = tmp_path / "bad.toml"
+    bad.write_text('[[events]]\nafter_motion = 1.0\naction = "pfl"\nevent = "bump"\n')
+    done = subprocess.run(  # noqa: S603 - our own CLI
+        [sys.executable, "-m", "pymotoros", "sim", "--scenario", str(bad), "--http-port", "0"],
+        capture_output=True,
+        text=True,
+        timeout=STARTUP_TIMEOUT,
+        check=False,
+    )
+    assert done.returncode == 2
+    assert done.stdout == ""
+    assert "events[0] (pfl).event: must be one of contact, clamping" in done.stderr

@@ -101,3 +101,32 @@ async def test_fsu_over_the_control_api(sim: SimulatorApp) -> None:
         r = await api.post("/api/pfl", json={"event": "contact", "retreat_ms": 5})
         assert r.status_code == 400
         assert "clamping only" in r.json()["error"]
+
+
+async def test_scenario_over_the_control_api(sim: SimulatorApp) -> None:
+    async with _api(sim) as api:
+        bad = await api.post(
+            "/api/scenario", json={"events": [{"at": 0.0, "action": "hold", "of": True}]}
+        )
+        assert bad.status_code == 400
+        assert "events[0] (hold).of: unknown key" in bad.json()["error"]
+        r = await api.post(
+            "/api/scenario",
+            json={
+                "events": [
+                    {"at": 0.0, "action": "hold", "on": True},
+                    {"at": 0.0, "action": "fsu", "joint_speed_pct": 40},
+                ]
+            },
+        )
+        assert r.status_code == 200
+        await sim.ticker.wait_ticks(2)
+        doc = (await api.get("/api/state")).json()
+        assert doc["hold"] is True
+        assert doc["fsu"]["joint_speed_pct"] == 40
+        events = doc["events"]
+        assert [(e["action"], e.get("on"), e.get("joint_speed_pct")) for e in events] == [
+            ("hold", True, None),
+            ("fsu", None, 40),
+        ]
+        assert all(e["t"] > 0 for e in events)
