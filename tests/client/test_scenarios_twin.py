@@ -126,3 +126,25 @@ async def test_drop_motion_closes_the_motion_connection() -> None:
         assert cell.controller.fired_events[0].error == ""
         with pytest.raises(ClientError):
             await client.enable()
+
+
+async def test_the_following_monitor_reports_an_fsu_slowdown_in_rad_and_percent(
+    caplog: pytest.LogCaptureFixture,
+) -> None:
+    reports = {}
+    for pct in (None, 30):
+        async with twin(robot="hc10", timeout_s=2.0) as (client, cell):
+            await client.enable()
+            if pct is not None:
+                cell.controller.set_fsu(joint_speed_pct=pct)
+            result = await client.move_joints(LONG_GOAL)
+            assert _off(LONG_GOAL, result.final_positions) < TOLERANCE
+            reports[pct] = result.following
+    free, slowed = reports[None], reports[30]
+    assert not free.slowed
+    assert free.min_speed_pct > 90
+    assert slowed.slowed
+    assert slowed.min_speed_pct < 40  # the FSU let 30 % of the axis maximum through
+    assert slowed.max_lag_rad > 10 * free.max_lag_rad
+    assert "rad) behind the plan" in caplog.text
+    assert "% of the planned speed" in caplog.text
