@@ -23,6 +23,7 @@ from typing import Final
 from pymotoros.controller.api import AlarmInfo, PendantMode
 from pymotoros.controller.inform import BUILTIN_VARIANTS, JobRunner, load_jobs
 from pymotoros.controller.io_image import IoImage
+from pymotoros.controller.peripherals import MAX_DELAY_MS, PeripheralConfig
 from pymotoros.controller.safety.startup import StartupConfig, check_parameters
 from pymotoros.errors import ConfigError, JobError
 from pymotoros.models import (
@@ -113,6 +114,8 @@ class CellConfig:
     warnings: tuple[str, ...] = ()
     source: str = "<default cell>"
     startup: StartupConfig = field(default_factory=StartupConfig)
+    peripherals: tuple[PeripheralConfig, ...] = ()
+    """``[[peripherals]]``: inputs that follow other bits like devices (docs/cell.md)."""
     """What MotoROS's start-up checks read: software version, conveyor tracking, set-up
     parameters (``[controller]``, ``[controller.parameters]``)."""
 
@@ -400,6 +403,7 @@ def cell_from_dict(
         raise top.error("tools", "a tool number appears twice")
 
     initial = _initial(top.table("initial"), groups, set(numbers))
+    peripherals = _peripherals(top, ctrl)
     top.finish()
     for w in warnings:
         logger.warning("%s: %s", source, w)
@@ -416,7 +420,40 @@ def cell_from_dict(
         warnings=tuple(warnings),
         source=source,
         startup=startup,
+        peripherals=peripherals,
     )
+
+
+def _peripherals(top: _Table, ctrl: ControllerModel) -> tuple[PeripheralConfig, ...]:
+    image = IoImage(ctrl)
+    out: list[PeripheralConfig] = []
+    for i, entry in enumerate(top.array("peripherals")):
+        t = _Table(entry, f"peripherals[{i}]", top.source)
+        addresses = []
+        for key in ("input", "follows"):
+            address = t.integer(key, -1, 0, 10**6 - 1)
+            if address < 0:
+                raise t.error(key, "is required (a bit address, e.g. 20010 or 10010)")
+            try:
+                image.check_forcible(address, 0)
+            except ValueError as exc:
+                raise t.error(key, str(exc)) from None
+            addresses.append(address)
+        if addresses[0] == addresses[1]:
+            raise t.error("follows", "a peripheral cannot follow its own input")
+        if addresses[0] in {p.input for p in out}:
+            raise t.error("input", f"bit {addresses[0]} is already driven by another peripheral")
+        out.append(
+            PeripheralConfig(
+                name=t.string("name", f"peripheral {i}"),
+                input=addresses[0],
+                follows=addresses[1],
+                delay_ms=t.integer("delay_ms", 0, 0, MAX_DELAY_MS),
+                invert=t.boolean("invert", False),
+            )
+        )
+        t.finish()
+    return tuple(out)
 
 
 def _startup(ctrl_t: _Table) -> StartupConfig:

@@ -50,6 +50,7 @@ from pymotoros.controller.machine import (
     ServoPower,
 )
 from pymotoros.controller.motoros import MotoRos
+from pymotoros.controller.peripherals import Peripherals
 from pymotoros.controller.processes import ControllerClock, Scheduler
 from pymotoros.controller.queues import MotionQueues
 from pymotoros.controller.readiness import Readiness
@@ -193,6 +194,7 @@ class VirtualController:
             boot=readiness.init_done,
         )
         self._starting = not self._startup.settled
+        self._peripherals = Peripherals(self._io, cell.peripherals)
         self._scenario: ScenarioDriver | None = None
         self._fired: list[FiredEvent] = []
         self.drop_motion_hook: Callable[[], None] | None = None
@@ -246,6 +248,8 @@ class VirtualController:
         inc_move.fill_tick()
         if self._scenario is not None:
             self._scenario.tick(now, moved)
+        if self._peripherals.active:
+            self._peripherals.tick(now)
         scheduler = self._scheduler
         if scheduler.busy:
             scheduler.advance()
