@@ -65,8 +65,8 @@ class SafetyUnit:
     def tick(self, now_ms: int) -> bool:
         """One interpolation period, before MotoROS's IncMove; True if it moved the servos."""
         pfl = self.pfl
-        if not pfl.enabled:
+        phase = pfl.phase
+        if phase == "idle":  # the common case, and a cell without PFL: nothing to do
             return False
-        moved = pfl.busy and pfl.status.phase == "escape"
         pfl.tick(now_ms)
-        return moved
+        return phase == "escape"

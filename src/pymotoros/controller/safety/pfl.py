@@ -70,21 +70,28 @@ class PflFunction:
         self._why_disabled = why_disabled
         self._period_ms = period_ms
         depth = MAX_RETREAT_MS // period_ms + 1
-        self._history: collections.deque[tuple[tuple[int, ...], ...]] = collections.deque(
-            maxlen=depth
+        # every tick's increment per group, recorded by the servos themselves (cheap: one
+        # append per tick) for a clamping's retreat
+        self._recorders: tuple[collections.deque[Sequence[int]], ...] = tuple(
+            collections.deque(maxlen=depth) for _ in self._servos
         )
-        self._phase = "idle"
+        if enabled:
+            for servo, recorder in zip(self._servos, self._recorders, strict=True):
+                servo.recorder = recorder
+        self.phase = "idle"
+        """"idle", "stop" (81702 on) or "escape" (81703 on, retreating)."""
         self._stop_until_ms = 0
         self._retreat: list[tuple[tuple[int, ...], ...]] = []
+        """Per tick of the retreat, per group, the increment that undoes one recorded tick."""
         self._events = 0
 
     @property
     def status(self) -> PflStatus:
-        return PflStatus(self.enabled, self._phase, self._events)
+        return PflStatus(self.enabled, self.phase, self._events)
 
     @property
     def busy(self) -> bool:
-        return self._phase != "idle"
+        return self.phase != "idle"
 
     def event(
         self,
@@ -105,7 +112,7 @@ class PflFunction:
             raise PflRefusedError(f"no PFL contact is possible: {self._why_disabled}")
         if self.busy:
             raise PflRefusedError(
-                f"a PFL {self._phase} is in progress; wait until the PFL signals clear"
+                f"a PFL {self.phase} is in progress; wait until the PFL signals clear"
             )
         if not moving:
             raise PflRefusedError(
@@ -117,23 +124,26 @@ class PflFunction:
             raise PflRefusedError(f"retreat_ms must be in 1..{MAX_RETREAT_MS}, not {retreat_ms}")
         self._events += 1
         logger.warning("PFL %s: PFL stop on for %d ms", kind, stop_ms)
-        self._phase = "stop"
+        self.phase = "stop"
         self._stop_until_ms = now_ms + stop_ms
         self._io.set(signals.PFL_STOP, 1)
         self._retreat = []
         if kind == "clamping":
             ticks = -(-retreat_ms // self._period_ms)
-            positions = list(self._history)[-(ticks + 1) :]
-            # the steps back: from the newest position to the one retreat_ms before
-            self._retreat = positions[::-1][1:]
+            recorded = [list(r)[-ticks:] for r in self._recorders]
+            steps = min(len(r) for r in recorded)
+            # newest first: each step undoes one recorded tick of every group
+            self._retreat = [
+                tuple(tuple(-x for x in r[len(r) - 1 - k]) for r in recorded)
+                for k in range(steps)
+            ]
 
     def tick(self, now_ms: int) -> None:
         """One interpolation period of the safety unit (before MotoROS's IncMove)."""
         if not self.enabled:
             return
-        phase = self._phase
+        phase = self.phase
         if phase == "idle":
-            self._history.append(tuple(tuple(s.command) for s in self._servos))
             return
         if phase == "stop":
             if now_ms < self._stop_until_ms:
@@ -141,21 +151,21 @@ class PflFunction:
             self._io.set(signals.PFL_STOP, 0)
             if self._retreat:
                 logger.info("PFL escape: retreating %d ticks", len(self._retreat))
-                self._phase = "escape"
+                self.phase = "escape"
                 self._io.set(signals.PFL_ESCAPE, 1)
             else:
                 self._end()
             return
-        # escape: one recorded position back per tick
-        target = self._retreat.pop(0)
-        for servo, goal in zip(self._servos, target, strict=True):
-            current = servo.command
-            servo.apply(tuple(g - c for g, c in zip(goal, current, strict=True)))
+        # escape: one recorded tick undone per tick
+        step = self._retreat.pop(0)
+        for servo, undo in zip(self._servos, step, strict=True):
+            servo.apply(undo)
         if not self._retreat:
             self._io.set(signals.PFL_ESCAPE, 0)
             self._end()
 
     def _end(self) -> None:
         logger.info("PFL signals clear")
-        self._phase = "idle"
-        self._history.clear()
+        self.phase = "idle"
+        for recorder in self._recorders:
+            recorder.clear()
