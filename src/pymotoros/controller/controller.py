@@ -195,6 +195,8 @@ class VirtualController:
         )
         self._starting = not self._startup.settled
         self._peripherals = Peripherals(self._io, cell.peripherals)
+        self._has_peripherals = self._peripherals.active
+        self._pfl = safety.pfl
         self._scenario: ScenarioDriver | None = None
         self._fired: list[FiredEvent] = []
         self.drop_motion_hook: Callable[[], None] | None = None
@@ -231,7 +233,7 @@ class VirtualController:
         if self._starting:
             self._startup.tick(now)
             self._starting = not self._startup.settled
-        safety_moved = self._safety.tick(now)
+        safety_moved = self._pfl.phase != "idle" and self._safety.tick(now)
         runner = self._runner
         if (now >= runner.wake_ms or self._io.changes != runner.seen_changes) and runner.step(now):
             machine.fire(Event.END_JOB, now)
@@ -248,7 +250,7 @@ class VirtualController:
         inc_move.fill_tick()
         if self._scenario is not None:
             self._scenario.tick(now, moved)
-        if self._peripherals.active:
+        if self._has_peripherals:
             self._peripherals.tick(now)
         scheduler = self._scheduler
         if scheduler.busy:

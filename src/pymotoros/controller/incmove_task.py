@@ -79,7 +79,8 @@ class IncMoveTask:
             if self._fsu_missing:
                 self._fsu_reset()
             return False
-        limits = self._clip() if self._clip is not None else None
+        clip = self._clip
+        limits = clip() if clip is not None else None
         if limits is not None or self._fsu_missing:
             return self._inc_move_fsu(limits)
         incs = inc_move(self.interpolators)
