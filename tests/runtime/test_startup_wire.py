@@ -81,3 +81,38 @@ async def test_warning_8003_ports_listen_after_reset() -> None:
         assert await ctrl(peer, MotionCommand.CHECK_MOTION_READY) != (ResultCode.SUCCESS, 0)
         assert await ctrl(peer, MotionCommand.START_TRAJ_MODE) == (ResultCode.SUCCESS, 0)
         await peer.close()
+
+
+@pytest.mark.parametrize(
+    ("keys", "subcode", "fatal"),
+    [
+        ({"parameters": {"RS000": 1}}, 1, False),
+        ({"parameters": {"S2C541": 1}}, 2, False),
+        ({"parameters": {"S2C542": 1}}, 3, False),
+        ({"parameters": {"S2C1100": 0}}, 4, True),
+        ({"parameters": {"S2C1103": 0}}, 5, True),
+        ({"model": "yrc1000micro", "parameters": {"S2C1117": 0}}, 6, True),
+        ({"parameters": {"S2C1119": 3}}, 7, False),
+        ({"software": "YAS2.79.00-00"}, 8, True),
+        ({"validation_code": 9}, 9, True),
+        ({"validation_code": 10}, 10, True),
+        ({"conveyor_tracking": True}, 11, True),
+        ({"validation_code": 104}, 104, True),
+    ],
+)
+async def test_every_8003_subcode_on_the_ports(
+    keys: dict[str, object], subcode: int, fatal: bool
+) -> None:
+    clock = ManualClock()
+    vc = controller(**keys)
+    async with (
+        SimulatorApp(vc, replace(LOCAL, http_port=0), clock=clock) as sim,
+        virtual_time(clock),
+    ):
+        assert [(a.code, a.subcode) for a in vc.snapshot().alarms] == [(8003, subcode)]
+        assert await refused(sim.ports.motion)
+        vc.reset()
+        await sim.ticker.wait_ticks(60)  # the runtime looks every 25 ticks
+        assert sim.motoros_listening is (not fatal)
+        for port in (sim.ports.motion, sim.ports.state, sim.ports.io):
+            assert await refused(port) is fatal
