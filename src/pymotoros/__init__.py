@@ -62,6 +62,7 @@ if TYPE_CHECKING:
     from pymotoros.client.sync import SyncRobotClient
     from pymotoros.client.timing import ClientClock
     from pymotoros.controller import CellConfig, VirtualController, default_cell, load_cell
+    from pymotoros.controller.scenario import Scenario, load_scenario, parse_scenario
     from pymotoros.errors import (
         ConfigError,
         JobError,
@@ -108,6 +109,9 @@ _WHERE: dict[str, str] = {
     "CellConfig": "pymotoros.controller",
     "default_cell": "pymotoros.controller",
     "load_cell": "pymotoros.controller",
+    "Scenario": "pymotoros.controller.scenario",
+    "load_scenario": "pymotoros.controller.scenario",
+    "parse_scenario": "pymotoros.controller.scenario",
     # models (GroupModel and DhLink: the models' ones, not the HTTP or wire shapes)
     "RobotModel": "pymotoros.models",
     "GroupModel": "pymotoros.models",
@@ -188,6 +192,7 @@ __all__ = [
     "RobotClient",
     "RobotModel",
     "RobotState",
+    "Scenario",
     "SpeedLimitError",
     "StartPositionError",
     "Status",
@@ -200,6 +205,8 @@ __all__ = [
     "controller_model",
     "default_cell",
     "load_cell",
+    "load_scenario",
+    "parse_scenario",
     "parse_srdf",
     "plan_joint_move",
     "robot_model",
