@@ -378,6 +378,10 @@ class Twin:
         service = self._services.get(port)
         if service is None or self._runner is None or self._stop.is_set():
             raise ConnectionRefusedError(f"the twin serves nothing on port {port}")
+        if not self.controller.motoros_started:  # as MotoROS's ports before its start-up
+            raise ConnectionRefusedError(
+                f"MotoROS is not listening on port {port}: {self.controller.motoros_phase}"
+            )
         number = next(self._numbers)
         client_end, server_end = memory_stream_pair(
             f"{host}-client-{number}", f"{service.name}-{number}"
