@@ -116,3 +116,22 @@ async def test_every_8003_subcode_on_the_ports(
         assert sim.motoros_listening is (not fatal)
         for port in (sim.ports.motion, sim.ports.state, sim.ports.io):
             assert await refused(port) is fatal
+
+
+async def test_an_alarm_at_boot_holds_the_ports_until_reset() -> None:
+    clock = ManualClock()
+    vc = VirtualController(cell_from_dict({"initial": {"alarms": [{"code": 4100}]}}))
+    async with (
+        SimulatorApp(vc, replace(LOCAL, http_port=0), clock=clock) as sim,
+        virtual_time(clock),
+    ):
+        await sim.ticker.wait_ticks(1000)  # 4 s: still held back
+        assert await refused(sim.ports.motion)
+        vc.reset()
+        reset_tick = vc.tick_count
+        async with asyncio.timeout(10.0):
+            while not sim.motoros_listening:
+                await sim.ticker.wait_ticks(5)
+        # the next 2.5 s check after the reset, then the runtime's next look (25 ticks)
+        assert vc.tick_count - reset_tick <= 2500 // vc.period_ms + 30
+        assert not await refused(sim.ports.motion)
