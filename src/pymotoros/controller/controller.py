@@ -56,7 +56,7 @@ from pymotoros.controller.queues import MotionQueues
 from pymotoros.controller.readiness import Readiness
 from pymotoros.controller.safety import DEFAULT_RETREAT_MS, PFL_STOP_MS, SafetyUnit
 from pymotoros.controller.safety.startup import MotoRosStartup, setup_validation
-from pymotoros.controller.scenario import FiredEvent, Scenario, ScenarioDriver, ScenarioEvent
+from pymotoros.controller.scenario import FiredEvent, Scenario, ScenarioDriver, perform
 from pymotoros.controller.servo import IN_MOTION_PULSES, ServoGroup
 from pymotoros.controller.skillsnd import SkillListeners
 from pymotoros.controller.trajectory import DhTable, TrajectoryPoints
@@ -576,7 +576,10 @@ class VirtualController:
     def load_scenario(self, scenario: Scenario) -> None:
         """Run ``scenario``'s events from the next tick (replacing events not fired yet)."""
         driver = ScenarioDriver(
-            scenario, perform=self._perform, read_io=self._read_any_io, now_ms=self.time_ms
+            scenario,
+            perform=lambda event: perform(self, event),
+            read_io=self._read_any_io,
+            now_ms=self.time_ms,
         )
         driver.fired = self._fired
         self._scenario = driver
@@ -592,44 +595,11 @@ class VirtualController:
             return self._io.read_mregister(address - M_REGISTER_BASE).value
         return self._io.get(address)
 
-    def _perform(self, event: ScenarioEvent) -> None:
-        p = event.params
-        action = event.action
-        if action == "estop":
-            self.press_estop(bool(p["pressed"]))
-        elif action in ("hold", "remote", "servo", "eco"):
-            setter = {
-                "hold": self.set_hold,
-                "remote": self.set_remote,
-                "servo": self.set_servo,
-                "eco": self.set_eco,
-            }[action]
-            setter(bool(p["on"]))
-        elif action == "mode":
-            self.set_mode(PendantMode(str(p["mode"])))
-        elif action == "alarm":
-            self.raise_alarm(int(p["code"]), int(p.get("subcode", 0)), str(p.get("text", "")))  # type: ignore[call-overload]
-        elif action == "reset":
-            self.reset()
-        elif action == "pfl":
-            kwargs = {k: int(v) for k, v in p.items() if k in ("retreat_ms", "stop_ms")}  # type: ignore[call-overload]
-            self.pfl_event(str(p["event"]), **kwargs)
-        elif action == "fsu":
-            pct = p.get("joint_speed_pct")
-            tcp = p.get("tcp_speed_mm_s")
-            self.set_fsu(
-                joint_speed_pct=int(pct) if isinstance(pct, int) else None,
-                tcp_speed_mm_s=float(tcp) if isinstance(tcp, int | float) else None,
-                off=bool(p.get("off", False)),
-            )
-        elif action == "io":
-            self.force_io(int(p["address"]), int(p["value"]))  # type: ignore[call-overload]
-        elif action == "drop_motion":
-            if self.drop_motion_hook is None:
-                raise ValueError("drop_motion: no motion server is attached to this controller")
-            self.drop_motion_hook()
-        else:  # parse_scenario refuses unknown actions; a new one must be added here
-            raise ValueError(f"unknown scenario action {action!r}")
+    def drop_motion(self) -> None:
+        """Close the motion connection as a pulled cable (a scenario's ``drop_motion``)."""
+        if self.drop_motion_hook is None:
+            raise ValueError("drop_motion: no motion server is attached to this controller")
+        self.drop_motion_hook()
 
     # ================================================================== safety functions
 

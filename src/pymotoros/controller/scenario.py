@@ -26,8 +26,9 @@ import tomllib
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Final
+from typing import Final, Protocol
 
+from pymotoros.controller.api import PendantMode
 from pymotoros.errors import ConfigError
 
 logger = logging.getLogger(__name__)
@@ -204,6 +205,74 @@ class FiredEvent:
 
 
 Action = Callable[[ScenarioEvent], None]
+
+
+class ScenarioTarget(Protocol):
+    """What a scenario's actions act on: the operator panel and the safety functions."""
+
+    def press_estop(self, pressed: bool) -> None: ...
+    def set_hold(self, on: bool) -> None: ...
+    def set_remote(self, on: bool) -> None: ...
+    def set_servo(self, on: bool) -> None: ...
+    def set_eco(self, on: bool) -> None: ...
+    def set_mode(self, mode: PendantMode) -> None: ...
+    def raise_alarm(self, code: int, subcode: int, text: str) -> None: ...
+    def reset(self) -> None: ...
+    def force_io(self, address: int, value: int) -> None: ...
+    def drop_motion(self) -> None: ...
+    def pfl_event(self, event: str, *, retreat_ms: int = ..., stop_ms: int = ...) -> None: ...
+    def set_fsu(
+        self,
+        *,
+        joint_speed_pct: int | None = None,
+        tcp_speed_mm_s: float | None = None,
+        off: bool = False,
+    ) -> None: ...
+
+
+def _int(value: object) -> int:
+    if not isinstance(value, int):  # parse_scenario checked it; a bug otherwise
+        raise TypeError(f"expected an integer, not {value!r}")
+    return value
+
+
+def perform(target: ScenarioTarget, event: ScenarioEvent) -> None:
+    """Carry out one event's action (ValueError when the target refuses it now)."""
+    p = event.params
+    action = event.action
+    if action == "estop":
+        target.press_estop(bool(p["pressed"]))
+    elif action in ("hold", "remote", "servo", "eco"):
+        setter = {
+            "hold": target.set_hold,
+            "remote": target.set_remote,
+            "servo": target.set_servo,
+            "eco": target.set_eco,
+        }[action]
+        setter(bool(p["on"]))
+    elif action == "mode":
+        target.set_mode(PendantMode(str(p["mode"])))
+    elif action == "alarm":
+        target.raise_alarm(_int(p["code"]), _int(p.get("subcode", 0)), str(p.get("text", "")))
+    elif action == "reset":
+        target.reset()
+    elif action == "pfl":
+        kwargs = {k: _int(v) for k, v in p.items() if k in ("retreat_ms", "stop_ms")}
+        target.pfl_event(str(p["event"]), **kwargs)
+    elif action == "fsu":
+        pct = p.get("joint_speed_pct")
+        tcp = p.get("tcp_speed_mm_s")
+        target.set_fsu(
+            joint_speed_pct=_int(pct) if pct is not None else None,
+            tcp_speed_mm_s=float(tcp) if isinstance(tcp, int | float) else None,
+            off=bool(p.get("off", False)),
+        )
+    elif action == "io":
+        target.force_io(_int(p["address"]), _int(p["value"]))
+    elif action == "drop_motion":
+        target.drop_motion()
+    else:  # parse_scenario refuses unknown actions; a new one must be added here
+        raise ValueError(f"unknown scenario action {action!r}")
 
 
 class ScenarioDriver:
