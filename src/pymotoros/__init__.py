@@ -62,6 +62,7 @@ if TYPE_CHECKING:
     from pymotoros.client.sync import SyncRobotClient
     from pymotoros.client.timing import ClientClock
     from pymotoros.controller import CellConfig, VirtualController, default_cell, load_cell
+    from pymotoros.controller.scenario import Scenario, load_scenario, parse_scenario
     from pymotoros.errors import (
         ConfigError,
         JobError,
@@ -113,6 +114,9 @@ _WHERE: dict[str, str] = {
     "CellConfig": "pymotoros.controller",
     "default_cell": "pymotoros.controller",
     "load_cell": "pymotoros.controller",
+    "Scenario": "pymotoros.controller.scenario",
+    "load_scenario": "pymotoros.controller.scenario",
+    "parse_scenario": "pymotoros.controller.scenario",
     # models (GroupModel and DhLink: the models' ones, not the HTTP or wire shapes)
     "RobotModel": "pymotoros.models",
     "GroupModel": "pymotoros.models",
@@ -196,6 +200,7 @@ __all__ = [
     "RobotClient",
     "RobotModel",
     "RobotState",
+    "Scenario",
     "SpeedLimitError",
     "StartPositionError",
     "Status",
@@ -209,6 +214,8 @@ __all__ = [
     "controller_model",
     "default_cell",
     "load_cell",
+    "load_scenario",
+    "parse_scenario",
     "parse_srdf",
     "plan_joint_move",
     "robot_model",

@@ -306,6 +306,7 @@ class Twin:
             self.controller, order, self.clock, period=state_period, message_gap=state_message_gap
         )
         self.io = IoServer(self.controller, order)
+        self.controller.drop_motion_hook = self.motion.drop_clients  # a scenario's drop_motion
         self._services: dict[int, TcpService] = {
             TCP_PORT_MOTION: self.motion,
             TCP_PORT_STATE: self.state,
@@ -377,6 +378,10 @@ class Twin:
         service = self._services.get(port)
         if service is None or self._runner is None or self._stop.is_set():
             raise ConnectionRefusedError(f"the twin serves nothing on port {port}")
+        if not self.controller.motoros_started:  # as MotoROS's ports before its start-up
+            raise ConnectionRefusedError(
+                f"MotoROS is not listening on port {port}: {self.controller.motoros_phase}"
+            )
         number = next(self._numbers)
         client_end, server_end = memory_stream_pair(
             f"{host}-client-{number}", f"{service.name}-{number}"

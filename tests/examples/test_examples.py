@@ -43,7 +43,13 @@ def run_example(sim: Sim, script: str, *args: str) -> subprocess.CompletedProces
 
 
 def test_every_example_is_tested() -> None:
-    assert SCRIPTS == ["back_to_back.py", "io_signal.py", "joint_values.py", "named_poses.py"]
+    assert SCRIPTS == [
+        "back_to_back.py",
+        "io_signal.py",
+        "joint_values.py",
+        "named_poses.py",
+        "recover_from_pfl.py",
+    ]
 
 
 def test_named_poses(sim: Sim) -> None:
@@ -58,6 +64,12 @@ def test_joint_values(sim: Sim) -> None:
     assert done.returncode == 0, done.stderr
     reached = done.stdout.split("reached:")[1].splitlines()[0]
     assert float(reached.split(",")[4]) == pytest.approx(-1.57, abs=1e-3)
+
+
+def test_recover_from_pfl_without_a_contact_runs_through(sim: Sim) -> None:
+    done = run_example(sim, "recover_from_pfl.py")
+    assert done.returncode == 0, done.stderr
+    assert "task done after 0 PFL recoveries" in done.stdout
 
 
 def test_back_to_back(sim: Sim) -> None:

@@ -35,6 +35,7 @@ async def test_state_document_has_exactly_the_contract_keys(api: httpx.AsyncClie
     doc = r.json()
     assert set(doc) == {
         "mode", "remote", "servo", "estop", "hold", "alarms", "motion_ready", "groups", "tick",
+        "fsu", "pfl", "events", "motoros", "ports",
     }  # fmt: skip
     assert doc["mode"] == "play"
     assert set(doc["groups"][0]) == {
@@ -180,7 +181,8 @@ async def test_malformed_json_is_422(api: httpx.AsyncClient) -> None:
 async def test_openapi_schema_lists_the_endpoints(api: httpx.AsyncClient) -> None:
     schema = (await api.get("/openapi.json")).json()
     for path in ("/api/state", "/api/estop", "/api/hold", "/api/mode", "/api/remote",
-                 "/api/servo", "/api/alarm", "/api/reset", "/api/io"):  # fmt: skip
+                 "/api/servo", "/api/alarm", "/api/reset", "/api/io", "/api/pfl", "/api/fsu",
+                 "/api/scenario"):  # fmt: skip
         assert path in schema["paths"]
 
 

@@ -21,6 +21,7 @@ from typing import Any, Final, TypeVar
 import click
 
 from pymotoros.cli.cartesian import cartesian_move, parse_relative, pose_from_args
+from pymotoros.cli.sim_view import fetch_state_async, safety_data, safety_lines
 from pymotoros.client import (
     ClientError,
     ConnectError,
@@ -213,7 +214,9 @@ def _yes(value: bool | None, yes: str = "yes", no: str = "no") -> str:
     return "unknown" if value is None else (yes if value else no)
 
 
-def _status_table(client: RobotClient, state: RobotState) -> str:
+def _status_table(
+    client: RobotClient, state: RobotState, sim_state: dict[str, Any] | None = None
+) -> str:
     lines = [f"{client.robot.name} on {client.controller.type.value} at {client.host}"]
     st = state.status
     if st is not None:
@@ -226,6 +229,7 @@ def _status_table(client: RobotClient, state: RobotState) -> str:
             f"  motion possible   {_yes(st.motion_possible)}"
             + ("" if st.motion_possible else "  (pymotoros enable)"),
         ]
+    lines += safety_lines(sim_state, st.error_code if st is not None and st.in_error else None)
     width = max(len(n) for g in client.robot.groups for n in g.joint_names) + 2
     for index, group in enumerate(client.robot.groups):
         fb = state.joints.get(index)
@@ -265,7 +269,15 @@ def _status_table(client: RobotClient, state: RobotState) -> str:
     show_default=True,
     help="With --watch: updates per second at most.",
 )
-def status(as_json: bool, watch: bool, count: int | None, rate: float, **kwargs: Any) -> None:
+@click.option(
+    "--api",
+    default=None,
+    metavar="URL",
+    help="pymotoros sim's control API (e.g. http://127.0.0.1:8080): adds PFL, FSU, alarm texts.",
+)
+def status(
+    as_json: bool, watch: bool, count: int | None, rate: float, api: str | None, **kwargs: Any
+) -> None:
     """Show the robot's state (state port only: safe next to another client)."""
     target = _target(kwargs)
 
@@ -278,10 +290,11 @@ def status(as_json: bool, watch: bool, count: int | None, rate: float, **kwargs:
             while True:
                 if loop.time() - last >= 1.0 / rate:
                     last = loop.time()
+                    sim_state = await fetch_state_async(api) if api is not None else None
                     if as_json:
-                        _echo_json(_status_data(client, state))
+                        _echo_json(_status_data(client, state) | safety_data(sim_state))
                     else:
-                        click.echo(_status_table(client, state))
+                        click.echo(_status_table(client, state, sim_state))
                     shown += 1
                     if not watch or (count is not None and shown >= count):
                         return

@@ -32,9 +32,15 @@ logger = logging.getLogger(__name__)
 _PORT = click.IntRange(0, 65535)
 
 
-def ready_line(motion: int, state: int, io: int, http: int | None) -> str:
-    """The line ``pymotoros sim`` prints when it is ready (an external contract)."""
-    return f"pymotoros sim ready motion={motion} state={state} io={io} http={http}"
+def ready_line(motion: int | None, state: int | None, io: int | None, http: int | None) -> str:
+    """The line ``pymotoros sim`` prints when it is ready (an external contract); a
+    MotoROS port that is not listening yet (start-up checks) is printed as ``-``."""
+
+    def show(port: int | None) -> str:
+        return "-" if port is None else str(port)
+
+    shown = f"motion={show(motion)} state={show(state)} io={show(io)}"
+    return f"pymotoros sim ready {shown} http={http}"
 
 
 async def run_simulator(app: SimulatorApp) -> None:
@@ -53,7 +59,8 @@ async def run_simulator(app: SimulatorApp) -> None:
     try:
         async with app:
             ports = app.ports
-            sys.stdout.write(ready_line(ports.motion, ports.state, ports.io, ports.http) + "\n")
+            motion, state, io = app.listening_ports()
+            sys.stdout.write(ready_line(motion, state, io, ports.http) + "\n")
             sys.stdout.flush()
             await app.wait_stopped()
     finally:
@@ -110,6 +117,14 @@ def _cell(
     metavar="CELL.toml",
     help="Cell file (controller, robots, tools, boot state); replaces --controller/--robot.",
 )
+@click.option(
+    "--scenario",
+    "scenario_path",
+    type=click.Path(exists=True, dir_okay=False, path_type=Path),
+    default=None,
+    metavar="FILE.toml",
+    help="Fault scenario: timed [[events]] (E-stop, PFL, FSU, alarms ...), see docs/sim.md.",
+)
 @click.pass_context
 def sim(
     ctx: click.Context,
@@ -121,6 +136,7 @@ def sim(
     controller_name: str,
     robot_name: str,
     config_path: Path | None,
+    scenario_path: Path | None,
 ) -> None:
     """Run the virtual controller (MotoROS on 50240/50241/50242, control API on --http-port).
 
@@ -129,6 +145,10 @@ def sim(
     try:
         cell = _cell(ctx, controller_name, robot_name, config_path)
         controller = VirtualController(cell)
+        if scenario_path is not None:
+            from pymotoros.controller.scenario import load_scenario
+
+            controller.load_scenario(load_scenario(scenario_path))
     except ConfigError as exc:
         raise click.UsageError(str(exc)) from exc
     order = cell.controller.byte_order  # FS100 speaks big-endian (reference §1.1)

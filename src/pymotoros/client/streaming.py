@@ -28,6 +28,7 @@ from __future__ import annotations
 
 import asyncio
 import bisect
+import collections
 import itertools
 import logging
 from collections.abc import Callable, Sequence
@@ -100,6 +101,9 @@ LAG_WARNING_S: Final = 0.25
 _SAME_POSITION: Final = 1e-12
 """Squared distance under which start and goal coincide (as ``JointTrajectory.progress``)."""
 
+SPEED_WINDOW_S: Final = 0.2
+"""Window of the following monitor's speed estimate: eight state cycles of 25 ms, long
+enough to smooth the encoder steps, short enough to see an FSU switch within a cycle."""
 ARRIVED_PROGRESS: Final = 0.999
 """Progress from which the following monitor counts the robot as arrived (no lag)."""
 
@@ -125,7 +129,10 @@ class FollowingSample:
     lag_s: float
     """How far behind the plan the robot is, in time (≥ 0)."""
     error: float
-    """Largest joint difference between feedback and plan now (rad or m)."""
+    """Largest joint difference between feedback and plan now (rad or m): the lag in rad."""
+    speed_pct: float = 100.0
+    """The robot's speed along the plan in % of the planned speed, over the last
+    :data:`SPEED_WINDOW_S` (100: on plan; an FSU joint-speed limit of 30 % shows as ~30)."""
 
 
 @dataclass(slots=True)
@@ -137,6 +144,13 @@ class FollowingReport:
     max_error: float = 0.0
     slowed: bool = False
     """True once the lag passed the warning threshold."""
+    min_speed_pct: float = 100.0
+    """The lowest :attr:`FollowingSample.speed_pct` seen while the plan was moving."""
+
+    @property
+    def max_lag_rad(self) -> float:
+        """The largest lag in rad (or m): :attr:`max_error`."""
+        return self.max_error
 
 
 @dataclass(frozen=True, slots=True)
@@ -545,6 +559,8 @@ class FollowingMonitor:
         self._times = [p.time for p in points]
         self._raw = [self._progress(p.positions) for p in points]
         self._best: list[float] = list(itertools.accumulate(self._raw[1:], max))
+        self._recent: collections.deque[tuple[float, float]] = collections.deque()
+        """(elapsed, plan time reached) of the samples in the last SPEED_WINDOW_S."""
 
     def start(self, t0: float | None = None) -> None:
         if self._t0 is None:
@@ -571,23 +587,40 @@ class FollowingMonitor:
         reached = self._time_at_progress(progress)
         # Within 0.1 % of the goal the robot is there: its last pulses of settling are no lag.
         lag = max(0.0, elapsed - reached) if progress < ARRIVED_PROGRESS else 0.0
-        sample = FollowingSample(elapsed, progress, lag, error)
+        speed_pct = self._speed_pct(elapsed, reached, progress)
+        sample = FollowingSample(elapsed, progress, lag, error, speed_pct)
         rep = self.report
         rep.samples += 1
         rep.max_error = max(rep.max_error, error)
         rep.max_lag_s = max(rep.max_lag_s, lag)
+        rep.min_speed_pct = min(rep.min_speed_pct, speed_pct)
         if lag > self.warn_lag_s and not rep.slowed:
             rep.slowed = True
             logger.warning(
-                "the robot runs %.2f s behind the plan at %.0f %% of the move: a safety speed "
-                "limit (FSU), a speed override or HOLD is slowing it",
+                "the robot runs %.2f s (%.4f rad) behind the plan at %.0f %% of the move, "
+                "moving at %.0f %% of the planned speed: a safety speed limit (FSU), a speed "
+                "override or HOLD is slowing it",
                 lag,
+                error,
                 progress * 100,
+                speed_pct,
             )
         self.last = sample
         if self.on_sample is not None:
             self.on_sample(sample)
         return sample
+
+    def _speed_pct(self, elapsed: float, reached: float, progress: float) -> float:
+        """Plan time gained per second over the last window, in % (100 outside motion)."""
+        recent = self._recent
+        recent.append((elapsed, reached))
+        while recent and elapsed - recent[0][0] > SPEED_WINDOW_S:
+            recent.popleft()
+        t0, r0 = recent[0]
+        end = self._times[-1] if self._times else 0.0
+        if elapsed - t0 < SPEED_WINDOW_S / 2 or progress >= ARRIVED_PROGRESS or r0 >= end:
+            return 100.0
+        return max(0.0, 100.0 * (reached - r0) / (elapsed - t0))
 
     def _planned_at(self, t: float) -> tuple[float, ...]:
         """``trajectory.position_at(t)``, finding the segment by bisection."""

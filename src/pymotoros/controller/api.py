@@ -17,9 +17,12 @@ from __future__ import annotations
 import enum
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
-from typing import Protocol
+from typing import TYPE_CHECKING, Protocol
 
 from pymotoros.protocol.constants import IoResultCode, ResultCode
+
+if TYPE_CHECKING:
+    from pymotoros.controller.scenario import Scenario
 
 
 @dataclass(frozen=True, slots=True)
@@ -152,6 +155,16 @@ class TcpSnapshot:
 
 
 @dataclass(frozen=True, slots=True)
+class FiredEventInfo:
+    """A scenario event that fired: seconds since boot, action, its parameters, refusal."""
+
+    t: float
+    action: str
+    params: tuple[tuple[str, object], ...]
+    error: str = ""
+
+
+@dataclass(frozen=True, slots=True)
 class GroupSnapshot:
     name: str
     joint_names: tuple[str, ...]
@@ -182,6 +195,17 @@ class ControllerSnapshot:
     latest operator action)."""
     groups: tuple[GroupSnapshot, ...]
     errors: tuple[AlarmInfo, ...] = field(default=())
+    fsu_joint_speed_pct: int | None = None
+    """The FSU joint-speed limit in force (None: off)."""
+    fsu_tcp_speed_mm_s: float | None = None
+    """The FSU TCP-speed limit in force (None: off)."""
+    pfl: str = "off"
+    """The PFL function: "off" (no PFL in this cell), "idle", "stop" (81702 on) or
+    "escape" (81703 on, retreating after a clamping)."""
+    events: tuple[FiredEventInfo, ...] = ()
+    """Scenario events fired so far."""
+    motoros: str = "running"
+    """MotoROS's start-up: "running", what it waits for, or why it halted (§2.1, §8)."""
 
 
 class MotoRosController(Protocol):
@@ -297,4 +321,35 @@ class FaultInjection(Protocol):
 
     def set_io_api_failure(self, *, reads: bool = False, writes: bool = False) -> None:
         """Make client IO reads (1004) and/or writes (1005) fail."""
+        ...
+
+
+class StartupView(Protocol):
+    """Whether MotoROS passed its start-up checks (the runtime starts its servers then)."""
+
+    @property
+    def motoros_started(self) -> bool: ...
+
+
+class SafetyPanel(Protocol):
+    """The cell's safety functions as the operator drives them (HTTP ``/api/pfl``,
+    ``/api/fsu``, ``/api/scenario``). ``VirtualController`` implements it; refusals raise
+    ``ValueError`` saying why."""
+
+    def load_scenario(self, scenario: Scenario) -> None:
+        """Run a scenario's timed events from the next tick."""
+        ...
+
+    def pfl_event(self, event: str, *, retreat_ms: int = ..., stop_ms: int = ...) -> None:
+        """A PFL "contact" or "clamping" (retreating ``retreat_ms``) now."""
+        ...
+
+    def set_fsu(
+        self,
+        *,
+        joint_speed_pct: int | None = None,
+        tcp_speed_mm_s: float | None = None,
+        off: bool = False,
+    ) -> None:
+        """Switch the FSU speed limits at run time."""
         ...

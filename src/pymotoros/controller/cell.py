@@ -23,6 +23,8 @@ from typing import Final
 from pymotoros.controller.api import AlarmInfo, PendantMode
 from pymotoros.controller.inform import BUILTIN_VARIANTS, JobRunner, load_jobs
 from pymotoros.controller.io_image import IoImage
+from pymotoros.controller.peripherals import MAX_DELAY_MS, PeripheralConfig
+from pymotoros.controller.safety.startup import StartupConfig, check_parameters
 from pymotoros.errors import ConfigError, JobError
 from pymotoros.models import (
     DEFAULT_CONTROLLER,
@@ -119,6 +121,11 @@ class CellConfig:
     """A built-in INIT_ROS variant name, "auto", or job files/directories."""
     warnings: tuple[str, ...] = ()
     source: str = "<default cell>"
+    startup: StartupConfig = field(default_factory=StartupConfig)
+    peripherals: tuple[PeripheralConfig, ...] = ()
+    """``[[peripherals]]``: inputs that follow other bits like devices (docs/cell.md)."""
+    """What MotoROS's start-up checks read: software version, conveyor tracking, set-up
+    parameters (``[controller]``, ``[controller.parameters]``)."""
 
     def tool(self, group_index: int, number: int) -> ToolConfig:
         """Tool file ``number`` of a group: its own ``[[groups.tools]]`` entry, else the
@@ -344,6 +351,7 @@ def cell_from_dict(
         ),
     )
     pfl_value = ctrl_t.get("pfl")
+    startup = _startup(ctrl_t)
     ctrl_t.finish()
 
     parts: list[tuple[str, GroupModel]] = []
@@ -408,6 +416,7 @@ def cell_from_dict(
         numbers.update(t.number for t in gt)
 
     initial = _initial(top.table("initial"), groups, numbers)
+    peripherals = _peripherals(top, ctrl)
     top.finish()
     for w in warnings:
         logger.warning("%s: %s", source, w)
@@ -425,6 +434,65 @@ def cell_from_dict(
         jobs=jobs,
         warnings=tuple(warnings),
         source=source,
+        startup=startup,
+        peripherals=peripherals,
+    )
+
+
+def _peripherals(top: _Table, ctrl: ControllerModel) -> tuple[PeripheralConfig, ...]:
+    image = IoImage(ctrl)
+    out: list[PeripheralConfig] = []
+    for i, entry in enumerate(top.array("peripherals")):
+        t = _Table(entry, f"peripherals[{i}]", top.source)
+        addresses = []
+        for key in ("input", "follows"):
+            address = t.integer(key, -1, 0, 10**6 - 1)
+            if address < 0:
+                raise t.error(key, "is required (a bit address, e.g. 20010 or 10010)")
+            try:
+                image.check_forcible(address, 0)
+            except ValueError as exc:
+                raise t.error(key, str(exc)) from None
+            addresses.append(address)
+        if addresses[0] == addresses[1]:
+            raise t.error("follows", "a peripheral cannot follow its own input")
+        if addresses[0] in {p.input for p in out}:
+            raise t.error("input", f"bit {addresses[0]} is already driven by another peripheral")
+        out.append(
+            PeripheralConfig(
+                name=t.string("name", f"peripheral {i}"),
+                input=addresses[0],
+                follows=addresses[1],
+                delay_ms=t.integer("delay_ms", 0, 0, MAX_DELAY_MS),
+                invert=t.boolean("invert", False),
+            )
+        )
+        t.finish()
+    return tuple(out)
+
+
+def _startup(ctrl_t: _Table) -> StartupConfig:
+    software = ctrl_t.get("software")
+    if software is not None and not isinstance(software, str):
+        raise ctrl_t.error(
+            "software", f"must be a string such as 'YAS2.80.00-00', not {software!r}"
+        )
+    params_t = ctrl_t.table("parameters")
+    problems = check_parameters(params_t.data)
+    if problems:
+        raise params_t.error(problems[0].split(":", 1)[0], problems[0].split(":", 1)[1].strip())
+    code = ctrl_t.get("validation_code")
+    if code is not None and (
+        not isinstance(code, int) or isinstance(code, bool) or not (code in (9, 10) or code > 11)
+    ):
+        raise ctrl_t.error(
+            "validation_code", f"must be 9, 10 or an integer above 11 (e.g. 102), not {code!r}"
+        )
+    return StartupConfig(
+        software=software,
+        conveyor_tracking=ctrl_t.boolean("conveyor_tracking", False),
+        parameters={k: int(v) for k, v in params_t.data.items() if isinstance(v, int)},
+        validation_code=code,
     )
 
 

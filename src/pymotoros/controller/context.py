@@ -11,6 +11,7 @@ it consults) and adding a shared part does not ripple through every signature.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 
 from pymotoros.controller.cell import CellConfig
@@ -36,6 +37,9 @@ class MotoRosContext:
     axes: tuple[GroupAxes, ...]
     interpolators: tuple[GroupInterpolator, ...]
     servos: tuple[ServoGroup, ...]
+    increment_clip: Callable[[], tuple[tuple[int, ...], ...] | None] | None = None
+    """The controller's FSU clip per group and slot for this tick (None: no clip); MotoROS
+    never calls it: the IncMove task uses it as the controller's increment function."""
 
     @property
     def num_groups(self) -> int:

@@ -26,6 +26,7 @@ from pymotoros.controller.alarms import Alarm, AlarmClass, AlarmHistory
 from pymotoros.controller.api import (
     ControllerSnapshot,
     FeedbackData,
+    FiredEventInfo,
     GroupSnapshot,
     IoRead,
     Outcome,
@@ -49,15 +50,20 @@ from pymotoros.controller.machine import (
     ServoPower,
 )
 from pymotoros.controller.motoros import MotoRos
+from pymotoros.controller.peripherals import Peripherals
 from pymotoros.controller.processes import ControllerClock, Scheduler
 from pymotoros.controller.queues import MotionQueues
 from pymotoros.controller.readiness import Readiness
 from pymotoros.controller.registers import RegisterOutputs
+from pymotoros.controller.safety import DEFAULT_RETREAT_MS, PFL_STOP_MS, SafetyUnit
+from pymotoros.controller.safety.startup import MotoRosStartup, setup_validation
+from pymotoros.controller.scenario import FiredEvent, Scenario, ScenarioDriver, perform
 from pymotoros.controller.servo import IN_MOTION_PULSES, ServoGroup
 from pymotoros.controller.skillsnd import SkillListeners
 from pymotoros.controller.tcp import TcpTracker
 from pymotoros.controller.trajectory import DhTable, TrajectoryPoints
 from pymotoros.controller.units import RosConverter
+from pymotoros.models import robot_model
 from pymotoros.models.controllers import M_REGISTER_BASE
 from pymotoros.motion import GroupAxes, GroupInterpolator, to_pulses
 from pymotoros.protocol.constants import (
@@ -83,6 +89,17 @@ _FORCED_ALARM_CODE: Final = {
 }
 
 SnapshotObserver = Callable[[ControllerSnapshot], None]
+
+
+def _why_no_pfl(cell: CellConfig) -> str:
+    """Why a cell has no PFL function ("" when it has one)."""
+    if cell.pfl:
+        return ""
+    if not cell.controller.pfl_signals:
+        return f"the {cell.controller.type.value} has no PFL (only YRC1000 / YRC1000micro)"
+    if not any(robot_model(r).pfl for r in cell.robots):
+        return f"{', '.join(cell.robots)} is not an HC (collaborative) robot"
+    return "the cell's PFL option is off (controller.pfl = false)"
 
 
 def _pad(values: Sequence[float]) -> tuple[float, ...]:
@@ -138,6 +155,15 @@ class VirtualController:
             )
             for g, axes in enumerate(self._axes)
         )
+        self._safety = safety = SafetyUnit(
+            self._io,
+            self._axes,
+            self._servos,
+            period_ms=ctrl.interpolation_period_ms,
+            pfl_enabled=cell.pfl,
+            pfl_why_disabled=_why_no_pfl(cell),
+            fsu_boot_pct=cell.servo.fsu_speed_limit_pct,
+        )
         # MotoROS (see motoros.py for the map of its parts)
         self._queues = queues = MotionQueues(self._interps)
         ctx = MotoRosContext(
@@ -150,6 +176,7 @@ class VirtualController:
             axes=self._axes,
             interpolators=self._interps,
             servos=self._servos,
+            increment_clip=safety.fsu.limits,
         )
         self._readiness = readiness = Readiness(ctx)
         self._commands = commands = MotionCommands(ctx, readiness)
@@ -163,7 +190,21 @@ class VirtualController:
         self._power_losses = 0
         self._eco_idle_ms = None if cell.servo.eco_idle_s is None else cell.servo.eco_idle_s * 1000
         self._machine.add_observer(self._on_operator_change)
-        readiness.boot()
+        readiness.init_read()
+        self._startup = MotoRosStartup(
+            setup_validation(ctrl, any(robot_model(r).pfl for r in cell.robots), cell.startup),
+            alarms_on=lambda: any(self._io.get(a) for a in signals.ALARM_BITS),
+            raise_alarm=self.raise_alarm,
+            boot=readiness.init_done,
+        )
+        self._starting = not self._startup.settled
+        self._peripherals = Peripherals(self._io, cell.peripherals)
+        self._has_peripherals = self._peripherals.active
+        self._pfl = safety.pfl
+        self._scenario: ScenarioDriver | None = None
+        self._fired: list[FiredEvent] = []
+        self.drop_motion_hook: Callable[[], None] | None = None
+        """Closes the motion connection (set by the runtime; a scenario's drop_motion)."""
 
     # ================================================================== time
 
@@ -193,6 +234,10 @@ class VirtualController:
         timer = machine.next_timer_ms
         if timer is not None and now >= timer:
             machine.advance(now)
+        if self._starting:
+            self._startup.tick(now)
+            self._starting = not self._startup.settled
+        safety_moved = self._pfl.phase != "idle" and self._safety.tick(now)
         runner = self._runner
         if (now >= runner.wake_ms or self._io.changes != runner.seen_changes) and runner.step(now):
             machine.fire(Event.END_JOB, now)
@@ -202,7 +247,8 @@ class VirtualController:
             if self._eco_idle_ms is not None:
                 self._check_eco_idle(now, self._eco_idle_ms)
         inc_move = self._inc_move
-        if not inc_move.inc_move_tick():
+        moved = inc_move.inc_move_tick()
+        if not moved and not safety_moved:
             for servo in self._servos:
                 servo.idle()
         inc_move.fill_tick()
@@ -213,6 +259,10 @@ class VirtualController:
                 clock.tick_count,
                 machine.state.drives_powered,
             )
+        if self._scenario is not None:
+            self._scenario.tick(now, moved)
+        if self._has_peripherals:
+            self._peripherals.tick(now)
         scheduler = self._scheduler
         if scheduler.busy:
             scheduler.advance()
@@ -398,6 +448,14 @@ class VirtualController:
             motion_ready=self._readiness.outlook(),
             groups=tuple(groups),
             errors=tuple(e.info for e in s.errors),
+            fsu_joint_speed_pct=self._safety.fsu.active.joint_speed_pct,
+            fsu_tcp_speed_mm_s=self._safety.fsu.active.tcp_speed_mm_s,
+            pfl=self._safety.pfl.status.phase if self._safety.pfl.enabled else "off",
+            motoros=self._startup.phase,
+            events=tuple(
+                FiredEventInfo(f.t, f.action, tuple(f.params.items()), f.error)
+                for f in self._fired
+            ),
         )
 
     @property
@@ -536,6 +594,77 @@ class VirtualController:
         for cls in AlarmClass:
             handlers[cls.address] = alarm_output(cls)
         return handlers
+
+    # ================================================================== scenarios
+
+    def load_scenario(self, scenario: Scenario) -> None:
+        """Run ``scenario``'s events from the next tick (replacing events not fired yet)."""
+        driver = ScenarioDriver(
+            scenario,
+            perform=lambda event: perform(self, event),
+            read_io=self._read_any_io,
+            now_ms=self.time_ms,
+        )
+        driver.fired = self._fired
+        self._scenario = driver
+        logger.info("scenario %s: %d events", scenario.source, len(scenario.events))
+
+    @property
+    def fired_events(self) -> tuple[FiredEvent, ...]:
+        """Scenario events fired so far (time since boot, action, parameters, refusal)."""
+        return tuple(self._fired)
+
+    def _read_any_io(self, address: int) -> int:
+        if address >= M_REGISTER_BASE:
+            return self._io.read_mregister(address - M_REGISTER_BASE).value
+        return self._io.get(address)
+
+    def drop_motion(self) -> None:
+        """Close the motion connection as a pulled cable (a scenario's ``drop_motion``)."""
+        if self.drop_motion_hook is None:
+            raise ValueError("drop_motion: no motion server is attached to this controller")
+        self.drop_motion_hook()
+
+    # ================================================================== safety functions
+
+    @property
+    def motoros_started(self) -> bool:
+        """MotoROS passed its start-up checks: INIT_DONE is on, its servers may listen."""
+        return self._startup.started
+
+    @property
+    def motoros_phase(self) -> str:
+        """Where MotoROS's start-up is: "running", waiting (for what), or halted (why)."""
+        return self._startup.phase
+
+    @property
+    def safety(self) -> SafetyUnit:
+        """The cell's safety functions (PFL, FSU), for the control API and tests."""
+        return self._safety
+
+    def pfl_event(
+        self, event: str, *, retreat_ms: int = DEFAULT_RETREAT_MS, stop_ms: int = PFL_STOP_MS
+    ) -> None:
+        """A PFL contact or clamping now (ValueError when the cell cannot have one)."""
+        self._safety.pfl.event(
+            event,
+            self._clock.time_ms,
+            moving=self.in_motion(),
+            stop_ms=stop_ms,
+            retreat_ms=retreat_ms if event == "clamping" else 0,
+        )
+
+    def set_fsu(
+        self,
+        *,
+        joint_speed_pct: int | None = None,
+        tcp_speed_mm_s: float | None = None,
+        off: bool = False,
+    ) -> None:
+        """Switch the FSU speed limits at run time (ValueError for a bad request)."""
+        self._safety.fsu.set(
+            joint_speed_pct=joint_speed_pct, tcp_speed_mm_s=tcp_speed_mm_s, off=off
+        )
 
     def _force_error(self, on: bool) -> None:
         if on:

@@ -38,7 +38,6 @@ class IncMoveTask:
     """The IncMove task (increments to the servos) and the AddToIncQueue tasks."""
 
     def __init__(self, ctx: MotoRosContext, readiness: Readiness) -> None:
-        cell = ctx.cell
         self._clock = ctx.clock
         self._io = ctx.io
         self._machine = ctx.machine
@@ -56,16 +55,10 @@ class IncMoveTask:
         self._takes_gen = -1
         self._takes_changes = -1
         self._takes: IncMoveReturn = IncMoveReturn.IMOV_UNREADY
-        # FSU speed limit (cell option) and MotoROS's compensation for it (§5.6 step 3)
-        pct = cell.servo.fsu_speed_limit_pct
-        self._fsu_limit: tuple[tuple[int, ...], ...] | None = (
-            None
-            if pct is None
-            else tuple(
-                tuple(max(1, m * pct // 100) if m else 0 for m in a.max_increment)
-                for a in self.axes
-            )
-        )
+        # The controller's FSU clip (safety unit) and MotoROS's compensation for it (§5.6 step 3)
+        self._clip = ctx.increment_clip
+        self._fsu_missing = False
+        """Pulses sent that the controller has not executed yet (resend before reading queues)."""
         self._to_process: list[list[int]] = [[0] * SLOTS for _ in self.axes]
         self._processed: list[list[int]] = [[0] * SLOTS for _ in self.axes]
         # IncMove retry while the controller leaves eco mode (§5.6 step 6.2)
@@ -83,11 +76,13 @@ class IncMoveTask:
             return self._retry_eco()
         # motion-ready is false while the stop flag is up (Readiness computes it so)
         if not self._readiness.motion_ready:
-            if self._fsu_limit is not None:
+            if self._fsu_missing:
                 self._fsu_reset()
             return False
-        if self._fsu_limit is not None:
-            return self._inc_move_fsu(self._fsu_limit)
+        clip = self._clip
+        limits = clip() if clip is not None else None
+        if limits is not None or self._fsu_missing:
+            return self._inc_move_fsu(limits)
         incs = inc_move(self.interpolators)
         if incs is None:
             return False
@@ -117,11 +112,12 @@ class IncMoveTask:
         return self._eco_retry is not None
 
     def _fsu_reset(self) -> None:
+        self._fsu_missing = False
         for g in range(self._num_groups):
             self._to_process[g] = [0] * SLOTS
             self._processed[g] = [0] * SLOTS
 
-    def _inc_move_fsu(self, limits: tuple[tuple[int, ...], ...]) -> bool:
+    def _inc_move_fsu(self, clip: tuple[tuple[int, ...], ...] | None) -> bool:
         """IncMove with the v1.9.12 FSU compensation, on a controller whose FSU clips.
 
         The controller executes at most ``limits`` pulses per axis and tick and drops
@@ -156,10 +152,14 @@ class IncMoveTask:
             self._fsu_reset()
             return self._inc_move_failed(result, tuple(tuple(s) for s in sends))
         self.last_motion_ms = self._clock.time_ms
+        missing = False
         for g, servo in enumerate(self._servos):
-            executed = servo.apply_limited(sends[g], limits[g])
+            limit = clip[g] if clip is not None else self.axes[g].max_increment
+            executed = servo.apply_limited(sends[g], limit)
             self._processed[g] = list(executed)
             self._to_process[g] = to_process[g]
+            missing = missing or executed != tuple(to_process[g])
+        self._fsu_missing = missing
         return True
 
     def _controller_takes_increments(self) -> IncMoveReturn:

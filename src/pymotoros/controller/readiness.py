@@ -226,10 +226,19 @@ class Readiness:
 
     def boot(self) -> None:
         """Ros_Controller_Init: clear the feedback outputs, read the status, INIT_DONE."""
+        self.init_read()
+        self.init_done()
+
+    def init_read(self) -> None:
+        """Ros_Controller_Init's first steps: clear the feedback outputs, read the status once."""
         io = self._io
         for address in (*signals.FEEDBACK_OUTPUTS, *signals.RESERVED_OUTPUTS):
             io.set(address, 0)
         self.status_update()
+
+    def init_done(self) -> None:
+        """The start-up checks passed: INIT_DONE on, the connection server runs (§2.1)."""
+        io = self._io
         io.set(signals.INIT_DONE, 1)
         io.set(signals.CONNECT_SERVER_RUNNING, 1)
 

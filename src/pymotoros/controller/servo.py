@@ -65,6 +65,7 @@ class ServoGroup:
         "_weights",
         "_window",
         "period_ms",
+        "recorder",
     )
 
     def __init__(
@@ -94,6 +95,8 @@ class ServoGroup:
         self._weights = tuple((w - 1 - m) / w for m in range(w))
         self._noise_pulses = noise_pulses
         self._seed = _mix(seed * SEED_STRIDE + group_index)
+        self.recorder: deque[Sequence[int]] | None = None
+        """When set (the PFL function), every tick's increment is appended, zeros included."""
 
     @property
     def lag_ticks(self) -> int:
@@ -123,6 +126,9 @@ class ServoGroup:
     def apply(self, increment: Sequence[int]) -> None:
         """One tick with these pulse increments (8 slots)."""
         self._history.append(increment)
+        recorder = self.recorder
+        if recorder is not None:
+            recorder.append(increment)
         unfolded = self._unfolded
         unfolded.append(increment)
         self._quiet = 0
@@ -131,6 +137,9 @@ class ServoGroup:
 
     def idle(self) -> None:
         """One tick without increments."""
+        recorder = self.recorder
+        if recorder is not None:
+            recorder.append(ZERO_INCREMENT)
         if self._quiet < self._window:
             self._history.append(ZERO_INCREMENT)
             self._quiet += 1

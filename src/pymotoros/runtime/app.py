@@ -46,7 +46,7 @@ from pymotoros.runtime.state_server import (
     StateServer,
 )
 from pymotoros.runtime.target import SimulatedController
-from pymotoros.runtime.tcp import bind_socket, is_loopback
+from pymotoros.runtime.tcp import bind_socket, bind_unlistened, is_loopback
 from pymotoros.runtime.ticker import Ticker, TickStats
 
 __all__ = ["DEFAULT_HTTP_PORT", "BoundPorts", "SimulatorApp", "SimulatorConfig"]
@@ -56,6 +56,10 @@ logger = logging.getLogger(__name__)
 DEFAULT_HTTP_PORT: Final = 8080
 """The control API's default port (``pymotoros sim --http-port``)."""
 
+MOTOROS_PORTS: Final = 3
+"""Motion, state and IO: the first three sockets, MotoROS's (the fourth is the control API)."""
+STARTUP_POLL_TICKS: Final = 25
+"""How often (ticks: 100 ms at 4 ms) the runtime looks whether MotoROS has started."""
 HTTP_STOP_TIMEOUT_S: Final = 3.0
 """How long the HTTP server may take to finish its requests at shutdown."""
 
@@ -112,6 +116,8 @@ class SimulatorApp:
             message_gap=self.config.state_message_gap,
         )
         self.io = IoServer(controller, order)
+        if hasattr(controller, "drop_motion_hook"):  # a scenario's drop_motion
+            controller.drop_motion_hook = self.motion.drop_clients
         self._ports: BoundPorts | None = None
         self._ready = asyncio.Event()
         self._stop = asyncio.Event()
@@ -121,6 +127,7 @@ class SimulatorApp:
         self._loop_tasks: list[asyncio.Task[None]] = []
         self._started = False
         self._shutdown_done = False
+        self._motoros_listening = False
 
     # ----------------------------------------------------------- public
 
@@ -169,15 +176,21 @@ class SimulatorApp:
         try:
             async with asyncio.TaskGroup() as tg:
                 try:
-                    motion = await self.motion.start(tg, socks[0])
-                    state = await self.state.start(tg, socks[1])
-                    io = await self.io.start(tg, socks[2])
+                    motion, state, io = (int(s.getsockname()[1]) for s in socks[:3])
+                    if self._motoros_started():
+                        await self._start_motoros(tg, socks)
                     http = await self._start_http(tg, socks[3]) if len(socks) > 3 else None
                     self._ports = BoundPorts(motion, state, io, http)
                     self._loop_tasks = [
                         tg.create_task(self.ticker.run(), name="interpolation"),
                         tg.create_task(self.state.broadcast(), name="state-broadcast"),
                     ]
+                    if not self._motoros_listening:
+                        self._loop_tasks.append(
+                            tg.create_task(
+                                self._start_motoros_when_ready(tg, socks), name="motoros-startup"
+                            )
+                        )
                     logger.info(
                         "simulator ready: motion %d, state %d, io %d, http %s (period %d ms, %s)",
                         motion,
@@ -195,6 +208,40 @@ class SimulatorApp:
             for sock in socks:  # already closed by their servers, unless start-up failed
                 sock.close()
 
+    @property
+    def motoros_listening(self) -> bool:
+        """MotoROS's servers listen (False while its start-up checks hold it back)."""
+        return self._motoros_listening
+
+    def listening_ports(self) -> tuple[int | None, int | None, int | None]:
+        """(motion, state, io) ports that accept connections; None while not listening."""
+        if self._ports is None or not self._motoros_listening:
+            return (None, None, None)
+        return (self._ports.motion, self._ports.state, self._ports.io)
+
+    def _motoros_started(self) -> bool:
+        started = getattr(self.controller, "motoros_started", True)
+        return bool(started)
+
+    async def _start_motoros(self, tg: asyncio.TaskGroup, socks: list[socket.socket]) -> None:
+        await self.motion.start(tg, socks[0])
+        await self.state.start(tg, socks[1])
+        await self.io.start(tg, socks[2])
+        self._motoros_listening = True
+
+    async def _start_motoros_when_ready(
+        self, tg: asyncio.TaskGroup, socks: list[socket.socket]
+    ) -> None:
+        """MotoROS's servers start once its start-up checks pass (never after a fatal one)."""
+        logger.warning(
+            "MotoROS is not started yet (%s): its ports refuse connections",
+            getattr(self.controller, "motoros_phase", "start-up checks"),
+        )
+        while not self._motoros_started():
+            await self.ticker.wait_ticks(STARTUP_POLL_TICKS)
+        await self._start_motoros(tg, socks)
+        logger.info("MotoROS started: motion, state and IO ports listening")
+
     def _bind_all(self) -> list[socket.socket]:
         cfg = self.config
         ports = [cfg.motion_port, cfg.state_port, cfg.io_port]
@@ -202,8 +249,11 @@ class SimulatorApp:
             ports.append(cfg.http_port)
         socks: list[socket.socket] = []
         try:
-            for port in ports:
-                socks.append(bind_socket(cfg.host, port))
+            for i, port in enumerate(ports):
+                # MotoROS's ports are bound now (a port in use fails at once) but listen
+                # only when its servers start
+                bind = bind_unlistened if i < MOTOROS_PORTS else bind_socket
+                socks.append(bind(cfg.host, port))
         except BaseException:
             for sock in socks:
                 sock.close()
@@ -243,7 +293,9 @@ class SimulatorApp:
 
     async def _start_http(self, tg: asyncio.TaskGroup, sock: socket.socket) -> int:
         bound = int(sock.getsockname()[1])
-        app = create_http_app(self.controller, self.tick_stats, self.ticker.reset_stats)
+        app = create_http_app(
+            self.controller, self.tick_stats, self.ticker.reset_stats, ports=self.listening_ports
+        )
         config = uvicorn.Config(
             app,
             log_level="warning",

@@ -17,7 +17,7 @@ from __future__ import annotations
 
 import logging
 from collections.abc import Callable
-from typing import Literal
+from typing import Any, Literal
 
 from fastapi import FastAPI, Request
 from fastapi.exceptions import RequestValidationError
@@ -27,6 +27,7 @@ from starlette.exceptions import HTTPException as StarletteHTTPException
 
 from pymotoros import __version__
 from pymotoros.controller.api import ControllerSnapshot, PendantMode, TcpSnapshot
+from pymotoros.controller.scenario import parse_scenario
 from pymotoros.runtime.target import SimulatedController
 from pymotoros.runtime.ticker import TickStats
 
@@ -77,6 +78,30 @@ class IoBody(BaseModel):
     value: int = Field(ge=0, le=0xFFFF, description="0/1 for a bit, 0..65535 for an M-register")
 
 
+class PflBody(BaseModel):
+    model_config = _STRICT
+    event: Literal["contact", "clamping"] = Field(
+        description="contact: PFL stop; clamping: PFL stop, then retreat with PFL escape"
+    )
+    retreat_ms: int | None = Field(
+        default=None, ge=1, description="clamping only: how much of the last motion to retreat"
+    )
+    stop_ms: int | None = Field(
+        default=None, ge=0, le=60_000, description="how long PFL stop stays on (default 500)"
+    )
+
+
+class FsuBody(BaseModel):
+    model_config = _STRICT
+    joint_speed_pct: int | None = Field(
+        default=None, ge=1, le=100, description="share of each axis's maximum speed"
+    )
+    tcp_speed_mm_s: float | None = Field(
+        default=None, gt=0, description="TCP speed limit (needs the kinematics model)"
+    )
+    off: bool = Field(default=False, description="switch every FSU speed limit off")
+
+
 # --------------------------------------------------------------------------- answers
 
 
@@ -124,6 +149,24 @@ class TickModel(BaseModel):
     lateness_ms: LatenessModel
 
 
+class ScenarioBody(BaseModel):
+    model_config = ConfigDict(extra="forbid", frozen=True)
+    events: list[dict[str, Any]] = Field(
+        description="timed events, the keys of a scenario file's [[events]] tables"
+    )
+
+
+class FsuModel(BaseModel):
+    joint_speed_pct: int | None
+    tcp_speed_mm_s: float | None
+
+
+class PortsModel(BaseModel):
+    motion: int | None
+    state: int | None
+    io: int | None
+
+
 class StateModel(BaseModel):
     mode: Literal["play", "teach"]
     remote: bool
@@ -134,6 +177,25 @@ class StateModel(BaseModel):
     motion_ready: bool
     groups: list[GroupModel]
     tick: TickModel
+    fsu: FsuModel = Field(
+        default_factory=lambda: FsuModel(joint_speed_pct=None, tcp_speed_mm_s=None),
+        description="the FSU speed limits in force (null: off)",
+    )
+    pfl: Literal["off", "idle", "stop", "escape"] = Field(
+        default="off", description="the PFL function: off (not in this cell), idle, stop, escape"
+    )
+    events: list[dict[str, Any]] = Field(
+        default_factory=list,
+        description='scenario events fired: {"t": seconds since boot, "action": ..., params}',
+    )
+    motoros: str = Field(
+        default="running",
+        description="MotoROS's start-up: running, what it waits for, or why it halted",
+    )
+    ports: PortsModel = Field(
+        default_factory=lambda: PortsModel(motion=None, state=None, io=None),
+        description="MotoROS's ports that accept connections (null: not listening)",
+    )
 
 
 class ErrorModel(BaseModel):
@@ -156,7 +218,11 @@ def _tcp_model(tcp: TcpSnapshot | None) -> TcpModel | None:
     )
 
 
-def state_model(snapshot: ControllerSnapshot, tick: TickStats) -> StateModel:
+def state_model(
+    snapshot: ControllerSnapshot,
+    tick: TickStats,
+    ports: tuple[int | None, int | None, int | None] = (None, None, None),
+) -> StateModel:
     """The ``GET /api/state`` document for a controller snapshot and the loop's statistics."""
     return StateModel(
         mode="play" if snapshot.mode is PendantMode.PLAY else "teach",
@@ -179,6 +245,22 @@ def state_model(snapshot: ControllerSnapshot, tick: TickStats) -> StateModel:
             )
             for g in snapshot.groups
         ],
+        fsu=FsuModel(
+            joint_speed_pct=snapshot.fsu_joint_speed_pct,
+            tcp_speed_mm_s=snapshot.fsu_tcp_speed_mm_s,
+        ),
+        pfl=snapshot.pfl,  # type: ignore[arg-type]
+        motoros=snapshot.motoros,
+        events=[
+            {
+                "t": e.t,
+                "action": e.action,
+                **dict(e.params),
+                **({"error": e.error} if e.error else {}),
+            }
+            for e in snapshot.events
+        ],
+        ports=PortsModel(motion=ports[0], state=ports[1], io=ports[2]),
         tick=TickModel(
             period_ms=tick.period_ms,
             count=tick.count,
@@ -253,6 +335,8 @@ def create_http_app(
     controller: SimulatedController,
     tick_stats: Callable[[], TickStats],
     reset_tick_stats: Callable[[], None] | None = None,
+    *,
+    ports: Callable[[], tuple[int | None, int | None, int | None]] | None = None,
 ) -> FastAPI:
     """The control API of one simulated controller."""
     app = FastAPI(
@@ -268,7 +352,8 @@ def create_http_app(
     app.add_exception_handler(ValueError, _value_error)
 
     def state() -> StateModel:
-        return state_model(controller.snapshot(), tick_stats())
+        listening = ports() if ports is not None else (None, None, None)
+        return state_model(controller.snapshot(), tick_stats(), listening)
 
     @app.get("/api/state", response_model=StateModel, tags=["state"])
     async def get_state() -> StateModel:
@@ -343,6 +428,37 @@ def create_http_app(
         """Fault injection: make client IO reads (1004) and/or writes (1005) fail."""
         logger.info("operator: IO API failure reads=%s writes=%s", body.reads, body.writes)
         controller.set_io_api_failure(reads=body.reads, writes=body.writes)
+        return state()
+
+    @app.post("/api/pfl", response_model=StateModel, responses=_ERRORS, tags=["safety"])
+    async def pfl(body: PflBody) -> StateModel:
+        """A PFL contact (PFL stop) or clamping (stop, then retreat with PFL escape)."""
+        logger.info("operator: PFL %s", body.event)
+        kwargs: dict[str, int] = {}
+        if body.retreat_ms is not None:
+            if body.event != "clamping":
+                raise ValueError("retreat_ms applies to a clamping only")
+            kwargs["retreat_ms"] = body.retreat_ms
+        if body.stop_ms is not None:
+            kwargs["stop_ms"] = body.stop_ms
+        controller.pfl_event(body.event, **kwargs)
+        return state()
+
+    @app.post("/api/fsu", response_model=StateModel, responses=_ERRORS, tags=["safety"])
+    async def fsu(body: FsuBody) -> StateModel:
+        """Switch the FSU speed limits at run time (the cell file's value is the boot value)."""
+        logger.info("operator: FSU %s", body.model_dump(exclude_defaults=True))
+        controller.set_fsu(
+            joint_speed_pct=body.joint_speed_pct, tcp_speed_mm_s=body.tcp_speed_mm_s, off=body.off
+        )
+        return state()
+
+    @app.post("/api/scenario", response_model=StateModel, responses=_ERRORS, tags=["safety"])
+    async def scenario(body: ScenarioBody) -> StateModel:
+        """Run timed events (same keys as a scenario file); replaces events not fired yet."""
+        parsed = parse_scenario({"events": body.events}, source="POST /api/scenario")
+        logger.info("operator: scenario with %d events", len(parsed.events))
+        controller.load_scenario(parsed)
         return state()
 
     @app.post("/api/tick/reset", response_model=StateModel, tags=["state"])

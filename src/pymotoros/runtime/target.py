@@ -4,10 +4,17 @@ from __future__ import annotations
 
 from typing import Protocol
 
-from pymotoros.controller.api import FaultInjection, MotoRosController, OperatorPanel
+from pymotoros.controller.api import (
+    FaultInjection,
+    MotoRosController,
+    OperatorPanel,
+    SafetyPanel,
+)
 
 __all__ = ["SimulatedController"]
 
 
-class SimulatedController(MotoRosController, OperatorPanel, FaultInjection, Protocol):
+class SimulatedController(
+    MotoRosController, OperatorPanel, FaultInjection, SafetyPanel, Protocol
+):
     """``VirtualController`` satisfies this: the servers use one side, the HTTP API the rest."""

@@ -59,6 +59,22 @@ def bind_socket(host: str, port: int) -> socket.socket:
     return sock
 
 
+def bind_unlistened(host: str, port: int) -> socket.socket:
+    """A TCP socket bound to ``host:port`` but not listening: connections are refused
+    until a server starts on it (MotoROS before its start-up checks pass)."""
+    family = socket.AF_INET6 if ":" in host else socket.AF_INET
+    sock = socket.socket(family, socket.SOCK_STREAM)
+    try:
+        if hasattr(socket, "SO_REUSEADDR"):
+            sock.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
+        sock.bind((host, port))
+    except BaseException:
+        sock.close()
+        raise
+    sock.setblocking(False)
+    return sock
+
+
 class Connection:
     """One accepted client."""
 
@@ -117,6 +133,11 @@ class TcpService(ABC):
     def stop_accepting(self) -> None:
         if self._server is not None:
             self._server.close()
+
+    def drop_clients(self) -> None:
+        """Close every client's connection now, as a cable pulled (fault injection)."""
+        for conn in list(self._tasks):
+            conn.close()
 
     async def close_clients(self) -> None:
         """Close every client and wait for its task to finish."""

@@ -1,0 +1,77 @@
+"""What ``pymotoros status --api URL`` adds from the simulator's control API.
+
+A real controller shows PFL, FSU and alarm texts on its pendant only; the simulator's
+``GET /api/state`` has them, so ``status`` can show them next to the wire's view.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import json
+import urllib.error
+import urllib.request
+from typing import Any, Final
+
+from pymotoros.client.alarms import alarm_text
+from pymotoros.errors import ConfigError
+
+API_TIMEOUT_S: Final = 5.0
+
+
+def fetch_state(api: str) -> dict[str, Any]:
+    """``GET {api}/api/state`` (blocking); ConfigError with the URL when it fails."""
+    url = api.rstrip("/") + "/api/state"
+    if not url.startswith(("http://", "https://")):
+        raise ConfigError(
+            f"--api must be an http:// URL such as http://127.0.0.1:8080, not {api!r}"
+        )
+    try:
+        with urllib.request.urlopen(url, timeout=API_TIMEOUT_S) as reply:  # noqa: S310 - checked above
+            doc = json.load(reply)
+    except (OSError, ValueError) as exc:
+        raise ConfigError(f"cannot read the simulator's state from {url}: {exc}") from exc
+    if not isinstance(doc, dict):
+        raise ConfigError(f"{url} did not answer a JSON object")
+    return doc
+
+
+async def fetch_state_async(api: str) -> dict[str, Any]:
+    return await asyncio.to_thread(fetch_state, api)
+
+
+def safety_lines(doc: dict[str, Any] | None, error_code: int | None) -> list[str]:
+    """The status table's extra lines: alarm texts, PFL, FSU, MotoROS start-up."""
+    lines: list[str] = []
+    if doc is None:
+        text = alarm_text(error_code) if error_code else ""
+        if text:
+            lines.append(f"  alarm text        {text}")
+        return lines
+    for alarm in doc.get("alarms", []):
+        lines.append(
+            f"  alarm             {alarm['code']}/{alarm['subcode']} {alarm['text']}".rstrip()
+        )
+    lines.append(f"  PFL               {doc.get('pfl', 'off')}")
+    fsu = doc.get("fsu") or {}
+    limits = []
+    if fsu.get("joint_speed_pct") is not None:
+        limits.append(f"joints {fsu['joint_speed_pct']} %")
+    if fsu.get("tcp_speed_mm_s") is not None:
+        limits.append(f"TCP {fsu['tcp_speed_mm_s']:g} mm/s")
+    lines.append(f"  FSU limit         {', '.join(limits) or 'off'}")
+    motoros = doc.get("motoros", "running")
+    if motoros != "running":
+        lines.append(f"  MotoROS           {motoros}")
+    return lines
+
+
+def safety_data(doc: dict[str, Any] | None) -> dict[str, Any]:
+    """The ``--json`` keys added from the control API (empty without ``--api``)."""
+    if doc is None:
+        return {}
+    return {
+        "alarms": doc.get("alarms", []),
+        "pfl": doc.get("pfl"),
+        "fsu": doc.get("fsu"),
+        "motoros": doc.get("motoros"),
+    }

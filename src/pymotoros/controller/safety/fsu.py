@@ -1,0 +1,124 @@
+"""The Functional Safety Unit's speed limits, switchable at run time.
+
+The FSU is the controller's, not MotoROS's: it clips each tick's increment to what the
+active limits allow and drops the rest, with no signal to anyone (seed 003, Appendix B).
+MotoROS 1.9.12 notices only through the incremental-move results (the commanded
+position moved less than it sent) and resends the missing pulses (reference §5.6 step 3).
+
+:meth:`FsuFunction.limits` is the one place the per-tick, per-axis clip is computed; it
+combines the joint-speed limit (a share of each axis's maximum increment) with any
+number of :data:`IncrementLimiter` hooks. The TCP-speed limit needs forward kinematics:
+it is plugged in by assigning :attr:`FsuFunction.tcp_limiter`; until then a TCP-speed
+request is refused with a message saying so.
+"""
+
+from __future__ import annotations
+
+import logging
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+
+from pymotoros.controller.servo import ServoGroup
+from pymotoros.motion import GroupAxes
+
+logger = logging.getLogger(__name__)
+
+IncrementLimiter = Callable[[float, int, Sequence[int]], Sequence[int]]
+"""TCP-speed hook: ``(tcp_speed_mm_s, group index, commanded pulses) -> per-slot maximum
+|increment| (pulses) for this tick``. Filled by the kinematics model (issue 10)."""
+
+TCP_NEEDS_KINEMATICS = (
+    "the FSU TCP-speed limit (tcp_speed_mm_s) needs the robot's kinematics model, which "
+    "this build of the virtual controller does not have yet; use joint_speed_pct"
+)
+
+
+@dataclass(frozen=True, slots=True)
+class FsuLimits:
+    """The active limits (None: that limit is off)."""
+
+    joint_speed_pct: int | None
+    tcp_speed_mm_s: float | None
+
+
+class FsuFunction:
+    """The FSU's joint-speed (and, once kinematics exist, TCP-speed) limit."""
+
+    def __init__(
+        self,
+        axes: Sequence[GroupAxes],
+        servos: Sequence[ServoGroup],
+        boot_joint_speed_pct: int | None,
+    ) -> None:
+        self._axes = tuple(axes)
+        self._servos = tuple(servos)
+        self.tcp_limiter: IncrementLimiter | None = None
+        """The TCP-speed hook; None until a kinematics model provides it."""
+        self._joint_pct: int | None = None
+        self._tcp: float | None = None
+        self._joint_clip: tuple[tuple[int, ...], ...] | None = None
+        self._set_joint(boot_joint_speed_pct)
+
+    @property
+    def active(self) -> FsuLimits:
+        return FsuLimits(self._joint_pct, self._tcp)
+
+    def set(
+        self,
+        *,
+        joint_speed_pct: int | None = None,
+        tcp_speed_mm_s: float | None = None,
+        off: bool = False,
+    ) -> None:
+        """Switch limits at run time: each given limit replaces that limit; ``off`` clears all.
+
+        Raises ValueError for a value out of range, ``off`` with a limit, nothing given,
+        or a TCP-speed limit without the kinematics hook.
+        """
+        if off:
+            if joint_speed_pct is not None or tcp_speed_mm_s is not None:
+                raise ValueError("FSU: give either off=true or limits, not both")
+            logger.info("FSU limits off")
+            self._set_joint(None)
+            self._tcp = None
+            return
+        if joint_speed_pct is None and tcp_speed_mm_s is None:
+            raise ValueError("FSU: give joint_speed_pct, tcp_speed_mm_s or off=true")
+        if joint_speed_pct is not None and not 1 <= joint_speed_pct <= 100:
+            raise ValueError(f"FSU: joint_speed_pct must be 1..100, not {joint_speed_pct}")
+        if tcp_speed_mm_s is not None:
+            if not tcp_speed_mm_s > 0:
+                raise ValueError(f"FSU: tcp_speed_mm_s must be > 0, not {tcp_speed_mm_s}")
+            if self.tcp_limiter is None:
+                raise ValueError(TCP_NEEDS_KINEMATICS)
+        if joint_speed_pct is not None:
+            logger.info("FSU joint-speed limit %d %%", joint_speed_pct)
+            self._set_joint(joint_speed_pct)
+        if tcp_speed_mm_s is not None:
+            logger.info("FSU TCP-speed limit %g mm/s", tcp_speed_mm_s)
+            self._tcp = float(tcp_speed_mm_s)
+
+    def _set_joint(self, pct: int | None) -> None:
+        self._joint_pct = pct
+        self._joint_clip = (
+            None
+            if pct is None
+            else tuple(
+                tuple(max(1, m * pct // 100) if m else 0 for m in a.max_increment)
+                for a in self._axes
+            )
+        )
+
+    def limits(self) -> tuple[tuple[int, ...], ...] | None:
+        """Per group and slot, the most pulses the controller executes this tick (None: no clip)."""
+        clip = self._joint_clip
+        tcp = self._tcp
+        limiter = self.tcp_limiter
+        if tcp is None or limiter is None:
+            return clip
+        groups = []
+        for g, (axes, servo) in enumerate(zip(self._axes, self._servos, strict=True)):
+            base = clip[g] if clip is not None else axes.max_increment
+            extra = limiter(tcp, g, servo.command)
+            groups.append(tuple(min(b, e) for b, e in zip(base, extra, strict=True)))
+        return tuple(groups)

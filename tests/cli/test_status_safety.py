@@ -1,0 +1,56 @@
+"""``pymotoros status`` shows PFL, FSU and the alarm texts (with --api), not only codes."""
+
+from __future__ import annotations
+
+import json
+import sys
+import time
+from pathlib import Path
+
+from click.testing import CliRunner, Result
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "client"))
+from client_sim import Sim, running_sim
+
+from pymotoros.cli.main import cli
+from pymotoros.cli.sim_view import safety_lines
+
+STATUS_WAIT_S = 10.0
+
+
+def invoke(sim: Sim, *args: str) -> Result:
+    return CliRunner().invoke(cli, [*args, *sim.cli_args()], catch_exceptions=False)
+
+
+def test_status_with_the_control_api_shows_pfl_fsu_and_alarm_texts() -> None:
+    with running_sim() as sim:
+        api = f"http://127.0.0.1:{sim.http}"
+        plain = invoke(sim, "status", "--api", api)
+        assert plain.exit_code == 0, plain.output
+        assert "PFL               idle" in plain.output
+        assert "FSU limit         off" in plain.output
+        sim.api("/api/fsu", {"joint_speed_pct": 40})
+        sim.api("/api/alarm", {"code": 4107, "subcode": 2, "text": "OUT OF RANGE (ABSO DATA)"})
+        deadline = time.monotonic() + STATUS_WAIT_S
+        while True:  # the state port shows the alarm at its next 10 ms monitor read
+            table = invoke(sim, "status", "--api", api)
+            if "4107/2 OUT OF RANGE (ABSO DATA)" in table.output or time.monotonic() > deadline:
+                break
+        assert "4107/2 OUT OF RANGE (ABSO DATA)" in table.output
+        assert "FSU limit         joints 40 %" in table.output
+        data = json.loads(invoke(sim, "status", "--json", "--api", api).stdout)
+        assert data["fsu"] == {"joint_speed_pct": 40, "tcp_speed_mm_s": None}
+        assert data["pfl"] == "idle"
+        assert data["alarms"][0]["text"] == "OUT OF RANGE (ABSO DATA)"
+        bad = CliRunner().invoke(cli, ["status", "--api", "ftp://x", *sim.cli_args()])
+        assert bad.exit_code != 0
+        assert "--api must be an http:// URL" in bad.output
+
+
+def test_without_the_api_motoros_alarms_get_their_text() -> None:
+    assert safety_lines(None, 8003) == [
+        "  alarm text        MotoROS set-up validation failed (the subcode on the pendant "
+        "says which check)"
+    ]
+    assert safety_lines(None, 4107) == []
+    assert safety_lines(None, None) == []
