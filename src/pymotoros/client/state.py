@@ -123,10 +123,19 @@ class StateTracker:
         self._queues: set[asyncio.Queue[RobotState]] = set()
         self._changed = asyncio.Event()
         self._error: ConnectionLostError | None = None
+        self._cycle: dict[int, int] = {}
+        self.groups_seen: Mapping[int, int] | None = None
+        """The groups whose feedback came in the last full state cycle (between two
+        ROBOT_STATUS), each with the number of joint slots up to its last non-zero
+        position (MotoROS sends zeros in unused slots): None until a full cycle was seen."""
 
     @property
     def state(self) -> RobotState:
         return self._state
+
+    def _saw(self, fb: JointFeedback) -> None:
+        used = max((i + 1 for i, v in enumerate(fb.pos) if v != 0.0), default=0)
+        self._cycle[fb.group_no] = max(used, self._cycle.get(fb.group_no, 0))
 
     @property
     def error(self) -> ConnectionLostError | None:
@@ -158,11 +167,16 @@ class StateTracker:
         if isinstance(message, RobotStatus):
             status = Status.from_message(message)
             status_count += 1
+            if status_count >= 2:  # the first cycle may have been joined half-way
+                self.groups_seen = MappingProxyType(dict(self._cycle))
+            self._cycle = {}
         elif isinstance(message, JointFeedback):
             joints[message.group_no] = self._joint_state(message, now)
+            self._saw(message)
         elif isinstance(message, MotoJointFeedbackEx):
             for fb in message.groups:
                 joints[fb.group_no] = self._joint_state(fb, now)
+                self._saw(fb)
         else:
             logger.debug("state port: ignoring %r", message)
             return
