@@ -11,20 +11,24 @@ import asyncio
 import contextlib
 import json
 import math
+import signal
 import sys
 import traceback
 from collections.abc import AsyncIterator, Callable, Coroutine
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, Final, TypeVar
+from typing import Any, Final, NoReturn, TypeVar
 
 import click
 
+from pymotoros.cli.settings import envvar
 from pymotoros.client import (
     ClientError,
     ConnectError,
     ConnectionLostError,
+    GroupError,
     IoAddressError,
+    ModelMismatchError,
     RequestTimeoutError,
     RobotClient,
 )
@@ -43,19 +47,26 @@ EXIT_USAGE: Final = 2
 """Bad arguments: click's own usage errors, an IO address out of range, an unknown pose."""
 EXIT_CONNECTION: Final = 3
 """No connection, connection lost, or no answer in time."""
+EXIT_INTERRUPTED: Final = 130
+"""Ctrl-C (SIGINT): a moving robot was stopped with STOP_MOTION first (128 + signal 2)."""
+EXIT_TERMINATED: Final = 143
+"""SIGTERM: a moving robot was stopped with STOP_MOTION first (128 + signal 15)."""
 
 EXIT_CODES_HELP: Final = (
     "\b\nExit codes:\n"
-    "  0  done\n"
-    "  1  the robot refused or failed (the message says why and what to do)\n"
-    "  2  bad usage: options, IO address out of range, unknown pose\n"
-    "  3  connection problem: refused, lost, or no answer in time"
+    "  0    done\n"
+    "  1    the robot refused or failed (the message says why and what to do)\n"
+    "  2    bad usage: options, values, IO address, unknown pose or group, model mismatch\n"
+    "  3    connection problem: refused, lost, or no answer in time\n"
+    "  130  Ctrl-C (a moving robot is stopped first)\n"
+    "  143  SIGTERM (a moving robot is stopped first)"
 )
 
 _T = TypeVar("_T")
 _F = TypeVar("_F", bound=Callable[..., Any])
 
 _PORT = click.IntRange(1, 65535)
+_DEFAULT_PORTS: Final = {"motion": TCP_PORT_MOTION, "state": TCP_PORT_STATE, "io": TCP_PORT_IO}
 
 
 @dataclass(frozen=True, slots=True)
@@ -70,6 +81,10 @@ class Target:
     robot: str
     timeout_s: float
     debug: bool
+    cell: Path | None = None
+    """A cell file (``--config``): controller and groups, instead of --controller/--robot."""
+    http_port: int | None = None
+    """The twin's control API port, when a ports file told it."""
 
     def client(self) -> RobotClient:
         return RobotClient(
@@ -81,6 +96,7 @@ class Target:
             robot=self.robot,
             timeout_s=self.timeout_s,
             connect_timeout_s=self.timeout_s,
+            cell=self.cell,
         )
 
 
@@ -99,24 +115,71 @@ async def connected(
 
 
 def robot_options(func: _F) -> _F:
-    """The options every robot command takes."""
+    """The options every robot command takes (each also from ``PYMOTOROS_<NAME>``).
+
+    Ports left unset come from ``--ports-file`` (written by ``pymotoros sim
+    --ports-file``), else MotoROS's fixed ports.
+    """
     options = [
-        click.option("--host", default="127.0.0.1", show_default=True, help="Controller address."),
-        click.option("--motion-port", type=_PORT, default=TCP_PORT_MOTION, show_default=True),
-        click.option("--state-port", type=_PORT, default=TCP_PORT_STATE, show_default=True),
-        click.option("--io-port", type=_PORT, default=TCP_PORT_IO, show_default=True),
+        click.option(
+            "--host",
+            default="127.0.0.1",
+            show_default=True,
+            envvar=envvar("host"),
+            help="Controller address.",
+        ),
+        click.option(
+            "--motion-port",
+            type=_PORT,
+            default=None,
+            envvar=envvar("motion_port"),
+            help=f"[default: {TCP_PORT_MOTION}]",
+        ),
+        click.option(
+            "--state-port",
+            type=_PORT,
+            default=None,
+            envvar=envvar("state_port"),
+            help=f"[default: {TCP_PORT_STATE}]",
+        ),
+        click.option(
+            "--io-port",
+            type=_PORT,
+            default=None,
+            envvar=envvar("io_port"),
+            help=f"[default: {TCP_PORT_IO}]",
+        ),
+        click.option(
+            "--ports-file",
+            type=click.Path(dir_okay=False, path_type=Path),
+            default=None,
+            envvar=envvar("ports_file"),
+            help="JSON file written by `pymotoros sim --ports-file`: the ports of a port-0 twin.",
+        ),
         click.option(
             "--controller",
             type=click.Choice([t.value for t in ControllerType], case_sensitive=False),
             default=DEFAULT_CONTROLLER.value,
             show_default=True,
+            envvar=envvar("controller"),
             help="Controller model: byte order (FS100 is big-endian) and IO map.",
         ),
         click.option(
             "--robot",
             default=DEFAULT_ROBOT,
             show_default=True,
+            envvar=envvar("robot"),
             help="Robot model: joint names and limits.",
+        ),
+        click.option(
+            "--config",
+            "cell_path",
+            type=click.Path(exists=True, dir_okay=False, path_type=Path),
+            default=None,
+            envvar=envvar("config"),
+            metavar="CELL.toml",
+            help="Cell file (the sim's format) naming controller and groups; replaces "
+            "--controller/--robot.",
         ),
         click.option(
             "--timeout",
@@ -124,50 +187,126 @@ def robot_options(func: _F) -> _F:
             type=click.FloatRange(0.1, 600),
             default=5.0,
             show_default=True,
+            envvar=envvar("timeout"),
             help="Seconds to wait for a connection or a reply.",
         ),
-        click.option("--debug", is_flag=True, help="Show a traceback on errors."),
+        click.option(
+            "--debug", is_flag=True, envvar=envvar("debug"), help="Show a traceback on errors."
+        ),
     ]
     for option in reversed(options):
         func = option(func)
     return func
 
 
+def read_ports_file(path: Path) -> dict[str, int]:
+    """The ports a ``pymotoros sim --ports-file`` wrote (motion, state, io, http)."""
+    try:
+        data = json.loads(path.read_text(encoding="utf-8"))
+    except OSError as exc:
+        raise ConfigError(
+            f"{path}: cannot read the ports file ({exc.strerror}); start "
+            f"`pymotoros sim --ports-file {path}` first"
+        ) from exc
+    except json.JSONDecodeError as exc:
+        raise ConfigError(f"{path}: not a ports file (not JSON: {exc})") from exc
+    if not isinstance(data, dict) or not all(isinstance(data.get(k), int) for k in _DEFAULT_PORTS):
+        raise ConfigError(f"{path}: not a ports file (needs motion, state and io numbers)")
+    return {k: v for k, v in data.items() if isinstance(v, int)}
+
+
 def _target(kwargs: dict[str, Any]) -> Target:
+    debug = kwargs.pop("debug")
+    ports_file: Path | None = kwargs.pop("ports_file")
+    try:
+        from_file = read_ports_file(ports_file) if ports_file is not None else {}
+    except ConfigError as exc:
+        fail(exc, debug=debug)
+
+    def port(kind: str) -> int:
+        given: int | None = kwargs.pop(f"{kind}_port")
+        return given if given is not None else from_file.get(kind, _DEFAULT_PORTS[kind])
+
     return Target(
         host=kwargs.pop("host"),
-        motion_port=kwargs.pop("motion_port"),
-        state_port=kwargs.pop("state_port"),
-        io_port=kwargs.pop("io_port"),
+        motion_port=port("motion"),
+        state_port=port("state"),
+        io_port=port("io"),
         controller=kwargs.pop("controller"),
         robot=kwargs.pop("robot"),
         timeout_s=kwargs.pop("timeout_s"),
-        debug=kwargs.pop("debug"),
+        debug=debug,
+        cell=kwargs.pop("cell_path"),
+        http_port=from_file.get("http"),
     )
 
 
 def _exit_code(exc: BaseException) -> int:
     if isinstance(exc, (ConnectError, ConnectionLostError, RequestTimeoutError)):
         return EXIT_CONNECTION
-    if isinstance(exc, (IoAddressError, PlanningError, NamedPoseError, ConfigError)):
+    if isinstance(
+        exc,
+        (
+            IoAddressError,
+            PlanningError,
+            NamedPoseError,
+            ConfigError,
+            GroupError,
+            ModelMismatchError,
+            InputError,
+        ),
+    ):
         return EXIT_USAGE
     if isinstance(exc, (ClientError, PymotorosError)):
         return EXIT_REFUSED
     return EXIT_REFUSED
 
 
-def run(target: Target, work: Callable[[], Coroutine[Any, Any, _T]]) -> _T:
-    """Run ``work`` on a fresh event loop; errors become one line and an exit code."""
+class InputError(PymotorosError, ValueError):
+    """A value the user typed that cannot be right (NaN, beyond a limit): exit code 2."""
+
+
+def fail(exc: BaseException, *, debug: bool) -> NoReturn:
+    """One line on stderr (a traceback too with --debug) and the error's exit code."""
+    if debug:
+        traceback.print_exception(exc)
+    click.echo(f"error: {exc}", err=True)
+    sys.exit(_exit_code(exc))
+
+
+def run(
+    target: Target, work: Callable[[], Coroutine[Any, Any, _T]], *, stoppable: bool = False
+) -> _T:
+    """Run ``work`` on a fresh event loop; errors become one line and an exit code.
+
+    With ``stoppable`` (commands that move the robot), SIGTERM cancels ``work`` like
+    Ctrl-C does: ``work`` sends STOP_MOTION on cancellation, then the process exits
+    with :data:`EXIT_TERMINATED` (:data:`EXIT_INTERRUPTED` for Ctrl-C).
+    """
+    signals: list[int] = []
+
+    async def main() -> _T:
+        task = asyncio.current_task()
+        loop = asyncio.get_running_loop()
+        if stoppable and task is not None:
+
+            def on_signal(sig: int) -> None:
+                signals.append(sig)
+                task.cancel()
+
+            for sig in (signal.SIGTERM, signal.SIGINT):
+                with contextlib.suppress(NotImplementedError, RuntimeError, ValueError):
+                    loop.add_signal_handler(sig, on_signal, sig)
+        return await work()
+
     try:
-        return asyncio.run(work())
+        return asyncio.run(main())
     except (PymotorosError, OSError) as exc:
-        if target.debug:
-            traceback.print_exc()
-        click.echo(f"error: {exc}", err=True)
-        sys.exit(_exit_code(exc))
-    except KeyboardInterrupt:
+        fail(exc, debug=target.debug)
+    except (KeyboardInterrupt, asyncio.CancelledError):
+        code = EXIT_TERMINATED if signal.SIGTERM in signals else EXIT_INTERRUPTED
         click.echo("interrupted", err=True)
-        sys.exit(130)
+        sys.exit(code)
 
 
 def _echo_json(data: object) -> None:
