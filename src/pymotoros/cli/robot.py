@@ -29,6 +29,7 @@ from pymotoros.client import (
     GroupError,
     IoAddressError,
     ModelMismatchError,
+    ReplyError,
     RequestTimeoutError,
     RobotClient,
 )
@@ -37,7 +38,7 @@ from pymotoros.client.srdf import NamedPoseError
 from pymotoros.client.state import RobotState
 from pymotoros.client.streaming import FollowingSample, MoveResult
 from pymotoros.errors import ConfigError, PymotorosError
-from pymotoros.models import DEFAULT_CONTROLLER, DEFAULT_ROBOT, ControllerType
+from pymotoros.models import DEFAULT_CONTROLLER, DEFAULT_ROBOT, ControllerType, GroupModel
 from pymotoros.protocol.constants import TCP_PORT_IO, TCP_PORT_MOTION, TCP_PORT_STATE
 
 EXIT_OK: Final = 0
@@ -199,6 +200,32 @@ def robot_options(func: _F) -> _F:
     return func
 
 
+def group_option(*, multiple: bool = False, default: str | None = "0") -> Callable[[_F], _F]:
+    """``--group`` by name (R1, R2, B1 … as the pendant names them) or number (0, 1 …)."""
+    help_text = "Control group: name (R1, R2, B1 …) or number (0, 1 …)" + (
+        "; repeat to move several groups in one trajectory (values in group order)."
+        if multiple
+        else "."
+    )
+    return click.option(
+        "--group",
+        "group",
+        multiple=multiple,
+        default=() if multiple else default,
+        show_default=not multiple,
+        metavar="NAME|N",
+        help=help_text,
+    )
+
+
+def unit_of(deg: bool, linear: bool = False) -> str:
+    return "m" if linear else ("deg" if deg else "rad")
+
+
+def to_user(value: float, deg: bool, linear: bool = False) -> float:
+    return value if linear or not deg else math.degrees(value)
+
+
 def read_ports_file(path: Path) -> dict[str, int]:
     """The ports a ``pymotoros sim --ports-file`` wrote (motion, state, io, http)."""
     try:
@@ -316,9 +343,13 @@ def _echo_json(data: object) -> None:
 # --------------------------------------------------------------------------- status
 
 
-def _status_data(client: RobotClient, state: RobotState) -> dict[str, Any]:
+def _status_data(
+    client: RobotClient, state: RobotState, only: tuple[int, ...] = ()
+) -> dict[str, Any]:
     groups = []
     for index, group in enumerate(client.robot.groups):
+        if only and index not in only:
+            continue
         fb = state.joints.get(index)
         groups.append(
             {
@@ -337,7 +368,7 @@ def _yes(value: bool | None, yes: str = "yes", no: str = "no") -> str:
     return "unknown" if value is None else (yes if value else no)
 
 
-def _status_table(client: RobotClient, state: RobotState) -> str:
+def _status_table(client: RobotClient, state: RobotState, only: tuple[int, ...] = ()) -> str:
     lines = [f"{client.robot.name} on {client.controller.type.value} at {client.host}"]
     st = state.status
     if st is not None:
@@ -352,6 +383,8 @@ def _status_table(client: RobotClient, state: RobotState) -> str:
         ]
     width = max(len(n) for g in client.robot.groups for n in g.joint_names) + 2
     for index, group in enumerate(client.robot.groups):
+        if only and index not in only:
+            continue
         fb = state.joints.get(index)
         lines.append(f"  {group.name:<{width + 2}}{'rad':>10}{'deg':>10}{'rad/s':>10}")
         for j, name in enumerate(group.joint_names):
@@ -381,12 +414,21 @@ def _status_table(client: RobotClient, state: RobotState) -> str:
     show_default=True,
     help="With --watch: updates per second at most.",
 )
-def status(as_json: bool, watch: bool, count: int | None, rate: float, **kwargs: Any) -> None:
+@group_option(multiple=True)
+def status(
+    as_json: bool,
+    watch: bool,
+    count: int | None,
+    rate: float,
+    group: tuple[str, ...],
+    **kwargs: Any,
+) -> None:
     """Show the robot's state (state port only: safe next to another client)."""
     target = _target(kwargs)
 
     async def work() -> None:
         async with connected(target, motion=False, state=True, io=False) as client:
+            only = tuple(client.group_index(g) for g in group)
             state = await client.wait_for_state(target.timeout_s)
             shown = 0
             last = -math.inf
@@ -395,9 +437,9 @@ def status(as_json: bool, watch: bool, count: int | None, rate: float, **kwargs:
                 if loop.time() - last >= 1.0 / rate:
                     last = loop.time()
                     if as_json:
-                        _echo_json(_status_data(client, state))
+                        _echo_json(_status_data(client, state, only))
                     else:
-                        click.echo(_status_table(client, state))
+                        click.echo(_status_table(client, state, only))
                     shown += 1
                     if not watch or (count is not None and shown >= count):
                         return
@@ -443,25 +485,73 @@ def disable(**kwargs: Any) -> None:
     _motion_command(kwargs, RobotClient.stop_trajectory_mode, "trajectory mode off")
 
 
+ONE_MOTION_CLIENT: Final = (
+    "MotoROS allows one motion client and closes a second motion connection while the "
+    "robot moves, so `pymotoros stop` cannot take over. What works: Ctrl-C in the "
+    "terminal of the moving command (or SIGTERM to it: it sends STOP_MOTION), HOLD or "
+    "E-stop on the pendant, or for the twin its control API "
+    '(POST /api/hold {{"on": true}} or /api/estop {{"pressed": true}} on {api})'
+)
+"""Reference §2.1: one motion connection; a new one is closed while increments are queued."""
+
+
 @click.command(epilog=EXIT_CODES_HELP)
 @robot_options
 def stop(**kwargs: Any) -> None:
-    """Stop motion at once and clear every queue: STOP_MOTION."""
-    _motion_command(kwargs, RobotClient.stop_motion, "stopped")
+    """Stop motion at once and clear every queue: STOP_MOTION.
+
+    Only when no other client holds the motion connection: MotoROS refuses a second
+    motion client while the robot moves (the message says what works instead).
+    """
+    target = _target(kwargs)
+
+    async def work() -> None:
+        try:
+            async with connected(target, motion=True, state=False, io=False) as client:
+                await client.stop_motion()
+        except ConnectionLostError as exc:
+            api = (
+                f"http://{target.host}:{target.http_port}"
+                if target.http_port is not None
+                else "the sim's --http-port"
+            )
+            raise ConnectionLostError(f"{exc}. " + ONE_MOTION_CLIENT.format(api=api)) from exc
+        click.echo("stopped")
+
+    run(target, work)
+
+
+@click.command(epilog=EXIT_CODES_HELP)
+@robot_options
+def reset(**kwargs: Any) -> None:
+    """Reset alarms and cancel errors: RESET_ALARM (the cause must be gone first)."""
+    _motion_command(kwargs, RobotClient.reset_alarm, "alarms and errors reset")
+
+
+@click.command(epilog=EXIT_CODES_HELP)
+@robot_options
+@click.argument("state", type=click.Choice(["on", "off"], case_sensitive=False))
+def servo(state: str, **kwargs: Any) -> None:
+    """Servo power on or off: START_SERVOS / STOP_SERVOS (trajectory mode is separate)."""
+    if state.lower() == "on":
+        _motion_command(kwargs, RobotClient.start_servos, "servo power on")
+    else:
+        _motion_command(kwargs, RobotClient.stop_servos, "servo power off")
 
 
 @click.command(epilog=EXIT_CODES_HELP)
 @robot_options
 @click.argument("number", type=click.IntRange(0, 63))
-@click.option("--group", type=click.IntRange(0, 3), default=0, show_default=True)
-def tool(number: int, group: int, **kwargs: Any) -> None:
+@group_option()
+def tool(number: int, group: str, **kwargs: Any) -> None:
     """Select the tool file NUMBER (0..63) a group moves with: MOTO_SELECT_TOOL."""
     target = _target(kwargs)
 
     async def work() -> None:
         async with connected(target, motion=True, state=False, io=False) as client:
-            await client.select_tool(number, group)
-        click.echo(f"group {group} moves with tool {number}")
+            index = client.group_index(group)
+            await client.select_tool(number, index)
+        click.echo(f"group {index} ({client.robot.groups[index].name}) moves with tool {number}")
 
     run(target, work)
 
@@ -506,7 +596,7 @@ def _move_data(result: MoveResult) -> dict[str, Any]:
     show_default=True,
     help="Fraction of each joint's maximum acceleration and jerk.",
 )
-@click.option("--group", type=click.IntRange(0, 3), default=0, show_default=True)
+@group_option(multiple=True)
 @click.option("--enable", "enable_first", is_flag=True, help="Enter trajectory mode first.")
 @click.option("--json", "as_json", is_flag=True, help="Print the result as JSON.")
 def move(
@@ -516,33 +606,37 @@ def move(
     deg: bool,
     speed_scale: float,
     accel_scale: float,
-    group: int,
+    group: tuple[str, ...],
     enable_first: bool,
     as_json: bool,
     **kwargs: Any,
 ) -> None:
-    """Move to joint positions J1 ... Jn (rad) or to a named pose, with a progress bar.
+    """Move to joint positions J1 ... Jn (rad, or deg with --deg) or to a named pose.
 
     Starts from where the robot rests, plans a synchronised, jerk-limited move within
-    the robot model's limits and waits until the robot has settled at the goal.
-    Ctrl-C stops the robot (STOP_MOTION).
+    the robot model's limits and waits until the robot has settled at the goal. With
+    several --group options the values are the groups' joints one group after the
+    other, sent as one JOINT_TRAJ_PT_FULL_EX trajectory. Ctrl-C or SIGTERM stops the
+    robot (STOP_MOTION) and exits with 130 or 143.
     """
     target = _target(kwargs)
     if (name is None) == (not joints):
         raise click.UsageError("give either joint values J1 ... Jn or --named NAME")
     if srdf is not None and name is None:
         raise click.UsageError("--srdf goes with --named")
+    unit = "deg" if deg else "rad"
 
     async def work() -> MoveResult:
         async with connected(target, motion=True, state=True, io=False) as client:
+            groups = tuple(client.group_index(g) for g in group) or (0,)
+            if len(set(groups)) != len(groups):
+                raise InputError("a --group is given twice: give each group once")
+            models = [client.robot.groups[g] for g in groups]
             if name is not None:
-                goal = client.named_pose(name, srdf=srdf, group=group)
+                goal = tuple(v for g in groups for v in client.named_pose(name, srdf=srdf, group=g))
             else:
-                axes = client.robot.groups[group].num_axes
-                if len(joints) != axes:
-                    names = ", ".join(client.robot.groups[group].joint_names)
-                    raise PlanningError(f"{client.robot.name} needs {axes} values ({names})")
-                goal = tuple(math.radians(j) for j in joints) if deg else joints
+                goal = _goal_from_values(joints, models, deg)
+            await client.wait_for_state(target.timeout_s)
             if enable_first:
                 await client.start_trajectory_mode()
             bar = (
@@ -560,28 +654,39 @@ def move(
 
             with bar if bar is not None else contextlib.nullcontext():
                 try:
-                    result = await client.move_joints(
+                    start = await client.current_positions(groups)
+                    trajectory = client.plan(
+                        start,
                         goal,
-                        group=group,
+                        groups=groups,
                         speed_scale=speed_scale,
                         accel_scale=accel_scale,
-                        on_progress=progress,
                     )
+                    result = await client.execute(trajectory, groups=groups, on_progress=progress)
                 except asyncio.CancelledError:
                     with contextlib.suppress(PymotorosError):
                         await asyncio.shield(client.stop_motion())
+                    click.echo(
+                        "\n" + _where(client, groups, models, goal, deg, "stopped (STOP_MOTION)"),
+                        err=True,
+                    )
+                    raise
+                except ReplyError as exc:
+                    if exc.point is not None:  # refused mid-move: say where the robot is
+                        where = _where(client, groups, models, goal, deg, "the robot stands")
+                        exc.args = (f"{exc}; {where}", *exc.args[1:])
                     raise
                 if bar is not None:
                     bar.update(1000 - done[0])
             return result
 
-    result = run(target, work)
+    result = run(target, work, stoppable=True)
     if as_json:
         _echo_json(_move_data(result))
     else:
-        pos = ", ".join(f"{p:.4f}" for p in result.final_positions)
+        pos = ", ".join(f"{to_user(p, deg):.4f}" for p in result.final_positions)
         click.echo(
-            f"reached [{pos}] in {result.elapsed_s:.2f} s "
+            f"reached [{pos}] {unit} in {result.elapsed_s:.2f} s "
             f"(planned {result.trajectory.duration:.2f} s, {result.stream.points} points)"
         )
         if result.following.slowed:
@@ -589,6 +694,58 @@ def move(
                 f"note: the robot ran up to {result.following.max_lag_s:.2f} s behind the plan "
                 "(a safety speed limit or override slowed it)"
             )
+
+
+def _goal_from_values(
+    values: tuple[float, ...], models: list[GroupModel], deg: bool
+) -> tuple[float, ...]:
+    """The goal in rad/m from the user's values, each checked: count, NaN, limits."""
+    axes = [a for m in models for a in m.axes]
+    if len(values) != len(axes):
+        needs = "; ".join(f"{m.name}: {m.num_axes} ({', '.join(m.joint_names)})" for m in models)
+        raise InputError(
+            f"{len(values)} values given, {len(axes)} needed ({needs}); "
+            "repeat --group to move several groups"
+        )
+    goal = []
+    for value, axis in zip(values, axes, strict=True):
+        u = unit_of(deg, axis.linear)
+        if not math.isfinite(value):
+            raise InputError(f"{axis.name}: {value} is not a number; give a finite value in {u}")
+        v = value if axis.linear or not deg else math.radians(value)
+        if not axis.lower <= v <= axis.upper:
+            lo, hi = to_user(axis.lower, deg, axis.linear), to_user(axis.upper, deg, axis.linear)
+            raise InputError(
+                f"{axis.name}: {value:g} {u} is outside its limits "
+                f"[{lo:.4g}, {hi:.4g}] {u}; give a value within them"
+                + ("" if deg or axis.linear else " (values in degrees need --deg)")
+            )
+        goal.append(v)
+    return tuple(goal)
+
+
+def _where(
+    client: RobotClient,
+    groups: tuple[int, ...],
+    models: list[GroupModel],
+    goal: tuple[float, ...],
+    deg: bool,
+    what: str,
+) -> str:
+    """Where the robot stands and how far it still is from the goal, in the user's units."""
+    here = [v for g in groups for v in (client.state.positions(g) or ())]
+    if len(here) != len(goal):
+        return f"{what}; position unknown"
+    axes = [a for m in models for a in m.axes]
+    pos = ", ".join(f"{to_user(v, deg, a.linear):.4f}" for v, a in zip(here, axes, strict=True))
+    left = max(
+        (abs(to_user(g - v, deg, a.linear)), a.name)
+        for g, v, a in zip(goal, here, axes, strict=True)
+    )
+    return (
+        f"{what} at [{pos}] {'deg' if deg else 'rad'}, {left[0]:.4f} "
+        f"{'deg' if deg else 'rad'} short of the goal ({left[1]})"
+    )
 
 
 # --------------------------------------------------------------------------- io and mreg
