@@ -15,7 +15,13 @@ from typing import Final
 import click
 
 from pymotoros import __version__
-from pymotoros.cli.settings import ENV_PREFIX, check_section, load_settings, settings_path
+from pymotoros.cli.settings import (
+    ENV_PREFIX,
+    check_section,
+    load_settings,
+    name_envvars,
+    settings_path,
+)
 from pymotoros.errors import ConfigError
 
 # name -> ("module:attribute" of a click.Command, one-line help for the listing)
@@ -53,6 +59,7 @@ class _LazyGroup(click.Group):
         command = getattr(importlib.import_module(module_name), attr)
         if not isinstance(command, click.Command):
             raise TypeError(f"{target} is not a click command")
+        name_envvars(command, f"{ENV_PREFIX}_{cmd_name.upper()}")
         return command
 
     def format_commands(self, ctx: click.Context, formatter: click.HelpFormatter) -> None:

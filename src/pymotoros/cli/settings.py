@@ -7,7 +7,8 @@ Precedence, highest first (documented in ``docs/cli.md``)::
 * Environment: the options every robot command shares have short names
   (``PYMOTOROS_HOST``, ``PYMOTOROS_MOTION_PORT``, ``PYMOTOROS_PORTS_FILE``,
   ``PYMOTOROS_CONFIG`` …); every other option is ``PYMOTOROS_<COMMAND>_<OPTION>``
-  (``PYMOTOROS_MOVE_SPEED_SCALE``, ``PYMOTOROS_SIM_HTTP_PORT``), click's own scheme.
+  after its long flag (``PYMOTOROS_MOVE_SPEED_SCALE``, ``PYMOTOROS_STATUS_JSON``,
+  ``PYMOTOROS_IO_READ_GROUP``, ``PYMOTOROS_SIM_HTTP_PORT``).
 * Settings file: TOML, from ``PYMOTOROS_SETTINGS`` or else the first of
   ``./pymotoros.toml`` and ``~/.config/pymotoros/config.toml``. Top-level keys apply to
   every command that has the option; a ``[move]`` (``[io.read]`` …) table to one
@@ -65,6 +66,19 @@ SHARED_KEYS: Final = frozenset(
 def envvar(name: str) -> str:
     """A shared option's environment variable: ``envvar("io_port")`` is PYMOTOROS_IO_PORT."""
     return f"{ENV_PREFIX}_{name.upper()}"
+
+
+def name_envvars(command: click.Command, prefix: str) -> None:
+    """Give every option without one the variable ``PREFIX_<LONG FLAG>`` (``--json`` of
+    ``status`` → PYMOTOROS_STATUS_JSON), named after the flag users type rather than
+    after the Python parameter (``as_json``) as click's automatic names would be."""
+    for param in command.params:
+        if isinstance(param, click.Option) and param.envvar is None:
+            longest = max(param.opts, key=len).lstrip("-").replace("-", "_").upper()
+            param.envvar = f"{prefix}_{longest}"
+    if isinstance(command, click.Group):
+        for name, sub in command.commands.items():
+            name_envvars(sub, f"{prefix}_{name.upper()}")
 
 
 def settings_path() -> Path | None:
@@ -159,5 +173,6 @@ __all__ = [
     "check_section",
     "envvar",
     "load_settings",
+    "name_envvars",
     "settings_path",
 ]
