@@ -21,6 +21,7 @@ from typing import Any, Final, NoReturn, TypeVar
 
 import click
 
+from pymotoros.cli.live import FrameWriter, alarm_line, not_ready_reason, twin_alarm_texts
 from pymotoros.cli.settings import envvar
 from pymotoros.client import (
     ClientError,
@@ -368,7 +369,12 @@ def _yes(value: bool | None, yes: str = "yes", no: str = "no") -> str:
     return "unknown" if value is None else (yes if value else no)
 
 
-def _status_table(client: RobotClient, state: RobotState, only: tuple[int, ...] = ()) -> str:
+def _status_table(
+    client: RobotClient,
+    state: RobotState,
+    only: tuple[int, ...] = (),
+    alarm_texts: dict[int, str] | None = None,
+) -> str:
     lines = [f"{client.robot.name} on {client.controller.type.value} at {client.host}"]
     st = state.status
     if st is not None:
@@ -376,10 +382,10 @@ def _status_table(client: RobotClient, state: RobotState, only: tuple[int, ...] 
             f"  mode              {st.mode.value.upper()}",
             f"  servo power       {_yes(st.drives_powered, 'on', 'off')}",
             f"  e-stop            {_yes(st.e_stopped, 'PRESSED', 'released')}",
-            f"  alarm             {st.error_code if st.in_error else 'none'}",
+            f"  alarm             {alarm_line(st, alarm_texts or {})}",
             f"  in motion         {_yes(st.in_motion)}",
             f"  motion possible   {_yes(st.motion_possible)}"
-            + ("" if st.motion_possible else "  (pymotoros enable)"),
+            + ("" if st.motion_possible else f"  ({not_ready_reason(st)})"),
         ]
     width = max(len(n) for g in client.robot.groups for n in g.joint_names) + 2
     for index, group in enumerate(client.robot.groups):
@@ -400,7 +406,17 @@ def _status_table(client: RobotClient, state: RobotState, only: tuple[int, ...] 
 @click.command(epilog=EXIT_CODES_HELP)
 @robot_options
 @click.option("--json", "as_json", is_flag=True, help="Print JSON instead of a table.")
-@click.option("--watch", is_flag=True, help="Keep printing as the state changes (Ctrl-C ends).")
+@click.option(
+    "--watch",
+    is_flag=True,
+    help="Keep showing the state as it changes (Ctrl-C ends): redrawn in place on a "
+    "terminal, else printed when it changes (every update with --json).",
+)
+@click.option(
+    "--live/--no-live",
+    default=None,
+    help="With --watch: redraw in place (default: when stdout is a terminal).",
+)
 @click.option(
     "--count",
     type=click.IntRange(1),
@@ -418,6 +434,7 @@ def _status_table(client: RobotClient, state: RobotState, only: tuple[int, ...] 
 def status(
     as_json: bool,
     watch: bool,
+    live: bool | None,
     count: int | None,
     rate: float,
     group: tuple[str, ...],
@@ -433,17 +450,30 @@ def status(
             shown = 0
             last = -math.inf
             loop = asyncio.get_running_loop()
-            while True:
-                if loop.time() - last >= 1.0 / rate:
-                    last = loop.time()
-                    if as_json:
-                        _echo_json(_status_data(client, state, only))
-                    else:
-                        click.echo(_status_table(client, state, only))
-                    shown += 1
-                    if not watch or (count is not None and shown >= count):
-                        return
-                state = await client.tracker.next_state(target.timeout_s)
+            texts: dict[int, str] = {}
+            redraw = watch and not as_json and (sys.stdout.isatty() if live is None else live)
+            frames = FrameWriter(click.get_text_stream("stdout"), live=redraw)
+            try:
+                while True:
+                    if loop.time() - last >= 1.0 / rate:
+                        last = loop.time()
+                        st = state.status
+                        if st is not None and st.in_error and st.error_code not in texts:
+                            texts.update(
+                                await asyncio.to_thread(
+                                    twin_alarm_texts, target.host, target.http_port
+                                )
+                            )
+                        if as_json:
+                            _echo_json(_status_data(client, state, only))
+                            shown += 1
+                        elif frames.show(_status_table(client, state, only, texts)):
+                            shown += 1
+                        if not watch or (count is not None and shown >= count):
+                            return
+                    state = await client.tracker.next_state(target.timeout_s)
+            finally:
+                frames.close()
 
     run(target, work)
 
