@@ -656,16 +656,23 @@ def move(
         raise click.UsageError("--srdf goes with --named")
     unit = "deg" if deg else "rad"
 
+    try:  # the goal is checked against the model before anything is sent
+        model_client = target.client()
+        groups = tuple(model_client.group_index(g) for g in group) or (0,)
+        if len(set(groups)) != len(groups):
+            raise InputError("a --group is given twice: give each group once")
+        models = [model_client.robot.groups[g] for g in groups]
+        if name is not None:
+            goal = tuple(
+                v for g in groups for v in model_client.named_pose(name, srdf=srdf, group=g)
+            )
+        else:
+            goal = _goal_from_values(joints, models, deg)
+    except PymotorosError as exc:
+        fail(exc, debug=target.debug)
+
     async def work() -> MoveResult:
         async with connected(target, motion=True, state=True, io=False) as client:
-            groups = tuple(client.group_index(g) for g in group) or (0,)
-            if len(set(groups)) != len(groups):
-                raise InputError("a --group is given twice: give each group once")
-            models = [client.robot.groups[g] for g in groups]
-            if name is not None:
-                goal = tuple(v for g in groups for v in client.named_pose(name, srdf=srdf, group=g))
-            else:
-                goal = _goal_from_values(joints, models, deg)
             await client.wait_for_state(target.timeout_s)
             if enable_first:
                 await client.start_trajectory_mode()
