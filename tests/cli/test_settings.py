@@ -118,3 +118,11 @@ def test_ports_file_missing_says_how_to_make_it(tmp_path: Path) -> None:
     assert result.exit_code == EXIT_USAGE
     assert "pymotoros sim --ports-file" in result.stderr
     assert "Traceback" not in result.output
+
+
+def test_ports_file_is_written_when_ready_and_removed_on_exit(tmp_path: Path) -> None:
+    ports = tmp_path / "ports.json"
+    with running_sim("--ports-file", str(ports)) as the_sim:
+        assert json.loads(ports.read_text())["motion"] == the_sim.motion
+    assert the_sim.process.returncode == 0
+    assert not ports.exists()
