@@ -30,6 +30,10 @@ from pymotoros.protocol.messages import (
 
 logger = logging.getLogger(__name__)
 
+STATUSES_FOR_A_FULL_CYCLE: Final = 2
+"""Each state cycle ends with ROBOT_STATUS (§2.3); the client may join the first cycle
+half-way, so the groups are known from the second ROBOT_STATUS on."""
+
 DEFAULT_STATE_TIMEOUT_S: Final = 2.0
 """No state message for this long means the state stream is dead (MotoROS sends ~40 Hz)."""
 
@@ -167,7 +171,7 @@ class StateTracker:
         if isinstance(message, RobotStatus):
             status = Status.from_message(message)
             status_count += 1
-            if status_count >= 2:  # the first cycle may have been joined half-way
+            if status_count >= STATUSES_FOR_A_FULL_CYCLE:
                 self.groups_seen = MappingProxyType(dict(self._cycle))
             self._cycle = {}
         elif isinstance(message, JointFeedback):
