@@ -9,7 +9,13 @@ from pathlib import Path
 
 import pytest
 
-from pymotoros.client import GroupError, ModelMismatchError, MoveStoppedError, RobotClient
+from pymotoros.client import (
+    ClientError,
+    GroupError,
+    ModelMismatchError,
+    MoveStoppedError,
+    RobotClient,
+)
 from pymotoros.controller.cell import load_cell
 from pymotoros.models.cell import load_cell_models
 from pymotoros.testing import Twin, sync_twin, twin
@@ -122,3 +128,23 @@ def test_sync_stop_from_another_thread() -> None:
         assert len(errors) == 1
         assert isinstance(errors[0], MoveStoppedError)
         assert errors[0].positions[0] < goal[0]
+
+
+async def test_stop_threadsafe_from_a_thread_ends_an_async_move(
+    two_arms: tuple[RobotClient, Twin],
+) -> None:
+    client, the_twin = two_arms
+    await client.enable()
+    goal = (-1.5, 0.5, 1.0, 0.0, -0.5, 0.0)
+    started = asyncio.Event()
+    move = asyncio.create_task(
+        client.move_joints(goal, group=0, on_progress=lambda s: started.set())
+    )
+    async with asyncio.timeout(5):
+        await started.wait()
+        await the_twin.sleep(0.2)
+        await asyncio.to_thread(client.stop_threadsafe)
+        with pytest.raises(MoveStoppedError):
+            await move
+    with pytest.raises(ClientError, match="own loop"):
+        client.stop_threadsafe()
