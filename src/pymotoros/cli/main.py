@@ -103,7 +103,7 @@ def cli(ctx: click.Context, verbose: int, quiet: bool) -> None:
     Options come from, highest first: the command line, PYMOTOROS_* environment
     variables (PYMOTOROS_HOST, PYMOTOROS_PORTS_FILE …, PYMOTOROS_MOVE_SPEED_SCALE …),
     a settings file (PYMOTOROS_SETTINGS, ./pymotoros.toml or
-    ~/.config/pymotoros/config.toml), then the defaults. See docs/cli.md.
+    ~/.config/pymotoros/config.toml), then the defaults. See docs/client.md.
     """
     configure_logging(verbose, quiet)
     try:

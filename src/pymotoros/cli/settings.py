@@ -1,6 +1,6 @@
 """Where CLI options come from besides the command line: environment and a settings file.
 
-Precedence, highest first (documented in ``docs/cli.md``)::
+Precedence, highest first (documented in ``docs/client.md``)::
 
     command-line flag  >  environment variable  >  settings file  >  built-in default
 
