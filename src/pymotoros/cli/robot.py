@@ -611,7 +611,9 @@ def _move_data(result: MoveResult) -> dict[str, Any]:
     default=None,
     help="SRDF file whose group_state entries are the named poses.",
 )
-@click.option("--deg", is_flag=True, help="J1 ... Jn, results and limit errors in degrees (default radians).")
+@click.option(
+    "--deg", is_flag=True, help="J1 ... Jn, results and limit errors in degrees (default radians)."
+)
 @click.option(
     "--speed-scale",
     type=click.FloatRange(0.0, 1.0, min_open=True),
