@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import io
+import json
 import sys
 from collections.abc import Iterator
 from pathlib import Path
@@ -36,6 +37,8 @@ def test_servo_off_reason_is_the_not_ready_meaning(sim: tuple[Sim, Path]) -> Non
     CliRunner().invoke(cli, ["servo", "off", "--ports-file", str(ports)])
     out = status(ports).stdout
     assert "SERVO_OFF (5006): servo power is off (or eco mode is on); pymotoros enable" in out
+    data = json.loads(status(ports, "--json").stdout)
+    assert data["status"]["not_ready_reason"].startswith("SERVO_OFF (5006)")
 
 
 def test_estop_and_alarm_are_named_with_the_pendant_text(sim: tuple[Sim, Path]) -> None:

@@ -362,6 +362,8 @@ def _status_data(
             }
         )
     status = state.status.as_dict() if state.status else None
+    if status is not None and state.status is not None and not state.status.motion_possible:
+        status["not_ready_reason"] = not_ready_reason(state.status)
     return {"status": status, "groups": groups}
 
 
