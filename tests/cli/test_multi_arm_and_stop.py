@@ -79,6 +79,9 @@ def test_unknown_group_is_one_line_with_the_groups(two_arms: tuple[Sim, Path]) -
     assert "no group 'R3'" in result.stderr
     assert "R1 (group 0, 6 axes), R2 (group 1, 6 axes)" in result.stderr
     assert "Traceback" not in result.output
+    result = invoke(ports, "tool", "3", "--group", "R2", "--robot", "gp12")
+    assert "warning: --robot is ignored: the cell file" in result.stderr
+    assert result.exit_code == 0, result.output
     result = invoke(ports, "tool", "3", "--group", "2")
     assert result.exit_code == EXIT_USAGE
     assert "no group 2" in result.stderr

@@ -255,6 +255,15 @@ def _target(kwargs: dict[str, Any]) -> Target:
         given: int | None = kwargs.pop(f"{kind}_port")
         return given if given is not None else from_file.get(kind, _DEFAULT_PORTS[kind])
 
+    cell = kwargs.get("cell_path")
+    ctx = click.get_current_context(silent=True)
+    if cell is not None and ctx is not None:
+        for option in ("controller", "robot"):
+            if ctx.get_parameter_source(option) is click.core.ParameterSource.COMMANDLINE:
+                click.echo(
+                    f"warning: --{option} is ignored: the cell file {cell} names the models",
+                    err=True,
+                )
     return Target(
         host=kwargs.pop("host"),
         motion_port=port("motion"),
