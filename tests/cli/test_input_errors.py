@@ -127,6 +127,14 @@ def test_wrong_model_is_a_mismatch_not_a_timeout(sim: Sim) -> None:
     assert "R1 7 axes" in line
 
 
+def test_same_axes_other_model_is_found_by_its_dh_parameters(sim: Sim) -> None:
+    line = _one_line_error(invoke(sim, "status", "--robot", "gp12", "--check-model"), EXIT_USAGE)
+    assert "model mismatch: the controller's DH parameters are not gp12's" in line
+    assert "d 0.2750 on the controller, 0.4500 in the model" in line
+    assert "--robot hc10" in line
+    assert invoke(sim, "status", "--check-model").exit_code == 0
+
+
 def test_estop_mid_move_says_where_and_how_far(sim: Sim) -> None:
     assert invoke(sim, "enable").exit_code == 0
     assert invoke(sim, "move", "0", "0", "0", "0", "0", "0").exit_code == 0

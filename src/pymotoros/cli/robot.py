@@ -442,6 +442,12 @@ def _status_table(
     help="With --watch: updates per second at most.",
 )
 @group_option(multiple=True)
+@click.option(
+    "--check-model",
+    is_flag=True,
+    help="Also compare the controller's DH parameters with the robot model (opens the "
+    "motion port: not next to a moving client).",
+)
 def status(
     as_json: bool,
     watch: bool,
@@ -449,15 +455,18 @@ def status(
     count: int | None,
     rate: float,
     group: tuple[str, ...],
+    check_model: bool,
     **kwargs: Any,
 ) -> None:
     """Show the robot's state (state port only: safe next to another client)."""
     target = _target(kwargs)
 
     async def work() -> None:
-        async with connected(target, motion=False, state=True, io=False) as client:
+        async with connected(target, motion=check_model, state=True, io=False) as client:
             only = tuple(client.group_index(g) for g in group)
             state = await client.wait_for_state(target.timeout_s)
+            if check_model:
+                await client.check_dh_parameters()
             shown = 0
             last = -math.inf
             loop = asyncio.get_running_loop()

@@ -69,6 +69,7 @@ from pymotoros.client.timing import REAL_TIME, ClientClock
 from pymotoros.models import (
     DEFAULT_CONTROLLER,
     DEFAULT_ROBOT,
+    ROBOTS,
     ControllerModel,
     ControllerType,
     RobotModel,
@@ -115,6 +116,10 @@ logger = logging.getLogger(__name__)
 SLOW_COMMAND_TIMEOUT_S: Final = 20.0
 """START_TRAJ_MODE may wait 5 s for servo power and 5 s for the job (§3.2); servo commands
 wait up to 5 s (§3.1)."""
+
+DH_TOLERANCE: Final = 1e-4
+"""DH parameters travel as float32 (reference §1.5): ~1e-7 relative; 0.1 mm / 0.1 mrad is
+far below any real difference between two robot models."""
 
 _SLOW_COMMANDS: Final = frozenset(
     {
@@ -323,6 +328,42 @@ class RobotClient:
                 + "; ".join(problems)
                 + ". Give the controller's robot with --robot, or its cell file with --config"
             )
+
+    async def check_dh_parameters(self) -> None:
+        """Compare the controller's DH parameters (MOTO_GET_DH_PARAMETERS) with the model's.
+
+        Two models with the same groups and axes (HC10 and GP12) look the same on the
+        state stream; their DH parameters differ. Raises :class:`ModelMismatchError`
+        naming the first difference, and the known robot whose parameters match. Opt-in:
+        on a MotoROS whose library fails the request the connection is closed (§5.9).
+        """
+        streamed = await self.get_dh_parameters()
+        for index, group in enumerate(self.robot.groups):
+            if not group.dh or index >= len(streamed):
+                continue
+            links = streamed[index]
+            for n, (model, seen) in enumerate(zip(group.dh, links, strict=False)):
+                for field in ("theta", "d", "a", "alpha"):
+                    want, got = getattr(model, field), getattr(seen, field)
+                    if abs(want - got) > DH_TOLERANCE:
+                        matches = [
+                            name
+                            for name, robot in ROBOTS.items()
+                            if robot.groups
+                            and robot.groups[0].dh
+                            and _dh_matches(robot.groups[0].dh, links)
+                        ]
+                        hint = (
+                            f"they match {', '.join(matches)}: give --robot {matches[0]}"
+                            if matches
+                            else "give the controller's robot with --robot or --config"
+                        )
+                        raise ModelMismatchError(
+                            f"model mismatch: the controller's DH parameters are not "
+                            f"{self.robot.name}'s (group {index} {group.name}, link {n + 1}: "
+                            f"{field} {got:.4f} on the controller, {want:.4f} in the model); "
+                            + hint
+                        )
 
     def group_index(self, group: int | str) -> int:
         """The number of a group given by number (0, 1 …) or name (R1, r2, B1 …)."""
@@ -713,6 +754,14 @@ def _expect(reply: WireMessage, cls: type[_R]) -> _R:
     if isinstance(reply, MotoMotionReply):
         raise reply_error(reply.result, reply.subcode, reply.command)
     raise ClientError(f"unexpected reply {reply!r}, expected {cls.__name__}")
+
+
+def _dh_matches(model: Sequence[object], seen: Sequence[object]) -> bool:
+    return all(
+        abs(getattr(m, f) - getattr(s, f)) <= DH_TOLERANCE
+        for m, s in zip(model, seen, strict=False)
+        for f in ("theta", "d", "a", "alpha")
+    )
 
 
 def _in_loop(loop: asyncio.AbstractEventLoop) -> bool:

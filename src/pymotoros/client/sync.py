@@ -184,6 +184,7 @@ class SyncRobotClient:
     queue_count = _forward(RobotClient.queue_count)
     select_tool = _forward(RobotClient.select_tool)
     get_dh_parameters = _forward(RobotClient.get_dh_parameters)
+    check_dh_parameters = _forward(RobotClient.check_dh_parameters)
     ping = _forward(RobotClient.ping)
     read_io_bit = _forward(RobotClient.read_io_bit)
     write_io_bit = _forward(RobotClient.write_io_bit)
