@@ -30,6 +30,7 @@ from pymotoros.models import (
     DEFAULT_ROBOT,
     ROBOTS,
     ControllerType,
+    GroupModel,
     controller_model,
     robot_model,
 )
@@ -43,6 +44,12 @@ EXIT_REJECTED: Final = 1
 
 class _Rejected(click.ClickException):
     exit_code = EXIT_REJECTED
+
+
+class _BadInput(click.ClickException):
+    """A malformed file or option, told in one line (no usage banner): exit code 2."""
+
+    exit_code = 2
 
 
 def _parse_ratios(value: str | None, n: int) -> list[float] | None:
@@ -83,6 +90,12 @@ def read_trajectory(
     header = next(reader, None)
     if header is None:
         raise click.BadParameter(f"{name} is empty; it needs a header row", param_hint="TRAJ.csv")
+    if header and all(_is_number(cell) for cell in header):
+        raise click.BadParameter(
+            f"{name} row 1 holds numbers, not column names: the first row must be a header "
+            f"({','.join(roles)}); add it above the start point",
+            param_hint="TRAJ.csv",
+        )
     if len(header) != columns:
         raise click.BadParameter(
             f"{name} row 1 (header): {len(header)} columns, expected {columns} "
@@ -120,6 +133,48 @@ def read_trajectory(
         )
     data = np.array(rows, dtype=np.float64)
     return data[:, 0], data[:, 1 : n + 1], data[:, n + 1 :]
+
+
+def _is_number(cell: str) -> bool:
+    try:
+        float(cell)
+    except ValueError:
+        return False
+    return True
+
+
+MAX_WARNINGS: Final = 5
+"""Warnings printed about impossible points before the rest are only counted."""
+
+
+def impossible_points(
+    times: np.ndarray, pos: np.ndarray, group: GroupModel, deg: bool
+) -> list[str]:
+    """Points beyond the model's joint limits, or steps faster than its joint speeds.
+
+    MotoROS checks neither (it checks the velocity fields, not the implied step), so a
+    typo like 9 rad or 2 rad in 10 ms would be interpolated as given: say so.
+    """
+    unit, speed = ("deg", "deg/s") if deg else ("rad", "rad/s")
+    scale = math.degrees(1.0) if deg else 1.0
+    found: list[str] = []
+    dt = np.diff(times)
+    for j, axis in enumerate(group.axes):
+        u, s, k = ("m", "m/s", 1.0) if axis.linear else (unit, speed, scale)
+        for i in np.flatnonzero((pos[:, j] < axis.lower) | (pos[:, j] > axis.upper)):
+            found.append(
+                f"point {i}: {axis.name} = {pos[i, j] * k:.4g} {u} is beyond its limits "
+                f"[{axis.lower * k:.4g}, {axis.upper * k:.4g}] {u}"
+            )
+        with np.errstate(divide="ignore", invalid="ignore"):
+            rate = np.abs(np.diff(pos[:, j])) / dt
+        for i in np.flatnonzero(rate > axis.max_velocity):
+            found.append(
+                f"point {i + 1}: {axis.name} moves {abs(pos[i + 1, j] - pos[i, j]) * k:.4g} {u} "
+                f"in {dt[i]:.4g} s ({rate[i] * k:.4g} {s}), above its maximum "
+                f"{axis.max_velocity * k:.4g} {s}"
+            )
+    return found
 
 
 def write_increments(stream: IO[str], time_ms: np.ndarray, increments: np.ndarray) -> None:
@@ -166,7 +221,12 @@ _ROBOT_HELP: Final = ", ".join(
     "-o",
     "--output",
     type=click.Path(dir_okay=False, writable=True, path_type=Path),
-    help="Write the increments here instead of to stdout.",
+    help="Write the increments here instead of to stdout (says where on stderr).",
+)
+@click.option(
+    "--deg",
+    is_flag=True,
+    help="Positions and velocities of TRAJ.csv are in deg and deg/s (default rad, rad/s).",
 )
 def interpolate(
     traj: Path,
@@ -174,6 +234,7 @@ def interpolate(
     robot_name: str,
     ratios: str | None,
     output: Path | None,
+    deg: bool,
 ) -> None:
     """Turn a trajectory CSV into the pulse increments MotoROS 1.9.12 would queue.
 
@@ -187,6 +248,20 @@ def interpolate(
     naming the point (0 = start), the axis, the value, the limit and the subcode.
     Robots with several control groups (sda10f) are not supported here.
     """
+    try:
+        _interpolate(traj, controller_name, robot_name, ratios, output, deg)
+    except click.BadParameter as exc:
+        raise _BadInput(exc.format_message()) from None
+
+
+def _interpolate(
+    traj: Path,
+    controller_name: str,
+    robot_name: str,
+    ratios: str | None,
+    output: Path | None,
+    deg: bool,
+) -> None:
     try:
         robot = robot_model(robot_name)
         controller = controller_model(controller_name)
@@ -214,6 +289,15 @@ def interpolate(
         raise click.BadParameter(str(exc), param_hint="--pulses-per-rad") from None
     with traj.open(newline="", encoding="utf-8") as stream:
         times, pos, vel = read_trajectory(stream, n, traj.name)
+    if deg:
+        angular = np.array([not a.linear for a in group.axes])
+        pos = np.where(angular, np.radians(pos), pos)
+        vel = np.where(angular, np.radians(vel), vel)
+    warnings = impossible_points(times, pos, group, deg)
+    for line in warnings[:MAX_WARNINGS]:
+        click.echo(f"warning: {line}; check the file", err=True)
+    if len(warnings) > MAX_WARNINGS:
+        click.echo(f"warning: {len(warnings) - MAX_WARNINGS} more such points", err=True)
     try:
         time_ms, increments = interpolate_arrays(times, pos, vel, axes)
     except TrajectoryRejectedError as exc:
@@ -223,3 +307,7 @@ def interpolate(
     else:
         with output.open("w", encoding="utf-8", newline="") as out:
             write_increments(out, time_ms, increments)
+        click.echo(
+            f"wrote {len(time_ms)} increments ({n} axes, {len(times)} points) to {output}",
+            err=True,
+        )

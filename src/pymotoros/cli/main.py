@@ -15,6 +15,14 @@ from typing import Final
 import click
 
 from pymotoros import __version__
+from pymotoros.cli.settings import (
+    ENV_PREFIX,
+    check_section,
+    load_settings,
+    name_envvars,
+    settings_path,
+)
+from pymotoros.errors import ConfigError
 
 # name -> ("module:attribute" of a click.Command, one-line help for the listing)
 _COMMANDS: Final[dict[str, tuple[str, str]]] = {
@@ -32,6 +40,8 @@ _COMMANDS: Final[dict[str, tuple[str, str]]] = {
     "mreg": ("pymotoros.cli.robot:mreg", "Read or write an M-register."),
     "tool": ("pymotoros.cli.robot:tool", "Select the tool file a group moves with."),
     "urdf": ("pymotoros.cli.urdf:urdf", "Write a robot model's URDF (base_link to tool0)."),
+    "reset": ("pymotoros.cli.robot:reset", "Reset alarms and errors (RESET_ALARM)."),
+    "servo": ("pymotoros.cli.robot:servo", "Servo power on or off (START/STOP_SERVOS)."),
 }
 
 
@@ -50,6 +60,7 @@ class _LazyGroup(click.Group):
         command = getattr(importlib.import_module(module_name), attr)
         if not isinstance(command, click.Command):
             raise TypeError(f"{target} is not a click command")
+        name_envvars(command, f"{ENV_PREFIX}_{cmd_name.upper()}")
         return command
 
     def format_commands(self, ctx: click.Context, formatter: click.HelpFormatter) -> None:
@@ -59,7 +70,8 @@ class _LazyGroup(click.Group):
 
 
 def configure_logging(verbose: int, quiet: bool) -> None:
-    """Log to stderr; -v for INFO, -vv for DEBUG, -q for errors only."""
+    """Log to stderr; -v for INFO (one line per request and reply), -vv for DEBUG (the
+    wire bytes too), -q for errors only."""
     if quiet:
         level = logging.ERROR
     elif verbose >= 2:
@@ -75,13 +87,38 @@ def configure_logging(verbose: int, quiet: bool) -> None:
     )
 
 
-@click.group(cls=_LazyGroup, context_settings={"help_option_names": ["-h", "--help"]})
+@click.group(
+    cls=_LazyGroup,
+    context_settings={"help_option_names": ["-h", "--help"], "auto_envvar_prefix": ENV_PREFIX},
+)
 @click.version_option(__version__, prog_name="pymotoros")
-@click.option("-v", "--verbose", count=True, help="More log output (-v info, -vv debug).")
+@click.option(
+    "-v", "--verbose", count=True, help="More log output (-v requests and replies, -vv debug)."
+)
 @click.option("-q", "--quiet", is_flag=True, help="Only log errors.")
-def cli(verbose: int, quiet: bool) -> None:
-    """A virtual Yaskawa Motoman controller running MotoROS, and a client for real robots."""
+@click.pass_context
+def cli(ctx: click.Context, verbose: int, quiet: bool) -> None:
+    """A virtual Yaskawa Motoman controller running MotoROS, and a client for real robots.
+
+    \b
+    Options come from, highest first: the command line, PYMOTOROS_* environment
+    variables (PYMOTOROS_HOST, PYMOTOROS_PORTS_FILE …, PYMOTOROS_MOVE_SPEED_SCALE …),
+    a settings file (PYMOTOROS_SETTINGS, ./pymotoros.toml or
+    ~/.config/pymotoros/config.toml), then the defaults. See docs/client.md.
+    """
     configure_logging(verbose, quiet)
+    try:
+        path = settings_path()
+        if path is not None:
+            ctx.default_map = load_settings(path, _COMMANDS)
+    except ConfigError as exc:
+        raise click.UsageError(str(exc)) from None
+    if ctx.invoked_subcommand is not None and ctx.default_map:
+        command = ctx.command
+        if isinstance(command, click.Group):
+            sub = command.get_command(ctx, ctx.invoked_subcommand)
+            if sub is not None:
+                check_section(ctx, sub)
 
 
 def main() -> None:

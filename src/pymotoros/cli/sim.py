@@ -12,7 +12,9 @@ from __future__ import annotations
 
 import asyncio
 import contextlib
+import errno
 import gc
+import json
 import logging
 import signal
 import sys
@@ -43,8 +45,9 @@ def ready_line(motion: int | None, state: int | None, io: int | None, http: int 
     return f"pymotoros sim ready {shown} http={http}"
 
 
-async def run_simulator(app: SimulatorApp) -> None:
-    """Serve until SIGINT/SIGTERM; print the ready line once listening."""
+async def run_simulator(app: SimulatorApp, ports_file: Path | None = None) -> None:
+    """Serve until SIGINT/SIGTERM; print the ready line (and write ``ports_file``) once
+    listening."""
     loop = asyncio.get_running_loop()
     handled: list[signal.Signals] = []
     for sig in (signal.SIGINT, signal.SIGTERM):
@@ -60,12 +63,23 @@ async def run_simulator(app: SimulatorApp) -> None:
         async with app:
             ports = app.ports
             motion, state, io = app.listening_ports()
+            if ports_file is not None:  # the bound ports: they listen once MotoROS starts
+                write_ports_file(ports_file, ports.motion, ports.state, ports.io, ports.http)
             sys.stdout.write(ready_line(motion, state, io, ports.http) + "\n")
             sys.stdout.flush()
             await app.wait_stopped()
     finally:
         for sig in handled:
             loop.remove_signal_handler(sig)
+
+
+def write_ports_file(path: Path, motion: int, state: int, io: int, http: int | None) -> None:
+    """Write the ports as JSON, atomically (a reader never sees half a file): robot
+    commands read it with ``--ports-file`` / ``PYMOTOROS_PORTS_FILE``."""
+    data = {"motion": motion, "state": state, "io": io, "http": http}
+    tmp = path.with_name(path.name + ".tmp")
+    tmp.write_text(json.dumps(data) + "\n", encoding="utf-8")
+    tmp.replace(path)
 
 
 def _cell(
@@ -125,6 +139,13 @@ def _cell(
     metavar="FILE.toml",
     help="Fault scenario: timed [[events]] (E-stop, PFL, FSU, alarms ...), see docs/sim.md.",
 )
+@click.option(
+    "--ports-file",
+    type=click.Path(dir_okay=False, writable=True, path_type=Path),
+    default=None,
+    help="Write the ports taken as JSON here once listening (removed on exit); "
+    "robot commands read it with --ports-file.",
+)
 @click.pass_context
 def sim(
     ctx: click.Context,
@@ -137,10 +158,13 @@ def sim(
     robot_name: str,
     config_path: Path | None,
     scenario_path: Path | None,
+    ports_file: Path | None,
 ) -> None:
     """Run the virtual controller (MotoROS on 50240/50241/50242, control API on --http-port).
 
-    Port 0 lets the OS choose; the ready line tells which ports were taken.
+    It runs in the foreground until Ctrl-C or SIGTERM: use a second terminal for the
+    robot commands. Port 0 lets the OS choose; the ready line (and --ports-file) tells
+    which ports were taken.
     """
     try:
         cell = _cell(ctx, controller_name, robot_name, config_path)
@@ -161,6 +185,16 @@ def sim(
         byte_order=order,
     )
     try:
-        asyncio.run(run_simulator(SimulatorApp(controller, config)))
+        try:
+            asyncio.run(run_simulator(SimulatorApp(controller, config), ports_file))
+        finally:
+            if ports_file is not None:
+                ports_file.unlink(missing_ok=True)
     except OSError as exc:  # e.g. a port already in use
-        raise click.ClickException(f"cannot listen on {host}: {exc}") from exc
+        hint = (
+            "; another controller or sim holds the port: stop it, or let the OS choose "
+            "with --motion-port 0 --state-port 0 --io-port 0 --http-port 0 --ports-file FILE"
+            if exc.errno == errno.EADDRINUSE
+            else ""
+        )
+        raise click.ClickException(f"cannot listen on {host}: {exc}{hint}") from exc

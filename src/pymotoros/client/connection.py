@@ -44,6 +44,8 @@ from pymotoros.protocol.messages import (
 
 logger = logging.getLogger(__name__)
 wire_logger = logging.getLogger("pymotoros.client.wire")
+request_logger = logging.getLogger("pymotoros.client.requests")
+"""One line per request and per reply (``pymotoros -v``); the wire bytes are at DEBUG."""
 
 READ_CHUNK: Final = 4096
 DEFAULT_CONNECT_TIMEOUT_S: Final = 5.0
@@ -293,9 +295,14 @@ class FrameConnection:
                         data = encode(message, self.order)
                         if wire_logger.isEnabledFor(logging.DEBUG):
                             wire_logger.debug("%s -> %s", self, data.hex())
+                        if request_logger.isEnabledFor(logging.INFO):
+                            request_logger.info("%s -> %r", self, message)
                         self._writer.write(data)
                         await self._writer.drain()
-                        return await future
+                        reply = await future
+                        if request_logger.isEnabledFor(logging.INFO):
+                            request_logger.info("%s <- %r", self, reply)
+                        return reply
                     except ConnectionLostError:
                         raise
                     except OSError as exc:

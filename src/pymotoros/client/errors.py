@@ -75,6 +75,26 @@ class MotionIncompleteError(ClientError):
     """The robot stopped moving before it reached the goal (and nothing says why)."""
 
 
+class GroupError(ClientError, ValueError):
+    """A control group that the robot model (or cell) given to the client does not have."""
+
+
+class ModelMismatchError(ClientError):
+    """The controller streams other groups or more axes than the robot model given to the client.
+
+    Named as such because it otherwise looks like a connection problem (a wait for
+    feedback of a group that never comes).
+    """
+
+
+class MoveStoppedError(ClientError):
+    """A move ended early because :meth:`RobotClient.stop` was called (STOP_MOTION sent)."""
+
+    def __init__(self, message: str, *, positions: tuple[float, ...] = ()) -> None:
+        super().__init__(message)
+        self.positions = positions
+
+
 @dataclass(frozen=True, slots=True)
 class AxisDeviation:
     """How far one axis of a refused point is from what the controller accepts."""

@@ -16,6 +16,7 @@ remedy. It imports no part of the virtual controller: it only speaks the wire.
 
 from __future__ import annotations
 
+import asyncio
 import itertools
 import logging
 import time
@@ -35,6 +36,9 @@ from pymotoros.client.connection import (
 from pymotoros.client.errors import (
     ClientError,
     ConnectionLostError,
+    GroupError,
+    ModelMismatchError,
+    MoveStoppedError,
     io_error,
     reply_error,
 )
@@ -69,12 +73,14 @@ from pymotoros.errors import KinematicsError
 from pymotoros.models import (
     DEFAULT_CONTROLLER,
     DEFAULT_ROBOT,
+    ROBOTS,
     ControllerModel,
     ControllerType,
     RobotModel,
     controller_model,
     robot_model,
 )
+from pymotoros.models.cell import CellModels, load_cell_models
 from pymotoros.models.s1cxg import S1cxgTable
 from pymotoros.protocol.constants import (
     MAX_TOOL_NUMBER,
@@ -117,6 +123,10 @@ SLOW_COMMAND_TIMEOUT_S: Final = 20.0
 """START_TRAJ_MODE may wait 5 s for servo power and 5 s for the job (§3.2); servo commands
 wait up to 5 s (§3.1)."""
 
+DH_TOLERANCE: Final = 1e-4
+"""DH parameters travel as float32 (reference §1.5): ~1e-7 relative; 0.1 mm / 0.1 mrad is
+far below any real difference between two robot models."""
+
 _SLOW_COMMANDS: Final = frozenset(
     {
         MotionCommand.START_TRAJ_MODE,
@@ -153,7 +163,11 @@ class RobotClient:
         connect_timeout_s: float = DEFAULT_CONNECT_TIMEOUT_S,
         clock: ClientClock = REAL_TIME,
         connector: Connector | None = None,
+        cell: CellModels | str | Path | None = None,
     ) -> None:
+        if cell is not None:  # a cell file names both the controller and the groups
+            cell = cell if isinstance(cell, CellModels) else load_cell_models(cell)
+            controller, robot = cell.controller, cell.robot
         base = ports or Ports()
         self.host = host
         self.ports = Ports(
@@ -183,11 +197,15 @@ class RobotClient:
         self._sequence = itertools.count(1)
         self.tools = ToolTable(self.robot)
         """Tool offsets the client knows (:meth:`ToolTable.define`) and the selected ones."""
+        self._loop: asyncio.AbstractEventLoop | None = None
+        self._moving: asyncio.Task[object] | None = None
+        self._stop_requested = False
 
     # ------------------------------------------------------------------ connection
 
     async def connect(self, *, motion: bool = True, state: bool = True, io: bool = True) -> Self:
         """Open the ports asked for; on any failure close what was opened and raise."""
+        self._loop = asyncio.get_running_loop()
         try:
             if motion:
                 self._motion = await self._open(Port.MOTION)
@@ -269,13 +287,115 @@ class RobotClient:
         return self.tracker.states(message_timeout_s)
 
     async def wait_for_state(self, timeout_s: float = DEFAULT_STATE_TIMEOUT_S) -> RobotState:
-        """Wait until a ROBOT_STATUS and every group's feedback have arrived."""
+        """Wait for a full state cycle: ROBOT_STATUS and every group's feedback.
+
+        The groups the controller streams are checked against the robot model: other
+        groups, or more axes than the model has, raise :class:`ModelMismatchError`.
+        """
         self._need(self._state_conn, Port.STATE)
+        tracker = self.tracker
+        await tracker.wait_for(
+            lambda s: tracker.groups_seen is not None,
+            timeout_s,
+            what="a full state cycle (feedback of every group, then ROBOT_STATUS)",
+        )
+        self.check_groups()
         groups = range(len(self.robot.groups))
-        return await self.tracker.wait_for(
+        return await tracker.wait_for(
             lambda s: s.status is not None and all(g in s.joints for g in groups),
             timeout_s,
             what="the first status and feedback from the state port",
+        )
+
+    def check_groups(self) -> None:
+        """Compare the groups seen on the state stream with the robot model (no-op before)."""
+        seen = self.tracker.groups_seen
+        if seen is None:
+            return
+        model = self.robot
+        expected = {i: g.num_axes for i, g in enumerate(model.groups)}
+        problems = [
+            f"group {i} ({model.groups[i].name}, {n} axes) sends no feedback"
+            for i, n in expected.items()
+            if i not in seen
+        ]
+        problems += [
+            f"group {i} streams at least {seen[i]} axes, the model has {n}"
+            for i, n in expected.items()
+            if i in seen and seen[i] > n
+        ]
+        extra = sorted(set(seen) - set(expected))
+        if extra:
+            problems.append(f"the controller also streams group(s) {', '.join(map(str, extra))}")
+        if problems:
+            described = ", ".join(f"{g.name} {g.num_axes} axes" for g in model.groups)
+            streamed = ", ".join(f"group {i}" for i in sorted(seen)) or "no group"
+            raise ModelMismatchError(
+                f"model mismatch: {model.name} expects {len(expected)} group(s) ({described}) "
+                f"but the controller streams {len(seen)} ({streamed}): "
+                + "; ".join(problems)
+                + ". Give the controller's robot with --robot, or its cell file with --config"
+            )
+
+    async def check_dh_parameters(self) -> None:
+        """Compare the controller's DH parameters (MOTO_GET_DH_PARAMETERS) with the model's.
+
+        Two models with the same groups and axes (HC10 and GP12) look the same on the
+        state stream; their DH parameters differ. Raises :class:`ModelMismatchError`
+        naming the first difference, and the known robot whose parameters match. Opt-in:
+        on a MotoROS whose library fails the request the connection is closed (§5.9).
+        """
+        streamed = await self.get_dh_parameters()
+        for index, group in enumerate(self.robot.groups):
+            if not group.dh or index >= len(streamed):
+                continue
+            links = streamed[index]
+            for n, (model, seen) in enumerate(zip(group.dh, links, strict=False)):
+                for field in ("theta", "d", "a", "alpha"):
+                    want, got = getattr(model, field), getattr(seen, field)
+                    if abs(want - got) > DH_TOLERANCE:
+                        matches = [
+                            name
+                            for name, robot in ROBOTS.items()
+                            if robot.groups
+                            and robot.groups[0].dh
+                            and _dh_matches(robot.groups[0].dh, links)
+                        ]
+                        hint = (
+                            f"they match {', '.join(matches)}: give --robot {matches[0]}"
+                            if matches
+                            else "give the controller's robot with --robot or --config"
+                        )
+                        raise ModelMismatchError(
+                            f"model mismatch: the controller's DH parameters are not "
+                            f"{self.robot.name}'s (group {index} {group.name}, link {n + 1}: "
+                            f"{field} {got:.4f} on the controller, {want:.4f} in the model); "
+                            + hint
+                        )
+
+    def group_index(self, group: int | str) -> int:
+        """The number of a group given by number (0, 1 …) or name (R1, r2, B1 …)."""
+        groups = self.robot.groups
+        if isinstance(group, str):
+            text = group.strip()
+            if text.isdigit():
+                group = int(text)
+            else:
+                for i, g in enumerate(groups):
+                    if g.name.lower() == text.lower():
+                        return i
+                raise GroupError(f"no group {text!r}: {self._describe_groups()}")
+        if not 0 <= group < len(groups):
+            raise GroupError(f"no group {group}: {self._describe_groups()}")
+        return group
+
+    def _describe_groups(self) -> str:
+        listed = ", ".join(
+            f"{g.name} (group {i}, {g.num_axes} axes)" for i, g in enumerate(self.robot.groups)
+        )
+        return (
+            f"{self.robot.name} has {listed}; a multi-arm cell is described with "
+            "--config CELL.toml (RobotClient(cell=...))"
         )
 
     async def wait_until(
@@ -461,10 +581,10 @@ class RobotClient:
 
     # ------------------------------------------------------------------ motion
 
-    def limits(self, group: int = 0) -> JointLimits:
+    def limits(self, group: int | str = 0) -> JointLimits:
         """Planning limits of ``group`` from the robot model."""
         return JointLimits.from_group(
-            self.robot.groups[group],
+            self.robot.groups[self.group_index(group)],
             self.controller.interpolation_period_ms,
             self.controller.float_mode,
         )
@@ -518,21 +638,59 @@ class RobotClient:
         goes as JOINT_TRAJ_PT_FULL, several as JOINT_TRAJ_PT_FULL_EX.
         """
         self._need(self._state_conn, Port.STATE)  # completion is judged from the state stream
-        return await self.streamer.execute(
-            trajectory,
-            groups,
-            busy_timeout_s=busy_timeout_s,
-            goal_tolerance=goal_tolerance,
-            timeout_s=timeout_s,
-            check_speed=check_speed,
-            on_progress=on_progress,
-        )
+        groups = tuple(self.group_index(g) for g in groups)
+        task = asyncio.current_task()
+        self._moving = task
+        self._stop_requested = False
+        try:
+            return await self.streamer.execute(
+                trajectory,
+                groups,
+                busy_timeout_s=busy_timeout_s,
+                goal_tolerance=goal_tolerance,
+                timeout_s=timeout_s,
+                check_speed=check_speed,
+                on_progress=on_progress,
+            )
+        except asyncio.CancelledError:
+            if not self._stop_requested or task is None:
+                raise
+            task.uncancel()
+            here = tuple(v for g in groups for v in (self.state.positions(g) or ()))
+            where = ", ".join(f"{v:.4f}" for v in here)
+            raise MoveStoppedError(
+                f"move stopped on request (STOP_MOTION) at [{where}]", positions=here
+            ) from None
+        finally:
+            self._moving = None
+
+    async def stop(self) -> None:
+        """Stop the robot now (STOP_MOTION) and end a move running in another task.
+
+        Safe from another task of the client's loop while :meth:`execute` /
+        :meth:`move_joints` runs: that call raises :class:`MoveStoppedError`. From
+        another thread use :meth:`stop_threadsafe`.
+        """
+        moving = self._moving
+        if moving is not None and moving is not asyncio.current_task():
+            self._stop_requested = True
+            moving.cancel()
+        await self.stop_motion()
+
+    def stop_threadsafe(self, timeout_s: float = DEFAULT_REQUEST_TIMEOUT_S) -> None:
+        """:meth:`stop` from another thread (not the client's loop); waits for the reply."""
+        loop = self._loop
+        if loop is None or loop.is_closed():
+            raise ClientError("the client is not connected: nothing to stop")
+        if _in_loop(loop):
+            raise ClientError("stop_threadsafe() called on the client's own loop: await stop()")
+        asyncio.run_coroutine_threadsafe(self.stop(), loop).result(timeout_s)
 
     async def move_joints(
         self,
-        goal: Sequence[float] | Mapping[int, Sequence[float]],
+        goal: Sequence[float] | Mapping[int, Sequence[float]] | Mapping[str, Sequence[float]],
         *,
-        group: int = 0,
+        group: int | str = 0,
         speed_scale: float = 1.0,
         accel_scale: float = 1.0,
         on_progress: Callable[[FollowingSample], None] | None = None,
@@ -547,10 +705,11 @@ class RobotClient:
         limits, streams, and waits until it has settled at the goal.
         """
         if isinstance(goal, Mapping):
-            groups = tuple(sorted(goal))
-            target = tuple(v for g in groups for v in goal[g])
+            groups = tuple(sorted(self.group_index(g) for g in goal))
+            by_index = {self.group_index(g): v for g, v in goal.items()}
+            target = tuple(v for g in groups for v in by_index[g])
         else:
-            groups = (group,)
+            groups = (self.group_index(group),)
             target = tuple(goal)
         start = await self.current_positions(groups)
         trajectory = self.plan(
@@ -686,13 +845,12 @@ class RobotClient:
         return self.tools.chain(group).pose(positions, frame, reference)
 
     def named_pose(
-        self, name: str, *, srdf: str | Path | None = None, group: int = 0
+        self, name: str, *, srdf: str | Path | None = None, group: int | str = 0
     ) -> tuple[float, ...]:
         """Joint values of a named pose: an SRDF ``group_state`` or the built-in ``home``."""
         poses: tuple[NamedPose, ...] = parse_srdf(srdf) if srdf is not None else ()
-        return find_pose(name, self.robot.groups[group], poses).positions_for(
-            self.robot.groups[group]
-        )
+        model = self.robot.groups[self.group_index(group)]
+        return find_pose(name, model, poses).positions_for(model)
 
     async def move_named(
         self,
@@ -725,6 +883,21 @@ def _expect(reply: WireMessage, cls: type[_R]) -> _R:
     if isinstance(reply, MotoMotionReply):
         raise reply_error(reply.result, reply.subcode, reply.command)
     raise ClientError(f"unexpected reply {reply!r}, expected {cls.__name__}")
+
+
+def _dh_matches(model: Sequence[object], seen: Sequence[object]) -> bool:
+    return all(
+        abs(getattr(m, f) - getattr(s, f)) <= DH_TOLERANCE
+        for m, s in zip(model, seen, strict=False)
+        for f in ("theta", "d", "a", "alpha")
+    )
+
+
+def _in_loop(loop: asyncio.AbstractEventLoop) -> bool:
+    try:
+        return asyncio.get_running_loop() is loop
+    except RuntimeError:
+        return False
 
 
 def _groups(group: int | Sequence[int]) -> tuple[int, ...]:

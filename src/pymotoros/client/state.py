@@ -30,6 +30,10 @@ from pymotoros.protocol.messages import (
 
 logger = logging.getLogger(__name__)
 
+STATUSES_FOR_A_FULL_CYCLE: Final = 2
+"""Each state cycle ends with ROBOT_STATUS (§2.3); the client may join the first cycle
+half-way, so the groups are known from the second ROBOT_STATUS on."""
+
 DEFAULT_STATE_TIMEOUT_S: Final = 2.0
 """No state message for this long means the state stream is dead (MotoROS sends ~40 Hz)."""
 
@@ -123,10 +127,19 @@ class StateTracker:
         self._queues: set[asyncio.Queue[RobotState]] = set()
         self._changed = asyncio.Event()
         self._error: ConnectionLostError | None = None
+        self._cycle: dict[int, int] = {}
+        self.groups_seen: Mapping[int, int] | None = None
+        """The groups whose feedback came in the last full state cycle (between two
+        ROBOT_STATUS), each with the number of joint slots up to its last non-zero
+        position (MotoROS sends zeros in unused slots): None until a full cycle was seen."""
 
     @property
     def state(self) -> RobotState:
         return self._state
+
+    def _saw(self, fb: JointFeedback) -> None:
+        used = max((i + 1 for i, v in enumerate(fb.pos) if v != 0.0), default=0)
+        self._cycle[fb.group_no] = max(used, self._cycle.get(fb.group_no, 0))
 
     @property
     def error(self) -> ConnectionLostError | None:
@@ -158,11 +171,16 @@ class StateTracker:
         if isinstance(message, RobotStatus):
             status = Status.from_message(message)
             status_count += 1
+            if status_count >= STATUSES_FOR_A_FULL_CYCLE:
+                self.groups_seen = MappingProxyType(dict(self._cycle))
+            self._cycle = {}
         elif isinstance(message, JointFeedback):
             joints[message.group_no] = self._joint_state(message, now)
+            self._saw(message)
         elif isinstance(message, MotoJointFeedbackEx):
             for fb in message.groups:
                 joints[fb.group_no] = self._joint_state(fb, now)
+                self._saw(fb)
         else:
             logger.debug("state port: ignoring %r", message)
             return

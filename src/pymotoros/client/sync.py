@@ -182,6 +182,9 @@ class SyncRobotClient:
     plan = _forward_plain(RobotClient.plan)
     limits = _forward_plain(RobotClient.limits)
     named_pose = _forward_plain(RobotClient.named_pose)
+    group_index = _forward_plain(RobotClient.group_index)
+    check_groups = _forward_plain(RobotClient.check_groups)
+    stop_threadsafe = _forward_plain(RobotClient.stop_threadsafe)
 
     wait_for_state = _forward(RobotClient.wait_for_state)
     wait_until = _forward(RobotClient.wait_until)
@@ -195,9 +198,12 @@ class SyncRobotClient:
     stop_servos = _forward(RobotClient.stop_servos)
     reset_alarm = _forward(RobotClient.reset_alarm)
     stop_motion = _forward(RobotClient.stop_motion)
+    stop = _forward(RobotClient.stop)
+    """Safe from another thread while a blocking move runs there (it raises MoveStoppedError)."""
     queue_count = _forward(RobotClient.queue_count)
     select_tool = _forward(RobotClient.select_tool)
     get_dh_parameters = _forward(RobotClient.get_dh_parameters)
+    check_dh_parameters = _forward(RobotClient.check_dh_parameters)
     ping = _forward(RobotClient.ping)
     read_io_bit = _forward(RobotClient.read_io_bit)
     write_io_bit = _forward(RobotClient.write_io_bit)

@@ -16,7 +16,7 @@ import logging
 import math
 import tomllib
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Final
 
@@ -36,6 +36,7 @@ from pymotoros.models import (
     controller_model,
     robot_model,
 )
+from pymotoros.models.cell import combine_groups, group_parts, rename_groups
 from pymotoros.models.s1cxg import S1cxgTable, parse_s1cxg
 from pymotoros.protocol.constants import MAX_TOOL_NUMBER
 
@@ -149,39 +150,8 @@ class CellConfig:
         return "multi_group" if multi else "single_arm"
 
 
-def _rename(groups: Sequence[GroupModel]) -> tuple[GroupModel, ...]:
-    """Number groups per kind in order (R1, R2, B1 …) as the controller does."""
-    counters: dict[GroupKind, int] = {}
-    out = []
-    for g in groups:
-        counters[g.kind] = counters.get(g.kind, 0) + 1
-        out.append(replace(g, name=f"{g.kind.value}{counters[g.kind]}"))
-    return tuple(out)
-
-
-def _combine(
-    controller: ControllerModel,
-    parts: Sequence[tuple[str, GroupModel]],
-    warnings: list[str],
-) -> tuple[tuple[GroupModel, ...], tuple[str, ...]]:
-    seen: set[str] = set()
-    for robot_name, _ in parts:
-        robot = robot_model(robot_name)
-        if robot_name not in seen and controller.type.value not in robot.controllers:
-            sold = ", ".join(sorted(robot.controllers)) or "no controller"
-            warnings.append(
-                f"robot {robot.name} is not sold with a {controller.type.value} controller "
-                f"(it runs on {sold}); simulating the combination anyway"
-            )
-        seen.add(robot_name)
-    if len(parts) > controller.max_groups:
-        warnings.append(
-            f"{len(parts)} control groups, but MotoROS uses at most {controller.max_groups} "
-            f"on {controller.type.value}; groups after the {controller.max_groups}th are ignored"
-        )
-        parts = parts[: controller.max_groups]
-    groups = _rename([g for _, g in parts])
-    return groups, tuple(r for r, _ in parts)
+_rename = rename_groups
+_combine = combine_groups
 
 
 def default_cell(
@@ -354,43 +324,28 @@ def cell_from_dict(
     startup = _startup(ctrl_t)
     ctrl_t.finish()
 
-    parts: list[tuple[str, GroupModel]] = []
+    parts = group_parts(data, source)  # the rules the client shares (models/cell.py)
+    top.used.update(("groups", "robot"))
     entry_tools: list[tuple[ToolConfig, ...]] = []
     entry_s1cxg: list[S1cxgTable | None] = []
-    """Per element of ``parts``, the ``[[groups.tools]]`` of the entry it came from."""
-    if "groups" in data and "robot" in data:
-        raise top.error("groups", "give either [robot] or [[groups]], not both")
+    """Per element of ``parts``, the ``[[groups.tools]]`` / ``[groups.s1cxg]`` of its entry."""
     if "groups" in data:
-        entries = top.array("groups")
-        if not entries:
-            raise top.error("groups", "needs at least one group")
-        for i, entry in enumerate(entries):
+        at = 0
+        for i, entry in enumerate(top.array("groups")):
             g_t = _Table(entry, f"groups[{i}]", source)
-            robot_name = _model(g_t, "robot", DEFAULT_ROBOT, "robot")
-            model = robot_model(robot_name)
-            wanted = g_t.get("group")
-            before = len(parts)
-            if wanted is None:
-                parts.extend((model.name, g) for g in model.groups)
-            else:
-                match = [g for g in model.groups if g.name == wanted]
-                if not match:
-                    names = ", ".join(g.name for g in model.groups)
-                    raise g_t.error("group", f"{model.name} has no group {wanted!r} ({names})")
-                parts.append((model.name, match[0]))
+            count = 1 if g_t.get("group") is not None else len(robot_model(parts[at][0]).groups)
+            mine = [g for _, g in parts[at : at + count]]
+            at += count
             own = _tools(g_t, "tools", source)
-            if own and not any(g.kind is GroupKind.ROBOT for _, g in parts[before:]):
+            if own and not any(g.kind is GroupKind.ROBOT for g in mine):
                 raise g_t.error("tools", "only robot groups take tools")
-            entry_tools.extend(own if g.kind is GroupKind.ROBOT else () for _, g in parts[before:])
-            entry_s1cxg.extend(_s1cxg(g_t, [g for _, g in parts[before:]]))
+            entry_tools.extend(own if g.kind is GroupKind.ROBOT else () for g in mine)
+            entry_s1cxg.extend(_s1cxg(g_t, mine))
+            g_t.used.update(("robot", "group"))
             g_t.finish()
     else:
-        r_t = top.table("robot")
-        model = robot_model(_model(r_t, "model", DEFAULT_ROBOT, "robot"))
-        r_t.finish()
-        parts.extend((model.name, g) for g in model.groups)
-        entry_tools.extend(() for _ in model.groups)
-        entry_s1cxg.extend(None for _ in model.groups)
+        entry_tools.extend(() for _ in parts)
+        entry_s1cxg.extend(None for _ in parts)
 
     warnings: list[str] = []
     groups, robots = _combine(ctrl, parts, warnings)

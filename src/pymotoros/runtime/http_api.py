@@ -28,6 +28,7 @@ from starlette.exceptions import HTTPException as StarletteHTTPException
 from pymotoros import __version__
 from pymotoros.controller.api import ControllerSnapshot, PendantMode, TcpSnapshot
 from pymotoros.controller.scenario import parse_scenario
+from pymotoros.runtime.docs_page import install_offline_docs
 from pymotoros.runtime.target import SimulatedController
 from pymotoros.runtime.ticker import TickStats
 
@@ -342,11 +343,13 @@ def create_http_app(
     app = FastAPI(
         title="pymotoros control API",
         version=__version__,
+        docs_url=None,  # /docs is served offline by install_offline_docs below
         description=(
             "The operator of the virtual controller: pendant keys, E-stop, mode switch, "
             'alarms and forced IO. Errors are 4xx with {"error": "..."}.'
         ),
     )
+    install_offline_docs(app)
     app.add_exception_handler(RequestValidationError, _validation_error)
     app.add_exception_handler(StarletteHTTPException, _http_error)
     app.add_exception_handler(ValueError, _value_error)

@@ -1,0 +1,43 @@
+"""The control API's /docs page loads without the internet: no external URL, assets served."""
+
+from __future__ import annotations
+
+import re
+from collections.abc import AsyncIterator
+
+import httpx
+import pytest
+
+from pymotoros.controller import VirtualController
+from pymotoros.runtime.http_api import create_http_app
+from pymotoros.runtime.ticker import LatenessStats, TickStats
+
+STATS = TickStats(4.0, 1000, 2, 0, 0, LatenessStats(0.05, 0.2, 1.5))
+MIN_BUNDLE_BYTES = 100_000
+"""swagger-ui's bundle is about a megabyte; a stub or an error page is far smaller."""
+
+
+@pytest.fixture
+async def api(controller: VirtualController) -> AsyncIterator[httpx.AsyncClient]:
+    app = create_http_app(controller, lambda: STATS)
+    transport = httpx.ASGITransport(app=app)
+    async with httpx.AsyncClient(transport=transport, base_url="http://sim") as client:
+        yield client
+
+
+async def test_docs_page_references_only_local_assets(api: httpx.AsyncClient) -> None:
+    page = await api.get("/docs")
+    assert page.status_code == 200
+    urls = re.findall(r"""(?:src|href|url)\s*[:=]\s*['"]([^'"]+)['"]""", page.text)
+    assert urls, page.text
+    external = [u for u in urls if re.match(r"(?i)(https?:)?//", u)]
+    assert external == []
+    assert not re.search(r"(?i)https?://", page.text)
+    for url in urls:
+        response = await api.get(url)
+        assert response.status_code == 200, url
+    bundle = await api.get("/docs/assets/swagger-ui-bundle.js")
+    assert len(bundle.content) > MIN_BUNDLE_BYTES
+    assert "javascript" in bundle.headers["content-type"]
+    css = await api.get("/docs/assets/swagger-ui.css")
+    assert "text/css" in css.headers["content-type"]
