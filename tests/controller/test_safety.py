@@ -124,18 +124,58 @@ def test_fsu_switches_and_refusals() -> None:
     vc.set_fsu(joint_speed_pct=50)
     assert vc.safety.fsu.active.joint_speed_pct == 50
     assert vc.safety.fsu.limits() is not None
-    with pytest.raises(ValueError, match="kinematics"):
-        vc.set_fsu(tcp_speed_mm_s=250.0)
     with pytest.raises(ValueError, match=r"1\.\.100"):
         vc.set_fsu(joint_speed_pct=0)
     with pytest.raises(ValueError, match="not both"):
         vc.set_fsu(joint_speed_pct=10, off=True)
     vc.set_fsu(off=True)
     assert vc.safety.fsu.limits() is None
-    # the hook: a TCP limiter plugged in makes the TCP limit active
-    vc.safety.fsu.tcp_limiter = lambda speed, group, pulses: (7,) * len(pulses)
+    # the controller plugs its kinematics in: the TCP limit is accepted and engages the clip
     vc.set_fsu(tcp_speed_mm_s=250.0)
     assert vc.safety.fsu.active.tcp_speed_mm_s == 250.0
-    limits = vc.safety.fsu.limits()
-    assert limits is not None
-    assert max(limits[0]) == 7
+    assert vc.safety.fsu.limits() is not None
+    # without a limiter (an FSU on its own) a TCP limit is refused, saying why
+    vc.set_fsu(off=True)
+    vc.safety.fsu.tcp_limiter = None
+    with pytest.raises(ValueError, match="kinematics"):
+        vc.set_fsu(tcp_speed_mm_s=250.0)
+
+
+TCP_LIMIT_MM_S = 100.0
+
+
+def _tcp_move(tcp_limit: float | None) -> tuple[tuple[int, ...], list[float], list[float], int]:
+    """A fast 1 s move of joints 1-3 with an optional FSU TCP limit from the start; per
+    tick the TCP speed of the command and of the feedback, the end pulses, the ticks."""
+    vc = VirtualController(cell_from_dict({"controller": {"pfl": False}}))
+    assert command(vc, CMD.START_TRAJ_MODE).ok
+    assert start_at_current(vc).ok
+    if tcp_limit is not None:
+        vc.set_fsu(tcp_speed_mm_s=tcp_limit)
+    assert send(vc, 1, point(0, 1.0, [0.6, 0.4, -0.3, 0, 0, 0])).ok
+    commanded: list[float] = []
+    feedback: list[float] = []
+    ticks = 0
+    while vc.has_queued_motion() or any(map(any, vc.motoros.unprocessed_pulses)) or ticks < 20:
+        vc.run_ticks(1)
+        ticks += 1
+        assert ticks < 10_000, "the move never ended"
+        tcp = vc.snapshot().groups[0].tcp
+        assert tcp is not None
+        commanded.append(tcp.command_speed_mm_s)
+        feedback.append(tcp.feedback_speed_mm_s)
+    vc.run_ticks(50)  # let the feedback settle
+    return vc.snapshot().groups[0].command_pulse, commanded, feedback, ticks
+
+
+def test_fsu_tcp_speed_limit_holds_and_the_move_still_ends_at_its_target() -> None:
+    free_end, free_cmd, _, free_ticks = _tcp_move(None)
+    end, cmd, fb, ticks = _tcp_move(TCP_LIMIT_MM_S)
+    assert max(free_cmd) > 3 * TCP_LIMIT_MM_S  # the move would be much faster unlimited
+    assert end == free_end  # MotoROS's compensation delivers every pulse
+    assert ticks > 2 * free_ticks
+    # per tick, never above the limit (rounding down per axis; 0.5 % for the chord-vs-arc
+    # difference of one 4 ms step); the feedback follows the command (+1 tick of slack)
+    assert max(cmd) <= TCP_LIMIT_MM_S * 1.005
+    assert max(fb[1:]) <= TCP_LIMIT_MM_S * 1.005
+    assert max(cmd) > 0.9 * TCP_LIMIT_MM_S  # and it does use what the limit allows

@@ -11,7 +11,7 @@ it consults) and adding a shared part does not ripple through every signature.
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
 from pymotoros.controller.cell import CellConfig
@@ -40,6 +40,11 @@ class MotoRosContext:
     increment_clip: Callable[[], tuple[tuple[int, ...], ...] | None] | None = None
     """The controller's FSU clip per group and slot for this tick (None: no clip); MotoROS
     never calls it: the IncMove task uses it as the controller's increment function."""
+    increment_tcp_clip: (
+        Callable[[int, Sequence[int], Sequence[int]], Sequence[int] | None] | None
+    ) = None
+    """The FSU's TCP-speed clip of one group's intended increment (group, commanded
+    pulses, increment) -> per-slot maximum, None when off; also the controller's side."""
 
     @property
     def num_groups(self) -> int:

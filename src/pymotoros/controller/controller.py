@@ -177,7 +177,9 @@ class VirtualController:
             interpolators=self._interps,
             servos=self._servos,
             increment_clip=safety.fsu.limits,
+            increment_tcp_clip=safety.fsu.tcp_clip,
         )
+        safety.fsu.tcp_limiter = self._tcp_limiter
         self._readiness = readiness = Readiness(ctx)
         self._commands = commands = MotionCommands(ctx, readiness)
         self._trajectory = trajectory = TrajectoryPoints(ctx, readiness, commands)
@@ -626,6 +628,18 @@ class VirtualController:
         self.drop_motion_hook()
 
     # ================================================================== safety functions
+
+    def _tcp_limiter(
+        self, limit_mm_s: float, group: int, command: Sequence[int], increment: Sequence[int]
+    ) -> tuple[int, ...]:
+        """The FSU's TCP-speed clip: scale the tick's increment so the TCP of the active
+        tool moves at most ``limit_mm_s`` (rounded down per axis, so never above it); a
+        group without a kinematic chain is not clipped."""
+        speed = self._tcp.increment_speed_mm_s(
+            group, self._interps[group].tool, command, increment
+        )
+        scale = 1.0 if speed <= limit_mm_s else limit_mm_s / speed
+        return tuple(int(abs(p) * scale) for p in increment)
 
     @property
     def motoros_started(self) -> bool:

@@ -57,6 +57,7 @@ class IncMoveTask:
         self._takes: IncMoveReturn = IncMoveReturn.IMOV_UNREADY
         # The controller's FSU clip (safety unit) and MotoROS's compensation for it (§5.6 step 3)
         self._clip = ctx.increment_clip
+        self._tcp_clip = ctx.increment_tcp_clip
         self._fsu_missing = False
         """Pulses sent that the controller has not executed yet (resend before reading queues)."""
         self._to_process: list[list[int]] = [[0] * SLOTS for _ in self.axes]
@@ -153,8 +154,13 @@ class IncMoveTask:
             return self._inc_move_failed(result, tuple(tuple(s) for s in sends))
         self.last_motion_ms = self._clock.time_ms
         missing = False
+        tcp_clip = self._tcp_clip
         for g, servo in enumerate(self._servos):
             limit = clip[g] if clip is not None else self.axes[g].max_increment
+            if tcp_clip is not None:
+                tcp_limit = tcp_clip(g, servo.command, sends[g])
+                if tcp_limit is not None:
+                    limit = tuple(min(a, b) for a, b in zip(limit, tcp_limit, strict=True))
             executed = servo.apply_limited(sends[g], limit)
             self._processed[g] = list(executed)
             self._to_process[g] = to_process[g]

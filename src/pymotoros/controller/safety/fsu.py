@@ -8,8 +8,10 @@ position moved less than it sent) and resends the missing pulses (reference §5.
 :meth:`FsuFunction.limits` is the one place the per-tick, per-axis clip is computed; it
 combines the joint-speed limit (a share of each axis's maximum increment) with any
 number of :data:`IncrementLimiter` hooks. The TCP-speed limit needs forward kinematics:
-it is plugged in by assigning :attr:`FsuFunction.tcp_limiter`; until then a TCP-speed
-request is refused with a message saying so.
+the controller plugs its kinematics in as :attr:`FsuFunction.tcp_limiter`, which sees
+each tick's intended increment and scales it so that the TCP moves no faster than the
+limit (:meth:`FsuFunction.tcp_clip`); without a limiter a TCP-speed request is refused
+with a message saying so.
 """
 
 from __future__ import annotations
@@ -23,9 +25,10 @@ from pymotoros.motion import GroupAxes
 
 logger = logging.getLogger(__name__)
 
-IncrementLimiter = Callable[[float, int, Sequence[int]], Sequence[int]]
-"""TCP-speed hook: ``(tcp_speed_mm_s, group index, commanded pulses) -> per-slot maximum
-|increment| (pulses) for this tick``. Filled by the kinematics model (issue 10)."""
+IncrementLimiter = Callable[[float, int, Sequence[int], Sequence[int]], Sequence[int]]
+"""TCP-speed hook: ``(tcp_speed_mm_s, group index, commanded pulses, intended increment)
+-> per-slot maximum |increment| (pulses) for this tick``. The controller fills it from its
+kinematics (``controller.tcp.TcpTracker``)."""
 
 TCP_NEEDS_KINEMATICS = (
     "the FSU TCP-speed limit (tcp_speed_mm_s) needs the robot's kinematics model, which "
@@ -110,15 +113,23 @@ class FsuFunction:
         )
 
     def limits(self) -> tuple[tuple[int, ...], ...] | None:
-        """Per group and slot, the most pulses the controller executes this tick (None: no clip)."""
-        clip = self._joint_clip
+        """Per group and slot, the most pulses the joint-speed limit lets the controller
+        execute this tick; None when no limit is on. With only the TCP-speed limit on it
+        is each axis's maximum increment: the TCP clip itself depends on the increment
+        (:meth:`tcp_clip`)."""
+        if self._joint_clip is not None:
+            return self._joint_clip
+        if self._tcp is not None and self.tcp_limiter is not None:
+            return tuple(a.max_increment for a in self._axes)
+        return None
+
+    def tcp_clip(
+        self, group: int, command: Sequence[int], increment: Sequence[int]
+    ) -> Sequence[int] | None:
+        """Per slot, the most pulses the TCP-speed limit lets ``increment`` execute from
+        ``command`` this tick; None when that limit is off."""
         tcp = self._tcp
         limiter = self.tcp_limiter
         if tcp is None or limiter is None:
-            return clip
-        groups = []
-        for g, (axes, servo) in enumerate(zip(self._axes, self._servos, strict=True)):
-            base = clip[g] if clip is not None else axes.max_increment
-            extra = limiter(tcp, g, servo.command)
-            groups.append(tuple(min(b, e) for b, e in zip(base, extra, strict=True)))
-        return tuple(groups)
+            return None
+        return limiter(tcp, group, command, increment)
