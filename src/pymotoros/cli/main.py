@@ -31,6 +31,11 @@ _COMMANDS: Final[dict[str, tuple[str, str]]] = {
     "io": ("pymotoros.cli.robot:io", "Read or write an IO bit or group."),
     "mreg": ("pymotoros.cli.robot:mreg", "Read or write an M-register."),
     "tool": ("pymotoros.cli.robot:tool", "Select the tool file a group moves with."),
+    "check": (
+        "pymotoros.cli.trajectory:check",
+        "Pre-flight a trajectory file: MotoROS's verdict and what it never checks.",
+    ),
+    "plan": ("pymotoros.cli.trajectory:plan", "Time waypoints within the robot's limits."),
 }
 
 
