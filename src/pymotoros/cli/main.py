@@ -36,6 +36,7 @@ _COMMANDS: Final[dict[str, tuple[str, str]]] = {
         "Pre-flight a trajectory file: MotoROS's verdict and what it never checks.",
     ),
     "plan": ("pymotoros.cli.trajectory:plan", "Time waypoints within the robot's limits."),
+    "run": ("pymotoros.cli.trajectory:run", "Stream exactly the points of a trajectory file."),
 }
 
 

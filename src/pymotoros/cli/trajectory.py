@@ -110,8 +110,9 @@ def _parse_from(value: str | None, count: int) -> list[float] | None:
     return out
 
 
-def render(report: CheckReport, traj: Trajectory, robot: RobotModel, controller: ControllerModel
-           ) -> str:
+def render(
+    report: CheckReport, traj: Trajectory, robot: RobotModel, controller: ControllerModel
+) -> str:
     """The human report of ``pymotoros check``."""
     lines = [
         f"{len(traj.times)} points, {len(traj.joint_names)} joints, {robot.name} on "
@@ -121,9 +122,7 @@ def render(report: CheckReport, traj: Trajectory, robot: RobotModel, controller:
     if r is not None:
         lines.append(
             f"REFUSED: MotoROS would answer INVALID ({r.result}) subcode {r.subcode} to point "
-            f"{r.point}"
-            + (f", {r.axis}" if r.axis else "")
-            + f": {r.meaning}"
+            f"{r.point}" + (f", {r.axis}" if r.axis else "") + f": {r.meaning}"
         )
         lines.append(f"  value {r.value:.6g}, limit {r.limit:.6g}")
         lines.append(f"  {r.message}")
@@ -185,14 +184,35 @@ def check(
     default=DEFAULT_CONTROLLER.value,
     show_default=True,
 )
-@click.option("--speed-scale", type=click.FloatRange(0, 1, min_open=True), default=1.0,
-              show_default=True, help="Velocity scaling of the model's limits (as MoveIt's).")
-@click.option("--accel-scale", type=click.FloatRange(0, 1, min_open=True), default=1.0,
-              show_default=True, help="Acceleration scaling of the model's limits.")
-@click.option("--sample", "sample_s", type=click.FloatRange(0.004, 10), default=0.05,
-              show_default=True, help="Approximate seconds between points.")
-@click.option("-o", "--output", type=click.Path(dir_okay=False, path_type=Path), required=True,
-              help="Trajectory file to write (.csv, .json, .yaml).")
+@click.option(
+    "--speed-scale",
+    type=click.FloatRange(0, 1, min_open=True),
+    default=1.0,
+    show_default=True,
+    help="Velocity scaling of the model's limits (as MoveIt's).",
+)
+@click.option(
+    "--accel-scale",
+    type=click.FloatRange(0, 1, min_open=True),
+    default=1.0,
+    show_default=True,
+    help="Acceleration scaling of the model's limits.",
+)
+@click.option(
+    "--sample",
+    "sample_s",
+    type=click.FloatRange(0.004, 10),
+    default=0.05,
+    show_default=True,
+    help="Approximate seconds between points.",
+)
+@click.option(
+    "-o",
+    "--output",
+    type=click.Path(dir_okay=False, path_type=Path),
+    required=True,
+    help="Trajectory file to write (.csv, .json, .yaml).",
+)
 def plan(
     waypoints: Path,
     robot_name: str,
@@ -204,7 +224,7 @@ def plan(
 ) -> None:
     """Time waypoints (one row per waypoint, every joint of the robot, rad; an optional
     header row) within the robot's limits, and write the trajectory."""
-    from pymotoros.trajectory.planning import plan_waypoints  # noqa: PLC0415 - scipy
+    from pymotoros.trajectory.planning import plan_waypoints
 
     try:
         robot = robot_model(robot_name)
@@ -220,8 +240,12 @@ def plan(
                     continue  # header
                 raise ConfigError(f"{waypoints.name} line {number}: not all numbers") from None
         result = plan_waypoints(
-            rows, robot, controller, velocity_scaling=speed_scale,
-            acceleration_scaling=accel_scale, sample_s=sample_s,
+            rows,
+            robot,
+            controller,
+            velocity_scaling=speed_scale,
+            acceleration_scaling=accel_scale,
+            sample_s=sample_s,
         )
         write_trajectory_file(result, output)
     except ConfigError as exc:
@@ -230,3 +254,98 @@ def plan(
         f"wrote {output}: {len(result.times)} points, {result.duration:.3f} s "
         f"(formats: {', '.join(FORMATS)})"
     )
+
+
+# --------------------------------------------------------------------------- run
+
+
+def client_trajectory(traj: Trajectory, robot: RobotModel) -> tuple[Any, tuple[int, ...]]:
+    """(the client's JointTrajectory, its groups): exactly the file's points, its joints
+    reordered group by group as the client sends them (no re-timing)."""
+    from pymotoros.client.planning import JointTrajectory, TrajectoryPoint
+
+    columns = traj.group_columns(robot)
+    groups = tuple(g for g, _ in columns)
+    order = [c for _, cols in columns for c in cols]
+    points = tuple(
+        TrajectoryPoint(
+            float(t), tuple(float(x) for x in p[order]), tuple(float(x) for x in v[order])
+        )
+        for t, p, v in zip(traj.times, traj.positions, traj.velocities, strict=True)
+    )
+    return JointTrajectory(points, float(traj.times[-1])), groups
+
+
+def _robot_options(func: Any) -> Any:
+    from pymotoros.cli.robot import robot_options
+
+    return robot_options(func)
+
+
+@click.command(context_settings={"help_option_names": ["-h", "--help"]})
+@click.argument("traj", metavar="TRAJ", type=_TRAJ)
+@_robot_options
+@click.option("--force", is_flag=True, help="Send even if `pymotoros check` finds a problem.")
+@click.option("--enable", "enable_first", is_flag=True, help="Enter trajectory mode first.")
+@click.option("--json", "as_json", is_flag=True, help="Print the result as JSON.")
+def run(traj: Path, force: bool, enable_first: bool, as_json: bool, **kwargs: Any) -> None:
+    """Stream exactly the points of a trajectory file to the robot (no re-timing).
+
+    The robot must be enabled as for `move` (or give --enable) and stand at the first
+    point. The file is checked first (as `pymotoros check`); a refusal or a warning
+    stops the command before anything moves, unless --force.
+    """
+    import asyncio
+    import contextlib
+
+    from pymotoros.cli.robot import _move_data, _target, connected
+    from pymotoros.cli.robot import run as run_client
+    from pymotoros.client.streaming import FollowingSample, MoveResult
+    from pymotoros.errors import PymotorosError
+
+    target = _target(kwargs)
+    trajectory, robot, controller = load(traj, target.robot, target.controller)
+    report = check_trajectory(trajectory, robot, controller)
+    if report.exit_code != EXIT_OK and not force:
+        click.echo(render(report, trajectory, robot, controller), err=True)
+        click.echo("not started: fix the trajectory or give --force", err=True)
+        sys.exit(report.exit_code)
+    joint, groups = client_trajectory(trajectory, robot)
+
+    async def work() -> MoveResult:
+        async with connected(target, motion=True, state=True, io=False) as client:
+            if enable_first:
+                await client.start_trajectory_mode()
+            bar = (
+                click.progressbar(length=1000, label="running", file=sys.stderr, show_eta=False)
+                if sys.stderr.isatty()
+                else None
+            )
+            done = [0]
+
+            def progress(sample: FollowingSample) -> None:
+                now = int(sample.progress * 1000)
+                if bar is not None and now > done[0]:
+                    bar.update(now - done[0])
+                    done[0] = now
+
+            with bar if bar is not None else contextlib.nullcontext():
+                try:
+                    result = await client.execute(
+                        joint, groups=groups, on_progress=progress, check_speed=not force
+                    )
+                except asyncio.CancelledError:
+                    with contextlib.suppress(PymotorosError):
+                        await asyncio.shield(client.stop_motion())
+                    raise
+            return result
+
+    result = run_client(target, work)
+    if as_json:
+        click.echo(json.dumps(_move_data(result)))
+    else:
+        pos = ", ".join(f"{p:.4f}" for p in result.final_positions)
+        click.echo(
+            f"reached [{pos}] in {result.elapsed_s:.2f} s (file {trajectory.duration:.2f} s, "
+            f"MotoROS {report.duration_s:.3f} s predicted, {result.stream.points} points)"
+        )

@@ -24,10 +24,11 @@ import numpy as np
 import numpy.typing as npt
 
 from pymotoros.errors import TrajectoryRejectedError
-from pymotoros.models import ControllerModel, GroupModel, RobotModel
+from pymotoros.models import ControllerModel, FloatMode, GroupModel, RobotModel
 from pymotoros.models.rules import START_TOLERANCE_PULSES, check_start
 from pymotoros.models.rules import TrajPoint as RulesPoint
 from pymotoros.motion import GroupAxes, interpolate_arrays, to_pulses
+from pymotoros.motion.numerics import c_int_array
 from pymotoros.protocol.constants import InvalidSubcode
 from pymotoros.trajectory.files import Trajectory
 
@@ -113,14 +114,23 @@ class CheckReport:
         refusal = None
         if self.refusal is not None:
             r = asdict(self.refusal)
-            refusal = {k: r[k] for k in ("point", "axis", "value", "limit", "result",
-                                          "subcode", "meaning", "remedy")}
+            refusal = {
+                k: r[k]
+                for k in (
+                    "point",
+                    "axis",
+                    "value",
+                    "limit",
+                    "result",
+                    "subcode",
+                    "meaning",
+                    "remedy",
+                )
+            }
         return {
             "accepted": self.accepted,
             "refusal": refusal,
-            "warnings": [
-                {k: v for k, v in asdict(w).items()} for w in self.warnings
-            ],
+            "warnings": [{k: v for k, v in asdict(w).items()} for w in self.warnings],
             "duration_s": self.duration_s,
             "increments": self.increments,
             "start_margin_pulses": self.start_margin_pulses,
@@ -128,7 +138,7 @@ class CheckReport:
 
 
 def _refused(exc: TrajectoryRejectedError, axes: GroupAxes) -> Refused:
-    from pymotoros.protocol.constants import ResultCode  # noqa: PLC0415
+    from pymotoros.protocol.constants import ResultCode
 
     sub = InvalidSubcode(exc.subcode)
     axis: str | None = None
@@ -144,7 +154,7 @@ def _refused(exc: TrajectoryRejectedError, axes: GroupAxes) -> Refused:
         limit=float(exc.limit if exc.limit is not None else 0.0),
         result=int(ResultCode.INVALID),
         subcode=int(sub),
-        meaning=sub.description,
+        meaning=sub.meaning,
         remedy=_REMEDIES.get(int(sub), "fix the point"),
         group=axes.name,
         message=str(exc),
@@ -180,11 +190,12 @@ def check_trajectory(
         vel = traj.velocities[:, cols]
         if cur is not None:
             commanded = to_pulses(tuple(cur[cols].tolist()), axes)
-            start = RulesPoint(float(traj.times[0]), tuple(pos[0].tolist()),
-                               tuple(vel[0].tolist()))
+            start = RulesPoint(float(traj.times[0]), tuple(pos[0].tolist()), tuple(vel[0].tolist()))
             requested = to_pulses(start.pos, axes)
-            margins.append(START_TOLERANCE_PULSES - max(
-                abs(a - b) for a, b in zip(requested, commanded, strict=True)))
+            margins.append(
+                START_TOLERANCE_PULSES
+                - max(abs(a - b) for a, b in zip(requested, commanded, strict=True))
+            )
             refusal = check_start(start, commanded, axes)
             if refusal is not None:
                 exc = refusal.error(0)
@@ -213,7 +224,7 @@ def check_trajectory(
     period = controller.interpolation_period_ms
     report.increments = ticks
     report.duration_s = ticks * period / 1000.0
-    report.warnings.extend(_feed_checks(traj, period))
+    report.warnings.extend(_feed_checks(traj, period, controller.float_mode))
     report.warnings.sort(key=lambda w: (w.point, w.kind))
     return report
 
@@ -256,23 +267,35 @@ def _model_checks(
             value = float(p[k]) / factor
             limit = axis.lower if value < axis.lower else axis.upper
             worst = float(p.max() if value > axis.upper else p.min()) / factor
-            out.append(Warning_(
-                "position", _point_of(time_ms, point_ms, k), name, worst, limit,
-                f"{group} {name} reaches {worst:.6g} rad at {time_ms[k]} ms, beyond its "
-                f"limit {limit:.6g} rad (MotoROS checks no joint limits; the controller's "
-                "soft limits stop the robot with an alarm); add points or slow down there",
-            ))
+            out.append(
+                Warning_(
+                    "position",
+                    _point_of(time_ms, point_ms, k),
+                    name,
+                    worst,
+                    limit,
+                    f"{group} {name} reaches {worst:.6g} rad at {time_ms[k]} ms, beyond its "
+                    f"limit {limit:.6g} rad (MotoROS checks no joint limits; the controller's "
+                    "soft limits stop the robot with an alarm); add points or slow down there",
+                )
+            )
         # increments above maxInc
         mx = axes.max_increment[slot]
         big = np.abs(inc[:, col]) > mx
         if big.any():
             k = int(np.argmax(big))
-            out.append(Warning_(
-                "increment", _point_of(time_ms, point_ms, k), name, float(abs(inc[k, col])),
-                float(mx),
-                f"{group} {name} moves {abs(int(inc[k, col]))} pulses in one {axes.period_ms} ms "
-                f"tick at {time_ms[k]} ms; its maximum is {mx} pulses per tick; slow down",
-            ))
+            out.append(
+                Warning_(
+                    "increment",
+                    _point_of(time_ms, point_ms, k),
+                    name,
+                    float(abs(inc[k, col])),
+                    float(mx),
+                    f"{group} {name} moves {abs(int(inc[k, col]))} pulses in one "
+                    f"{axes.period_ms} ms "
+                    f"tick at {time_ms[k]} ms; its maximum is {mx} pulses per tick; slow down",
+                )
+            )
         # acceleration and jerk per tick, robot at rest before and after
         v = np.concatenate(([0], inc[:, col], [0])).astype(np.float64)
         d2 = np.diff(v)
@@ -282,14 +305,20 @@ def _model_checks(
         over = accel > allow
         if over.any():
             k = min(int(np.argmax(over)), len(time_ms) - 1)
-            out.append(Warning_(
-                "acceleration", _point_of(time_ms, point_ms, k), name, float(accel.max()), amax,
-                f"{group} {name} accelerates at up to {accel.max():.6g} rad/s² (first at "
-                f"{time_ms[k]} ms), above its {amax:.6g} rad/s² (plus {allow - amax:.3g} for "
-                "whole-pulse rounding); re-time with lower acceleration scaling",
-            ))
+            out.append(
+                Warning_(
+                    "acceleration",
+                    _point_of(time_ms, point_ms, k),
+                    name,
+                    float(accel.max()),
+                    amax,
+                    f"{group} {name} accelerates at up to {accel.max():.6g} rad/s² (first at "
+                    f"{time_ms[k]} ms), above its {amax:.6g} rad/s² (plus {allow - amax:.3g} for "
+                    "whole-pulse rounding); re-time with lower acceleration scaling",
+                )
+            )
         if len(d2) > 1 and axis.max_jerk > 0:
-            jerk = np.abs(np.diff(d2)) / (factor * t ** 3)
+            jerk = np.abs(np.diff(d2)) / (factor * t**3)
             report.max_jerk_ratio = max(report.max_jerk_ratio, float(jerk.max() / axis.max_jerk))
     # the points themselves
     for col, name in enumerate(axes.joint_names):
@@ -299,30 +328,56 @@ def _model_checks(
             i = int(np.argmax(bad))
             value = float(pos[i, col])
             limit = axis.lower if value < axis.lower else axis.upper
-            out.append(Warning_(
-                "position", i, name, value, limit,
-                f"point {i}: {group} {name} = {value:.6g} rad is beyond its limit {limit:.6g} rad",
-            ))
+            out.append(
+                Warning_(
+                    "position",
+                    i,
+                    name,
+                    value,
+                    limit,
+                    f"point {i}: {group} {name} = {value:.6g} rad is beyond its limit "
+                    f"{limit:.6g} rad",
+                )
+            )
     return out
 
 
-def _feed_checks(traj: Trajectory, period_ms: int) -> list[Warning_]:
+def _feed_checks(traj: Trajectory, period_ms: int, mode: FloatMode) -> list[Warning_]:
+    """Point times as MotoROS sees them (integer ms of the float32 time, §11)."""
     out: list[Warning_] = []
-    ms = np.trunc(np.asarray(traj.times, dtype=np.float32).astype(np.float64) * 1000.0)
+    t32 = np.asarray(traj.times, dtype=np.float32)
+    if mode is FloatMode.X87_EXTENDED:
+        exact = t32.astype(np.float64) * 1000.0  # exact: 24 × 10 bits
+    else:
+        exact = (t32 * np.float32(1000.0)).astype(np.float64)
+    ms = c_int_array(exact, mode).astype(np.float64)
     gaps = np.diff(ms)
     for i in np.flatnonzero(gaps <= 0)[:1]:
-        out.append(Warning_(
-            "dropped", int(i) + 1, None, float(gaps[i]), 0.0,
-            f"point {i + 1} is not after point {i} ({gaps[i]:g} ms); MotoROS accepts it and "
-            "drops it without moving",
-        ))
+        out.append(
+            Warning_(
+                "dropped",
+                int(i) + 1,
+                None,
+                float(gaps[i]),
+                0.0,
+                f"point {i + 1} is not after point {i} ({gaps[i]:g} ms); MotoROS accepts it and "
+                "drops it without moving",
+            )
+        )
     short = (gaps > 0) & (gaps < period_ms)
     if short.any():
         i = int(np.argmax(short))
-        out.append(Warning_(
-            "feed", i + 1, None, float(gaps[i]), float(period_ms),
-            f"{int(short.sum())} point(s) follow the one before by less than one "
-            f"{period_ms} ms tick (first: point {i + 1}, {gaps[i]:g} ms); MotoROS takes at most "
-            "one point per group per tick, so the motion falls behind the trajectory's times",
-        ))
+        out.append(
+            Warning_(
+                "feed",
+                i + 1,
+                None,
+                float(gaps[i]),
+                float(period_ms),
+                f"{int(short.sum())} point(s) follow the one before by less than one "
+                f"{period_ms} ms tick (first: point {i + 1}, {gaps[i]:g} ms); "
+                "MotoROS takes at most "
+                "one point per group per tick, so the motion falls behind the trajectory's times",
+            )
+        )
     return out

@@ -22,7 +22,6 @@ from __future__ import annotations
 import csv
 import io
 import json
-import math
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Final
@@ -257,8 +256,7 @@ def parse_yaml(text: str, name: str = "YAML") -> Trajectory:
         raise TrajectoryFileError(f"{name}: not YAML: {exc}") from None
     if len(docs) != 1:
         raise TrajectoryFileError(
-            f"{name}: holds {len(docs)} messages; keep exactly one "
-            "(rostopic echo -n 1 prints one)"
+            f"{name}: holds {len(docs)} messages; keep exactly one (rostopic echo -n 1 prints one)"
         )
     doc = docs[0]
     if not isinstance(doc, dict) or "joint_names" not in doc or "points" not in doc:
@@ -338,8 +336,5 @@ def to_yaml(traj: Trajectory) -> str:
             for t, p, v in zip(traj.times, traj.positions, traj.velocities, strict=True)
         ],
     }
-    return yaml.safe_dump(doc, sort_keys=False, default_flow_style=None) + "---\n"
-
-
-def is_finite(x: float) -> bool:
-    return math.isfinite(x)
+    text: str = yaml.safe_dump(doc, sort_keys=False, default_flow_style=None)
+    return text + "---\n"
