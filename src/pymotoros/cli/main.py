@@ -37,6 +37,7 @@ _COMMANDS: Final[dict[str, tuple[str, str]]] = {
     ),
     "plan": ("pymotoros.cli.trajectory:plan", "Time waypoints within the robot's limits."),
     "run": ("pymotoros.cli.trajectory:run", "Stream exactly the points of a trajectory file."),
+    "plot": ("pymotoros.cli.trajectory:plot", "Plot a trajectory per joint (PNG)."),
 }
 
 

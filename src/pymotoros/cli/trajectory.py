@@ -349,3 +349,31 @@ def run(traj: Path, force: bool, enable_first: bool, as_json: bool, **kwargs: An
             f"reached [{pos}] in {result.elapsed_s:.2f} s (file {trajectory.duration:.2f} s, "
             f"MotoROS {report.duration_s:.3f} s predicted, {result.stream.points} points)"
         )
+
+
+# --------------------------------------------------------------------------- plot
+
+
+@click.command(context_settings={"help_option_names": ["-h", "--help"]})
+@click.argument("traj", metavar="TRAJ", type=_TRAJ)
+@model_options
+@click.option(
+    "-o",
+    "--output",
+    type=click.Path(dir_okay=False, path_type=Path),
+    required=True,
+    help="PNG file to write.",
+)
+def plot(traj: Path, robot_name: str | None, controller_name: str | None, output: Path) -> None:
+    """Plot a trajectory per joint: planned and MotoROS-interpolated positions and
+    velocities, with the limits. A trajectory MotoROS would refuse is not plotted
+    (exit 1, as `pymotoros check`)."""
+    from pymotoros.trajectory.plot import plot_trajectory
+
+    trajectory, robot, controller = load(traj, robot_name, controller_name)
+    report = check_trajectory(trajectory, robot, controller)
+    if not report.accepted:
+        click.echo(render(report, trajectory, robot, controller), err=True)
+        sys.exit(EXIT_REFUSED)
+    plot_trajectory(trajectory, robot, controller, report, output)
+    click.echo(f"wrote {output}")
