@@ -45,8 +45,8 @@ PLANNING_MARGIN: Final = 0.95
 fits between samples and whole-pulse rounding add a few per mille; 5 % keeps every
 tick inside the limit."""
 MIN_WAYPOINT_STEP: Final = 1e-6
-"""rad (m): waypoints closer than this to the previous one are merged into it; a
-tenth of a pulse on the finest axis we model (about 1e-5 rad per pulse)."""
+"""rad (m): a joint that moves less than this from one waypoint to the next is held
+still there; a tenth of a pulse on the finest axis we model (about 1e-5 rad per pulse)."""
 _HALF_MS: Final = 0.5
 _MAX_STRETCHES: Final = 8
 """Time stretches tried to bring the cubics within the limits (one or two suffice)."""
@@ -149,10 +149,11 @@ def plan_waypoints(
     # merge waypoints closer than MIN_WAYPOINT_STEP: the path parameter must increase
     kept = [way[0]]
     for w in way[1:]:
-        if np.max(np.abs(w - kept[-1])) > MIN_WAYPOINT_STEP:
+        # per joint: a step below MIN_WAYPOINT_STEP is no step (it would give the path
+        # a needlessly steep, even overflowing, slope)
+        w = np.where(np.abs(w - kept[-1]) <= MIN_WAYPOINT_STEP, kept[-1], w)
+        if np.any(w != kept[-1]):
             kept.append(w)
-    if len(kept) > 1 and np.max(np.abs(kept[-1] - way[-1])) > 0:
-        kept[-1] = way[-1]  # end exactly at the last waypoint
     way = np.array(kept)
     if len(way) < 2:
         raise WaypointPlanningError("all waypoints are the same position: nothing to plan")
