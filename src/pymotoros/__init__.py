@@ -81,6 +81,14 @@ if TYPE_CHECKING:
         controller_model,
         robot_model,
     )
+    from pymotoros.trajectory import (
+        CheckReport,
+        Trajectory,
+        check_trajectory,
+        plan_waypoints,
+        read_trajectory_file,
+        write_trajectory_file,
+    )
 
 _WHERE: dict[str, str] = {
     # the client
@@ -103,6 +111,13 @@ _WHERE: dict[str, str] = {
     "plan_joint_move": "pymotoros.client.planning",
     "NamedPose": "pymotoros.client.srdf",
     "parse_srdf": "pymotoros.client.srdf",
+    # trajectory files, waypoint timing and the offline pre-flight
+    "Trajectory": "pymotoros.trajectory",
+    "CheckReport": "pymotoros.trajectory",
+    "check_trajectory": "pymotoros.trajectory",
+    "plan_waypoints": "pymotoros.trajectory",
+    "read_trajectory_file": "pymotoros.trajectory",
+    "write_trajectory_file": "pymotoros.trajectory",
     # the virtual controller
     "VirtualController": "pymotoros.controller",
     "CellConfig": "pymotoros.controller",
@@ -150,6 +165,7 @@ __all__ = [
     "AxisModel",
     "BusyTimeoutError",
     "CellConfig",
+    "CheckReport",
     "ClientClock",
     "ClientError",
     "CommandFailedError",
@@ -192,17 +208,22 @@ __all__ = [
     "StartPositionError",
     "Status",
     "SyncRobotClient",
+    "Trajectory",
     "TrajectoryPoint",
     "TrajectoryRejectedError",
     "VirtualController",
     "__version__",
+    "check_trajectory",
     "connect",
     "controller_model",
     "default_cell",
     "load_cell",
     "parse_srdf",
     "plan_joint_move",
+    "plan_waypoints",
+    "read_trajectory_file",
     "robot_model",
+    "write_trajectory_file",
 ]
 
 
