@@ -259,3 +259,28 @@ def test_tiny_waypoint_steps_are_held_still() -> None:
     traj = plan_waypoints([START, tiny, START], HC10, YRC)
     assert np.all(traj.positions[:, 5] == 0.0)
     assert check_trajectory(traj, HC10, YRC).exit_code == EXIT_OK
+
+
+def test_multi_group_sda10f_planned_checked_and_matches_the_twin() -> None:
+    sda = robot_model("sda10f")
+    dx200 = controller_model("dx200")
+    start = np.array(asyncio.run(twin_start("sda10f", "dx200")))
+    goal = start.copy()
+    goal[0] += 0.3  # left arm S
+    goal[7 + 1] += 0.2  # right arm L
+    goal[14] += 0.1  # torso
+    traj = plan_waypoints([start, goal], sda, dx200)
+    report = check_trajectory(traj, sda, dx200)
+    assert report.exit_code == EXIT_OK, report.to_json()
+    assert set(report.per_group) == {"R1", "R2", "B1", "B2"}
+    outcome = asyncio.run(run_on_twin(traj, "sda10f", "dx200"))
+    assert outcome.refused is None
+    for gi, group in enumerate(sda.groups):
+        axes = GroupAxes.from_model(group, dx200)
+        _, predicted = report.per_group[group.name]
+        executed = outcome.increments(gi, axes.axis_slots)
+        moving = np.flatnonzero(np.any(predicted != 0, axis=1))
+        if not len(moving):
+            assert not len(executed)
+            continue
+        np.testing.assert_array_equal(executed, predicted[moving[0] : moving[-1] + 1])
