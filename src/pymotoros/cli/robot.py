@@ -70,6 +70,8 @@ class Target:
     robot: str
     timeout_s: float
     debug: bool
+    record: Path | None = None
+    """pcapng file recording every frame of the session (--record)."""
 
     def client(self) -> RobotClient:
         return RobotClient(
@@ -127,6 +129,12 @@ def robot_options(func: _F) -> _F:
             help="Seconds to wait for a connection or a reply.",
         ),
         click.option("--debug", is_flag=True, help="Show a traceback on errors."),
+        click.option(
+            "--record",
+            type=click.Path(dir_okay=False, writable=True, path_type=Path),
+            default=None,
+            help="Record every frame sent and received to this pcapng file (Wireshark).",
+        ),
     ]
     for option in reversed(options):
         func = option(func)
@@ -143,6 +151,7 @@ def _target(kwargs: dict[str, Any]) -> Target:
         robot=kwargs.pop("robot"),
         timeout_s=kwargs.pop("timeout_s"),
         debug=kwargs.pop("debug"),
+        record=kwargs.pop("record", None),
     )
 
 
@@ -159,7 +168,12 @@ def _exit_code(exc: BaseException) -> int:
 def run(target: Target, work: Callable[[], Coroutine[Any, Any, _T]]) -> _T:
     """Run ``work`` on a fresh event loop; errors become one line and an exit code."""
     try:
-        return asyncio.run(work())
+        if target.record is None:
+            return asyncio.run(work())
+        from pymotoros.client.recorder import record_session
+
+        with record_session(target.record):
+            return asyncio.run(work())
     except (PymotorosError, OSError) as exc:
         if target.debug:
             traceback.print_exc()
