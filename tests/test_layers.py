@@ -45,7 +45,9 @@ FORBIDDEN: dict[str, tuple[str, ...]] = {
         "testing",
     ),
     "runtime": ("client", "cli", "web", "testing"),
-    "client": ("controller", "runtime", "motion", "cli", "web", "testing"),
+    "client": ("controller", "runtime", "motion", "cli", "web", "testing", "trajectory"),
+    # trajectory files, planning and the offline check: on top of models and motion
+    "trajectory": ("controller", "runtime", "client", "cli", "web", "testing"),
     "cli": ("testing",),
 }
 

@@ -87,6 +87,14 @@ if TYPE_CHECKING:
         controller_model,
         robot_model,
     )
+    from pymotoros.trajectory import (
+        CheckReport,
+        Trajectory,
+        check_trajectory,
+        plan_waypoints,
+        read_trajectory_file,
+        write_trajectory_file,
+    )
 
 _WHERE: dict[str, str] = {
     # the client
@@ -112,6 +120,13 @@ _WHERE: dict[str, str] = {
     # kinematics
     "Chain": "pymotoros.kinematics",
     "chain_for": "pymotoros.kinematics",
+    # trajectory files, waypoint timing and the offline pre-flight
+    "Trajectory": "pymotoros.trajectory",
+    "CheckReport": "pymotoros.trajectory",
+    "check_trajectory": "pymotoros.trajectory",
+    "plan_waypoints": "pymotoros.trajectory",
+    "read_trajectory_file": "pymotoros.trajectory",
+    "write_trajectory_file": "pymotoros.trajectory",
     # the virtual controller
     "VirtualController": "pymotoros.controller",
     "CellConfig": "pymotoros.controller",
@@ -167,6 +182,7 @@ __all__ = [
     "BusyTimeoutError",
     "CellConfig",
     "Chain",
+    "CheckReport",
     "ClientClock",
     "ClientError",
     "CommandFailedError",
@@ -214,11 +230,13 @@ __all__ = [
     "StartPositionError",
     "Status",
     "SyncRobotClient",
+    "Trajectory",
     "TrajectoryPoint",
     "TrajectoryRejectedError",
     "VirtualController",
     "__version__",
     "chain_for",
+    "check_trajectory",
     "connect",
     "controller_model",
     "default_cell",
@@ -227,7 +245,10 @@ __all__ = [
     "parse_scenario",
     "parse_srdf",
     "plan_joint_move",
+    "plan_waypoints",
+    "read_trajectory_file",
     "robot_model",
+    "write_trajectory_file",
 ]
 
 

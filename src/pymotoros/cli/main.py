@@ -42,6 +42,13 @@ _COMMANDS: Final[dict[str, tuple[str, str]]] = {
     "urdf": ("pymotoros.cli.urdf:urdf", "Write a robot model's URDF (base_link to tool0)."),
     "reset": ("pymotoros.cli.robot:reset", "Reset alarms and errors (RESET_ALARM)."),
     "servo": ("pymotoros.cli.robot:servo", "Servo power on or off (START/STOP_SERVOS)."),
+    "check": (
+        "pymotoros.cli.trajectory:check",
+        "Pre-flight a trajectory file: MotoROS's verdict and what it never checks.",
+    ),
+    "plan": ("pymotoros.cli.trajectory:plan", "Time waypoints within the robot's limits."),
+    "run": ("pymotoros.cli.trajectory:run", "Stream exactly the points of a trajectory file."),
+    "plot": ("pymotoros.cli.trajectory:plot", "Plot a trajectory per joint (PNG)."),
 }
 
 

@@ -94,6 +94,8 @@ class Target:
     """A cell file (``--config``): controller and groups, instead of --controller/--robot."""
     http_port: int | None = None
     """The twin's control API port, when a ports file told it."""
+    record: Path | None = None
+    """pcapng file recording every frame of the session (--record)."""
 
     def client(self) -> RobotClient:
         return RobotClient(
@@ -202,6 +204,13 @@ def robot_options(func: _F) -> _F:
         click.option(
             "--debug", is_flag=True, envvar=envvar("debug"), help="Show a traceback on errors."
         ),
+        click.option(
+            "--record",
+            type=click.Path(dir_okay=False, writable=True, path_type=Path),
+            default=None,
+            envvar=envvar("record"),
+            help="Record every frame sent and received to this pcapng file (Wireshark).",
+        ),
     ]
     for option in reversed(options):
         func = option(func)
@@ -282,6 +291,7 @@ def _target(kwargs: dict[str, Any]) -> Target:
         debug=debug,
         cell=kwargs.pop("cell_path"),
         http_port=from_file.get("http"),
+        record=kwargs.pop("record", None),
     )
 
 
@@ -344,7 +354,12 @@ def run(
         return await work()
 
     try:
-        return asyncio.run(main())
+        if target.record is None:
+            return asyncio.run(main())
+        from pymotoros.client.recorder import record_session
+
+        with record_session(target.record):
+            return asyncio.run(main())
     except (PymotorosError, OSError) as exc:
         fail(exc, debug=target.debug)
     except (KeyboardInterrupt, asyncio.CancelledError):

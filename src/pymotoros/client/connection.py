@@ -21,6 +21,7 @@ from dataclasses import dataclass
 from typing import Final, TypeAlias
 
 from pymotoros.client.errors import ConnectError, ConnectionLostError, RequestTimeoutError
+from pymotoros.client.recorder import active_flow
 from pymotoros.errors import RemoteProtocolError
 from pymotoros.protocol.constants import (
     HEADER_SIZE,
@@ -148,6 +149,7 @@ class FrameConnection:
         self._closing = False
         self.closed = asyncio.Event()
         """Set once the connection is gone, for whatever reason."""
+        self._flow = active_flow(port)  # the session recorder, when one is active
         self._task = asyncio.create_task(self._read_loop(), name=f"pymotoros-client-{self}")
 
     def __str__(self) -> str:
@@ -224,6 +226,8 @@ class FrameConnection:
                 data = await self._reader.read(READ_CHUNK)
                 if not data:
                     break
+                if self._flow is not None:
+                    self._flow.received(data)
                 self._decoder.feed(data)
                 while (frame := self._decoder.next_frame()) is not None:
                     if wire_logger.isEnabledFor(logging.DEBUG):
@@ -298,6 +302,8 @@ class FrameConnection:
                         if request_logger.isEnabledFor(logging.INFO):
                             request_logger.info("%s -> %r", self, message)
                         self._writer.write(data)
+                        if self._flow is not None:
+                            self._flow.sent(data)
                         await self._writer.drain()
                         reply = await future
                         if request_logger.isEnabledFor(logging.INFO):

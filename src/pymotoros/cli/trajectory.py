@@ -1,0 +1,379 @@
+"""``pymotoros plan``, ``check``, ``run`` and ``plot``: trajectory files before, during and
+after the move.
+
+External contract of ``check`` (docs/trajectories.md)::
+
+    pymotoros check TRAJ [--controller C --robot R] [--from J1,...,Jn] [--json]
+
+exit 0 all clear, 1 MotoROS would refuse a point, 4 accepted with warnings, 2 bad
+usage or an unreadable file. ``--json`` prints ``{"accepted", "refusal", "warnings",
+"duration_s", "increments"}`` (plus ``start_margin_pulses``); points are numbered as
+their sequence numbers (the start point is 0).
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import sys
+from pathlib import Path
+from typing import Any, Final
+
+import click
+
+from pymotoros.errors import ConfigError
+from pymotoros.models import (
+    DEFAULT_CONTROLLER,
+    DEFAULT_ROBOT,
+    ControllerModel,
+    ControllerType,
+    RobotModel,
+    controller_model,
+    robot_model,
+)
+from pymotoros.trajectory.check import (
+    EXIT_OK,
+    EXIT_REFUSED,
+    EXIT_WARNINGS,
+    CheckReport,
+    check_trajectory,
+)
+from pymotoros.trajectory.files import (
+    FORMATS,
+    Trajectory,
+    read_trajectory_file,
+    write_trajectory_file,
+)
+
+EXIT_USAGE: Final = 2
+
+CHECK_EXIT_HELP: Final = (
+    "\b\nExit codes:\n"
+    f"  {EXIT_OK}  all clear\n"
+    f"  {EXIT_REFUSED}  MotoROS would refuse a point (the message names it and says what to do)\n"
+    f"  {EXIT_USAGE}  bad usage or a trajectory file that cannot be read\n"
+    f"  {EXIT_WARNINGS}  MotoROS accepts it, but the robot should not do it (warnings)"
+)
+
+_TRAJ = click.Path(exists=True, dir_okay=False, path_type=Path)
+
+
+def model_options(func: Any) -> Any:
+    """--controller and --robot (the file's own robot/controller, if it names them,
+    is used when the option is not given)."""
+    func = click.option(
+        "--robot",
+        "robot_name",
+        default=None,
+        help=f"Robot model [default: the file's, else {DEFAULT_ROBOT}].",
+    )(func)
+    return click.option(
+        "--controller",
+        "controller_name",
+        type=click.Choice([t.value for t in ControllerType], case_sensitive=False),
+        default=None,
+        help=f"Controller family [default: the file's, else {DEFAULT_CONTROLLER.value}].",
+    )(func)
+
+
+def load(
+    path: Path, robot_name: str | None, controller_name: str | None
+) -> tuple[Trajectory, RobotModel, ControllerModel]:
+    """The file and the models it is checked against; errors are usage errors (exit 2)."""
+    try:
+        robot = robot_model(robot_name or DEFAULT_ROBOT)
+        traj = read_trajectory_file(path, robot)
+        if robot_name is None and traj.robot is not None:
+            robot = robot_model(traj.robot)
+        controller = controller_model(controller_name or traj.controller or DEFAULT_CONTROLLER)
+        traj.group_columns(robot)  # names every joint of whole groups of this robot
+    except ConfigError as exc:
+        raise click.BadParameter(str(exc), param_hint="TRAJ") from None
+    return traj, robot, controller
+
+
+def _parse_from(value: str | None, count: int) -> list[float] | None:
+    if value is None:
+        return None
+    parts = [p.strip() for p in value.split(",")]
+    if len(parts) != count:
+        raise click.BadParameter(
+            f"needs {count} comma-separated values (the file's joints, rad), got {len(parts)}",
+            param_hint="--from",
+        )
+    try:
+        out = [float(p) for p in parts]
+    except ValueError:
+        raise click.BadParameter(f"not all numbers: {value!r}", param_hint="--from") from None
+    if not all(math.isfinite(v) for v in out):
+        raise click.BadParameter("values must be finite", param_hint="--from")
+    return out
+
+
+def render(
+    report: CheckReport, traj: Trajectory, robot: RobotModel, controller: ControllerModel
+) -> str:
+    """The human report of ``pymotoros check``."""
+    lines = [
+        f"{len(traj.times)} points, {len(traj.joint_names)} joints, {robot.name} on "
+        f"{controller.type.value}"
+    ]
+    r = report.refusal
+    if r is not None:
+        lines.append(
+            f"REFUSED: MotoROS would answer INVALID ({r.result}) subcode {r.subcode} to point "
+            f"{r.point}" + (f", {r.axis}" if r.axis else "") + f": {r.meaning}"
+        )
+        lines.append(f"  value {r.value:.6g}, limit {r.limit:.6g}")
+        lines.append(f"  {r.message}")
+        lines.append(f"  remedy: {r.remedy}")
+        return "\n".join(lines)
+    lines.append(
+        f"accepted: {report.increments} increments, {report.duration_s:.3f} s "
+        f"(planned {traj.duration:.3f} s)"
+    )
+    if report.start_margin_pulses is not None:
+        lines.append(f"start margin: {report.start_margin_pulses} pulses of the 30 MotoROS allows")
+    for w in report.warnings:
+        lines.append(f"warning [{w.kind}] point {w.point}: {w.text}")
+    if not report.warnings:
+        lines.append("no warnings")
+    return "\n".join(lines)
+
+
+@click.command(epilog=CHECK_EXIT_HELP, context_settings={"help_option_names": ["-h", "--help"]})
+@click.argument("traj", metavar="TRAJ", type=_TRAJ)
+@model_options
+@click.option(
+    "--from",
+    "from_",
+    metavar="J1,...,Jn",
+    help="The robot's current position (rad, the file's joints): checks the start margin.",
+)
+@click.option("--json", "as_json", is_flag=True, help="Print the report as JSON.")
+def check(
+    traj: Path,
+    robot_name: str | None,
+    controller_name: str | None,
+    from_: str | None,
+    as_json: bool,
+) -> None:
+    """Pre-flight a trajectory file (.csv, .json, .yaml) offline.
+
+    Runs MotoROS 1.9.12's validation and interpolation exactly (the twin's engine),
+    then checks what MotoROS never does: joint limits between points, per-tick
+    increments and accelerations, feed rate, start margin.
+    """
+    trajectory, robot, controller = load(traj, robot_name, controller_name)
+    current = _parse_from(from_, len(trajectory.joint_names))
+    report = check_trajectory(trajectory, robot, controller, current=current)
+    if as_json:
+        click.echo(json.dumps(report.to_json()))
+    else:
+        click.echo(render(report, trajectory, robot, controller))
+    sys.exit(report.exit_code)
+
+
+@click.command(context_settings={"help_option_names": ["-h", "--help"]})
+@click.argument("waypoints", metavar="WAYPOINTS.csv", type=_TRAJ)
+@click.option("--robot", "robot_name", default=DEFAULT_ROBOT, show_default=True)
+@click.option(
+    "--controller",
+    "controller_name",
+    type=click.Choice([t.value for t in ControllerType], case_sensitive=False),
+    default=DEFAULT_CONTROLLER.value,
+    show_default=True,
+)
+@click.option(
+    "--speed-scale",
+    type=click.FloatRange(0, 1, min_open=True),
+    default=1.0,
+    show_default=True,
+    help="Velocity scaling of the model's limits (as MoveIt's).",
+)
+@click.option(
+    "--accel-scale",
+    type=click.FloatRange(0, 1, min_open=True),
+    default=1.0,
+    show_default=True,
+    help="Acceleration scaling of the model's limits.",
+)
+@click.option(
+    "--sample",
+    "sample_s",
+    type=click.FloatRange(0.004, 10),
+    default=0.05,
+    show_default=True,
+    help="Approximate seconds between points.",
+)
+@click.option(
+    "-o",
+    "--output",
+    type=click.Path(dir_okay=False, path_type=Path),
+    required=True,
+    help="Trajectory file to write (.csv, .json, .yaml).",
+)
+def plan(
+    waypoints: Path,
+    robot_name: str,
+    controller_name: str,
+    speed_scale: float,
+    accel_scale: float,
+    sample_s: float,
+    output: Path,
+) -> None:
+    """Time waypoints (one row per waypoint, every joint of the robot, rad; an optional
+    header row) within the robot's limits, and write the trajectory."""
+    from pymotoros.trajectory.planning import plan_waypoints
+
+    try:
+        robot = robot_model(robot_name)
+        controller = controller_model(controller_name)
+        rows = []
+        for number, line in enumerate(waypoints.read_text(encoding="utf-8").splitlines(), 1):
+            if not line.strip():
+                continue
+            try:
+                rows.append([float(c) for c in line.split(",")])
+            except ValueError:
+                if number == 1:
+                    continue  # header
+                raise ConfigError(f"{waypoints.name} line {number}: not all numbers") from None
+        result = plan_waypoints(
+            rows,
+            robot,
+            controller,
+            velocity_scaling=speed_scale,
+            acceleration_scaling=accel_scale,
+            sample_s=sample_s,
+        )
+        write_trajectory_file(result, output)
+    except ConfigError as exc:
+        raise click.BadParameter(str(exc)) from None
+    click.echo(
+        f"wrote {output}: {len(result.times)} points, {result.duration:.3f} s "
+        f"(formats: {', '.join(FORMATS)})"
+    )
+
+
+# --------------------------------------------------------------------------- run
+
+
+def client_trajectory(traj: Trajectory, robot: RobotModel) -> tuple[Any, tuple[int, ...]]:
+    """(the client's JointTrajectory, its groups): exactly the file's points, its joints
+    reordered group by group as the client sends them (no re-timing)."""
+    from pymotoros.client.planning import JointTrajectory, TrajectoryPoint
+
+    columns = traj.group_columns(robot)
+    groups = tuple(g for g, _ in columns)
+    order = [c for _, cols in columns for c in cols]
+    points = tuple(
+        TrajectoryPoint(
+            float(t), tuple(float(x) for x in p[order]), tuple(float(x) for x in v[order])
+        )
+        for t, p, v in zip(traj.times, traj.positions, traj.velocities, strict=True)
+    )
+    return JointTrajectory(points, float(traj.times[-1])), groups
+
+
+def _robot_options(func: Any) -> Any:
+    from pymotoros.cli.robot import robot_options
+
+    return robot_options(func)
+
+
+@click.command(context_settings={"help_option_names": ["-h", "--help"]})
+@click.argument("traj", metavar="TRAJ", type=_TRAJ)
+@_robot_options
+@click.option("--force", is_flag=True, help="Send even if `pymotoros check` finds a problem.")
+@click.option("--enable", "enable_first", is_flag=True, help="Enter trajectory mode first.")
+@click.option("--json", "as_json", is_flag=True, help="Print the result as JSON.")
+def run(traj: Path, force: bool, enable_first: bool, as_json: bool, **kwargs: Any) -> None:
+    """Stream exactly the points of a trajectory file to the robot (no re-timing).
+
+    The robot must be enabled as for `move` (or give --enable) and stand at the first
+    point. The file is checked first (as `pymotoros check`); a refusal or a warning
+    stops the command before anything moves, unless --force.
+    """
+    import asyncio
+    import contextlib
+
+    from pymotoros.cli.robot import _move_data, _target, connected
+    from pymotoros.cli.robot import run as run_client
+    from pymotoros.client.streaming import FollowingSample, MoveResult
+    from pymotoros.errors import PymotorosError
+
+    target = _target(kwargs)
+    trajectory, robot, controller = load(traj, target.robot, target.controller)
+    report = check_trajectory(trajectory, robot, controller)
+    if report.exit_code != EXIT_OK and not force:
+        click.echo(render(report, trajectory, robot, controller), err=True)
+        click.echo("not started: fix the trajectory or give --force", err=True)
+        sys.exit(report.exit_code)
+    joint, groups = client_trajectory(trajectory, robot)
+
+    async def work() -> MoveResult:
+        async with connected(target, motion=True, state=True, io=False) as client:
+            if enable_first:
+                await client.start_trajectory_mode()
+            bar = (
+                click.progressbar(length=1000, label="running", file=sys.stderr, show_eta=False)
+                if sys.stderr.isatty()
+                else None
+            )
+            done = [0]
+
+            def progress(sample: FollowingSample) -> None:
+                now = int(sample.progress * 1000)
+                if bar is not None and now > done[0]:
+                    bar.update(now - done[0])
+                    done[0] = now
+
+            with bar if bar is not None else contextlib.nullcontext():
+                try:
+                    result = await client.execute(
+                        joint, groups=groups, on_progress=progress, check_speed=not force
+                    )
+                except asyncio.CancelledError:
+                    with contextlib.suppress(PymotorosError):
+                        await asyncio.shield(client.stop_motion())
+                    raise
+            return result
+
+    result = run_client(target, work)
+    if as_json:
+        click.echo(json.dumps(_move_data(result)))
+    else:
+        pos = ", ".join(f"{p:.4f}" for p in result.final_positions)
+        click.echo(
+            f"reached [{pos}] in {result.elapsed_s:.2f} s (file {trajectory.duration:.2f} s, "
+            f"MotoROS {report.duration_s:.3f} s predicted, {result.stream.points} points)"
+        )
+
+
+# --------------------------------------------------------------------------- plot
+
+
+@click.command(context_settings={"help_option_names": ["-h", "--help"]})
+@click.argument("traj", metavar="TRAJ", type=_TRAJ)
+@model_options
+@click.option(
+    "-o",
+    "--output",
+    type=click.Path(dir_okay=False, path_type=Path),
+    required=True,
+    help="PNG file to write.",
+)
+def plot(traj: Path, robot_name: str | None, controller_name: str | None, output: Path) -> None:
+    """Plot a trajectory per joint: planned and MotoROS-interpolated positions and
+    velocities, with the limits. A trajectory MotoROS would refuse is not plotted
+    (exit 1, as `pymotoros check`)."""
+    from pymotoros.trajectory.plot import plot_trajectory
+
+    trajectory, robot, controller = load(traj, robot_name, controller_name)
+    report = check_trajectory(trajectory, robot, controller)
+    if not report.accepted:
+        click.echo(render(report, trajectory, robot, controller), err=True)
+        sys.exit(EXIT_REFUSED)
+    plot_trajectory(trajectory, robot, controller, report, output)
+    click.echo(f"wrote {output}")

@@ -1,0 +1,383 @@
+"""The pre-flight: what MotoROS 1.9.12 will do with a trajectory, and what it never checks.
+
+MotoROS's own validation and interpolation run offline on the engine the twin uses
+(:func:`pymotoros.motion.interpolate_arrays` and the checks of
+:mod:`pymotoros.models.rules`), so a refusal here is the refusal the controller
+sends. Then the increments it would queue are checked against the model for what
+MotoROS never checks: joint limits between points (the cubic can overshoot), per-tick
+increments above an axis's maximum, per-tick acceleration, points closer than one
+tick (MotoROS takes at most one point per group per tick), dropped points, and the
+start margin against a given current position.
+
+A warning needs a real excess: whole-pulse rounding alone moves a position by up to
+one pulse and an acceleration by up to two pulses per tick²; those are allowed.
+"""
+
+from __future__ import annotations
+
+import logging
+from collections.abc import Sequence
+from dataclasses import asdict, dataclass, field
+from typing import Any, Final
+
+import numpy as np
+import numpy.typing as npt
+
+from pymotoros.errors import TrajectoryRejectedError
+from pymotoros.models import ControllerModel, FloatMode, GroupModel, RobotModel
+from pymotoros.models.rules import START_TOLERANCE_PULSES, check_start
+from pymotoros.models.rules import TrajPoint as RulesPoint
+from pymotoros.motion import GroupAxes, interpolate_arrays, to_pulses
+from pymotoros.motion.numerics import c_int_array
+from pymotoros.protocol.constants import InvalidSubcode
+from pymotoros.trajectory.files import Trajectory
+
+I64Array = npt.NDArray[np.int64]
+
+logger = logging.getLogger(__name__)
+
+POSITION_ROUNDING_PULSES: Final = 1
+"""A position computed from whole pulses is off by at most one pulse (truncation)."""
+ACCEL_ROUNDING_PULSES: Final = 2
+"""Two neighbouring increments each rounded by up to one pulse: their difference (the
+per-tick acceleration) by up to two."""
+
+EXIT_OK: Final = 0
+EXIT_REFUSED: Final = 1
+EXIT_WARNINGS: Final = 4
+
+_REMEDIES: Final[dict[int, str]] = {
+    int(InvalidSubcode.DATA_START_POS): (
+        "start the trajectory where the robot is (read it with `pymotoros status`), or "
+        "move there first with `pymotoros move`"
+    ),
+    int(InvalidSubcode.DATA_SPEED): (
+        "re-time the trajectory slower (lower velocity scaling) so that every velocity "
+        "stays below the axis maximum"
+    ),
+    int(InvalidSubcode.DATA_TIME): "split the trajectory: point times must stay below 4 h",
+}
+
+
+@dataclass(frozen=True, slots=True)
+class Refused:
+    """The first point MotoROS would refuse (the ``refusal`` of ``--json``)."""
+
+    point: int
+    axis: str | None
+    value: float
+    limit: float
+    result: int
+    subcode: int
+    meaning: str
+    remedy: str
+    group: str = ""
+    message: str = ""
+
+
+@dataclass(frozen=True, slots=True)
+class Warning_:  # noqa: N801 - "Warning" is a builtin
+    """Something MotoROS accepts but the robot should not do."""
+
+    kind: str
+    """position | increment | acceleration | feed | dropped | start"""
+    point: int
+    axis: str | None
+    value: float
+    limit: float
+    text: str
+
+
+@dataclass(slots=True)
+class CheckReport:
+    """The outcome; :meth:`to_json` is the ``pymotoros check --json`` contract."""
+
+    accepted: bool
+    refusal: Refused | None
+    warnings: list[Warning_] = field(default_factory=list)
+    duration_s: float = 0.0
+    increments: int = 0
+    start_margin_pulses: int | None = None
+    max_jerk_ratio: float = 0.0
+    """Largest per-tick jerk as a fraction of the model's limit (informational: the
+    cubic's acceleration steps at every point, so MotoROS's own motion exceeds it)."""
+    per_group: dict[str, tuple[I64Array, I64Array]] = field(default_factory=dict, repr=False)
+    """Group name → (time_ms, increments) MotoROS would queue."""
+
+    @property
+    def exit_code(self) -> int:
+        if not self.accepted:
+            return EXIT_REFUSED
+        return EXIT_WARNINGS if self.warnings else EXIT_OK
+
+    def to_json(self) -> dict[str, Any]:
+        refusal = None
+        if self.refusal is not None:
+            r = asdict(self.refusal)
+            refusal = {
+                k: r[k]
+                for k in (
+                    "point",
+                    "axis",
+                    "value",
+                    "limit",
+                    "result",
+                    "subcode",
+                    "meaning",
+                    "remedy",
+                )
+            }
+        return {
+            "accepted": self.accepted,
+            "refusal": refusal,
+            "warnings": [{k: v for k, v in asdict(w).items()} for w in self.warnings],
+            "duration_s": self.duration_s,
+            "increments": self.increments,
+            "start_margin_pulses": self.start_margin_pulses,
+        }
+
+
+def _refused(exc: TrajectoryRejectedError, axes: GroupAxes) -> Refused:
+    from pymotoros.protocol.constants import ResultCode
+
+    sub = InvalidSubcode(exc.subcode)
+    axis: str | None = None
+    if exc.axis is not None:
+        if sub is InvalidSubcode.DATA_START_POS:
+            axis = axes.joint_at_slot(exc.axis)
+        else:
+            axis = axes.joint_name(exc.axis)
+    return Refused(
+        point=exc.point,
+        axis=axis,
+        value=float(exc.value if exc.value is not None else 0.0),
+        limit=float(exc.limit if exc.limit is not None else 0.0),
+        result=int(ResultCode.INVALID),
+        subcode=int(sub),
+        meaning=sub.meaning,
+        remedy=_REMEDIES.get(int(sub), "fix the point"),
+        group=axes.name,
+        message=str(exc),
+    )
+
+
+def check_trajectory(
+    traj: Trajectory,
+    robot: RobotModel,
+    controller: ControllerModel,
+    *,
+    current: Sequence[float] | None = None,
+) -> CheckReport:
+    """Check ``traj`` for ``robot`` on ``controller``; ``current`` is the robot's
+    position (all joints of the groups the file names, file order), default the start."""
+    columns = traj.group_columns(robot)
+    if not columns:
+        raise TrajectoryRejectedError(
+            f"the trajectory names none of {robot.name}'s groups", point=0, subcode=0
+        )
+    cur = None if current is None else np.asarray(current, dtype=np.float64)
+    if cur is not None and cur.shape != (len(traj.joint_names),):
+        raise ValueError(
+            f"--from needs {len(traj.joint_names)} values (the file's joints), got {cur.shape}"
+        )
+    first: Refused | None = None
+    report = CheckReport(accepted=True, refusal=None)
+    margins: list[int] = []
+    for gi, cols in columns:
+        group = robot.groups[gi]
+        axes = GroupAxes.from_model(group, controller)
+        pos = traj.positions[:, cols]
+        vel = traj.velocities[:, cols]
+        if cur is not None:
+            commanded = to_pulses(tuple(cur[cols].tolist()), axes)
+            start = RulesPoint(float(traj.times[0]), tuple(pos[0].tolist()), tuple(vel[0].tolist()))
+            requested = to_pulses(start.pos, axes)
+            margins.append(
+                START_TOLERANCE_PULSES
+                - max(abs(a - b) for a, b in zip(requested, commanded, strict=True))
+            )
+            refusal = check_start(start, commanded, axes)
+            if refusal is not None:
+                exc = refusal.error(0)
+                cand = _refused(exc, axes)
+                if first is None or cand.point < first.point:
+                    first = cand
+                continue
+        try:
+            time_ms, inc = interpolate_arrays(traj.times, pos, vel, axes)
+        except TrajectoryRejectedError as exc:
+            cand = _refused(exc, axes)
+            if first is None or cand.point < first.point:
+                first = cand
+            continue
+        report.per_group[group.name] = (time_ms, inc)
+        report.warnings.extend(_model_checks(traj, pos, axes, time_ms, inc, report, group))
+    if margins:
+        report.start_margin_pulses = min(margins)
+    if first is not None:
+        report.accepted = False
+        report.refusal = first
+        report.warnings.clear()
+        report.per_group.clear()
+        return report
+    ticks = max((len(t) for t, _ in report.per_group.values()), default=0)
+    period = controller.interpolation_period_ms
+    report.increments = ticks
+    report.duration_s = ticks * period / 1000.0
+    report.warnings.extend(_feed_checks(traj, period, controller.float_mode))
+    report.warnings.sort(key=lambda w: (w.point, w.kind))
+    return report
+
+
+def _point_of(time_ms: I64Array, point_ms: npt.NDArray[np.float64], k: int) -> int:
+    """The point whose segment holds queue entry ``k`` (the segment's end point)."""
+    return int(min(np.searchsorted(point_ms, time_ms[k], side="left"), len(point_ms) - 1))
+
+
+def _model_checks(
+    traj: Trajectory,
+    pos: npt.NDArray[np.float64],
+    axes: GroupAxes,
+    time_ms: I64Array,
+    inc: I64Array,
+    report: CheckReport,
+    group_model: GroupModel,
+) -> list[Warning_]:
+    group = axes.name
+    out: list[Warning_] = []
+    if not len(inc):
+        return out
+    point_ms = np.asarray(traj.times, dtype=np.float64) * 1000.0
+    models = {a.name: a for a in group_model.axes}
+    t = axes.period_ms / 1000.0
+    start = np.array(axes.take(to_pulses(tuple(pos[0].tolist()), axes)), dtype=np.int64)
+    path = start + np.cumsum(inc, axis=0)
+    for col, ros in enumerate(axes.columns_list):
+        name = axes.joint_names[ros]
+        axis = models[name]
+        factor = float(axes.factors_ros[ros])
+        slot = axes.axis_slots[col]
+        # positions between points
+        lo = axis.lower * factor - POSITION_ROUNDING_PULSES
+        hi = axis.upper * factor + POSITION_ROUNDING_PULSES
+        p = path[:, col]
+        beyond = (p < lo) | (p > hi)
+        if beyond.any():
+            k = int(np.argmax(beyond))
+            value = float(p[k]) / factor
+            limit = axis.lower if value < axis.lower else axis.upper
+            worst = float(p.max() if value > axis.upper else p.min()) / factor
+            out.append(
+                Warning_(
+                    "position",
+                    _point_of(time_ms, point_ms, k),
+                    name,
+                    worst,
+                    limit,
+                    f"{group} {name} reaches {worst:.6g} rad at {time_ms[k]} ms, beyond its "
+                    f"limit {limit:.6g} rad (MotoROS checks no joint limits; the controller's "
+                    "soft limits stop the robot with an alarm); add points or slow down there",
+                )
+            )
+        # increments above maxInc
+        mx = axes.max_increment[slot]
+        big = np.abs(inc[:, col]) > mx
+        if big.any():
+            k = int(np.argmax(big))
+            out.append(
+                Warning_(
+                    "increment",
+                    _point_of(time_ms, point_ms, k),
+                    name,
+                    float(abs(inc[k, col])),
+                    float(mx),
+                    f"{group} {name} moves {abs(int(inc[k, col]))} pulses in one "
+                    f"{axes.period_ms} ms "
+                    f"tick at {time_ms[k]} ms; its maximum is {mx} pulses per tick; slow down",
+                )
+            )
+        # acceleration and jerk per tick, robot at rest before and after
+        v = np.concatenate(([0], inc[:, col], [0])).astype(np.float64)
+        d2 = np.diff(v)
+        amax = axis.max_acceleration
+        accel = np.abs(d2) / (factor * t * t)
+        allow = amax + ACCEL_ROUNDING_PULSES / (factor * t * t)
+        over = accel > allow
+        if over.any():
+            k = min(int(np.argmax(over)), len(time_ms) - 1)
+            out.append(
+                Warning_(
+                    "acceleration",
+                    _point_of(time_ms, point_ms, k),
+                    name,
+                    float(accel.max()),
+                    amax,
+                    f"{group} {name} accelerates at up to {accel.max():.6g} rad/s² (first at "
+                    f"{time_ms[k]} ms), above its {amax:.6g} rad/s² (plus {allow - amax:.3g} for "
+                    "whole-pulse rounding); re-time with lower acceleration scaling",
+                )
+            )
+        if len(d2) > 1 and axis.max_jerk > 0:
+            jerk = np.abs(np.diff(d2)) / (factor * t**3)
+            report.max_jerk_ratio = max(report.max_jerk_ratio, float(jerk.max() / axis.max_jerk))
+    # the points themselves
+    for col, name in enumerate(axes.joint_names):
+        axis = models[name]
+        bad = (pos[:, col] < axis.lower) | (pos[:, col] > axis.upper)
+        if bad.any():
+            i = int(np.argmax(bad))
+            value = float(pos[i, col])
+            limit = axis.lower if value < axis.lower else axis.upper
+            out.append(
+                Warning_(
+                    "position",
+                    i,
+                    name,
+                    value,
+                    limit,
+                    f"point {i}: {group} {name} = {value:.6g} rad is beyond its limit "
+                    f"{limit:.6g} rad",
+                )
+            )
+    return out
+
+
+def _feed_checks(traj: Trajectory, period_ms: int, mode: FloatMode) -> list[Warning_]:
+    """Point times as MotoROS sees them (integer ms of the float32 time, §11)."""
+    out: list[Warning_] = []
+    t32 = np.asarray(traj.times, dtype=np.float32)
+    if mode is FloatMode.X87_EXTENDED:
+        exact = t32.astype(np.float64) * 1000.0  # exact: 24 × 10 bits
+    else:
+        exact = (t32 * np.float32(1000.0)).astype(np.float64)
+    ms = c_int_array(exact, mode).astype(np.float64)
+    gaps = np.diff(ms)
+    for i in np.flatnonzero(gaps <= 0)[:1]:
+        out.append(
+            Warning_(
+                "dropped",
+                int(i) + 1,
+                None,
+                float(gaps[i]),
+                0.0,
+                f"point {i + 1} is not after point {i} ({gaps[i]:g} ms); MotoROS accepts it and "
+                "drops it without moving",
+            )
+        )
+    short = (gaps > 0) & (gaps < period_ms)
+    if short.any():
+        i = int(np.argmax(short))
+        out.append(
+            Warning_(
+                "feed",
+                i + 1,
+                None,
+                float(gaps[i]),
+                float(period_ms),
+                f"{int(short.sum())} point(s) follow the one before by less than one "
+                f"{period_ms} ms tick (first: point {i + 1}, {gaps[i]:g} ms); "
+                "MotoROS takes at most "
+                "one point per group per tick, so the motion falls behind the trajectory's times",
+            )
+        )
+    return out

@@ -1,0 +1,166 @@
+"""``pymotoros plan``/``check``/``run``/``plot``: exit codes, the --json contract, and a
+trajectory as ``rostopic echo`` prints it checked, run on ``pymotoros sim`` and plotted."""
+
+from __future__ import annotations
+
+import json
+import sys
+from collections.abc import Iterator
+from pathlib import Path
+
+import matplotlib
+import numpy as np
+import pytest
+from click.testing import CliRunner, Result
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "client"))
+from client_sim import Sim, running_sim
+
+from pymotoros.cli.main import cli
+from pymotoros.models import controller_model, robot_model
+from pymotoros.trajectory import check_trajectory, read_trajectory_file
+from pymotoros.trajectory.check import EXIT_OK, EXIT_REFUSED, EXIT_WARNINGS
+from pymotoros.trajectory.files import to_yaml
+from pymotoros.trajectory.plot import plot_trajectory
+
+matplotlib.use("Agg")
+
+HC10 = robot_model("hc10")
+YRC = controller_model("yrc1000")
+CONTRACT = {"accepted", "refusal", "warnings", "duration_s", "increments"}
+REFUSAL_KEYS = {"point", "axis", "value", "limit", "result", "subcode", "meaning", "remedy"}
+WARNING_KEYS = {"kind", "point", "axis", "value", "limit", "text"}
+
+
+def invoke(*args: str) -> Result:
+    return CliRunner().invoke(cli, list(args), catch_exceptions=False)
+
+
+@pytest.fixture(scope="module")
+def sim() -> Iterator[Sim]:
+    with running_sim() as s:
+        yield s
+
+
+@pytest.fixture
+def planned_yaml(tmp_path: Path) -> Path:
+    """Waypoints timed by ``pymotoros plan``, written as ROS 1 rostopic echo YAML."""
+    way = tmp_path / "way.csv"
+    way.write_text("s,l,u,r,b,t\n0,0,0,0,0,0\n0.4,0.2,0.3,0,-0.5,0\n0,0,0,0,0,0\n")
+    out = tmp_path / "traj.yaml"
+    result = invoke("plan", str(way), "--speed-scale", "0.8", "-o", str(out))
+    assert result.exit_code == 0, result.output
+    return out
+
+
+def _write_yaml(tmp_path: Path, times: list[float], pos: list[list[float]]) -> Path:
+    from pymotoros.trajectory import Trajectory
+
+    n = len(pos[0])
+    traj = Trajectory(
+        HC10.groups[0].joint_names, np.array(times), np.array(pos), np.zeros((len(pos), n))
+    )
+    path = tmp_path / "t.yaml"
+    path.write_text(to_yaml(traj))
+    return path
+
+
+def test_check_accepted_json_contract(planned_yaml: Path) -> None:
+    result = invoke("check", str(planned_yaml), "--json")
+    assert result.exit_code == EXIT_OK, result.output
+    data = json.loads(result.stdout)
+    assert set(data) >= CONTRACT
+    assert data["accepted"] is True
+    assert data["refusal"] is None
+    assert data["warnings"] == []
+    traj = read_trajectory_file(planned_yaml)
+    report = check_trajectory(traj, HC10, YRC)
+    assert data["increments"] == report.increments > 0
+    assert data["duration_s"] == pytest.approx(traj.duration, abs=0.005)
+
+
+def test_check_refusal_exit_1_json_and_human(tmp_path: Path) -> None:
+    path = _write_yaml(tmp_path, [0.0, 1.0], [[0.0] * 6, [0.1] + [0.0] * 5])
+    result = invoke("check", str(path), "--json", "--from", "0,0,0.01,0,0,0")
+    assert result.exit_code == EXIT_REFUSED
+    data = json.loads(result.stdout)
+    assert data["accepted"] is False
+    assert set(data["refusal"]) == REFUSAL_KEYS
+    assert data["refusal"]["subcode"] == 3011
+    assert data["refusal"]["result"] == 3
+    assert data["refusal"]["point"] == 0
+    assert data["refusal"]["axis"] == "joint_3_u"
+    human = invoke("check", str(path), "--from", "0,0,0.01,0,0,0")
+    assert human.exit_code == EXIT_REFUSED
+    assert "REFUSED" in human.stdout
+    assert "3011" in human.stdout
+    assert "remedy:" in human.stdout
+
+
+def test_check_warnings_exit_4(tmp_path: Path) -> None:
+    path = _write_yaml(tmp_path, [0.0, 0.3], [[0.0] * 6, [0.0, 0.0, 0.0, 0.5, 0.0, 0.0]])
+    result = invoke("check", str(path), "--json")
+    assert result.exit_code == EXIT_WARNINGS
+    data = json.loads(result.stdout)
+    assert data["accepted"] is True
+    assert [set(w) for w in data["warnings"]] == [WARNING_KEYS]
+    assert data["warnings"][0]["kind"] == "acceleration"
+    assert data["warnings"][0]["axis"] == "joint_4_r"
+
+
+def test_check_usage_errors_exit_2(tmp_path: Path) -> None:
+    bad = tmp_path / "bad.yaml"
+    bad.write_text("joint_names: [x]\npoints: []\n")
+    result = invoke("check", str(bad))
+    assert result.exit_code == 2
+    assert "points must be a non-empty list" in result.output
+    good = _write_yaml(tmp_path, [0.0, 1.0], [[0.0] * 6] * 2)
+    assert invoke("check", str(good), "--from", "0,0").exit_code == 2
+
+
+def test_rostopic_echo_yaml_checked_run_and_plotted(
+    sim: Sim, planned_yaml: Path, tmp_path: Path
+) -> None:
+    assert invoke("check", str(planned_yaml)).exit_code == EXIT_OK
+    assert invoke("move", "0", "0", "0", "0", "0", "0", "--enable", *sim.cli_args()).exit_code == 0
+    result = invoke("run", str(planned_yaml), "--json", *sim.cli_args())
+    assert result.exit_code == 0, result.output
+    final = json.loads(result.stdout)["positions"]
+    assert np.allclose(final, [0.0] * 6, atol=1e-4)
+    png = tmp_path / "plot.png"
+    result = invoke("plot", str(planned_yaml), "-o", str(png))
+    assert result.exit_code == 0, result.output
+    assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+def test_run_refuses_to_start_when_check_fails(sim: Sim, tmp_path: Path) -> None:
+    path = _write_yaml(tmp_path, [0.0, 0.3], [[0.0] * 6, [0.0, 0.0, 0.0, 0.5, 0.0, 0.0]])
+    result = invoke("run", str(path), *sim.cli_args())
+    assert result.exit_code == EXIT_WARNINGS
+    assert "not started" in result.stderr
+
+
+def test_plot_content(planned_yaml: Path, tmp_path: Path) -> None:
+    traj = read_trajectory_file(planned_yaml)
+    report = check_trajectory(traj, HC10, YRC)
+    fig = plot_trajectory(traj, HC10, YRC, report, tmp_path / "p.png")
+    axes = fig.get_axes()
+    assert len(axes) == 2 * 6
+    position = axes[0]  # joint_1_s position
+    labels = [line.get_label() for line in position.get_lines()]
+    assert {"planned points", "MotoROS interpolation", "joint limits"} <= set(labels)
+    planned, interp = position.get_lines()[0], position.get_lines()[1]
+    assert np.allclose(planned.get_xdata(), traj.times)
+    assert len(interp.get_xdata()) == report.increments + 1
+    assert max(interp.get_ydata()) == pytest.approx(0.4, abs=1e-4)  # the waypoint
+    assert position.get_ylabel().startswith("joint_1_s")
+    assert "[rad]" in position.get_ylabel()
+    assert axes[1].get_ylabel() == "[rad/s]"
+    # limits drawn: the velocity limit of joint_1_s as a horizontal line
+    vlines = [line for line in axes[1].get_lines() if line.get_label() == "velocity limit"]
+    assert vlines
+    assert vlines[0].get_ydata()[0] == pytest.approx(HC10.groups[0].axes[0].max_velocity)
+    title = fig.get_suptitle()
+    assert "hc10" in title
+    assert "yrc1000" in title
+    assert f"{report.duration_s:.3f} s" in title
