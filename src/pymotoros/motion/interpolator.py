@@ -12,8 +12,10 @@ The controller drives it:
 
 A segment's step grid, and so the number and times of its entries, is integer
 arithmetic; its pulses are not needed before IncMove reaches them. So ``fill`` plans
-the segment and queues its entries at once (as the real task does, within the 200
-limit), and the pulses of all queued segments are computed together, vectorised
+the segment in pieces of :data:`PIECE_ENTRIES` entries, the next one when the queue
+has taken the last (so no point, however far away, makes a tick do more work), and
+queues them as the real task does, within the 200 limit; the pulses of all queued
+pieces are computed together, vectorised
 (:func:`pymotoros.motion.batch.queued_targets`), when the first of them is due. The
 results are those of the step-by-step loop; a tick costs a few tuple operations. A
 segment computed on its own (the queue ran dry) with few steps is done in plain Python.
