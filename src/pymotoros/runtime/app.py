@@ -36,7 +36,7 @@ from pymotoros.protocol.constants import (
     TCP_PORT_STATE,
     ByteOrder,
 )
-from pymotoros.runtime.clock import PRECISE_SPIN_S, Clock, LoopClock
+from pymotoros.runtime.clock import Clock, LoopClock, ThreadClock
 from pymotoros.runtime.http_api import create_http_app
 from pymotoros.runtime.io_server import IoServer
 from pymotoros.runtime.motion_server import MotionServer
@@ -98,9 +98,10 @@ class SimulatorApp:
         self.controller = controller
         self.config = config or SimulatorConfig()
         self.clock: Clock = clock or LoopClock()
-        # Real time: the interpolation loop gets the precise (spinning) flavour of the
-        # loop clock; the same time line, so the state stream and the ticker agree.
-        tick_clock: Clock = clock or LoopClock(spin=PRECISE_SPIN_S)
+        # Real time: the interpolation loop is woken by the timer thread (precise, and
+        # it sleeps: issue 13); the same time line, so the state stream and the ticker
+        # agree.
+        tick_clock: Clock = clock or ThreadClock()
         self.ticker = Ticker(controller.tick, controller.period_ms / 1000.0, tick_clock)
         order = self.config.byte_order
         self.motion = MotionServer(controller, order)
