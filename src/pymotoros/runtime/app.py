@@ -36,7 +36,7 @@ from pymotoros.protocol.constants import (
     TCP_PORT_STATE,
     ByteOrder,
 )
-from pymotoros.runtime.clock import Clock, LoopClock, ThreadClock
+from pymotoros.runtime.clock import Clock, LoopClock, precise_clock
 from pymotoros.runtime.http_api import create_http_app
 from pymotoros.runtime.io_server import IoServer
 from pymotoros.runtime.motion_server import MotionServer
@@ -98,10 +98,10 @@ class SimulatorApp:
         self.controller = controller
         self.config = config or SimulatorConfig()
         self.clock: Clock = clock or LoopClock()
-        # Real time: the interpolation loop is woken by the timer thread (precise, and
-        # it sleeps: issue 13); the same time line, so the state stream and the ticker
-        # agree.
-        tick_clock: Clock = clock or ThreadClock()
+        # Real time: the interpolation loop sleeps on a precise timer (a timerfd in the
+        # selector, or a timer thread; issue 13) instead of spinning the last
+        # millisecond; the same time line, so the state stream and the ticker agree.
+        tick_clock: Clock = clock or precise_clock()
         self.ticker = Ticker(controller.tick, controller.period_ms / 1000.0, tick_clock)
         order = self.config.byte_order
         self.motion = MotionServer(controller, order)
