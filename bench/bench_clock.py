@@ -14,8 +14,9 @@ For each fleet size in ``--twins`` it starts that many ``pymotoros sim`` process
    state client; all the clients run in this process.
 
 Then, side by side in the same run, the clock alone: a do-nothing Ticker on the
-ThreadClock (the simulator's clock since issue 13) and on the LoopClock that spins the
-last millisecond (the clock before), each in a fresh process: lateness and CPU.
+TimerFdClock (the simulator's clock since issue 13), on the ThreadClock (the timer
+thread, the fallback off Linux) and on the LoopClock that spins the last millisecond
+(the clock before), each in a fresh process: lateness and CPU.
 
 Contention between the clock and the servers: ``--contention`` seconds of CHECK_QUEUE_CNT
 round trips back to back against one twin on its default clock (its loop as busy as a
