@@ -18,9 +18,9 @@ OK = ResultCode.SUCCESS
 REPLY_BUDGET_S = 0.1
 """Issue 13: every extreme but legal point is answered within 100 ms."""
 
-STALL_BUDGET_TICKS = 25
-"""Ticks the loop may skip in the whole test (100 ms of 4 ms ticks): a machine under
-load may lose a few; the unbounded segment used to lose thousands."""
+STALL_BUDGET_TICKS = 125
+"""Ticks the loop may skip over the whole test (0.5 s at 4 ms): a CI machine shared with
+other jobs loses some; the unbounded segment of a 14,399 s point used to lose ~4,300."""
 
 WATCH_TICKS = 500
 """Ticks (2 s) watched after the point is queued: the first pieces are computed."""

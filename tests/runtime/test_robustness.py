@@ -44,9 +44,9 @@ FRAMES = int(os.environ.get("PYMOTOROS_FUZZ_FRAMES", "3000"))
 REPLY_BUDGET_S = 0.1
 """Issue 13: every request is answered within 100 ms."""
 
-STALL_BUDGET_TICKS = 25
-"""Ticks the loop may skip over a whole test (100 ms at 4 ms): a loaded machine loses a
-few; a stalled loop loses many more."""
+STALL_BUDGET_TICKS = 125
+"""Ticks the loop may skip over the whole test (0.5 s at 4 ms): a CI machine shared with
+other jobs loses some; the unbounded segment of a 14,399 s point used to lose ~4,300."""
 
 FLOOD_CONNECTS = 200
 """Connections opened and closed at once per port (issue 13: hundreds)."""
