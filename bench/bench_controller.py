@@ -112,13 +112,16 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--seconds", type=float, default=60.0)
     parser.add_argument("--repeat", type=int, default=3)
+    parser.add_argument(
+        "--spacings", type=float, nargs="+", default=[0.1, 0.05, 0.02, 0.004], help="seconds"
+    )
     args = parser.parse_args()
     print(f"{args.seconds:g} s trajectory, 6 axes, HC10 on YRC1000, best of {args.repeat}")
     print(
         f"{'spacing':>8} {'ticks':>7} {'µs/tick':>8} {'× rt':>6} "
         f"{'unpreempted µs':>14} {'× rt':>6} {'(ticks >1ms)':>12} {'loop s':>7} {'× rt':>6}"
     )
-    for spacing in (0.1, 0.05, 0.02):
+    for spacing in args.spacings:
         runs = [run(args.seconds, spacing) for _ in range(args.repeat)]
         ticks, in_tick, trimmed, total, preempted = min(runs, key=lambda r: r[2])
         print(

@@ -135,13 +135,14 @@ def batch_increments(
 
 
 def queued_targets(
-    rows: F32Array, grids: Sequence[tuple[int, int, int, int]], axes: GroupAxes
+    rows: F32Array, grids: Sequence[tuple[int, int, int, int, bool]], axes: GroupAxes
 ) -> tuple[list[int], I64Array]:
     """:func:`batch_increments` for the tick engine: (entry times, absolute targets) of
     the segments waiting in a queue, a few hundred entries at most.
 
-    ``grids`` holds (start ms, end ms, first step ms, steps besides the last) per
-    segment. At this size the cost is the number of numpy calls, not the arithmetic,
+    ``grids`` holds (start ms, end ms, first step ms, steps, ends) per segment (or
+    piece of a segment: its steps from the first one given, then the end point if
+    ``with_end``). At this size the cost is the number of numpy calls, not the arithmetic,
     so the grid bookkeeping is done in Python and every entry goes through one
     position kernel: the last entry of a segment takes the terms (x1, 0, 0, 0) at τ = 0,
     which give x1 exactly and are never close to a rounding boundary.
@@ -153,16 +154,17 @@ def queued_targets(
     pick: list[int] = []
     tau_ms: list[int] = []
     lengths: list[int] = []
-    for j, (start, end, first, full) in enumerate(grids):
+    for j, (start, end, first, full, with_end) in enumerate(grids):
         lengths.append(end - start)
         if full:
             stop = first + period * full
             times += range(first, stop, period)
             tau_ms += range(first - start, stop - start, period)
             pick += [j] * full
-        times.append(end)
-        tau_ms.append(0)
-        pick.append(count + j)
+        if with_end:
+            times.append(end)
+            tau_ms.append(0)
+            pick.append(count + j)
     duration = ms_to_seconds(np.array(lengths))[:, None]
     tau = ms_to_seconds(np.array(tau_ms))[:, None]
     with np.errstate(all="ignore"):

@@ -12,8 +12,10 @@ The controller drives it:
 
 A segment's step grid, and so the number and times of its entries, is integer
 arithmetic; its pulses are not needed before IncMove reaches them. So ``fill`` plans
-the segment and queues its entries at once (as the real task does, within the 200
-limit), and the pulses of all queued segments are computed together, vectorised
+the segment in pieces of :data:`PIECE_ENTRIES` entries, the next one when the queue
+has taken the last (so no point, however far away, makes a tick do more work), and
+queues them as the real task does, within the 200 limit; the pulses of all queued
+pieces are computed together, vectorised
 (:func:`pymotoros.motion.batch.queued_targets`), when the first of them is due. The
 results are those of the step-by-step loop; a tick costs a few tuple operations. A
 segment computed on its own (the queue ran dry) with few steps is done in plain Python.
@@ -35,7 +37,7 @@ import numpy.typing as npt
 from pymotoros.models import FloatMode
 from pymotoros.motion.axes import GroupAxes
 from pymotoros.motion.batch import queued_targets
-from pymotoros.motion.constants import SLOTS
+from pymotoros.motion.constants import QUEUE_SIZE, SLOTS
 from pymotoros.motion.numerics import (
     LD,
     coefficients_kernel,
@@ -64,28 +66,56 @@ SMALL_SEGMENT_STEPS: Final = 8
 done in plain Python: below that, numpy's per-call cost exceeds the arithmetic."""
 
 
+PIECE_ENTRIES: Final = QUEUE_SIZE
+"""Entries of a segment planned (and later computed) at a time. A segment is cut into
+pieces of this many entries, each planned when the queue has taken the previous one,
+so the work and memory of a tick do not depend on the segment's length: a legal point
+14,400 s away (§3.4's limit) is 3.6 million steps at 4 ms."""
+
+
 class PlannedSegment:
-    """A segment whose grid is known; its pulses are computed on demand."""
+    """A piece of a segment whose grid is known; its pulses are computed on demand.
+
+    The piece holds entries ``step0`` … ``step0 + count − 1`` of the segment (entry
+    ``grid.full_steps`` is the end point); ``start``, ``end`` and ``grid`` are the whole
+    segment's.
+    """
 
     __slots__ = (
         "chain",
         "end",
         "entries",
         "grid",
+        "last",
         "leftover_before",
         "offset",
         "start",
+        "step0",
+        "steps",
         "tool",
     )
 
     def __init__(
-        self, start: GroupPoint, end: GroupPoint, grid: Grid, tool: int, leftover: int
+        self,
+        start: GroupPoint,
+        end: GroupPoint,
+        grid: Grid,
+        tool: int,
+        leftover: int,
+        step0: int = 0,
     ) -> None:
         self.start = start
         self.end = end
         self.grid = grid
         self.tool = tool
         self.leftover_before = leftover
+        self.step0 = step0
+        total = grid.full_steps + 1
+        stop = min(step0 + PIECE_ENTRIES, total)
+        self.last = stop == total
+        """The piece ends with the segment's end point."""
+        self.steps = stop - step0 - 1 if self.last else stop - step0
+        """Interpolated steps in the piece (the end point excluded)."""
         self.entries: list[Increment] | None = None
         self.chain: Sequence[tuple[int, ...]] | npt.NDArray[np.int64] = ()
         """Once computed: 8-slot absolute targets; row ``offset`` is prevPulsePos before
@@ -95,10 +125,23 @@ class PlannedSegment:
 
     @property
     def count(self) -> int:
-        return self.grid.full_steps + 1
+        """Entries in the piece."""
+        return self.steps + 1 if self.last else self.steps
+
+    def next_piece(self) -> PlannedSegment:
+        """The piece after this one (this one must not be the last)."""
+        return PlannedSegment(
+            self.start,
+            self.end,
+            self.grid,
+            self.tool,
+            self.leftover_before,
+            self.step0 + self.count,
+        )
 
     def target(self, index: int) -> tuple[int, ...]:
-        """prevPulsePos once entry ``index`` is queued (8 slots); -1: before the segment."""
+        """prevPulsePos once entry ``index`` of the piece is queued (8 slots); -1: before
+        the piece."""
         row = self.chain[self.offset + 1 + index]
         return row if isinstance(row, tuple) else tuple(row.tolist())
 
@@ -247,37 +290,52 @@ class GroupInterpolator:
             self._abort(segment)
             return
         done = self._next
-        count = segment.grid.full_steps + 1
-        stop = self.queue.queue_segment(segment, done, count)
-        if stop == done:  # the queue is full
-            return
-        self._prev_at = (segment, stop - 1)
-        if stop == count:
-            self._current = segment.end
-            self._leftover = segment.grid.leftover_ms
-            self._active = None
-            self._pending = None
-        else:
-            self._next = stop
+        queue = self.queue
+        while True:
+            count = segment.count
+            stop = queue.queue_segment(segment, done, count)
+            if stop == done:  # the queue is full
+                return
+            self._prev_at = (segment, stop - 1)
+            if stop < count:
+                self._next = stop
+                return
+            if segment.last:
+                self._current = segment.end
+                self._leftover = segment.grid.leftover_ms
+                self._active = None
+                self._pending = None
+                return
+            # The piece is queued: plan the next one (at most PIECE_ENTRIES entries).
+            segment = segment.next_piece()
+            self._uncomputed.append(segment)
+            self._active = segment
+            self._next = done = 0
 
     # ------------------------------------------------------------------ internals
 
     def _abort(self, segment: PlannedSegment) -> None:
         """End the segment at the step the task was blocked on (computed, not queued)."""
         self._compute()
-        blocked = self._next
-        full = _compute_segment(
-            segment.start,
-            segment.end,
-            segment.leftover_before,
-            segment.target(-1),
-            segment.tool,
-            self.axes,
-        )
-        if full is None:  # pragma: no cover - a planned segment always has steps
-            raise RuntimeError("planned segment without steps")
-        self._current = full.state_at(blocked)
-        self._leftover = segment.grid.leftover_ms if blocked == segment.count - 1 else 0
+        blocked = segment.step0 + self._next  # the entry's index in the whole segment
+        if blocked == segment.grid.full_steps:
+            self._current = segment.end
+            self._leftover = segment.grid.leftover_ms
+        else:
+            # Only the blocked step is computed: the segment may be millions of steps.
+            one = _compute_segment(
+                segment.start,
+                segment.end,
+                segment.leftover_before,
+                segment.target(-1),
+                segment.tool,
+                self.axes,
+                only=blocked,
+            )
+            if one is None:  # pragma: no cover - a planned segment always has steps
+                raise RuntimeError("planned segment without steps")
+            self._current = one.state_at(0)
+            self._leftover = 0
         self._chain_prev = self.prev_pulses  # the steps after the blocked one never existed
         self._active = None
         self._pending = None
@@ -287,11 +345,12 @@ class GroupInterpolator:
         do it (FS100, untame values, more steps, or a value too close to a rounding
         boundary)."""
         axes = self.axes
-        full = segment.grid.full_steps
+        full = segment.steps
         start, end = segment.start, segment.end
         mode = axes.float_mode
         if (
             full > SMALL_SEGMENT_STEPS
+            or not segment.last
             or mode is not FloatMode.X87_EXTENDED
             or not (start.tame and end.tame)
         ):
@@ -304,7 +363,8 @@ class GroupInterpolator:
         coef = coefficients_x87_scalar(x0, v0, x1, v1, duration) or coefficients_x87_exact(
             x0, v0, x1, v1, duration
         )
-        first, period = segment.grid.first_ms, axes.period_ms
+        period = axes.period_ms
+        first = segment.grid.first_ms + period * segment.step0
         times = [first + period * k for k in range(full)]
         taus = f32_tuple([(c - s_ms) / 1000 for c in times], full)
         h1 = [c / 2 for c in coef[:n]]
@@ -341,7 +401,7 @@ class GroupInterpolator:
         self._uncomputed = []
         axes = self.axes
         prev = self._chain_prev
-        if len(segments) == 1 and segments[0].grid.full_steps == 0:
+        if len(segments) == 1 and segments[0].count == 1 and segments[0].last:
             # A single entry at the end point (points as dense as the period): its
             # target is the end position in pulses, no interpolation is involved.
             only = segments[0]
@@ -364,7 +424,17 @@ class GroupInterpolator:
         count = len(segments)
         raw = b"".join([p for s in segments for p in (s.start.packed(), s.end.packed())])
         rows = np.frombuffer(raw, dtype=np.float32).reshape(count, 4, SLOTS)[:, :, :n]
-        grids = [(s.start.time_ms, s.end.time_ms, *s.grid[:2]) for s in segments]
+        period = axes.period_ms
+        grids = [
+            (
+                s.start.time_ms,
+                s.end.time_ms,
+                s.grid.first_ms + period * s.step0,
+                s.steps,
+                s.last,
+            )
+            for s in segments
+        ]
         times, targets = queued_targets(rows.transpose(1, 0, 2), grids, axes)
         # Row 0: prevPulsePos before the first segment; the slots without an axis keep it.
         chain = np.empty((len(times) + 1, SLOTS), dtype=np.int64)
@@ -384,7 +454,7 @@ class GroupInterpolator:
         )
         lo = 0
         for segment in segments:
-            hi = lo + segment.grid.full_steps + 1
+            hi = lo + segment.count
             segment.chain = chain
             segment.offset = lo
             segment.entries = entries[lo:hi]
@@ -437,8 +507,12 @@ def _compute_segment(
     previous: tuple[int, ...],
     tool: int,
     axes: GroupAxes,
+    only: int | None = None,
 ) -> _Segment | None:
     """Every step of the segment start → end, or None if end is not after start.
+
+    With ``only``, just full step ``only`` (then the end point): what
+    :meth:`GroupInterpolator._abort` needs, whatever the segment's length.
 
     ``previous`` is prevPulsePos (8 slots, controller order); ``tool`` is latched into
     every entry. Written for few numpy calls. The queue's segments are computed
@@ -453,8 +527,12 @@ def _compute_segment(
     n = axes.num_axes
     period = axes.period_ms
     grid = plan_grid(s_ms, end.time_ms, leftover_ms, period)
-    full = grid.full_steps
-    steps = [grid.first_ms + period * k for k in range(full)]
+    if only is None:
+        full = grid.full_steps
+        steps = [grid.first_ms + period * k for k in range(full)]
+    else:
+        full = 1
+        steps = [grid.first_ms + period * only]
     # (int ms)/1000 stored as float32. The exact quotient is never within 2⁻³⁵ of a
     # float32 rounding boundary, so float64 division then rounding gives the x87 value.
     duration = f32((end.time_ms - s_ms) / 1000)

@@ -36,7 +36,7 @@ from pymotoros.protocol.constants import (
     TCP_PORT_STATE,
     ByteOrder,
 )
-from pymotoros.runtime.clock import PRECISE_SPIN_S, Clock, LoopClock
+from pymotoros.runtime.clock import Clock, LoopClock, precise_clock
 from pymotoros.runtime.http_api import create_http_app
 from pymotoros.runtime.io_server import IoServer
 from pymotoros.runtime.motion_server import MotionServer
@@ -102,9 +102,10 @@ class SimulatorApp:
         self.controller = controller
         self.config = config or SimulatorConfig()
         self.clock: Clock = clock or LoopClock()
-        # Real time: the interpolation loop gets the precise (spinning) flavour of the
-        # loop clock; the same time line, so the state stream and the ticker agree.
-        tick_clock: Clock = clock or LoopClock(spin=PRECISE_SPIN_S)
+        # Real time: the interpolation loop sleeps on a precise timer (a timerfd in the
+        # selector, or a timer thread; issue 13) instead of spinning the last
+        # millisecond; the same time line, so the state stream and the ticker agree.
+        tick_clock: Clock = clock or precise_clock()
         self.ticker = Ticker(controller.tick, controller.period_ms / 1000.0, tick_clock)
         order = self.config.byte_order
         self.motion = MotionServer(controller, order)

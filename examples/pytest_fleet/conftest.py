@@ -1,0 +1,3 @@
+"""Enable the pymotoros pytest plugin: the ``pymotoros_twin`` fixture."""
+
+pytest_plugins = ["pymotoros.pytest_plugin"]

@@ -1,0 +1,190 @@
+"""A pytest plugin: the ``pymotoros_twin`` fixture, a started twin on OS-chosen ports.
+
+Enable it in a ``conftest.py`` (or with ``-p pymotoros.pytest_plugin``)::
+
+    pytest_plugins = ["pymotoros.pytest_plugin"]
+
+    def test_my_driver(pymotoros_twin):
+        drive_robot("127.0.0.1", pymotoros_twin.motion, pymotoros_twin.state)
+
+Each test gets its own twin: the real servers (motion, state, IO and, with
+``http=True``, the control API) on 127.0.0.1 port 0 around a fresh
+:class:`~pymotoros.controller.VirtualController` on the real clock, run by a thread of
+the test process with its own event loop, so synchronous and asynchronous tests alike
+can use it, and stopped after the test. Every port is chosen by the OS, so it works
+under pytest-xdist (``pytest -n auto``): one twin per test, in every worker.
+
+The cell comes from, in order: the test's ``@pytest.mark.pymotoros(cell=PATH)``
+marker, its ``robot=``/``controller=`` names, the ``pymotoros_cell`` ini option (a
+path relative to the rootdir), the default cell (HC10 on a YRC1000).
+
+Like :mod:`pymotoros.testing`, this module sits on top of every layer; nothing in the
+package imports it.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import concurrent.futures
+import threading
+from collections.abc import Callable, Iterator
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Final, TypeVar
+
+import pytest
+
+from pymotoros.controller import VirtualController
+from pymotoros.controller.cell import CellConfig, default_cell, load_cell
+from pymotoros.runtime.app import SimulatorApp, SimulatorConfig
+
+__all__ = ["RunningTwin", "pymotoros_twin"]
+
+T = TypeVar("T")
+
+START_TIMEOUT_S: Final = 30.0
+"""Longest wait for the twin to listen (the control API's start-up is the slow part)."""
+
+STOP_TIMEOUT_S: Final = 30.0
+"""Longest wait for the twin's thread to finish after the test."""
+
+MARKER: Final = "pymotoros"
+
+
+@dataclass(frozen=True)
+class RunningTwin:
+    """A twin serving on 127.0.0.1: its ports and, for the operator's side, its controller."""
+
+    host: str
+    motion: int
+    state: int
+    io: int
+    http: int | None
+    """The control API's port, or None (``@pytest.mark.pymotoros(http=True)`` starts it)."""
+    controller: VirtualController
+    """Live on the twin's thread: change it through :meth:`call` (thread-safe)."""
+    _loop: asyncio.AbstractEventLoop
+
+    def call(self, fn: Callable[[VirtualController], T]) -> T:
+        """Run ``fn(controller)`` on the twin's event loop, between two ticks; its result.
+
+        For the operator's side in a test (``twin.call(lambda c: c.press_estop(True))``):
+        the controller must not be touched from the test's thread directly.
+        """
+        future: concurrent.futures.Future[T] = concurrent.futures.Future()
+
+        def run() -> None:
+            try:
+                future.set_result(fn(self.controller))
+            except BaseException as exc:  # handed to the caller
+                future.set_exception(exc)
+
+        self._loop.call_soon_threadsafe(run)
+        return future.result(timeout=START_TIMEOUT_S)
+
+
+class _TwinThread:
+    """Runs a SimulatorApp in a thread with its own event loop until told to stop."""
+
+    def __init__(self, cell: CellConfig, http: bool) -> None:
+        self._cell = cell
+        self._http = http
+        self._started: concurrent.futures.Future[RunningTwin] = concurrent.futures.Future()
+        self._stop: asyncio.Event | None = None
+        self._loop: asyncio.AbstractEventLoop | None = None
+        self._thread = threading.Thread(target=self._run, name="pymotoros-twin", daemon=True)
+
+    def start(self) -> RunningTwin:
+        self._thread.start()
+        return self._started.result(timeout=START_TIMEOUT_S)
+
+    def stop(self) -> None:
+        loop, stop = self._loop, self._stop
+        if loop is not None and stop is not None and not loop.is_closed():
+            loop.call_soon_threadsafe(stop.set)
+        self._thread.join(timeout=STOP_TIMEOUT_S)
+        if self._thread.is_alive():
+            raise RuntimeError(f"the pymotoros twin did not stop within {STOP_TIMEOUT_S} s")
+
+    def _run(self) -> None:
+        try:
+            asyncio.run(self._main())
+        except BaseException as exc:  # reported to the test
+            if not self._started.done():
+                self._started.set_exception(exc)
+
+    async def _main(self) -> None:
+        self._loop = asyncio.get_running_loop()
+        self._stop = asyncio.Event()
+        controller = VirtualController(self._cell)
+        config = SimulatorConfig(
+            host="127.0.0.1",
+            motion_port=0,
+            state_port=0,
+            io_port=0,
+            http_port=0 if self._http else None,
+        )
+        async with SimulatorApp(controller, config) as app:
+            ports = app.ports
+            self._started.set_result(
+                RunningTwin(
+                    "127.0.0.1",
+                    ports.motion,
+                    ports.state,
+                    ports.io,
+                    ports.http,
+                    controller,
+                    self._loop,
+                )
+            )
+            await self._stop.wait()
+
+
+def _cell_for(request: pytest.FixtureRequest) -> tuple[CellConfig, bool]:
+    marker = request.node.get_closest_marker(MARKER)
+    kwargs = dict(marker.kwargs) if marker is not None else {}
+    unknown = set(kwargs) - {"cell", "robot", "controller", "http"}
+    if unknown:
+        raise pytest.UsageError(
+            f"@pytest.mark.{MARKER} got unknown arguments {sorted(unknown)}; "
+            "use cell=PATH, robot=NAME, controller=NAME, http=True"
+        )
+    http = bool(kwargs.get("http", False))
+    names = {k: str(v) for k, v in kwargs.items() if k in ("robot", "controller")}
+    path = kwargs.get("cell") or (None if names else request.config.getini("pymotoros_cell"))
+    if path:
+        resolved = Path(str(path))
+        if not resolved.is_absolute():
+            resolved = Path(str(request.config.rootpath)) / resolved
+        return load_cell(resolved), http
+    if names:
+        return default_cell(names.get("controller", "yrc1000"), names.get("robot", "hc10")), http
+    return default_cell(), http
+
+
+def pytest_addoption(parser: pytest.Parser) -> None:
+    parser.addini(
+        "pymotoros_cell",
+        "cell TOML file (relative to the rootdir) for the pymotoros_twin fixture",
+        default="",
+    )
+
+
+def pytest_configure(config: pytest.Config) -> None:
+    config.addinivalue_line(
+        "markers",
+        f"{MARKER}(cell=None, robot=None, controller=None, http=False): "
+        "the cell and options of the pymotoros_twin fixture",
+    )
+
+
+@pytest.fixture
+def pymotoros_twin(request: pytest.FixtureRequest) -> Iterator[RunningTwin]:
+    """A started twin on OS-chosen ports, stopped after the test."""
+    cell, http = _cell_for(request)
+    runner = _TwinThread(cell, http)
+    twin = runner.start()
+    try:
+        yield twin
+    finally:
+        runner.stop()

@@ -1,0 +1,76 @@
+"""The large-file path of ``pymotoros interpolate`` (pyarrow's CSV engine, issue 13) gives
+byte-for-byte the output of the Python path, and the same errors."""
+
+from __future__ import annotations
+
+import math
+import random
+from pathlib import Path
+
+import pytest
+from click.testing import CliRunner
+
+import pymotoros.cli.interpolate as interpolate_cli
+from pymotoros.cli.main import cli
+
+from .test_interpolate import HEADER6, test_bad_csv_is_a_clear_error
+
+pytest.importorskip("pyarrow")
+
+ALWAYS: int = 0
+NEVER: int = 1 << 62
+
+
+def trajectory_text(points: int, seed: int) -> str:
+    """A smooth 6-axis trajectory with irregular spacing, numbers written at full precision
+    (so the parsers' rounding is exercised)."""
+    rng = random.Random(seed)
+    t = 0.0
+    lines = [HEADER6, "0" + ",0" * 12 + "\n"]
+    for _ in range(points):
+        t += rng.uniform(0.004, 0.1)
+        pos = [0.3 * math.sin(t * (1 + 0.2 * i)) * rng.uniform(0.999, 1.0) for i in range(6)]
+        lines.append(",".join(repr(x) for x in [t, *pos, *([0.0] * 6)]) + "\n")
+    return "".join(lines)
+
+
+def run(monkeypatch: pytest.MonkeyPatch, threshold: int, *args: str) -> tuple[int, bytes, str]:
+    monkeypatch.setattr(interpolate_cli, "FAST_CSV_BYTES", threshold)
+    result = CliRunner().invoke(cli, ["interpolate", *args])
+    return result.exit_code, result.stdout_bytes, result.stderr
+
+
+@pytest.mark.parametrize("seed", [1, 2])
+def test_fast_and_python_paths_write_the_same_bytes(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, seed: int
+) -> None:
+    traj = tmp_path / "traj.csv"
+    traj.write_text(trajectory_text(400, seed), encoding="utf-8")
+    slow = run(monkeypatch, NEVER, str(traj))
+    fast = run(monkeypatch, ALWAYS, str(traj))
+    assert slow[0] == fast[0] == 0, (slow[2], fast[2])
+    assert len(slow[1].splitlines()) > 400
+    assert fast[1] == slow[1]
+    out_slow, out_fast = tmp_path / "slow.csv", tmp_path / "fast.csv"
+    run(monkeypatch, NEVER, str(traj), "-o", str(out_slow))
+    run(monkeypatch, ALWAYS, str(traj), "-o", str(out_fast))
+    assert out_fast.read_bytes() == out_slow.read_bytes()
+
+
+@pytest.mark.parametrize(
+    ("text", "words"),
+    [
+        ("", ["empty"]),
+        (HEADER6, ["no points"]),
+        ("time,p1\n0,0\n", ["row 1", "13"]),
+        (HEADER6 + "0,0,0\n", ["row 2", "3 columns", "13"]),
+        (HEADER6 + "0" + ",0" * 12 + "\n0.1,0,0,abc" + ",0" * 9 + "\n", ["row 3", "abc"]),
+        (HEADER6 + "0" + ",0" * 11 + ",nan\n", ["row 2", "column 13", "v6"]),
+        (HEADER6 + "0" + ",0" * 11 + ",inf\n", ["row 2", "column 13", "v6"]),
+    ],
+)
+def test_the_fast_path_falls_back_for_the_precise_error(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, text: str, words: list[str]
+) -> None:
+    monkeypatch.setattr(interpolate_cli, "FAST_CSV_BYTES", ALWAYS)
+    test_bad_csv_is_a_clear_error(tmp_path, text, words)
