@@ -5,6 +5,7 @@ Precedence: flag > env > file > default.
 
 from __future__ import annotations
 
+import contextlib
 import json
 import sys
 from collections.abc import Iterator
@@ -36,9 +37,9 @@ def closed_port() -> int:
 
 
 def run(args: list[str], env: dict[str, str], cwd: Path) -> Result:
-    runner = CliRunner()
-    with runner.isolated_filesystem(temp_dir=cwd):
-        return runner.invoke(cli, args, env={"PYMOTOROS_SETTINGS": "", **env})
+    """Run the CLI in ``cwd`` (so no ./pymotoros.toml of the repository is read)."""
+    with contextlib.chdir(cwd):
+        return CliRunner().invoke(cli, args, env={"PYMOTOROS_SETTINGS": "", **env})
 
 
 def ports_env(sim: Sim) -> dict[str, str]:
@@ -87,10 +88,9 @@ def test_settings_file_and_precedence(sim: Sim, tmp_path: Path) -> None:
 
 
 def test_local_pymotoros_toml_is_read(sim: Sim, tmp_path: Path) -> None:
-    runner = CliRunner()
-    with runner.isolated_filesystem(temp_dir=tmp_path):
-        Path("pymotoros.toml").write_text(f"io_port = {sim.io}\n")
-        result = runner.invoke(cli, ["mreg", "read", "2"], env={"PYMOTOROS_SETTINGS": ""})
+    (tmp_path / "pymotoros.toml").write_text(f"io_port = {sim.io}\n")
+    with contextlib.chdir(tmp_path):
+        result = CliRunner().invoke(cli, ["mreg", "read", "2"], env={"PYMOTOROS_SETTINGS": ""})
     assert result.exit_code == 0, result.output
 
 

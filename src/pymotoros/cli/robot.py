@@ -520,7 +520,7 @@ def status(
             loop = asyncio.get_running_loop()
             texts: dict[int, str] = {}
             redraw = watch and not as_json and (sys.stdout.isatty() if live is None else live)
-            frames = FrameWriter(click.get_text_stream("stdout"), live=redraw)
+            frames = FrameWriter(sys.stdout, live=redraw)
             try:
                 while True:
                     if loop.time() - last >= 1.0 / rate:
