@@ -14,7 +14,7 @@ import math
 import signal
 import sys
 import traceback
-from collections.abc import AsyncIterator, Callable, Coroutine
+from collections.abc import AsyncIterator, Callable, Coroutine, Iterator
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Final, NoReturn, TypeVar
@@ -658,6 +658,26 @@ def tool(number: int, group: str, **kwargs: Any) -> None:
 # --------------------------------------------------------------------------- move
 
 
+@contextlib.contextmanager
+def progress_bar(label: str) -> Iterator[Callable[[FollowingSample], None]]:
+    """A progress bar on a terminal's stderr, fed by the following monitor's samples;
+    nothing when stderr is not a terminal. Completed only if the block succeeds."""
+    if not sys.stderr.isatty():
+        yield lambda _sample: None
+        return
+    with click.progressbar(length=1000, label=label, file=sys.stderr, show_eta=False) as bar:
+        done = [0]
+
+        def progress(sample: FollowingSample) -> None:
+            now = int(sample.progress * 1000)
+            if now > done[0]:
+                bar.update(now - done[0])
+                done[0] = now
+
+        yield progress
+        bar.update(1000 - done[0])
+
+
 def _move_data(result: MoveResult) -> dict[str, Any]:
     return {
         "positions": list(result.final_positions),
@@ -795,20 +815,7 @@ def move(
             await client.wait_for_state(target.timeout_s)
             if enable_first:
                 await client.start_trajectory_mode()
-            bar = (
-                click.progressbar(length=1000, label="moving", file=sys.stderr, show_eta=False)
-                if sys.stderr.isatty()
-                else None
-            )
-            done = [0]
-
-            def progress(sample: FollowingSample) -> None:
-                now = int(sample.progress * 1000)
-                if bar is not None and now > done[0]:
-                    bar.update(now - done[0])
-                    done[0] = now
-
-            with bar if bar is not None else contextlib.nullcontext():
+            with progress_bar("moving") as progress:
                 try:
                     if cartesian:
                         result = await cartesian_move(
@@ -848,8 +855,6 @@ def move(
                         where = _where(client, groups, models, goal, deg, "the robot stands")
                         exc.args = (f"{exc}; {where}", *exc.args[1:])
                     raise
-                if bar is not None:
-                    bar.update(1000 - done[0])
             return result
 
     result = run(target, work, stoppable=True)

@@ -298,9 +298,9 @@ def run(traj: Path, force: bool, enable_first: bool, as_json: bool, **kwargs: An
     import asyncio
     import contextlib
 
-    from pymotoros.cli.robot import _move_data, _target, connected
+    from pymotoros.cli.robot import _move_data, _target, connected, progress_bar
     from pymotoros.cli.robot import run as run_client
-    from pymotoros.client.streaming import FollowingSample, MoveResult
+    from pymotoros.client.streaming import MoveResult
     from pymotoros.errors import PymotorosError
 
     target = _target(kwargs)
@@ -316,20 +316,7 @@ def run(traj: Path, force: bool, enable_first: bool, as_json: bool, **kwargs: An
         async with connected(target, motion=True, state=True, io=False) as client:
             if enable_first:
                 await client.start_trajectory_mode()
-            bar = (
-                click.progressbar(length=1000, label="running", file=sys.stderr, show_eta=False)
-                if sys.stderr.isatty()
-                else None
-            )
-            done = [0]
-
-            def progress(sample: FollowingSample) -> None:
-                now = int(sample.progress * 1000)
-                if bar is not None and now > done[0]:
-                    bar.update(now - done[0])
-                    done[0] = now
-
-            with bar if bar is not None else contextlib.nullcontext():
+            with progress_bar("running") as progress:
                 try:
                     result = await client.execute(
                         joint, groups=groups, on_progress=progress, check_speed=not force
@@ -340,7 +327,7 @@ def run(traj: Path, force: bool, enable_first: bool, as_json: bool, **kwargs: An
                     raise
             return result
 
-    result = run_client(target, work)
+    result = run_client(target, work, stoppable=True)  # Ctrl-C / SIGTERM: STOP_MOTION
     if as_json:
         click.echo(json.dumps(_move_data(result)))
     else:
