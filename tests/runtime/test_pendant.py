@@ -1,0 +1,142 @@
+"""The web pendant: the page and its assets are local, the feed pushes live state with
+joint frames, and state-changing requests from other sites are refused (CSRF)."""
+
+from __future__ import annotations
+
+import asyncio
+import json
+import math
+import re
+from collections.abc import AsyncIterator
+from dataclasses import replace
+from typing import Any
+
+import httpx
+import pytest
+import websocket
+
+from pymotoros.controller import VirtualController
+from pymotoros.kinematics import chain_for
+from pymotoros.runtime.app import SimulatorApp
+from pymotoros.runtime.http_api import create_http_app
+from pymotoros.runtime.pendant import FEED_PERIOD_S
+from pymotoros.runtime.ticker import LatenessStats, TickStats
+
+from .support import LOCAL
+
+STATS = TickStats(4.0, 1000, 2, 0, 0, LatenessStats(0.05, 0.2, 1.5))
+MIN_FEED_HZ = 20.0
+"""The issue's floor for live updates."""
+WS_TIMEOUT_S = 5.0
+"""Generous bound on one WebSocket read (documents come every 40 ms)."""
+HTTP_FORBIDDEN = 403
+
+
+@pytest.fixture
+async def api(controller: VirtualController) -> AsyncIterator[httpx.AsyncClient]:
+    app = create_http_app(controller, lambda: STATS)
+    transport = httpx.ASGITransport(app=app)
+    async with httpx.AsyncClient(transport=transport, base_url="http://sim") as client:
+        yield client
+
+
+def test_feed_period_is_at_least_20_hz() -> None:
+    assert 1.0 / FEED_PERIOD_S >= MIN_FEED_HZ
+
+
+async def test_page_and_every_asset_it_references_are_served_locally(
+    api: httpx.AsyncClient,
+) -> None:
+    page = await api.get("/")
+    assert page.status_code == 200
+    assert "text/html" in page.headers["content-type"]
+    assert "E-STOP" in page.text
+    urls = re.findall(r"""(?:src|href)\s*=\s*['"]([^'"]+)['"]""", page.text)
+    assert "/pendant/pendant.js" in urls
+    assert [u for u in urls if re.match(r"(?i)(https?:)?//", u)] == []
+    for url in urls:
+        assert (await api.get(url)).status_code == 200, url
+    script = (await api.get("/pendant/pendant.js")).text
+    assert not re.search(r"(?i)https?://", script)
+    assert "/ws/state" in script
+
+
+async def test_pendant_document_has_the_state_and_joint_frames(
+    api: httpx.AsyncClient, controller: VirtualController
+) -> None:
+    doc = (await api.get("/api/pendant/state")).json()
+    state = (await api.get("/api/state")).json()
+    assert {k: v for k, v in doc.items() if k != "groups"} == {
+        k: v for k, v in state.items() if k != "groups"
+    }
+    group = doc["groups"][0]
+    chain = chain_for(controller.cell.groups[0])
+    expected = [f["xyz"] for f in chain.joint_frames(group["feedback_rad"])]
+    assert group["frames"]["feedback"] == expected
+    assert len(group["frames"]["command"]) == chain.num_joints + 3  # flange, tool0, tcp
+
+
+def _receive(url: str, origin: str | None, count: int) -> list[dict[str, Any]]:
+    """Open the feed like a browser tab (blocking client, run in a thread) and read
+    ``count`` documents."""
+    ws = websocket.create_connection(url, timeout=WS_TIMEOUT_S, origin=origin)
+    try:
+        return [json.loads(ws.recv()) for _ in range(count)]
+    finally:
+        ws.close()
+
+
+async def test_websocket_pushes_live_state(controller: VirtualController) -> None:
+    async with SimulatorApp(controller, replace(LOCAL, http_port=0)) as sim:
+        url = f"ws://127.0.0.1:{sim.ports.http}/ws/state"
+        docs = await asyncio.to_thread(_receive, url, f"http://127.0.0.1:{sim.ports.http}", 30)
+        ticks = [d["tick"]["count"] for d in docs]
+        assert ticks == sorted(ticks)
+        assert ticks[-1] > ticks[0]  # live: the loop advanced between documents
+        assert math.isfinite(docs[-1]["groups"][0]["frames"]["feedback"][-1][2])
+        async with httpx.AsyncClient(base_url=f"http://127.0.0.1:{sim.ports.http}") as client:
+            await client.post("/api/estop", json={"pressed": True})
+        docs = await asyncio.to_thread(_receive, url, None, 2)
+        assert docs[-1]["estop"] is True
+
+
+async def test_websocket_from_another_site_is_refused(controller: VirtualController) -> None:
+    async with SimulatorApp(controller, replace(LOCAL, http_port=0)) as sim:
+        url = f"ws://127.0.0.1:{sim.ports.http}/ws/state"
+        with pytest.raises(websocket.WebSocketBadStatusException) as err:
+            await asyncio.to_thread(_receive, url, "http://evil.example", 1)
+        assert err.value.status_code == HTTP_FORBIDDEN
+
+
+async def test_cross_site_post_is_refused_and_changes_nothing(
+    api: httpx.AsyncClient, controller: VirtualController
+) -> None:
+    r = await api.post(
+        "/api/estop", json={"pressed": True}, headers={"Origin": "http://evil.example"}
+    )
+    assert r.status_code == 403
+    assert "cross-site" in r.json()["error"]
+    assert controller.snapshot().estop is False
+    r = await api.post(
+        "/api/estop",
+        json={"pressed": True},
+        headers={"Referer": "http://evil.example/page.html"},
+    )
+    assert r.status_code == 403
+    assert controller.snapshot().estop is False
+
+
+async def test_same_origin_and_header_less_posts_are_allowed(
+    api: httpx.AsyncClient, controller: VirtualController
+) -> None:
+    r = await api.post("/api/estop", json={"pressed": True}, headers={"Origin": "http://sim"})
+    assert r.status_code == 200
+    assert r.json()["estop"] is True
+    r = await api.post("/api/estop", json={"pressed": False})  # curl, scripts: no Origin
+    assert r.status_code == 200
+    assert controller.snapshot().estop is False
+
+
+async def test_cross_site_get_still_reads(api: httpx.AsyncClient) -> None:
+    r = await api.get("/api/state", headers={"Origin": "http://evil.example"})
+    assert r.status_code == 200
