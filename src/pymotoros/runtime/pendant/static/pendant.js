@@ -7,7 +7,7 @@
   const RECONNECT_MS = 1000;       // retry delay after the feed closed
   const COLORS = ["#4fc3f7", "#ffb74d", "#81c784", "#e57373", "#ba68c8", "#fff176", "#90a4ae", "#f06292"];
   const $ = (id) => document.getElementById(id);
-  const state = { last: null, updates: 0, history: [], view: { yaw: -0.7, pitch: 0.45, dist: 3.2, cx: 0, cy: 0, cz: 0.6 } };
+  const state = { last: null, updates: 0, history: [], view: { yaw: -0.7, pitch: 0.4, dist: 2.4, cx: 0, cy: 0, cz: 0.5 } };
   window.pendant = state;           // for debugging and the browser test
 
   function say(text) { $("message").textContent = text; }
