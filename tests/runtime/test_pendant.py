@@ -66,9 +66,16 @@ async def test_pendant_document_has_the_state_and_joint_frames(
 ) -> None:
     doc = (await api.get("/api/pendant/state")).json()
     state = (await api.get("/api/state")).json()
-    assert {k: v for k, v in doc.items() if k != "groups"} == {
+    assert {k: v for k, v in doc.items() if k not in ("groups", "pendant")} == {
         k: v for k, v in state.items() if k != "groups"
     }
+    extra = doc["pendant"]
+    # INIT_ROS has not started at boot: MotoROS would answer 5 / 5007 NOT_STARTED
+    assert extra["not_ready"]["name"] == controller.motoros.not_ready_reason()[1]
+    assert extra["not_ready"]["subcode"] != 0
+    assert [o["name"] for o in extra["outputs"]] == [f"OT#{n}" for n in range(889, 897)]
+    assert all(set(j) == {"job", "line"} for j in extra["jobs"])
+    assert "clients" not in extra  # only the running simulator knows its clients
     group = doc["groups"][0]
     chain = chain_for(controller.cell.groups[0])
     expected = [f["xyz"] for f in chain.joint_frames(group["feedback_rad"])]
@@ -94,6 +101,7 @@ async def test_websocket_pushes_live_state(controller: VirtualController) -> Non
         assert ticks == sorted(ticks)
         assert ticks[-1] > ticks[0]  # live: the loop advanced between documents
         assert math.isfinite(docs[-1]["groups"][0]["frames"]["feedback"][-1][2])
+        assert docs[-1]["pendant"]["clients"] == {"motion": 0, "state": 0, "io": 0}
         async with httpx.AsyncClient(base_url=f"http://127.0.0.1:{sim.ports.http}") as client:
             await client.post("/api/estop", json={"pressed": True})
         docs = await asyncio.to_thread(_receive, url, None, 2)

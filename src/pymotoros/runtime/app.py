@@ -219,6 +219,10 @@ class SimulatorApp:
             return (None, None, None)
         return (self._ports.motion, self._ports.state, self._ports.io)
 
+    def client_counts(self) -> dict[str, int]:
+        """Clients connected on each MotoROS port (the web pendant shows them)."""
+        return {"motion": self.motion.clients, "state": self.state.clients, "io": self.io.clients}
+
     def _motoros_started(self) -> bool:
         started = getattr(self.controller, "motoros_started", True)
         return bool(started)
@@ -294,7 +298,11 @@ class SimulatorApp:
     async def _start_http(self, tg: asyncio.TaskGroup, sock: socket.socket) -> int:
         bound = int(sock.getsockname()[1])
         app = create_http_app(
-            self.controller, self.tick_stats, self.ticker.reset_stats, ports=self.listening_ports
+            self.controller,
+            self.tick_stats,
+            self.ticker.reset_stats,
+            ports=self.listening_ports,
+            clients=self.client_counts,
         )
         config = uvicorn.Config(
             app,

@@ -340,6 +340,7 @@ def create_http_app(
     reset_tick_stats: Callable[[], None] | None = None,
     *,
     ports: Callable[[], tuple[int | None, int | None, int | None]] | None = None,
+    clients: Callable[[], dict[str, int]] | None = None,
 ) -> FastAPI:
     """The control API of one simulated controller."""
     app = FastAPI(
@@ -361,7 +362,7 @@ def create_http_app(
         listening = ports() if ports is not None else (None, None, None)
         return state_model(controller.snapshot(), tick_stats(), listening)
 
-    install_pendant(app, controller, lambda: state().model_dump())
+    install_pendant(app, controller, lambda: state().model_dump(), clients)
 
     @app.get("/api/state", response_model=StateModel, tags=["state"])
     async def get_state() -> StateModel:

@@ -39,6 +39,12 @@ logger = logging.getLogger(__name__)
 FEED_PERIOD_S: Final = 0.04
 """25 Hz: the issue asks for at least 20 Hz; 40 ms leaves headroom on a busy machine."""
 
+MOTOROS_FIRST_OUTPUT: Final = 889
+"""OT#889..896: the outputs INIT_ROS and MotoROS use (motoros-1.9.12.md)."""
+MOTOROS_OUTPUTS: Final = 8
+OT889_ADDRESS: Final = 11120
+"""IO address of OT#889 (controller/readiness.py: ros_ready)."""
+
 STATIC_DIR: Final = files("pymotoros.runtime.pendant") / "static"
 
 
@@ -54,8 +60,10 @@ class PendantFeed:
         build: Callable[[], dict[str, Any]],
         chains: list[Chain | None],
         period_s: float = FEED_PERIOD_S,
+        extras: Callable[[], dict[str, Any]] | None = None,
     ) -> None:
         self._build = build
+        self._extras = extras
         self._chains = chains
         self._period_s = period_s
         self._latest: dict[str, Any] | None = None
@@ -71,6 +79,8 @@ class PendantFeed:
     def document(self) -> dict[str, Any]:
         """One state document with the joint frames (also ``GET /api/pendant/state``)."""
         doc = self._build()
+        if self._extras is not None:
+            doc["pendant"] = self._extras()
         for group, chain in zip(doc["groups"], self._chains, strict=False):
             if chain is None or len(group["feedback_rad"]) != chain.num_joints:
                 group["frames"] = None
@@ -128,6 +138,39 @@ class PendantFeed:
                 self._task = None
 
 
+def _extras(
+    controller: object, clients: Callable[[], dict[str, int]] | None
+) -> Callable[[], dict[str, Any]]:
+    """What a pendant shows beyond ``GET /api/state``: why motion is not ready, the
+    INIT_ROS job's line, MotoROS's outputs, the clients per port. Each part only where
+    the controller offers it (a test double may not)."""
+
+    def read() -> dict[str, Any]:
+        out: dict[str, Any] = {}
+        motoros = getattr(controller, "motoros", None)
+        reason = getattr(motoros, "not_ready_reason", None)
+        if reason is not None:
+            code, name, meaning, why = reason()
+            out["not_ready"] = {"subcode": code, "name": name, "meaning": meaning, "why": why}
+        jobs = getattr(controller, "job_position", None)  # a property of VirtualController
+        if jobs is not None:
+            out["jobs"] = [{"job": job, "line": line} for job, line in jobs]
+        read_bit = getattr(controller, "read_io_bit", None)
+        if read_bit is not None:
+            out["outputs"] = [
+                {
+                    "name": f"OT#{MOTOROS_FIRST_OUTPUT + i}",
+                    "value": read_bit(OT889_ADDRESS + i).value,
+                }
+                for i in range(MOTOROS_OUTPUTS)
+            ]
+        if clients is not None:
+            out["clients"] = clients()
+        return out
+
+    return read
+
+
 def _chains(controller: object) -> list[Chain | None]:
     cell = getattr(controller, "cell", None)
     out: list[Chain | None] = []
@@ -139,9 +182,14 @@ def _chains(controller: object) -> list[Chain | None]:
     return out
 
 
-def install_pendant(app: FastAPI, controller: object, build: Callable[[], dict[str, Any]]) -> None:
+def install_pendant(
+    app: FastAPI,
+    controller: object,
+    build: Callable[[], dict[str, Any]],
+    clients: Callable[[], dict[str, int]] | None = None,
+) -> None:
     """Serve the pendant at ``/`` (assets under ``/pendant``) and its feed at ``/ws/state``."""
-    feed = PendantFeed(build, _chains(controller))
+    feed = PendantFeed(build, _chains(controller), extras=_extras(controller, clients))
     app.state.pendant_feed = feed
     app.mount("/pendant", StaticFiles(directory=str(STATIC_DIR)), name="pendant")
 

@@ -61,6 +61,17 @@
     $("st-hold").innerHTML = yn(doc.hold);
     $("st-ready").innerHTML = doc.motion_ready ? '<span class="yes">ready</span>' : '<span class="no">not ready</span>';
     $("st-motoros").textContent = doc.motoros;
+    const extra = doc.pendant || {};
+    if (extra.not_ready) {
+      const n = extra.not_ready;
+      $("st-notready").textContent = doc.motion_ready ? "–" : `${n.subcode} ${n.name}: ${n.meaning}${n.why ? " (" + n.why + ")" : ""}`;
+    }
+    if (extra.jobs) $("st-jobs").textContent = extra.jobs.length ? extra.jobs.map((j) => `${j.job} line ${j.line}`).join(", ") : "no job running";
+    if (extra.outputs) $("st-outputs").innerHTML = extra.outputs.map((o) => `<span class="${o.value ? "yes" : "no"}" title="${o.name}">${o.value}</span>`).join(" ");
+    if (extra.clients) {
+      const c = extra.clients, p0 = doc.ports;
+      $("st-clients").textContent = `motion ${c.motion} on ${p0.motion ?? "–"}, state ${c.state} on ${p0.state ?? "–"}, io ${c.io} on ${p0.io ?? "–"}`;
+    }
     const p = doc.ports;
     $("st-ports").textContent = `motion ${p.motion ?? "closed"}, state ${p.state ?? "closed"}, io ${p.io ?? "closed"}`;
     $("st-pfl").textContent = doc.pfl;
