@@ -303,6 +303,7 @@ class SimulatorApp:
             self.ticker.reset_stats,
             ports=self.listening_ports,
             clients=self.client_counts,
+            after_ticks=self.ticker.wait_ticks,
         )
         config = uvicorn.Config(
             app,

@@ -16,7 +16,7 @@ the action, in the same shape as ``GET /api/state``.
 from __future__ import annotations
 
 import logging
-from collections.abc import Callable
+from collections.abc import Awaitable, Callable
 from typing import Any, Literal
 
 from fastapi import FastAPI, Request
@@ -341,6 +341,7 @@ def create_http_app(
     *,
     ports: Callable[[], tuple[int | None, int | None, int | None]] | None = None,
     clients: Callable[[], dict[str, int]] | None = None,
+    after_ticks: Callable[[int], Awaitable[None]] | None = None,
 ) -> FastAPI:
     """The control API of one simulated controller."""
     app = FastAPI(
@@ -362,7 +363,7 @@ def create_http_app(
         listening = ports() if ports is not None else (None, None, None)
         return state_model(controller.snapshot(), tick_stats(), listening)
 
-    install_pendant(app, controller, lambda: state().model_dump(), clients)
+    install_pendant(app, controller, lambda: state().model_dump(), clients, after_ticks)
 
     @app.get("/api/state", response_model=StateModel, tags=["state"])
     async def get_state() -> StateModel:
