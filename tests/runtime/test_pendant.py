@@ -9,6 +9,7 @@ import math
 import re
 from collections.abc import AsyncIterator
 from dataclasses import replace
+from pathlib import Path
 from typing import Any
 
 import httpx
@@ -16,7 +17,9 @@ import pytest
 import websocket
 
 from pymotoros.controller import VirtualController
+from pymotoros.controller.cell import default_cell, load_cell
 from pymotoros.kinematics import chain_for
+from pymotoros.models.robots import ROBOTS
 from pymotoros.runtime.app import SimulatorApp
 from pymotoros.runtime.http_api import create_http_app
 from pymotoros.runtime.pendant import FEED_PERIOD_S
@@ -30,6 +33,7 @@ MIN_FEED_HZ = 20.0
 WS_TIMEOUT_S = 5.0
 """Generous bound on one WebSocket read (documents come every 40 ms)."""
 HTTP_FORBIDDEN = 403
+CELLS = Path(__file__).resolve().parents[2] / "examples" / "cells"
 
 
 @pytest.fixture
@@ -148,3 +152,24 @@ async def test_same_origin_and_header_less_posts_are_allowed(
 async def test_cross_site_get_still_reads(api: httpx.AsyncClient) -> None:
     r = await api.get("/api/state", headers={"Origin": "http://evil.example"})
     assert r.status_code == 200
+
+
+@pytest.mark.parametrize("robot", sorted(ROBOTS))
+def test_every_built_in_model_has_joint_frames_for_the_3d_view(robot: str) -> None:
+    """Every group of every built-in robot (SDA10F: two arms and the torso) is drawn."""
+    controller = VirtualController(cell=default_cell(robot=robot))
+    app = create_http_app(controller, lambda: STATS)
+    doc = app.state.pendant_feed.document()
+    assert len(doc["groups"]) == len(controller.cell.groups)
+    for group in doc["groups"]:
+        frames = group["frames"]
+        assert frames is not None, group["name"]
+        assert len(frames["feedback"]) == len(group["feedback_rad"]) + 3
+        assert frames["command"] == frames["feedback"]  # at rest
+
+
+def test_multi_group_cell_file_has_frames_per_group() -> None:
+    controller = VirtualController(cell=load_cell(CELLS / "two_hc10_dx100.toml"))
+    doc = create_http_app(controller, lambda: STATS).state.pendant_feed.document()
+    assert [g["name"] for g in doc["groups"]] == ["R1", "R2"]
+    assert all(g["frames"] is not None for g in doc["groups"])
