@@ -72,11 +72,14 @@ TAB_PROCESS = textwrap.dedent(
 
 
 @contextlib.contextmanager
-def websocket_tabs(sim: Sim) -> Iterator[list[float]]:
+def websocket_tabs(sim: Sim, nice: int = 0) -> Iterator[list[float]]:
     """Three pendant feeds in another process; yields a list filled with each tab's Hz."""
     rates: list[float] = []
+    cmd = [sys.executable, "-c", TAB_PROCESS, str(sim.http), str(TABS)]
+    if nice:
+        cmd = ["nice", "-n", str(nice), *cmd]
     proc = subprocess.Popen(  # noqa: S603 - our own argv
-        [sys.executable, "-c", TAB_PROCESS, str(sim.http), str(TABS)],
+        cmd,
         stdin=subprocess.PIPE,
         stdout=subprocess.PIPE,
         text=True,
@@ -123,14 +126,14 @@ def browser_tabs(sim: Sim) -> Iterator[list[float]]:
         driver.quit()
 
 
-def one_run(duration: float, warmup: float, tabs: str) -> dict[str, object]:
+def one_run(duration: float, warmup: float, tabs: str, nice: int = 0) -> dict[str, object]:
     with running_sim() as sim:
         if tabs == "none":
             result = asyncio.run(stream_and_listen(sim, duration, warmup))
             result["tab_hz"] = []
             return result
-        opener = browser_tabs if tabs == "browser" else websocket_tabs
-        with opener(sim) as rates:
+        opener = browser_tabs(sim) if tabs == "browser" else websocket_tabs(sim, nice)
+        with opener as rates:
             result = asyncio.run(stream_and_listen(sim, duration, warmup))
         result["tab_hz"] = rates
         return result
@@ -142,12 +145,19 @@ def main() -> None:
     parser.add_argument("--warmup", type=float, default=3.0, help="seconds before measuring")
     parser.add_argument("--rounds", type=int, default=3, help="alternations of both runs")
     parser.add_argument("--browser", action="store_true", help="real Chromium tabs")
+    parser.add_argument(
+        "--tab-nice",
+        type=int,
+        default=0,
+        help="run the WebSocket tabs under nice N: tells the simulator's own cost from "
+        "the CPU the tabs' process takes from it on a 2-core machine",
+    )
     args = parser.parse_args()
     kind = "browser" if args.browser else "websocket"
     rows: dict[str, list[float]] = {"none": [], kind: []}
     for r in range(args.rounds):
         for tabs in ("none", kind):
-            res = one_run(args.duration, args.warmup, tabs)
+            res = one_run(args.duration, args.warmup, tabs, args.tab_nice)
             tick = res["tick"]
             assert isinstance(tick, dict)
             late = tick["lateness_ms"]

@@ -168,7 +168,8 @@ class SimulatorApp:
         if not is_loopback(cfg.host):
             logger.warning(
                 "listening on %s: the simulator is reachable from the network and has no "
-                "authentication (the control API can press E-stop and force IO)",
+                "authentication (the control API and the web pendant at / can press E-stop, "
+                "move the robot and force IO)",
                 cfg.host,
             )
         # Bind everything first: a port in use is a plain OSError, before any task starts.
