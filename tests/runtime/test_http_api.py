@@ -88,7 +88,7 @@ async def test_operator_actions(api: httpx.AsyncClient, controller: VirtualContr
     ("method", "path", "body", "status", "fragment"),
     [
         ("GET", "/api/nope", None, 404, "no such endpoint: GET /api/nope"),
-        ("GET", "/", None, 404, "no such endpoint"),
+        ("GET", "/nowhere", None, 404, "no such endpoint"),
         ("GET", "/api/estop", None, 405, "method GET not allowed on /api/estop"),
         ("POST", "/api/estop", None, 422, "a JSON body is required"),
         ("POST", "/api/estop", {"pressed": "yes"}, 422, "pressed"),

@@ -81,6 +81,12 @@ class MotoRos:
     def clear_pfl_latch(self) -> None:
         self._readiness.clear_pfl_latch()
 
+    def not_ready_reason(self) -> tuple[int, str, str, str]:
+        """(subcode, name, meaning, what clears it) that CHECK_MOTION_READY would give now,
+        for the web pendant (subcode 0 UNSPECIFIED when ready)."""
+        sub = self._readiness.not_ready_subcode()
+        return int(sub), sub.name, sub.meaning, self._readiness.not_ready_why(sub)
+
     def clear_inc_move_error(self) -> None:
         self._readiness.clear_inc_move_error()
 

@@ -405,6 +405,10 @@ class Readiness:
             detail += f" ({why})"
         return reply(result, int(sub), detail, group_no=group_no)
 
+    def not_ready_why(self, sub: NotReadySubcode) -> str:
+        """The specifics behind ``sub`` and what clears it (the web pendant shows it)."""
+        return self._not_ready_why(sub)
+
     def _not_ready_why(self, sub: NotReadySubcode) -> str:
         """The specifics behind a NOT_READY subcode, and what clears it."""
         s = self._machine.state

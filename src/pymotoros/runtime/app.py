@@ -169,7 +169,8 @@ class SimulatorApp:
         if not is_loopback(cfg.host):
             logger.warning(
                 "listening on %s: the simulator is reachable from the network and has no "
-                "authentication (the control API can press E-stop and force IO)",
+                "authentication (the control API and the web pendant at / can press E-stop, "
+                "move the robot and force IO)",
                 cfg.host,
             )
         # Bind everything first: a port in use is a plain OSError, before any task starts.
@@ -219,6 +220,10 @@ class SimulatorApp:
         if self._ports is None or not self._motoros_listening:
             return (None, None, None)
         return (self._ports.motion, self._ports.state, self._ports.io)
+
+    def client_counts(self) -> dict[str, int]:
+        """Clients connected on each MotoROS port (the web pendant shows them)."""
+        return {"motion": self.motion.clients, "state": self.state.clients, "io": self.io.clients}
 
     def _motoros_started(self) -> bool:
         started = getattr(self.controller, "motoros_started", True)
@@ -295,7 +300,12 @@ class SimulatorApp:
     async def _start_http(self, tg: asyncio.TaskGroup, sock: socket.socket) -> int:
         bound = int(sock.getsockname()[1])
         app = create_http_app(
-            self.controller, self.tick_stats, self.ticker.reset_stats, ports=self.listening_ports
+            self.controller,
+            self.tick_stats,
+            self.ticker.reset_stats,
+            ports=self.listening_ports,
+            clients=self.client_counts,
+            after_ticks=self.ticker.wait_ticks,
         )
         config = uvicorn.Config(
             app,

@@ -16,7 +16,7 @@ the action, in the same shape as ``GET /api/state``.
 from __future__ import annotations
 
 import logging
-from collections.abc import Callable
+from collections.abc import Awaitable, Callable
 from typing import Any, Literal
 
 from fastapi import FastAPI, Request
@@ -28,7 +28,9 @@ from starlette.exceptions import HTTPException as StarletteHTTPException
 from pymotoros import __version__
 from pymotoros.controller.api import ControllerSnapshot, PendantMode, TcpSnapshot
 from pymotoros.controller.scenario import parse_scenario
+from pymotoros.runtime.csrf import CsrfGuard
 from pymotoros.runtime.docs_page import install_offline_docs
+from pymotoros.runtime.pendant import install_pendant
 from pymotoros.runtime.target import SimulatedController
 from pymotoros.runtime.ticker import TickStats
 
@@ -338,6 +340,8 @@ def create_http_app(
     reset_tick_stats: Callable[[], None] | None = None,
     *,
     ports: Callable[[], tuple[int | None, int | None, int | None]] | None = None,
+    clients: Callable[[], dict[str, int]] | None = None,
+    after_ticks: Callable[[int], Awaitable[None]] | None = None,
 ) -> FastAPI:
     """The control API of one simulated controller."""
     app = FastAPI(
@@ -350,6 +354,7 @@ def create_http_app(
         ),
     )
     install_offline_docs(app)
+    app.add_middleware(CsrfGuard)  # the pendant's buttons: refuse other sites' POSTs
     app.add_exception_handler(RequestValidationError, _validation_error)
     app.add_exception_handler(StarletteHTTPException, _http_error)
     app.add_exception_handler(ValueError, _value_error)
@@ -357,6 +362,8 @@ def create_http_app(
     def state() -> StateModel:
         listening = ports() if ports is not None else (None, None, None)
         return state_model(controller.snapshot(), tick_stats(), listening)
+
+    install_pendant(app, controller, lambda: state().model_dump(), clients, after_ticks)
 
     @app.get("/api/state", response_model=StateModel, tags=["state"])
     async def get_state() -> StateModel:

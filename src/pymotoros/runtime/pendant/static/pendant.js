@@ -1,0 +1,224 @@
+// The pymotoros web pendant: live state over /ws/state, buttons over POST /api/...
+// Plain JavaScript, no library: everything is served by the simulator (works offline).
+"use strict";
+(function () {
+  const M_BASE = 1000000;          // M-register n is IO address 1000000 + n (control API)
+  const PLOT_SECONDS = 10;         // history shown by the plots
+  const RECONNECT_MS = 1000;       // retry delay after the feed closed
+  const COLORS = ["#4fc3f7", "#ffb74d", "#81c784", "#e57373", "#ba68c8", "#fff176", "#90a4ae", "#f06292"];
+  const $ = (id) => document.getElementById(id);
+  const state = { last: null, updates: 0, history: [], view: { yaw: -0.7, pitch: 0.4, dist: 2.4, cx: 0, cy: 0, cz: 0.5 } };
+  window.pendant = state;           // for debugging and the browser test
+
+  function say(text) { $("message").textContent = text; }
+
+  async function post(path, body) {
+    const resp = await fetch(path, { method: "POST", headers: { "Content-Type": "application/json" },
+                                     body: JSON.stringify(body === undefined ? {} : body) });
+    const answer = await resp.json();
+    if (!resp.ok) { say(answer.error || ("HTTP " + resp.status)); return null; }
+    say(""); render(answer, false); return answer;
+  }
+
+  async function readIo(address, out) {
+    const resp = await fetch("/api/io/" + address);
+    const answer = await resp.json();
+    out.textContent = resp.ok ? ("= " + answer.value) : answer.error;
+  }
+
+  const yn = (v) => v ? '<span class="yes">ON</span>' : '<span class="no">OFF</span>';
+  function setOn(id, on) { $(id).classList.toggle("on", !!on); }
+
+  function fmt(rad) {
+    return $("units-rad").checked ? rad.toFixed(4) : (rad * 180 / Math.PI).toFixed(2);
+  }
+
+  function renderGroups(groups) {
+    const unit = $("units-rad").checked ? "rad" : "deg";
+    let html = "";
+    for (const g of groups) {
+      html += `<h3>${g.name}: queue ${g.queue}, tool ${g.tool}</h3><table class="joints"><tr><th></th>`;
+      html += g.joint_names.map((n) => `<th>${n}</th>`).join("") + "</tr>";
+      html += `<tr><th>command (${unit})</th>` + g.command_rad.map((v, i) => `<td class="cmd" data-joint="${i}">${fmt(v)}</td>`).join("") + "</tr>";
+      html += `<tr><th>feedback (${unit})</th>` + g.feedback_rad.map((v, i) => `<td class="fb" data-joint="${i}">${fmt(v)}</td>`).join("") + "</tr></table>";
+      if (g.tcp) {
+        const p = g.tcp.feedback;
+        html += `<div class="small">TCP x ${(p[0] * 1000).toFixed(1)} y ${(p[1] * 1000).toFixed(1)} z ${(p[2] * 1000).toFixed(1)} mm,` +
+                ` rx ${(p[3] * 180 / Math.PI).toFixed(2)} ry ${(p[4] * 180 / Math.PI).toFixed(2)} rz ${(p[5] * 180 / Math.PI).toFixed(2)}°,` +
+                ` ${g.tcp.speed_mm_s.feedback.toFixed(1)} mm/s</div>`;
+      }
+    }
+    $("groups").innerHTML = html;
+  }
+
+  function render(doc, live) {
+    state.last = doc;
+    if (live) state.updates += 1;
+    $("st-mode").textContent = doc.mode.toUpperCase();
+    $("st-remote").innerHTML = yn(doc.remote);
+    $("st-servo").innerHTML = yn(doc.servo);
+    $("st-estop").innerHTML = doc.estop ? '<span class="no">PRESSED</span>' : '<span class="yes">released</span>';
+    $("st-hold").innerHTML = yn(doc.hold);
+    $("st-ready").innerHTML = doc.motion_ready ? '<span class="yes">ready</span>' : '<span class="no">not ready</span>';
+    $("st-motoros").textContent = doc.motoros;
+    const extra = doc.pendant || {};
+    if (extra.not_ready) {
+      const n = extra.not_ready;
+      $("st-notready").textContent = doc.motion_ready ? "–" : `${n.subcode} ${n.name}: ${n.meaning}${n.why ? " (" + n.why + ")" : ""}`;
+    }
+    if (extra.jobs) $("st-jobs").textContent = extra.jobs.length ? extra.jobs.map((j) => `${j.job} line ${j.line}`).join(", ") : "no job running";
+    if (extra.outputs) $("st-outputs").innerHTML = extra.outputs.map((o) => `<span class="${o.value ? "yes" : "no"}" title="${o.name}">${o.value}</span>`).join(" ");
+    if (extra.clients) {
+      const c = extra.clients, p0 = doc.ports;
+      $("st-clients").textContent = `motion ${c.motion} on ${p0.motion ?? "–"}, state ${c.state} on ${p0.state ?? "–"}, io ${c.io} on ${p0.io ?? "–"}`;
+    }
+    const p = doc.ports;
+    $("st-ports").textContent = `motion ${p.motion ?? "closed"}, state ${p.state ?? "closed"}, io ${p.io ?? "closed"}`;
+    $("st-pfl").textContent = doc.pfl;
+    $("st-fsu").textContent = doc.fsu.joint_speed_pct === null && doc.fsu.tcp_speed_mm_s === null ? "off" :
+      `${doc.fsu.joint_speed_pct ?? "–"} % joint, ${doc.fsu.tcp_speed_mm_s ?? "–"} mm/s TCP`;
+    const t = doc.tick;
+    $("st-tick").textContent = `${t.count} ticks of ${t.period_ms} ms, lateness p50 ${t.lateness_ms.p50.toFixed(3)} ` +
+      `p99 ${t.lateness_ms.p99.toFixed(3)} max ${t.lateness_ms.max.toFixed(3)} ms, ${t.overruns} overruns`;
+    $("alarms").innerHTML = doc.alarms.length === 0 ? "<li>none</li>" :
+      doc.alarms.map((a) => `<li>${a.code} / ${a.subcode}: ${escapeHtml(a.text)}</li>`).join("");
+    $("events").innerHTML = doc.events.length === 0 ? "<li>none</li>" :
+      doc.events.slice(-8).map((e) => `<li>${e.t.toFixed(2)} s ${escapeHtml(e.action)}${e.error ? " (" + escapeHtml(e.error) + ")" : ""}</li>`).join("");
+    $("estop-light").classList.toggle("on", doc.estop);
+    setOn("btn-estop", doc.estop); setOn("btn-hold", doc.hold); setOn("btn-remote", doc.remote);
+    setOn("btn-servo", doc.servo); $("btn-mode").textContent = doc.mode === "play" ? "PLAY → TEACH" : "TEACH → PLAY";
+    $("safety-row").style.display = doc.pfl === "off" ? "none" : "flex";
+    renderGroups(doc.groups);
+    if (live) {
+      const now = performance.now() / 1000;
+      state.history.push({ t: now, groups: doc.groups.map((g) => ({ c: g.command_rad, f: g.feedback_rad })), late: t.lateness_ms.p99 });
+      while (state.history.length && state.history[0].t < now - PLOT_SECONDS) state.history.shift();
+      drawPlots(now);
+    }
+    if (doc.groups.some((g) => g.frames)) draw3d();
+  }
+
+  function escapeHtml(s) { return String(s).replace(/[&<>"]/g, (c) => ({ "&": "&amp;", "<": "&lt;", ">": "&gt;", '"': "&quot;" }[c])); }
+
+  // ------------------------------------------------------------------ plots
+  function drawSeries(ctx, w, h, now, series, lo, hi, color, dash) {
+    ctx.strokeStyle = color; ctx.setLineDash(dash || []); ctx.beginPath();
+    series.forEach(([t, v], i) => {
+      const x = w - (now - t) / PLOT_SECONDS * w, y = h - (v - lo) / (hi - lo || 1) * (h - 10) - 5;
+      if (i === 0) ctx.moveTo(x, y); else ctx.lineTo(x, y);
+    });
+    ctx.stroke(); ctx.setLineDash([]);
+  }
+
+  function drawPlots(now) {
+    const c = $("plot-joints"), ctx = c.getContext("2d");
+    ctx.clearRect(0, 0, c.width, c.height);
+    const g0 = state.history.length ? state.history[state.history.length - 1].groups[0] : null;
+    if (g0) {
+      let lo = Infinity, hi = -Infinity;
+      for (const s of state.history) for (const v of s.groups[0].c.concat(s.groups[0].f)) { lo = Math.min(lo, v); hi = Math.max(hi, v); }
+      for (let j = 0; j < g0.c.length; j++) {
+        drawSeries(ctx, c.width, c.height, now, state.history.map((s) => [s.t, s.groups[0].c[j]]), lo, hi, COLORS[j % COLORS.length], [4, 3]);
+        drawSeries(ctx, c.width, c.height, now, state.history.map((s) => [s.t, s.groups[0].f[j]]), lo, hi, COLORS[j % COLORS.length]);
+      }
+      ctx.fillStyle = "#aab"; ctx.fillText("group 1: dashed command, solid feedback (rad)", 6, 12);
+    }
+    const l = $("plot-lateness"), lctx = l.getContext("2d");
+    lctx.clearRect(0, 0, l.width, l.height);
+    const hi = Math.max(1, ...state.history.map((s) => s.late));
+    drawSeries(lctx, l.width, l.height, now, state.history.map((s) => [s.t, s.late]), 0, hi, "#ffb74d");
+    lctx.fillStyle = "#aab"; lctx.fillText(`loop lateness p99 (ms), scale 0–${hi.toFixed(2)}`, 6, 12);
+  }
+
+  // ------------------------------------------------------------------ 3D view
+  // A small perspective projection of the joint positions (z up), links as thick lines.
+  function project(p, v, w, h) {
+    const x = p[0] - v.cx, y = p[1] - v.cy, z = p[2] - v.cz;
+    const cy = Math.cos(v.yaw), sy = Math.sin(v.yaw), cp = Math.cos(v.pitch), sp = Math.sin(v.pitch);
+    const xr = cy * x - sy * y, yr = sy * x + cy * y;          // yaw about z
+    const depth = v.dist + cp * yr - sp * z;                   // camera looks along +y, tilted down
+    const up = sp * yr + cp * z;
+    const f = h * 1.2 / Math.max(0.1, depth);
+    return [w / 2 + xr * f, h / 2 - up * f, depth];
+  }
+
+  function draw3d() {
+    const c = $("view3d"), ctx = c.getContext("2d"), v = state.view, w = c.width, h = c.height;
+    ctx.clearRect(0, 0, w, h);
+    ctx.strokeStyle = "#2c3540"; ctx.lineWidth = 1;               // floor grid, 0.25 m
+    for (let i = -4; i <= 4; i++) {
+      const a = project([i * 0.25, -1, 0], v, w, h), b = project([i * 0.25, 1, 0], v, w, h);
+      const d = project([-1, i * 0.25, 0], v, w, h), e = project([1, i * 0.25, 0], v, w, h);
+      ctx.beginPath(); ctx.moveTo(a[0], a[1]); ctx.lineTo(b[0], b[1]); ctx.moveTo(d[0], d[1]); ctx.lineTo(e[0], e[1]); ctx.stroke();
+    }
+    const groups = (state.last && state.last.groups) || [];
+    groups.forEach((g, gi) => {
+      if (!g.frames) return;
+      const shift = (p) => [p[0], p[1] + gi * 1.5, p[2]];          // groups side by side
+      for (const [pts, color, width] of [[g.frames.command, "rgba(200,200,200,0.35)", 9], [g.frames.feedback, "#f5a623", 11]]) {
+        const all = [[0, 0, 0]].concat(pts).map((p) => project(shift(p), v, w, h));
+        ctx.lineCap = "round"; ctx.lineJoin = "round";
+        for (let i = 1; i < all.length; i++) {
+          ctx.strokeStyle = color; ctx.lineWidth = Math.max(2, width * (i < all.length - 3 ? 1 : 0.5) * 3 / all[i][2]);
+          ctx.beginPath(); ctx.moveTo(all[i - 1][0], all[i - 1][1]); ctx.lineTo(all[i][0], all[i][1]); ctx.stroke();
+        }
+        ctx.fillStyle = color === "#f5a623" ? "#333" : "rgba(0,0,0,0)";
+        for (const q of all) { ctx.beginPath(); ctx.arc(q[0], q[1], 3, 0, 2 * Math.PI); ctx.fill(); }
+      }
+      const base = project(shift([0, 0, 0]), v, w, h);
+      ctx.fillStyle = "#aab"; ctx.fillText(g.name, base[0] + 8, base[1] + 14);
+    });
+  }
+
+  function setupOrbit() {
+    const c = $("view3d"); let drag = null;
+    c.addEventListener("mousedown", (e) => { drag = [e.clientX, e.clientY]; });
+    window.addEventListener("mouseup", () => { drag = null; });
+    window.addEventListener("mousemove", (e) => {
+      if (!drag) return;
+      state.view.yaw += (e.clientX - drag[0]) * 0.01;
+      state.view.pitch = Math.max(-1.4, Math.min(1.4, state.view.pitch + (e.clientY - drag[1]) * 0.01));
+      drag = [e.clientX, e.clientY]; draw3d();
+    });
+    c.addEventListener("wheel", (e) => {
+      e.preventDefault(); state.view.dist = Math.max(0.5, Math.min(20, state.view.dist * (e.deltaY > 0 ? 1.1 : 0.9))); draw3d();
+    }, { passive: false });
+  }
+
+  // ------------------------------------------------------------------ feed
+  function connect() {
+    const ws = new WebSocket((location.protocol === "https:" ? "wss://" : "ws://") + location.host + "/ws/state");
+    ws.onopen = () => { $("link").textContent = "live"; $("link").className = "badge on"; };
+    ws.onmessage = (m) => render(JSON.parse(m.data), true);
+    ws.onclose = () => { $("link").textContent = "disconnected"; $("link").className = "badge off"; setTimeout(connect, RECONNECT_MS); };
+  }
+
+  // ------------------------------------------------------------------ buttons
+  function wire() {
+    const last = () => state.last || {};
+    $("btn-estop").onclick = () => post("/api/estop", { pressed: !last().estop });
+    $("btn-hold").onclick = () => post("/api/hold", { on: !last().hold });
+    $("btn-mode").onclick = () => post("/api/mode", { mode: last().mode === "play" ? "teach" : "play" });
+    $("btn-remote").onclick = () => post("/api/remote", { on: !last().remote });
+    $("btn-servo").onclick = () => post("/api/servo", { on: !last().servo });
+    $("btn-reset").onclick = () => post("/api/reset");
+    $("btn-alarm").onclick = () => post("/api/alarm", { code: Number($("alarm-code").value), text: $("alarm-text").value });
+    $("btn-pfl").onclick = () => post("/api/pfl", { event: "contact" });
+    $("btn-fsu").onclick = () => post("/api/fsu", { joint_speed_pct: Number($("fsu-pct").value) });
+    $("btn-fsu-off").onclick = () => post("/api/fsu", { off: true });
+    $("btn-io-read").onclick = () => readIo(Number($("io-address").value), $("io-result"));
+    $("btn-io-write").onclick = () => post("/api/io", { address: Number($("io-address").value), value: Number($("io-value").value) });
+    $("btn-m-read").onclick = () => readIo(M_BASE + Number($("m-number").value), $("m-result"));
+    $("btn-m-write").onclick = () => post("/api/io", { address: M_BASE + Number($("m-number").value), value: Number($("m-value").value) });
+    $("btn-scenario").onclick = async () => {
+      const file = $("scenario-file").files[0];
+      if (!file) { say("choose a scenario file (JSON: {\"events\": [...]}) first"); return; }
+      let doc;
+      try { doc = JSON.parse(await file.text()); } catch (err) { say("not JSON: " + err); return; }
+      post("/api/scenario", Array.isArray(doc) ? { events: doc } : doc);
+    };
+    $("units-rad").onchange = () => state.last && renderGroups(state.last.groups);
+  }
+
+  wire(); setupOrbit(); connect();
+})();

@@ -1,0 +1,245 @@
+"""The web pendant end to end in a real headless browser (Debian's Chromium + chromedriver,
+driven by Selenium), with every non-local request blocked and recorded.
+
+While the client streams a trajectory, the page's joint values change and match
+``GET /api/state``; the 3D canvas is not blank and changes between two screenshots; the
+page's E-STOP button stops the robot (light on, the client's move fails with a typed
+:class:`~pymotoros.client.NotReadyError`); release and RESET recover. Screenshots go to
+``docs/`` (the README shows one).
+"""
+
+from __future__ import annotations
+
+import concurrent.futures
+import json
+import math
+import shutil
+from base64 import b64encode
+from collections.abc import Callable, Iterator
+from pathlib import Path
+from typing import Any
+from urllib.parse import urlsplit
+
+import pytest
+from client_sim import Sim, running_sim
+
+from pymotoros.client import NotReadyError, SyncRobotClient
+
+webdriver = pytest.importorskip("selenium.webdriver", reason="selenium is not installed")
+
+from selenium.webdriver.chrome.options import Options  # noqa: E402
+from selenium.webdriver.chrome.service import Service  # noqa: E402
+from selenium.webdriver.common.by import By  # noqa: E402
+from selenium.webdriver.remote.webdriver import WebDriver  # noqa: E402
+from selenium.webdriver.support.ui import WebDriverWait  # noqa: E402
+
+DOCS = Path(__file__).resolve().parents[2] / "docs"
+CHROMIUM = shutil.which("chromium") or shutil.which("chromium-browser")
+CHROMEDRIVER = shutil.which("chromedriver")
+WAIT_S = 20.0
+"""Bound on every wait for the page (a cold Chromium start on a busy 2-core machine)."""
+MOVING_TOLERANCE_DEG = 15.0
+"""Page vs ``GET /api/state`` while moving: the two readings are up to ~0.3 s apart, at
+most ~40 °/s at the test's speed scale."""
+RESTING_TOLERANCE_DEG = 0.01
+"""Page vs ``GET /api/state`` at rest: the same value shown with two decimals."""
+DEAD_PROXY = "127.0.0.1:9"
+"""Every non-loopback request goes to this closed port (the discard port): blocked."""
+GOAL = (1.2, 0.5, 0.6, 0.8, -1.2, 1.0)
+LIGHT_ON_JS = 'return document.getElementById("estop-light").classList.contains("on")'
+MIN_COLOURS = 20
+"""A blank canvas has one colour; grid, links, joints and ghost give far more."""
+PLOT_SAMPLES = 60
+"""About 2.4 s of updates at 25 Hz before the screenshot, so the plots show a trend."""
+SPEED_SCALE = 0.15
+"""Slow enough that the move lasts several seconds while the page is looked at."""
+
+pytestmark = [
+    pytest.mark.timeout(180),
+    pytest.mark.skipif(
+        CHROMIUM is None or CHROMEDRIVER is None,
+        reason="chromium and chromium-driver are not installed (.ci/run installs them)",
+    ),
+]
+
+
+@pytest.fixture(scope="module")
+def sim() -> Iterator[Sim]:
+    with running_sim() as sim:
+        yield sim
+
+
+@pytest.fixture(scope="module")
+def browser() -> Iterator[WebDriver]:
+    options = Options()
+    options.binary_location = str(CHROMIUM)
+    for arg in (
+        "--headless=new",
+        "--no-sandbox",
+        "--disable-dev-shm-usage",
+        "--disable-gpu",
+        "--window-size=1500,1150",
+        f"--proxy-server={DEAD_PROXY}",  # loopback bypasses the proxy; nothing else gets out
+        "--disable-background-networking",
+        "--disable-component-update",
+        "--no-first-run",
+    ):
+        options.add_argument(arg)
+    options.set_capability("goog:loggingPrefs", {"performance": "ALL"})
+    driver = webdriver.Chrome(options=options, service=Service(str(CHROMEDRIVER)))
+    try:
+        yield driver
+    finally:
+        driver.quit()
+
+
+def _requested_urls(driver: WebDriver) -> list[str]:
+    urls = []
+    for entry in driver.get_log("performance"):
+        message = json.loads(entry["message"])["message"]
+        if message.get("method") in ("Network.requestWillBeSent", "Network.webSocketCreated"):
+            params = message["params"]
+            urls.append(params.get("request", {}).get("url") or params.get("url", ""))
+    return urls
+
+
+def _non_local(urls: list[str]) -> list[str]:
+    return [
+        u
+        for u in urls
+        if not u.startswith(("data:", "blob:", "about:"))
+        and urlsplit(u).hostname not in ("127.0.0.1", "localhost")
+    ]
+
+
+def _wait(driver: WebDriver, condition: Callable[[WebDriver], Any], what: str) -> Any:
+    return WebDriverWait(driver, WAIT_S, poll_frequency=0.05).until(condition, what)
+
+
+def _page_feedback_deg(driver: WebDriver) -> list[float]:
+    """The first group's feedback as the page shows it (read in one script: the table is
+    redrawn at every update, so element handles go stale)."""
+    texts = driver.execute_script(
+        'return Array.from(document.querySelectorAll("#groups table.joints td.fb"))'
+        ".slice(0, 6).map((c) => c.textContent);"
+    )
+    return [float(t) for t in texts]
+
+
+def _api_feedback_deg(sim: Sim) -> list[float]:
+    return [math.degrees(v) for v in sim.api("/api/state")["groups"][0]["feedback_rad"]]
+
+
+def _canvas_png(driver: WebDriver) -> bytes:
+    return driver.find_element(By.ID, "view3d").screenshot_as_png
+
+
+def _colours(driver: WebDriver, png: bytes) -> int:
+    """Distinct colours in a PNG (decoded by the browser itself: no imaging library)."""
+    return int(
+        driver.execute_async_script(
+            """
+            const done = arguments[arguments.length - 1];
+            const img = new Image();
+            img.onload = () => {
+              const c = document.createElement("canvas");
+              c.width = img.width; c.height = img.height;
+              const ctx = c.getContext("2d"); ctx.drawImage(img, 0, 0);
+              const d = ctx.getImageData(0, 0, c.width, c.height).data, seen = new Set();
+              for (let i = 0; i < d.length; i += 4) seen.add((d[i] << 16) | (d[i+1] << 8) | d[i+2]);
+              done(seen.size);
+            };
+            img.src = "data:image/png;base64," + arguments[0];
+            """,
+            b64encode(png).decode(),
+        )
+    )
+
+
+def test_pendant_in_a_real_browser_offline(sim: Sim, browser: WebDriver) -> None:
+    url = f"http://127.0.0.1:{sim.http}/"
+    robot = SyncRobotClient(**sim.client_options())
+    pool = concurrent.futures.ThreadPoolExecutor(1)
+    try:
+        robot.connect()
+        robot.enable()
+        move = pool.submit(robot.move_joints, GOAL, speed_scale=SPEED_SCALE)
+
+        browser.get(url)
+        _wait(browser, lambda d: d.find_element(By.ID, "link").text == "live", "the live feed")
+        _wait(browser, lambda d: any(abs(v) > 1.0 for v in _page_feedback_deg(d)), "motion")
+
+        # the page's joint values change and match GET /api/state
+        first = _page_feedback_deg(browser)
+        api = _api_feedback_deg(sim)
+        assert max(abs(a - b) for a, b in zip(first, api, strict=True)) < MOVING_TOLERANCE_DEG
+        _wait(browser, lambda d: _page_feedback_deg(d) != first, "joint values to change")
+
+        # the 3D view renders and moves
+        shot_a = _canvas_png(browser)
+        _wait(browser, lambda d: _canvas_png(d) != shot_a, "the 3D view to change")
+        assert (
+            _colours(browser, _canvas_png(browser)) > MIN_COLOURS
+        )  # not blank: floor grid, links, ghost
+        _wait(  # a few seconds of plot history for the screenshot
+            browser,
+            lambda d: d.execute_script("return window.pendant.history.length") >= PLOT_SAMPLES,
+            "plot history",
+        )
+        browser.save_screenshot(str(DOCS / "pendant.png"))
+
+        # E-STOP from the page: the light, the state, the client's typed error
+        browser.find_element(By.ID, "btn-estop").click()
+        _wait(
+            browser,
+            lambda d: d.execute_script(LIGHT_ON_JS),
+            "the E-stop light",
+        )
+        assert browser.find_element(By.ID, "st-estop").text == "PRESSED"
+        assert sim.api("/api/state")["estop"] is True
+        with pytest.raises(NotReadyError) as info:
+            move.result(WAIT_S)
+        assert "E-stop" in str(info.value) or "estop" in str(info.value).lower()
+        # at rest the page and the API agree to the displayed two decimals
+        _wait(
+            browser,
+            lambda d: (
+                max(
+                    abs(a - b)
+                    for a, b in zip(_page_feedback_deg(d), _api_feedback_deg(sim), strict=True)
+                )
+                <= RESTING_TOLERANCE_DEG
+            ),
+            "page and API to agree at rest",
+        )
+        browser.save_screenshot(str(DOCS / "pendant-estop.png"))
+
+        # release, RESET, and the client moves again
+        browser.find_element(By.ID, "btn-estop").click()
+        _wait(browser, lambda d: d.find_element(By.ID, "st-estop").text == "released", "release")
+        browser.find_element(By.ID, "btn-reset").click()
+        _wait(browser, lambda d: sim.api("/api/state")["alarms"] == [], "alarms cleared")
+        robot.enable()
+        result = robot.move_joints((0.0,) * 6, speed_scale=0.5)
+        assert result is not None
+        assert max(abs(v) for v in _api_feedback_deg(sim)) < 0.1
+
+        assert _non_local(_requested_urls(browser)) == []
+        logs = [e for e in browser.get_log("browser") if e["level"] == "SEVERE"]
+        assert logs == [], logs
+    finally:
+        pool.shutdown(wait=True, cancel_futures=True)
+        robot.close()
+
+
+def test_non_local_requests_are_blocked(sim: Sim, browser: WebDriver) -> None:
+    """The blocking the offline test relies on is real: a fetch to the internet fails."""
+    browser.get(f"http://127.0.0.1:{sim.http}/")
+    outcome = browser.execute_async_script(
+        """
+        const done = arguments[arguments.length - 1];
+        fetch("http://example.com/").then(() => done("reached"), (e) => done("blocked: " + e));
+        """
+    )
+    assert str(outcome).startswith("blocked")
+    assert _non_local(_requested_urls(browser)) == ["http://example.com/"]
