@@ -212,6 +212,23 @@ class VirtualClock(ManualClock):
         self._start = start
         self.ticks = 0
         """Ticks run so far (the tick at ``start`` is the first)."""
+        self._tick_hooks: list[Callable[[], None]] = []
+
+    def add_tick_hook(self, hook: Callable[[], None]) -> Callable[[], None]:
+        """Call ``hook`` right after every tick (the controller's state is that tick's);
+        returns the function that removes it.
+
+        For tests that record what the controller did tick by tick (the commanded
+        pulses of every tick: :meth:`Twin.commanded_pulses`) without reaching into the
+        clock. A hook runs inside the time driver: it must not await or raise.
+        """
+        self._tick_hooks.append(hook)
+
+        def remove() -> None:
+            if hook in self._tick_hooks:
+                self._tick_hooks.remove(hook)
+
+        return remove
 
     def _tick_time(self, k: int) -> float:
         return self._start + k * (self.period or 0.0)
@@ -237,6 +254,10 @@ class VirtualClock(ManualClock):
                 self._now = when
             step()
             self.ticks += 1
+            hooks = self._tick_hooks
+            if hooks:
+                for hook in tuple(hooks):
+                    hook()
             if target is None or not batch or len(ready):
                 return False
         return True
@@ -407,6 +428,24 @@ class Twin:
     async def sleep(self, seconds: float) -> None:
         """Wait ``seconds`` of the twin's time (a shortcut for ``twin.clock.sleep``)."""
         await self.clock.sleep(seconds)
+
+    # ----------------------------------------------------------- observing ticks
+
+    def on_tick(self, hook: Callable[[], None]) -> Callable[[], None]:
+        """Call ``hook`` after every controller tick; returns its remover
+        (:meth:`VirtualClock.add_tick_hook`)."""
+        return self.clock.add_tick_hook(hook)
+
+    def commanded_pulses(self, group: int = 0) -> tuple[int, ...]:
+        """The group's commanded pulses now (controller order, 8 slots): the initial
+        position plus every increment executed (cheap enough to read every tick)."""
+        return self.controller.commanded_pulses(group)
+
+    def executed_this_tick(self) -> bool:
+        """Whether the last tick executed a queue entry (IncMove sent increments to the
+        servos, zero pulses included): the ticks a trajectory's duration counts."""
+        c = self.controller
+        return c.tick_count > 0 and c.last_increment_ms == c.time_ms
 
 
 @contextlib.asynccontextmanager

@@ -9,15 +9,15 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from pymotoros.models import controller_model, robot_model
+from pymotoros.models import ControllerModel, RobotModel, controller_model, robot_model
 from pymotoros.models.rules import to_pulses
 from pymotoros.motion import GroupAxes
 from pymotoros.protocol.constants import InvalidSubcode
-from pymotoros.trajectory import Trajectory, check_trajectory, plan_waypoints
+from pymotoros.trajectory import CheckReport, Trajectory, check_trajectory, plan_waypoints
 from pymotoros.trajectory.check import EXIT_OK, EXIT_REFUSED, EXIT_WARNINGS
 from pymotoros.trajectory.planning import MIN_WAYPOINT_STEP, WaypointPlanningError
 
-from .twin_run import run_on_twin, twin_start
+from .twin_run import TwinOutcome, run_on_twin, twin_start
 
 HC10 = robot_model("hc10")
 YRC = controller_model("yrc1000")
@@ -39,16 +39,25 @@ def _assert_same_as_twin(traj: Trajectory) -> None:
         assert outcome.refused.point == report.refusal.point
         return
     assert outcome.refused is None, outcome.refused
-    _, predicted = report.per_group["R1"]
-    moving = np.flatnonzero(np.any(predicted != 0, axis=1))
-    predicted = predicted[moving[0] : moving[-1] + 1]
-    executed = outcome.increments(0, AXES.axis_slots)
-    assert executed.shape == predicted.shape
-    np.testing.assert_array_equal(executed, predicted)
-    # duration: the twin executes one queue entry per tick, so the moving ticks are the
-    # moving entries (same shape above); the still entries before and after are counted
-    # in the prediction only
-    assert report.increments >= len(executed) > 0
+    _assert_same_motion(report, outcome, HC10, YRC)
+
+
+def _assert_same_motion(
+    report: CheckReport, outcome: TwinOutcome, robot: RobotModel, controller: ControllerModel
+) -> None:
+    """Tick for tick over the whole motion (first to last executed queue entry, still
+    ones included), per group: the increments, their count and the duration."""
+    assert outcome.paused_ticks == 0, "the twin's queue ran dry: the client fed it too slowly"
+    assert report.increments == outcome.executed_ticks > 0
+    assert report.duration_s == pytest.approx(outcome.duration_s, abs=1e-9)
+    for gi, group in enumerate(robot.groups):
+        axes = GroupAxes.from_model(group, controller)
+        _, predicted = report.per_group[group.name]
+        executed = outcome.executed_increments(gi, axes.axis_slots)
+        # a group with fewer ticks than the longest stands still for the rest
+        assert len(predicted) <= len(executed)
+        np.testing.assert_array_equal(executed[: len(predicted)], predicted)
+        assert not executed[len(predicted) :].any()
 
 
 def _still(t: float) -> list[float]:
@@ -275,12 +284,4 @@ def test_multi_group_sda10f_planned_checked_and_matches_the_twin() -> None:
     assert set(report.per_group) == {"R1", "R2", "B1", "B2"}
     outcome = asyncio.run(run_on_twin(traj, "sda10f", "dx200"))
     assert outcome.refused is None
-    for gi, group in enumerate(sda.groups):
-        axes = GroupAxes.from_model(group, dx200)
-        _, predicted = report.per_group[group.name]
-        executed = outcome.increments(gi, axes.axis_slots)
-        moving = np.flatnonzero(np.any(predicted != 0, axis=1))
-        if not len(moving):
-            assert not len(executed)
-            continue
-        np.testing.assert_array_equal(executed, predicted[moving[0] : moving[-1] + 1])
+    _assert_same_motion(report, outcome, sda, dx200)

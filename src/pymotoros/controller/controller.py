@@ -227,6 +227,21 @@ class VirtualController:
     def num_groups(self) -> int:
         return len(self._axes)
 
+    def commanded_pulses(self, group_no: int) -> tuple[int, ...]:
+        """The group's command register: pulses, controller order, 8 slots.
+
+        The cheap read for per-tick observers (tests that record what the servos
+        executed): :meth:`snapshot` converts every group to radians and runs kinematics.
+        """
+        self._check_group(group_no)
+        return tuple(self._servos[group_no].command)
+
+    @property
+    def last_increment_ms(self) -> int:
+        """Controller time of the last tick in which IncMove sent increments to the servos
+        (zero pulses included: a queue entry was executed); 0 before the first."""
+        return self._inc_move.last_motion_ms
+
     def tick(self) -> None:
         """Advance controller time by exactly one interpolation period."""
         clock = self._clock

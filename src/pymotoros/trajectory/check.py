@@ -102,7 +102,8 @@ class CheckReport:
     """Largest per-tick jerk as a fraction of the model's limit (informational: the
     cubic's acceleration steps at every point, so MotoROS's own motion exceeds it)."""
     per_group: dict[str, tuple[I64Array, I64Array]] = field(default_factory=dict, repr=False)
-    """Group name → (time_ms, increments) MotoROS would queue."""
+    """Group name → (time_ms, increments) per tick as MotoROS executes them: its queue
+    entries, a partial step joined with the next as IncMove joins them (:func:`per_tick`)."""
 
     @property
     def exit_code(self) -> int:
@@ -204,12 +205,13 @@ def check_trajectory(
                     first = cand
                 continue
         try:
-            time_ms, inc = interpolate_arrays(traj.times, pos, vel, axes)
+            entry_ms, entries = interpolate_arrays(traj.times, pos, vel, axes)
         except TrajectoryRejectedError as exc:
             cand = _refused(exc, axes)
             if first is None or cand.point < first.point:
                 first = cand
             continue
+        time_ms, inc = per_tick(entry_ms, entries, _point0_ms(traj, controller), axes.period_ms)
         report.per_group[group.name] = (time_ms, inc)
         report.warnings.extend(_model_checks(traj, pos, axes, time_ms, inc, report, group))
     if margins:
@@ -227,6 +229,50 @@ def check_trajectory(
     report.warnings.extend(_feed_checks(traj, period, controller.float_mode))
     report.warnings.sort(key=lambda w: (w.point, w.kind))
     return report
+
+
+def _point0_ms(traj: Trajectory, controller: ControllerModel) -> int:
+    """The start point's time as MotoROS holds it (integer ms of the float32 time)."""
+    t32 = np.asarray(traj.times[:1], dtype=np.float32)
+    if controller.float_mode is FloatMode.X87_EXTENDED:
+        exact = t32.astype(np.float64) * 1000.0
+    else:
+        exact = (t32 * np.float32(1000.0)).astype(np.float64)
+    return int(c_int_array(exact, controller.float_mode)[0])
+
+
+def per_tick(
+    entry_ms: I64Array, entries: I64Array, start_ms: int, period_ms: int
+) -> tuple[I64Array, I64Array]:
+    """The queue entries as IncMove executes them: one tick each, except that an entry
+    is joined with the following ones that end within one period of the time the
+    previous tick reached (a segment's partial last step and the next segment's first
+    step move in one tick, reference §5.6; :func:`pymotoros.motion.incmove.inc_move`).
+
+    ``start_ms`` is the start point's time (where the first tick starts from). Returns
+    (time reached, increments) per tick: the motion's length is the number of rows.
+    """
+    n = len(entry_ms)
+    if n == 0:
+        return entry_ms, entries
+    gaps = np.diff(entry_ms, prepend=start_ms)
+    if not np.any(gaps[1:] + gaps[:-1] <= period_ms):
+        return entry_ms, entries  # no two entries end within one period: nothing joins
+    times = entry_ms.tolist()
+    keep: list[int] = []  # the index of each tick's last entry
+    q_time = start_ms
+    i = 0
+    while i < n:
+        limit = q_time + period_ms
+        j = i
+        while j + 1 < n and q_time <= times[j + 1] <= limit:
+            j += 1
+        keep.append(j)
+        q_time = times[j]
+        i = j + 1
+    last = np.asarray(keep, dtype=np.intp)
+    first = np.concatenate(([0], last[:-1] + 1))
+    return entry_ms[last], np.add.reduceat(entries, first, axis=0).astype(np.int64)
 
 
 def _point_of(time_ms: I64Array, point_ms: npt.NDArray[np.float64], k: int) -> int:
