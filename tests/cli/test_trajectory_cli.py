@@ -164,3 +164,93 @@ def test_plot_content(planned_yaml: Path, tmp_path: Path) -> None:
     assert "hc10" in title
     assert "yrc1000" in title
     assert f"{report.duration_s:.3f} s" in title
+
+
+FSU_CELL = """name = "slow cell"
+[controller]
+model = "yrc1000"
+fsu_speed_limit_pct = 30
+[robot]
+model = "hc10"
+"""
+
+
+@pytest.fixture
+def fsu_cell(tmp_path: Path) -> Path:
+    path = tmp_path / "slow.toml"
+    path.write_text(FSU_CELL)
+    return path
+
+
+def test_check_config_uses_the_cells_fsu_limit(planned_yaml: Path, fsu_cell: Path) -> None:
+    built_in = invoke("check", str(planned_yaml), "--json")
+    assert built_in.exit_code == EXIT_OK
+    result = invoke("check", str(planned_yaml), "--config", str(fsu_cell), "--json")
+    assert result.exit_code == EXIT_WARNINGS, result.output
+    data = json.loads(result.stdout)
+    assert set(data) >= CONTRACT
+    assert [w["kind"] for w in data["warnings"]] == ["fsu"]
+    assert set(data["warnings"][0]) == WARNING_KEYS
+    assert data["increments"] > json.loads(built_in.stdout)["increments"]
+    human = invoke("check", str(planned_yaml), "--config", str(fsu_cell))
+    assert human.exit_code == EXIT_WARNINGS
+    assert "cell 'slow cell' (hc10 on yrc1000, FSU joint speeds 30 %)" in human.stdout
+    assert "warning [fsu]" in human.stdout
+    # plot draws what the FSU lets through: as many ticks as check predicts
+    png = planned_yaml.with_suffix(".png")
+    assert (
+        invoke("plot", str(planned_yaml), "--config", str(fsu_cell), "-o", str(png)).exit_code == 0
+    )
+
+
+@pytest.mark.parametrize(
+    ("command", "models"),
+    [
+        ("check", ["--robot", "hc10"]),
+        ("check", ["--controller", "dx200"]),
+        ("plot", ["--robot", "hc10", "--controller", "yrc1000"]),
+        ("run", ["--robot", "hc10"]),
+    ],
+)
+def test_config_with_controller_or_robot_is_a_usage_error(
+    command: str, models: list[str], planned_yaml: Path, fsu_cell: Path, tmp_path: Path
+) -> None:
+    extra = ["-o", str(tmp_path / "x.png")] if command == "plot" else []
+    result = invoke(command, str(planned_yaml), "--config", str(fsu_cell), *models, *extra)
+    assert result.exit_code == 2
+    assert "cannot be combined with --config" in result.output
+    assert models[0] in result.output
+
+
+def test_plan_config_with_robot_is_a_usage_error_and_warns_about_the_fsu(
+    fsu_cell: Path, tmp_path: Path
+) -> None:
+    way = tmp_path / "way.csv"
+    way.write_text("0,0,0,0,0,0\n0.4,0.2,0.3,0,-0.5,0\n")
+    out = tmp_path / "t.json"
+    bad = invoke("plan", str(way), "--config", str(fsu_cell), "--robot", "hc10", "-o", str(out))
+    assert bad.exit_code == 2
+    assert "--robot cannot be combined with --config" in bad.output
+    result = invoke("plan", str(way), "--config", str(fsu_cell), "-o", str(out))
+    assert result.exit_code == 0, result.output
+    assert "FSU limits joint speeds to 30 %" in result.stderr
+    assert invoke("check", str(out), "--config", str(fsu_cell)).exit_code == EXIT_WARNINGS
+    slow = tmp_path / "slow.json"
+    args = ["--speed-scale", "0.25", "-o", str(slow)]
+    result = invoke("plan", str(way), "--config", str(fsu_cell), *args)
+    assert result.exit_code == 0
+    assert "FSU" not in result.stderr
+    assert invoke("check", str(slow), "--config", str(fsu_cell)).exit_code == EXIT_OK
+
+
+def test_check_config_errors_name_the_file(planned_yaml: Path, tmp_path: Path) -> None:
+    bad = tmp_path / "bad.toml"
+    bad.write_text("[controller]\nfsu_speed_limit_pct = 0\n")
+    result = invoke("check", str(planned_yaml), "--config", str(bad))
+    assert result.exit_code == 2
+    assert "controller.fsu_speed_limit_pct: must lie in 1..100, not 0" in result.output
+    two = tmp_path / "two.toml"
+    two.write_text('[[groups]]\nrobot = "hc10"\n[[groups]]\nrobot = "hc10"\n')
+    result = invoke("check", str(planned_yaml), "--config", str(two))
+    assert result.exit_code == 2
+    assert "joint_1_s belongs to groups R1, R2" in result.output

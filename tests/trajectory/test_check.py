@@ -3,18 +3,27 @@
 from __future__ import annotations
 
 import asyncio
+from pathlib import Path
 
 import numpy as np
 import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
+from pymotoros.controller.cell import load_cell
 from pymotoros.models import ControllerModel, RobotModel, controller_model, robot_model
+from pymotoros.models.cell import load_cell_models
 from pymotoros.models.rules import to_pulses
 from pymotoros.motion import GroupAxes
 from pymotoros.protocol.constants import InvalidSubcode
-from pymotoros.trajectory import CheckReport, Trajectory, check_trajectory, plan_waypoints
-from pymotoros.trajectory.check import EXIT_OK, EXIT_REFUSED, EXIT_WARNINGS
+from pymotoros.trajectory import (
+    CheckReport,
+    Trajectory,
+    check_against_cell,
+    check_trajectory,
+    plan_waypoints,
+)
+from pymotoros.trajectory.check import EXIT_OK, EXIT_REFUSED, EXIT_WARNINGS, fsu_clip
 from pymotoros.trajectory.planning import MIN_WAYPOINT_STEP, WaypointPlanningError
 
 from .twin_run import TwinOutcome, run_on_twin, twin_start
@@ -285,3 +294,54 @@ def test_multi_group_sda10f_planned_checked_and_matches_the_twin() -> None:
     outcome = asyncio.run(run_on_twin(traj, "sda10f", "dx200"))
     assert outcome.refused is None
     _assert_same_motion(report, outcome, sda, dx200)
+
+
+FSU_PCT = 30
+"""A cell's FSU joint-speed limit well below what the planned test trajectory uses."""
+
+
+def _fsu_cell(tmp_path: Path, pct: int = FSU_PCT) -> Path:
+    path = tmp_path / "fsu.toml"
+    path.write_text(
+        f'name = "fsu cell"\n[controller]\nmodel = "yrc1000"\nfsu_speed_limit_pct = {pct}\n'
+        '[robot]\nmodel = "hc10"\n'
+    )
+    return path
+
+
+def test_a_cell_with_an_fsu_limit_warns_where_the_built_in_model_passes_and_predicts_the_twin(
+    tmp_path: Path,
+) -> None:
+    goal = list(START)
+    goal[0] += 0.4
+    goal[4] -= 0.3
+    traj = plan_waypoints([START, goal, START], HC10, YRC)
+    built_in = check_trajectory(traj, HC10, YRC)
+    assert built_in.exit_code == EXIT_OK, built_in.to_json()
+    path = _fsu_cell(tmp_path)
+    models = load_cell_models(path)
+    report = check_against_cell(traj, models)
+    assert report.exit_code == EXIT_WARNINGS
+    [fsu] = [w for w in report.warnings if w.kind == "fsu"]
+    clip = fsu_clip(AXES, FSU_PCT)[AXES.ros_to_slot[0]]
+    assert (fsu.axis, fsu.limit) == ("joint_1_s", clip)
+    assert fsu.value > clip
+    assert report.increments > built_in.increments  # the FSU stretches the motion
+    assert f"{FSU_PCT} %" in fsu.text
+    outcome = asyncio.run(run_on_twin(traj, cell=load_cell(path)))
+    assert outcome.refused is None
+    _assert_same_motion(report, outcome, models.robot, models.controller)
+    # the robot still ends where the trajectory does
+    np.testing.assert_allclose(outcome.final, START, atol=1e-4)
+
+
+def test_an_fsu_limit_the_trajectory_stays_under_changes_nothing(tmp_path: Path) -> None:
+    goal = list(START)
+    goal[0] += 0.2
+    traj = plan_waypoints([START, goal], HC10, YRC, velocity_scaling=0.2)
+    models = load_cell_models(_fsu_cell(tmp_path, 90))
+    report = check_against_cell(traj, models)
+    built_in = check_trajectory(traj, HC10, YRC)
+    assert report.exit_code == EXIT_OK, report.to_json()
+    assert report.increments == built_in.increments
+    np.testing.assert_array_equal(report.per_group["R1"][1], built_in.per_group["R1"][1])

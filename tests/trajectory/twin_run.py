@@ -9,6 +9,7 @@ import numpy as np
 
 from pymotoros.cli.trajectory import client_trajectory
 from pymotoros.client.errors import ReplyError
+from pymotoros.controller import CellConfig
 from pymotoros.models import robot_model
 from pymotoros.testing import Twin, twin
 from pymotoros.trajectory import Trajectory
@@ -77,12 +78,22 @@ def _record(tw: Twin, out: TwinOutcome) -> None:
 
 
 async def run_on_twin(
-    traj: Trajectory, robot: str = "hc10", controller: str = "yrc1000"
+    traj: Trajectory,
+    robot: str = "hc10",
+    controller: str = "yrc1000",
+    *,
+    cell: CellConfig | None = None,
 ) -> TwinOutcome:
-    """Enable, stream exactly the file's points (no client pre-flight), wait until settled."""
+    """Enable, stream exactly the file's points (no client pre-flight), wait until
+    settled; on a twin of ``robot`` on ``controller``, or started with ``cell``."""
     out = TwinOutcome()
-    joint, groups = client_trajectory(traj, robot_model(robot))
-    async with twin(robot=robot, controller=controller) as (client, tw):
+    if cell is None:
+        joint, groups = client_trajectory(traj, robot_model(robot))
+        started = twin(robot=robot, controller=controller)
+    else:
+        joint, groups = client_trajectory(traj, Twin(cell).robot)
+        started = twin(cell=cell)
+    async with started as (client, tw):
         await client.start_trajectory_mode()
         _record(tw, out)
         try:

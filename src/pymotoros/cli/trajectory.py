@@ -3,7 +3,7 @@ after the move.
 
 External contract of ``check`` (docs/trajectories.md)::
 
-    pymotoros check TRAJ [--controller C --robot R] [--from J1,...,Jn] [--json]
+    pymotoros check TRAJ [--controller C --robot R | --config CELL.toml] [--from J1,...,Jn] [--json]
 
 exit 0 all clear, 1 MotoROS would refuse a point, 4 accepted with warnings, 2 bad
 usage or an unreadable file. ``--json`` prints ``{"accepted", "refusal", "warnings",
@@ -16,6 +16,7 @@ from __future__ import annotations
 import json
 import math
 import sys
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Final
 
@@ -31,6 +32,7 @@ from pymotoros.models import (
     controller_model,
     robot_model,
 )
+from pymotoros.models.cell import CellModels, load_cell_models
 from pymotoros.trajectory.check import (
     EXIT_OK,
     EXIT_REFUSED,
@@ -58,9 +60,23 @@ CHECK_EXIT_HELP: Final = (
 _TRAJ = click.Path(exists=True, dir_okay=False, path_type=Path)
 
 
+CONFIG_HELP: Final = (
+    "Cell file (the sim's format): check against its controller, groups and FSU "
+    "joint-speed limit, instead of --controller/--robot."
+)
+
+
 def model_options(func: Any) -> Any:
     """--controller and --robot (the file's own robot/controller, if it names them,
-    is used when the option is not given)."""
+    is used when the option is not given), or --config CELL.toml instead of both."""
+    func = click.option(
+        "--config",
+        "cell_path",
+        type=click.Path(exists=True, dir_okay=False, path_type=Path),
+        default=None,
+        metavar="CELL.toml",
+        help=CONFIG_HELP,
+    )(func)
     func = click.option(
         "--robot",
         "robot_name",
@@ -76,20 +92,97 @@ def model_options(func: Any) -> Any:
     )(func)
 
 
+def reject_models_with_config(cell_path: Path | None, *params: str) -> None:
+    """``--config`` names the models: --controller/--robot given with it on the command
+    line is a usage error (exit 2), not a silent choice between the two."""
+    ctx = click.get_current_context()
+    if cell_path is None:
+        return
+    given = [
+        p for p in params if ctx.get_parameter_source(p) is click.core.ParameterSource.COMMANDLINE
+    ]
+    if given:
+        flags = " and ".join("--" + p.removesuffix("_name").replace("_", "-") for p in given)
+        raise click.UsageError(
+            f"{flags} cannot be combined with --config {cell_path}: the cell file names the "
+            "controller and the robot. Give either --config or --controller/--robot."
+        )
+
+
+@dataclass(frozen=True, slots=True)
+class Loaded:
+    """A trajectory file and the models it is checked against."""
+
+    trajectory: Trajectory
+    robot: RobotModel
+    controller: ControllerModel
+    cell: CellModels | None = None
+
+    @property
+    def fsu_pct(self) -> int | None:
+        return None if self.cell is None else self.cell.fsu_speed_limit_pct
+
+    def check(self, current: list[float] | None = None) -> CheckReport:
+        return check_trajectory(
+            self.trajectory,
+            self.robot,
+            self.controller,
+            current=current,
+            fsu_speed_limit_pct=self.fsu_pct,
+        )
+
+    def render(self, report: CheckReport) -> str:
+        return render(report, self.trajectory, self.robot, self.controller, self.cell)
+
+
 def load(
     path: Path, robot_name: str | None, controller_name: str | None
 ) -> tuple[Trajectory, RobotModel, ControllerModel]:
     """The file and the models it is checked against; errors are usage errors (exit 2)."""
+    loaded = load_models(path, robot_name, controller_name, None)
+    return loaded.trajectory, loaded.robot, loaded.controller
+
+
+def load_models(
+    path: Path, robot_name: str | None, controller_name: str | None, cell_path: Path | None
+) -> Loaded:
+    """:func:`load`, or with a cell file its models (numpy-free models layer, as
+    ``pymotoros move --config`` reads it); errors are usage errors (exit 2)."""
+    if cell_path is None:
+        try:
+            robot = robot_model(robot_name or DEFAULT_ROBOT)
+            traj = read_trajectory_file(path, robot)
+            if robot_name is None and traj.robot is not None:
+                robot = robot_model(traj.robot)
+            controller = controller_model(controller_name or traj.controller or DEFAULT_CONTROLLER)
+            traj.group_columns(robot)  # names every joint of whole groups of this robot
+        except ConfigError as exc:
+            raise click.BadParameter(str(exc), param_hint="TRAJ") from None
+        return Loaded(traj, robot, controller)
     try:
-        robot = robot_model(robot_name or DEFAULT_ROBOT)
-        traj = read_trajectory_file(path, robot)
-        if robot_name is None and traj.robot is not None:
-            robot = robot_model(traj.robot)
-        controller = controller_model(controller_name or traj.controller or DEFAULT_CONTROLLER)
-        traj.group_columns(robot)  # names every joint of whole groups of this robot
+        cell = load_cell_models(cell_path)
+    except ConfigError as exc:
+        raise click.BadParameter(str(exc), param_hint="--config") from None
+    try:
+        traj = read_trajectory_file(path, cell.robot)
+        traj.group_columns(cell.robot)
     except ConfigError as exc:
         raise click.BadParameter(str(exc), param_hint="TRAJ") from None
-    return traj, robot, controller
+    for warning in cell.warnings:
+        click.echo(f"warning: {warning}", err=True)
+    if traj.robot is not None and traj.robot.lower() not in cell.robots:
+        click.echo(
+            f"warning: {path.name} was made for {traj.robot}; checking it against the cell "
+            f"{cell.name} ({', '.join(cell.robots)})",
+            err=True,
+        )
+    if traj.controller is not None and traj.controller.lower() != cell.controller.type.value:
+        click.echo(
+            f"warning: {path.name} was made for a {traj.controller}; checking it against the "
+            f"cell's {cell.controller.type.value}",
+            err=True,
+        )
+    return Loaded(traj, cell.robot, cell.controller, cell)
 
 
 def _parse_from(value: str | None, count: int) -> list[float] | None:
@@ -111,13 +204,20 @@ def _parse_from(value: str | None, count: int) -> list[float] | None:
 
 
 def render(
-    report: CheckReport, traj: Trajectory, robot: RobotModel, controller: ControllerModel
+    report: CheckReport,
+    traj: Trajectory,
+    robot: RobotModel,
+    controller: ControllerModel,
+    cell: CellModels | None = None,
 ) -> str:
     """The human report of ``pymotoros check``."""
-    lines = [
-        f"{len(traj.times)} points, {len(traj.joint_names)} joints, {robot.name} on "
-        f"{controller.type.value}"
-    ]
+    what = f"{robot.name} on {controller.type.value}"
+    if cell is not None:
+        what = f"cell {cell.name!r} ({', '.join(cell.robots)} on {controller.type.value}"
+        if cell.fsu_speed_limit_pct is not None:
+            what += f", FSU joint speeds {cell.fsu_speed_limit_pct} %"
+        what += ")"
+    lines = [f"{len(traj.times)} points, {len(traj.joint_names)} joints, {what}"]
     r = report.refusal
     if r is not None:
         lines.append(
@@ -155,6 +255,7 @@ def check(
     traj: Path,
     robot_name: str | None,
     controller_name: str | None,
+    cell_path: Path | None,
     from_: str | None,
     as_json: bool,
 ) -> None:
@@ -162,15 +263,17 @@ def check(
 
     Runs MotoROS 1.9.12's validation and interpolation exactly (the twin's engine),
     then checks what MotoROS never does: joint limits between points, per-tick
-    increments and accelerations, feed rate, start margin.
+    increments and accelerations, feed rate, start margin; with --config, also what
+    the cell's FSU joint-speed limit does to the motion.
     """
-    trajectory, robot, controller = load(traj, robot_name, controller_name)
-    current = _parse_from(from_, len(trajectory.joint_names))
-    report = check_trajectory(trajectory, robot, controller, current=current)
+    reject_models_with_config(cell_path, "robot_name", "controller_name")
+    loaded = load_models(traj, robot_name, controller_name, cell_path)
+    current = _parse_from(from_, len(loaded.trajectory.joint_names))
+    report = loaded.check(current)
     if as_json:
         click.echo(json.dumps(report.to_json()))
     else:
-        click.echo(render(report, trajectory, robot, controller))
+        click.echo(loaded.render(report))
     sys.exit(report.exit_code)
 
 
@@ -183,6 +286,15 @@ def check(
     type=click.Choice([t.value for t in ControllerType], case_sensitive=False),
     default=DEFAULT_CONTROLLER.value,
     show_default=True,
+)
+@click.option(
+    "--config",
+    "cell_path",
+    type=click.Path(exists=True, dir_okay=False, path_type=Path),
+    default=None,
+    metavar="CELL.toml",
+    help="Cell file (the sim's format): plan for its groups and controller, instead of "
+    "--controller/--robot.",
 )
 @click.option(
     "--speed-scale",
@@ -217,6 +329,7 @@ def plan(
     waypoints: Path,
     robot_name: str,
     controller_name: str,
+    cell_path: Path | None,
     speed_scale: float,
     accel_scale: float,
     sample_s: float,
@@ -226,9 +339,23 @@ def plan(
     header row) within the robot's limits, and write the trajectory."""
     from pymotoros.trajectory.planning import plan_waypoints
 
+    reject_models_with_config(cell_path, "robot_name", "controller_name")
     try:
-        robot = robot_model(robot_name)
-        controller = controller_model(controller_name)
+        if cell_path is None:
+            robot = robot_model(robot_name)
+            controller = controller_model(controller_name)
+        else:
+            cell = load_cell_models(cell_path)
+            robot, controller = cell.robot, cell.controller
+            pct = cell.fsu_speed_limit_pct
+            if pct is not None and speed_scale * 100 > pct:
+                click.echo(
+                    f"warning: the cell's FSU limits joint speeds to {pct} %: at "
+                    f"--speed-scale {speed_scale:g} the robot will run behind the plan "
+                    f"(`pymotoros check --config` says by how much); plan with "
+                    f"--speed-scale {pct / 100:g} or less",
+                    err=True,
+                )
         rows = []
         for number, line in enumerate(waypoints.read_text(encoding="utf-8").splitlines(), 1):
             if not line.strip():
@@ -303,11 +430,18 @@ def run(traj: Path, force: bool, enable_first: bool, as_json: bool, **kwargs: An
     from pymotoros.client.streaming import MoveResult
     from pymotoros.errors import PymotorosError
 
+    reject_models_with_config(kwargs.get("cell_path"), "robot", "controller")
     target = _target(kwargs)
-    trajectory, robot, controller = load(traj, target.robot, target.controller)
-    report = check_trajectory(trajectory, robot, controller)
+    loaded = load_models(
+        traj,
+        None if target.cell is not None else target.robot,
+        None if target.cell is not None else target.controller,
+        target.cell,
+    )
+    trajectory, robot = loaded.trajectory, loaded.robot
+    report = loaded.check()
     if report.exit_code != EXIT_OK and not force:
-        click.echo(render(report, trajectory, robot, controller), err=True)
+        click.echo(loaded.render(report), err=True)
         click.echo("not started: fix the trajectory or give --force", err=True)
         sys.exit(report.exit_code)
     joint, groups = client_trajectory(trajectory, robot)
@@ -351,16 +485,23 @@ def run(traj: Path, force: bool, enable_first: bool, as_json: bool, **kwargs: An
     required=True,
     help="PNG file to write.",
 )
-def plot(traj: Path, robot_name: str | None, controller_name: str | None, output: Path) -> None:
+def plot(
+    traj: Path,
+    robot_name: str | None,
+    controller_name: str | None,
+    cell_path: Path | None,
+    output: Path,
+) -> None:
     """Plot a trajectory per joint: planned and MotoROS-interpolated positions and
     velocities, with the limits. A trajectory MotoROS would refuse is not plotted
     (exit 1, as `pymotoros check`)."""
     from pymotoros.trajectory.plot import plot_trajectory
 
-    trajectory, robot, controller = load(traj, robot_name, controller_name)
-    report = check_trajectory(trajectory, robot, controller)
+    reject_models_with_config(cell_path, "robot_name", "controller_name")
+    loaded = load_models(traj, robot_name, controller_name, cell_path)
+    report = loaded.check()
     if not report.accepted:
-        click.echo(render(report, trajectory, robot, controller), err=True)
+        click.echo(loaded.render(report), err=True)
         sys.exit(EXIT_REFUSED)
-    plot_trajectory(trajectory, robot, controller, report, output)
+    plot_trajectory(loaded.trajectory, loaded.robot, loaded.controller, report, output)
     click.echo(f"wrote {output}")

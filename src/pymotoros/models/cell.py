@@ -32,6 +32,10 @@ class CellModels:
     robots: tuple[str, ...]
     """Robot model name of each group."""
     warnings: tuple[str, ...] = ()
+    fsu_speed_limit_pct: int | None = None
+    """``controller.fsu_speed_limit_pct``: the FSU joint-speed limit at boot (each axis
+    executes at most this share of its maximum increment per tick); None: no FSU.
+    The offline check (``pymotoros check --config``) predicts its effect."""
 
 
 def rename_groups(groups: Sequence[GroupModel]) -> tuple[GroupModel, ...]:
@@ -178,7 +182,28 @@ def cell_models_from_dict(data: Mapping[str, object], *, source: str = "<cell>")
         controllers=first.controllers,
         pfl=any(robot_model(r).pfl for r in robots),
     )
-    return CellModels(str(name), ctrl, robot, robots, tuple(warnings))
+    return CellModels(
+        str(name), ctrl, robot, robots, tuple(warnings), fsu_speed_limit_pct(data, source)
+    )
+
+
+FSU_PCT_RANGE: Final = (1, 100)
+"""``controller.fsu_speed_limit_pct``: a share of each axis's maximum speed, in % (docs/cell.md)."""
+
+
+def fsu_speed_limit_pct(data: Mapping[str, object], source: str) -> int | None:
+    """``controller.fsu_speed_limit_pct`` of a parsed cell file (None when absent),
+    checked as the simulator checks it: an integer within :data:`FSU_PCT_RANGE`."""
+    value = _table(data, "controller", source).get("fsu_speed_limit_pct")
+    if value is None:
+        return None
+    key = "controller.fsu_speed_limit_pct"
+    if not isinstance(value, int) or isinstance(value, bool):
+        raise _error(source, key, f"must be an integer, not {value!r}")
+    lo, hi = FSU_PCT_RANGE
+    if not lo <= value <= hi:
+        raise _error(source, key, f"must lie in {lo}..{hi}, not {value}")
+    return value
 
 
 def load_cell_models(path: str | Path) -> CellModels:
@@ -198,6 +223,7 @@ __all__ = [
     "cell_models_from_dict",
     "combine_groups",
     "controller_name",
+    "fsu_speed_limit_pct",
     "group_parts",
     "load_cell_models",
     "rename_groups",

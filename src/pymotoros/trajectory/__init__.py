@@ -8,7 +8,13 @@ CLI: :class:`Trajectory` is one file model read and written as the CSV of
 plus what it never checks. The client never imports this package (it is wire only).
 """
 
-from pymotoros.trajectory.check import CheckReport, Refused, Warning_, check_trajectory
+from pymotoros.trajectory.check import (
+    CheckReport,
+    Refused,
+    Warning_,
+    check_against_cell,
+    check_trajectory,
+)
 from pymotoros.trajectory.files import Trajectory, read_trajectory_file, write_trajectory_file
 from pymotoros.trajectory.planning import plan_waypoints
 
@@ -17,6 +23,7 @@ __all__ = [
     "Refused",
     "Trajectory",
     "Warning_",
+    "check_against_cell",
     "check_trajectory",
     "plan_waypoints",
     "read_trajectory_file",

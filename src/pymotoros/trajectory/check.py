@@ -25,6 +25,7 @@ import numpy.typing as npt
 
 from pymotoros.errors import TrajectoryRejectedError
 from pymotoros.models import ControllerModel, FloatMode, GroupModel, RobotModel
+from pymotoros.models.cell import CellModels
 from pymotoros.models.rules import START_TOLERANCE_PULSES, check_start
 from pymotoros.models.rules import TrajPoint as RulesPoint
 from pymotoros.motion import GroupAxes, interpolate_arrays, to_pulses
@@ -80,7 +81,7 @@ class Warning_:  # noqa: N801 - "Warning" is a builtin
     """Something MotoROS accepts but the robot should not do."""
 
     kind: str
-    """position | increment | acceleration | feed | dropped | start"""
+    """position | increment | acceleration | feed | dropped | start | fsu"""
     point: int
     axis: str | None
     value: float
@@ -138,6 +139,20 @@ class CheckReport:
         }
 
 
+def check_against_cell(
+    traj: Trajectory, cell: CellModels, *, current: Sequence[float] | None = None
+) -> CheckReport:
+    """:func:`check_trajectory` against a cell file's models (``pymotoros check
+    --config``): its controller, its groups, and its FSU joint-speed limit."""
+    return check_trajectory(
+        traj,
+        cell.robot,
+        cell.controller,
+        current=current,
+        fsu_speed_limit_pct=cell.fsu_speed_limit_pct,
+    )
+
+
 def _refused(exc: TrajectoryRejectedError, axes: GroupAxes) -> Refused:
     from pymotoros.protocol.constants import ResultCode
 
@@ -168,9 +183,16 @@ def check_trajectory(
     controller: ControllerModel,
     *,
     current: Sequence[float] | None = None,
+    fsu_speed_limit_pct: int | None = None,
 ) -> CheckReport:
     """Check ``traj`` for ``robot`` on ``controller``; ``current`` is the robot's
-    position (all joints of the groups the file names, file order), default the start."""
+    position (all joints of the groups the file names, file order), default the start.
+
+    ``fsu_speed_limit_pct``: the controller's FSU joint-speed limit (a cell file's
+    ``controller.fsu_speed_limit_pct``, :func:`check_against_cell`): the increments are
+    then the ones the FSU lets through, tick by tick, with MotoROS resending what it
+    dropped, and a ``fsu`` warning says how much longer the motion takes.
+    """
     columns = traj.group_columns(robot)
     if not columns:
         raise TrajectoryRejectedError(
@@ -183,6 +205,7 @@ def check_trajectory(
         )
     first: Refused | None = None
     report = CheckReport(accepted=True, refusal=None)
+    checked_axes: dict[str, GroupAxes] = {}
     margins: list[int] = []
     for gi, cols in columns:
         group = robot.groups[gi]
@@ -214,6 +237,7 @@ def check_trajectory(
         time_ms, inc = per_tick(entry_ms, entries, _point0_ms(traj, controller), axes.period_ms)
         report.per_group[group.name] = (time_ms, inc)
         report.warnings.extend(_model_checks(traj, pos, axes, time_ms, inc, report, group))
+        checked_axes[group.name] = axes
     if margins:
         report.start_margin_pulses = min(margins)
     if first is not None:
@@ -222,13 +246,123 @@ def check_trajectory(
         report.warnings.clear()
         report.per_group.clear()
         return report
-    ticks = max((len(t) for t, _ in report.per_group.values()), default=0)
     period = controller.interpolation_period_ms
+    if fsu_speed_limit_pct is not None:
+        report.warnings.extend(_fsu(traj, report, checked_axes, fsu_speed_limit_pct, period))
+    ticks = max((len(t) for t, _ in report.per_group.values()), default=0)
     report.increments = ticks
     report.duration_s = ticks * period / 1000.0
     report.warnings.extend(_feed_checks(traj, period, controller.float_mode))
     report.warnings.sort(key=lambda w: (w.point, w.kind))
     return report
+
+
+def fsu_clip(axes: GroupAxes, pct: int) -> tuple[int, ...]:
+    """Per slot, the most pulses an FSU joint-speed limit of ``pct`` % lets the
+    controller execute in one tick: that share of the axis's maximum increment, at
+    least one pulse (the twin's :class:`~pymotoros.controller.safety.fsu.FsuFunction`)."""
+    return tuple(max(1, m * pct // 100) if m else 0 for m in axes.max_increment)
+
+
+def fsu_execution(groups: Sequence[tuple[GroupAxes, I64Array]], pct: int) -> list[I64Array]:
+    """Per group, the increments the servos execute tick by tick under an FSU
+    joint-speed limit of ``pct`` %, from the increments IncMove sends (:func:`per_tick`).
+
+    The FSU executes at most :func:`fsu_clip` pulses per axis and tick and drops the
+    rest; MotoROS 1.9.12 sees the shortfall in the commanded position, resends the
+    missing pulses (clamped to what the controller took the tick before, or the axis
+    maximum where it took nothing) and reads no queue entry of any group until every
+    group's pulses are through (reference §5.6 step 3). The motion ends where it
+    would have, later.
+    """
+    cols = [list(axes.axis_slots) for axes, _ in groups]
+    clips = [[fsu_clip(axes, pct)[s] for s in c] for (axes, _), c in zip(groups, cols, strict=True)]
+    maxes = [[axes.max_increment[s] for s in c] for (axes, _), c in zip(groups, cols, strict=True)]
+    rows = [inc.tolist() for _, inc in groups]
+    length = max((len(r) for r in rows), default=0)
+    zero = [[0] * len(c) for c in cols]
+    to_process = [list(z) for z in zero]
+    processed = [list(z) for z in zero]
+    out: list[list[list[int]]] = [[] for _ in groups]
+    missing = False
+    k = 0
+    while missing or k < length:
+        if missing:
+            sends = []
+            for g in range(len(groups)):
+                rest = [a - b for a, b in zip(to_process[g], processed[g], strict=True)]
+                clamp = [abs(t) or m for t, m in zip(processed[g], maxes[g], strict=True)]
+                sends.append([max(-c, min(c, r)) for r, c in zip(rest, clamp, strict=True)])
+                to_process[g] = rest
+        else:
+            sends = [r[k] if k < len(r) else list(z) for r, z in zip(rows, zero, strict=True)]
+            to_process = [list(x) for x in sends]
+            k += 1
+        missing = False
+        for g, send in enumerate(sends):
+            done = [max(-c, min(c, x)) for x, c in zip(send, clips[g], strict=True)]
+            processed[g] = done
+            out[g].append(done)
+            missing = missing or done != to_process[g]
+    return [np.array(o, dtype=np.int64).reshape(-1, len(c)) for o, c in zip(out, cols, strict=True)]
+
+
+def _fsu(
+    traj: Trajectory,
+    report: CheckReport,
+    axes_of: dict[str, GroupAxes],
+    pct: int,
+    period_ms: int,
+) -> list[Warning_]:
+    """Replace the increments by what the FSU lets through; warn where it clips."""
+    names = list(report.per_group)
+    if not names:
+        return []
+    before = max(len(t) for t, _ in report.per_group.values())
+    groups = [(axes_of[n], report.per_group[n][1]) for n in names]
+    executed = fsu_execution(groups, pct)
+    first: tuple[int, int, str, float, float] | None = None  # (tick, point, axis, value, clip)
+    point_ms = np.asarray(traj.times, dtype=np.float64) * 1000.0
+    for name, (axes, inc) in zip(names, groups, strict=True):
+        time_ms = report.per_group[name][0]
+        clip = np.array([fsu_clip(axes, pct)[s] for s in axes.axis_slots], dtype=np.int64)
+        over = np.abs(inc) > clip
+        if over.any():
+            k = int(np.argmax(over.any(axis=1)))
+            col = int(np.argmax(over[k]))
+            if first is None or k < first[0]:
+                ros = axes.columns_list[col]
+                first = (
+                    k,
+                    _point_of(time_ms, point_ms, k),
+                    axes.joint_names[ros],
+                    float(np.abs(inc[:, col]).max()),
+                    float(clip[col]),
+                )
+    for name, done in zip(names, executed, strict=True):
+        time_ms = report.per_group[name][0]
+        t0 = int(time_ms[0]) if len(time_ms) else period_ms
+        ticks = t0 + period_ms * np.arange(len(done), dtype=np.int64)  # one entry a tick
+        report.per_group[name] = (ticks, done)
+    if first is None:
+        return []
+    after = max(len(d) for d in executed)
+    _, point, axis, value, limit = first
+    return [
+        Warning_(
+            "fsu",
+            point,
+            axis,
+            value,
+            limit,
+            f"the cell's FSU joint-speed limit ({pct} %) lets {axis} move at most "
+            f"{int(limit)} pulses per {period_ms} ms tick; the trajectory asks up to "
+            f"{int(value)}: the FSU drops the rest, MotoROS resends it, and the motion takes "
+            f"{after * period_ms / 1000:.3f} s instead of {before * period_ms / 1000:.3f} s "
+            f"(behind the trajectory's times); re-time it at most {pct} % of the axis "
+            "speeds or raise the FSU limit",
+        )
+    ]
 
 
 def _point0_ms(traj: Trajectory, controller: ControllerModel) -> int:

@@ -100,6 +100,17 @@ class Trajectory:
                 f"{robot.name} has no joint(s) {unknown}; its joints are "
                 + "; ".join(f"{g.name}: {', '.join(g.joint_names)}" for g in robot.groups)
             )
+        owners: dict[str, list[str]] = {}
+        for group in robot.groups:
+            for n in group.joint_names:
+                owners.setdefault(n, []).append(group.name)
+        shared = [n for n in self.joint_names if len(owners[n]) > 1]
+        if shared:
+            raise TrajectoryFileError(
+                f"{robot.name}: joint {shared[0]} belongs to groups "
+                f"{', '.join(owners[shared[0]])}, so a trajectory file cannot say which it "
+                "moves; describe the cell's groups with robots whose joints are named apart"
+            )
         out: list[tuple[int, list[int]]] = []
         for gi, group in enumerate(robot.groups):
             present = [n in index for n in group.joint_names]
