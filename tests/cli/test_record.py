@@ -96,6 +96,28 @@ def test_cli_session_recorded_and_opened_by_tshark(sim: Sim, tmp_path: Path) -> 
     assert flags.strip() == ""
 
 
+def test_cli_recordings_read_back(sim: Sim, tmp_path: Path) -> None:
+    """The reader on a sim's random ports: which MotoROS port each was, from the traffic."""
+    from pymotoros.client.recording import read_recording
+    from pymotoros.protocol.constants import Port
+    from pymotoros.protocol.messages import MotoMotionCtrl, MotoMotionReply, MotoReadIoBit
+
+    io_pcap = tmp_path / "io.pcapng"
+    stop_pcap = tmp_path / "stop.pcapng"
+    for args, pcap in ((["io", "read", "10010"], io_pcap), (["stop"], stop_pcap)):
+        result = CliRunner().invoke(
+            cli, [*args, "--record", str(pcap), *sim.cli_args()], catch_exceptions=False
+        )
+        assert result.exit_code == 0, result.output
+    (io,) = read_recording(io_pcap).on(Port.IO)
+    assert io.server_port == sim.io
+    assert [type(m.message) for m in io.sent()] == [MotoReadIoBit]
+    (motion,) = read_recording(stop_pcap).on(Port.MOTION)
+    assert motion.server_port == sim.motion
+    assert [type(m.message) for m in motion.sent()] == [MotoMotionCtrl]
+    assert [type(m.message) for m in motion.received()] == [MotoMotionReply]
+
+
 async def test_record_session_context_manager_records_every_port(tmp_path: Path) -> None:
     """The API: every connection opened inside ``record_session`` is recorded."""
     from pymotoros.client.recorder import record_session
