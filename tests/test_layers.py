@@ -49,6 +49,21 @@ FORBIDDEN: dict[str, tuple[str, ...]] = {
     # trajectory files, planning and the offline check: on top of models and motion
     "trajectory": ("controller", "runtime", "client", "cli", "web", "testing"),
     "cli": ("testing",),
+    # the pcapng writer of the session recorder: bytes and ports only, so that both the
+    # client and the runtime (``sim --record``) can import it
+    "capture": (
+        "protocol",
+        "models",
+        "motion",
+        "kinematics",
+        "controller",
+        "runtime",
+        "client",
+        "trajectory",
+        "cli",
+        "web",
+        "testing",
+    ),
 }
 
 
@@ -64,6 +79,8 @@ def _imports(path: Path) -> set[str]:
 
 
 def _modules(layer: str) -> list[Path]:
+    if (SRC / f"{layer}.py").is_file():  # a one-module layer (capture)
+        return [SRC / f"{layer}.py"]
     return sorted((SRC / layer).rglob("*.py"))
 
 

@@ -146,6 +146,15 @@ def _cell(
     help="Write the ports taken as JSON here once listening (removed on exit); "
     "robot commands read it with --ports-file.",
 )
+@click.option(
+    "--record",
+    "record_path",
+    type=click.Path(dir_okay=False, writable=True, path_type=Path),
+    default=None,
+    metavar="FILE.pcapng",
+    help="Record the twin's side of every MotoROS connection (any client: the ROS "
+    "driver, a PLC) to a pcapng file for Wireshark, `pymotoros replay` and `plot`.",
+)
 @click.pass_context
 def sim(
     ctx: click.Context,
@@ -159,6 +168,7 @@ def sim(
     config_path: Path | None,
     scenario_path: Path | None,
     ports_file: Path | None,
+    record_path: Path | None = None,
 ) -> None:
     """Run the virtual controller (MotoROS on 50240/50241/50242, control API on --http-port).
 
@@ -184,12 +194,27 @@ def sim(
         http_port=http_port,
         byte_order=order,
     )
+    app = SimulatorApp(controller, config)
+    recorder = None
+    if record_path is not None:
+        from pymotoros.capture import SessionRecorder
+
+        try:
+            recorder = SessionRecorder(record_path)
+        except OSError as exc:
+            raise click.ClickException(
+                f"cannot write the recording {record_path}: {exc.strerror or exc}"
+            ) from exc
+        for server in (app.motion, app.state, app.io):
+            server.recorder = recorder
     try:
         try:
-            asyncio.run(run_simulator(SimulatorApp(controller, config), ports_file))
+            asyncio.run(run_simulator(app, ports_file))
         finally:
             if ports_file is not None:
                 ports_file.unlink(missing_ok=True)
+            if recorder is not None:
+                recorder.close()
     except OSError as exc:  # e.g. a port already in use
         hint = (
             "; another controller or sim holds the port: stop it, or let the OS choose "

@@ -153,7 +153,7 @@ class StateServer(TcpService):
             async with asyncio.TaskGroup() as tg:
                 sender = tg.create_task(self._send_loop(client), name=f"state-send:{conn.peer}")
                 try:
-                    while await conn.reader.read(READ_CHUNK):
+                    while await conn.read(READ_CHUNK):
                         pass  # MotoROS ignores anything a state client sends
                 except OSError as exc:  # a reset (clients often close with unread data), a timeout
                     logger.info("state: client %s: connection lost (%s)", conn.peer, exc)
@@ -185,7 +185,7 @@ class StateServer(TcpService):
                 for index, frame in enumerate(cycle):
                     if index:
                         await clock.sleep_until(start + index * gap)
-                    writer.write(frame)
+                    client.conn.write(frame)  # recorded (sim --record)
                     await writer.drain()
                 client.sent += 1
         except (ConnectionError, OSError) as exc:

@@ -19,6 +19,7 @@ from abc import ABC, abstractmethod
 from collections.abc import AsyncGenerator, Callable
 from typing import Final
 
+from pymotoros.capture import Flow, SessionRecorder
 from pymotoros.errors import RemoteProtocolError
 from pymotoros.protocol.constants import ByteOrder
 from pymotoros.protocol.framing import Frame, FrameDecoder, encode
@@ -75,18 +76,50 @@ def bind_unlistened(host: str, port: int) -> socket.socket:
     return sock
 
 
-class Connection:
-    """One accepted client."""
+def _peer_port(writer: asyncio.StreamWriter) -> int | None:
+    """The client's TCP port, None for an in-memory client (the recorder makes one up)."""
+    peer = writer.get_extra_info("peername")
+    return int(peer[1]) if isinstance(peer, tuple) and len(peer) >= 2 else None
 
-    __slots__ = ("peer", "reader", "writer")
+
+class Connection:
+    """One accepted client.
+
+    Servers read and write through :meth:`read` and :meth:`write`: the one place
+    that records the connection when ``pymotoros sim --record`` is on (``flow``).
+    """
+
+    __slots__ = ("flow", "peer", "reader", "writer")
 
     def __init__(self, reader: asyncio.StreamReader, writer: asyncio.StreamWriter) -> None:
         self.reader = reader
         self.writer = writer
         self.peer = peer_name(writer)
+        self.flow: Flow | None = None
+        """This connection in the session recording, if one is being made."""
+
+    async def read(self, n: int) -> bytes:
+        """Up to ``n`` bytes from the client (b"" at EOF), recorded."""
+        data = await self.reader.read(n)
+        if self.flow is not None:
+            if data:
+                self.flow.from_client(data)
+            else:
+                self.flow.closed()
+                self.flow = None
+        return data
+
+    def write(self, data: bytes) -> None:
+        """Queue ``data`` for the client, recorded; the caller drains."""
+        if self.flow is not None:
+            self.flow.to_client(data)
+        self.writer.write(data)
 
     def close(self) -> None:
         """Close the transport; a handler blocked on it wakes with EOF."""
+        if self.flow is not None:
+            self.flow.server_closed()
+            self.flow = None
         if not self.writer.is_closing():
             self.writer.close()
 
@@ -106,6 +139,8 @@ class TcpService(ABC):
         self.accepted = 0
         self.refused = 0
         self.replaced = 0
+        self.recorder: SessionRecorder | None = None
+        """Records every accepted connection (``pymotoros sim --record``) when set."""
 
     # ----------------------------------------------------------- life cycle
 
@@ -192,6 +227,8 @@ class TcpService(ABC):
             self._evict(admission.evicted)
         self.accepted += 1
         configure_socket(writer)
+        if self.recorder is not None:
+            conn.flow = self.recorder.flow(self.port, _peer_port(writer))
         coro = self._run(conn)
         try:
             task = tg.create_task(coro, name=f"{self.name}:{conn.peer}")
@@ -278,7 +315,7 @@ class FramedService(TcpService):
     async def frames(self, conn: Connection) -> AsyncGenerator[Frame, None]:
         """The whole frames ``conn`` sends, until EOF."""
         decoder = FrameDecoder(self._order)
-        while data := await conn.reader.read(READ_CHUNK):
+        while data := await conn.read(READ_CHUNK):
             fragmented = decoder.buffered > 0
             decoder.feed(data)
             while True:
@@ -310,5 +347,5 @@ class FramedService(TcpService):
 
     async def send(self, conn: Connection, message: Message) -> None:
         """One write per message: common clients read one reply per ``recv()`` (clients §1.3)."""
-        conn.writer.write(encode(message, self._order))
+        conn.write(encode(message, self._order))
         await conn.writer.drain()
