@@ -254,3 +254,86 @@ def test_check_config_errors_name_the_file(planned_yaml: Path, tmp_path: Path) -
     result = invoke("check", str(planned_yaml), "--config", str(two))
     assert result.exit_code == 2
     assert "joint_1_s belongs to groups R1, R2" in result.output
+
+
+LAG_PLAUSIBLE_MS = (4.0, 100.0)
+"""A feedback lag on the twin: at least one tick (the twin's feedback trails the command by
+3 ticks on average, plus the ticks before the first increment), far below 100 ms."""
+FEEDBACK_PEAK_TOLERANCE = 5e-3
+"""rad: the twin's feedback is the command averaged over 7 ticks, which rounds a peak off
+by far less than this."""
+
+
+def test_plot_with_a_recording_of_a_run_on_the_sim(
+    sim: Sim, planned_yaml: Path, tmp_path: Path
+) -> None:
+    from pymotoros.cli.trajectory import recorded_run
+    from pymotoros.trajectory.plot import COMMANDED_LABEL, ERROR_LABEL, hermite, tracking
+
+    rec = tmp_path / "run.pcapng"
+    assert invoke("move", "0", "0", "0", "0", "0", "0", "--enable", *sim.cli_args()).exit_code == 0
+    result = invoke("run", str(planned_yaml), "--record", str(rec), *sim.cli_args())
+    assert result.exit_code == 0, result.output
+    png = tmp_path / "rec.png"
+    result = invoke("plot", str(planned_yaml), "--recording", str(rec), "-o", str(png))
+    assert result.exit_code == 0, result.output
+    assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    assert "joint_1_s: feedback lag" in result.stdout
+    assert "joint_4_r" not in result.stdout  # still: no lag to measure
+
+    # the figure the command drew, inspected
+    traj = read_trajectory_file(planned_yaml)
+    report = check_trajectory(traj, HC10, YRC)
+    run = recorded_run(rec, traj, HC10)
+    fig = plot_trajectory(traj, HC10, YRC, report, tmp_path / "again.png", run=run)
+    axes = fig.get_axes()
+    assert len(axes) == 3 * 6
+    assert "recording run.pcapng: feedback lag" in fig.get_suptitle()
+    moving = [j for j in range(6) if np.ptp(traj.positions[:, j]) > 0]
+    assert moving == [0, 1, 2, 4]
+    for j in range(6):
+        position, error_panel = axes[3 * j], axes[3 * j + 2]
+        lines = {line.get_label(): line for line in position.get_lines()}
+        commanded = lines[COMMANDED_LABEL]
+        np.testing.assert_allclose(commanded.get_xdata(), traj.times, atol=1e-6)
+        np.testing.assert_allclose(commanded.get_ydata(), traj.positions[:, j], atol=1e-6)
+        [feedback] = [line for label, line in lines.items() if label.startswith("feedback (")]
+        fb = np.asarray(feedback.get_ydata())
+        assert fb.min() == pytest.approx(traj.positions[:, j].min(), abs=FEEDBACK_PEAK_TOLERANCE)
+        assert fb.max() == pytest.approx(traj.positions[:, j].max(), abs=FEEDBACK_PEAK_TOLERANCE)
+        assert fb[-1] == pytest.approx(traj.positions[-1, j], abs=1e-4)  # settled at the end
+        track = tracking(run, j)
+        assert track is not None
+        assert np.isfinite(track.max_error)
+        assert track.max_error >= track.mean_error >= 0
+        [error] = error_panel.get_lines()[:1]
+        assert error.get_label().startswith(ERROR_LABEL)
+        if j in moving:
+            assert track.lag_ms is not None
+            assert LAG_PLAUSIBLE_MS[0] <= track.lag_ms <= LAG_PLAUSIBLE_MS[1]
+            assert f"lag {track.lag_ms:.0f} ms" in feedback.get_label()
+            # the error is mostly the feedback lagging the command: taking the lag out
+            # of the command shrinks it
+            assert 0 < track.max_error < np.ptp(traj.positions[:, j])
+            cmd, fbs = run.commanded[0], run.feedback[0]
+            t = fbs.times[(fbs.times >= 0) & (fbs.times <= traj.times[-1])]
+            f = fbs.positions[(fbs.times >= 0) & (fbs.times <= traj.times[-1]), j]
+            args = (cmd.times, cmd.positions[:, j], cmd.velocities[:, j])
+            shifted = np.abs(f - hermite(*args, t - track.lag_ms / 1000)).max()
+            assert shifted < track.max_error / 2
+        else:
+            assert track.lag_ms is None
+            assert "lag n/a" in feedback.get_label()
+            assert track.max_error == pytest.approx(0.0, abs=1e-6)
+
+
+def test_plot_recording_without_a_trajectory_is_a_usage_error(
+    sim: Sim, planned_yaml: Path, tmp_path: Path
+) -> None:
+    rec = tmp_path / "io.pcapng"
+    assert invoke("io", "read", "10010", "--record", str(rec), *sim.cli_args()).exit_code == 0
+    result = invoke(
+        "plot", str(planned_yaml), "--recording", str(rec), "-o", str(tmp_path / "x.png")
+    )
+    assert result.exit_code == 2
+    assert "holds no trajectory point the controller accepted" in result.output

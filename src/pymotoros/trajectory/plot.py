@@ -12,7 +12,7 @@ from __future__ import annotations
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import Any, Final
 
 import numpy as np
 import numpy.typing as npt
@@ -34,6 +34,127 @@ class Reported:
     times: F64Array
     positions: F64Array
     label: str = "feedback"
+
+
+@dataclass(frozen=True, slots=True)
+class Series:
+    """One group's samples: times (s, from the trajectory start), positions (T, k) and
+    velocities (T, k or None), column ``i`` being the file's joint ``columns[i]``."""
+
+    times: F64Array
+    positions: F64Array
+    columns: tuple[int, ...]
+    velocities: F64Array | None = None
+
+    def column(self, joint: int) -> int | None:
+        return self.columns.index(joint) if joint in self.columns else None
+
+
+@dataclass(frozen=True, slots=True)
+class RecordedRun:
+    """A run of the trajectory as a session recording shows it.
+
+    ``commanded``: the points the client sent (JOINT_TRAJ_PT_FULL / _EX) at their
+    own times, relative to the start point's; ``feedback``: the positions the robot
+    reported on the state port (JOINT_FEEDBACK / _EX) at the time they arrived,
+    relative to the moment the controller accepted the start point (sequence 0):
+    trajectory time 0 on both. One :class:`Series` per group.
+    """
+
+    commanded: tuple[Series, ...]
+    feedback: tuple[Series, ...]
+    source: str = "recording"
+
+
+LAG_SEARCH_S: Final = (-0.05, 0.5)
+"""The time shifts tried for the lag (s): feedback cannot lead the command, but the
+arrival time of a state message can trail its sampling by a little; half a second
+is far beyond any controller's servo lag (the twin's is 12 ms)."""
+LAG_STEP_S: Final = 0.001
+"""Resolution of the lag (1 ms: a quarter of the 4 ms interpolation period)."""
+LAG_MIN_TRAVEL: Final = 1e-3
+"""rad (m): a joint that travels less has no measurable lag (its lag is None)."""
+
+
+@dataclass(frozen=True, slots=True)
+class Tracking:
+    """How the feedback followed the command on one joint.
+
+    ``lag_ms``: the time shift that best lays the commanded motion onto the feedback
+    (least squares over the samples from the start to the end of the motion plus
+    :data:`LAG_SEARCH_S`'s upper end), None for a joint that barely moved;
+    ``max_error``/``mean_error``: largest and mean |feedback − command| at the same
+    instant, rad (m), over the same samples.
+    """
+
+    lag_ms: float | None
+    max_error: float
+    mean_error: float
+    samples: int
+
+
+def hermite(points_t: F64Array, pos: F64Array, vel: F64Array, t: F64Array) -> F64Array:
+    """The cubic through the points with their velocities (as MotoROS interpolates
+    between trajectory points), held at the first and last point outside them.
+    ``pos``/``vel`` (P,) one joint; returns (len(t),)."""
+    t = np.asarray(t, dtype=np.float64)
+    if len(points_t) == 1:
+        return np.full(t.shape, float(pos[0]))
+    k = np.clip(np.searchsorted(points_t, t, side="right") - 1, 0, len(points_t) - 2)
+    t0, t1 = points_t[k], points_t[k + 1]
+    h = np.where(t1 > t0, t1 - t0, 1.0)
+    u = np.clip((t - t0) / h, 0.0, 1.0)
+    u2, u3 = u * u, u * u * u
+    out: F64Array = (
+        (2 * u3 - 3 * u2 + 1) * pos[k]
+        + (u3 - 2 * u2 + u) * h * vel[k]
+        + (-2 * u3 + 3 * u2) * pos[k + 1]
+        + (u3 - u2) * h * vel[k + 1]
+    )
+    return out
+
+
+def _commanded_joint(run: RecordedRun, joint: int) -> tuple[F64Array, F64Array, F64Array] | None:
+    for series in run.commanded:
+        c = series.column(joint)
+        if c is not None:
+            vel = (
+                series.velocities[:, c]
+                if series.velocities is not None
+                else np.zeros(len(series.times))
+            )
+            return series.times, series.positions[:, c], vel
+    return None
+
+
+def _feedback_joint(run: RecordedRun, joint: int) -> tuple[F64Array, F64Array] | None:
+    for series in run.feedback:
+        c = series.column(joint)
+        if c is not None:
+            return series.times, series.positions[:, c]
+    return None
+
+
+def tracking(run: RecordedRun, joint: int) -> Tracking | None:
+    """The lag and tracking error of one file joint; None without command or feedback."""
+    cmd = _commanded_joint(run, joint)
+    fb = _feedback_joint(run, joint)
+    if cmd is None or fb is None:
+        return None
+    ct, cp, cv = cmd
+    ft, fp = fb
+    window = (ft >= 0.0) & (ft <= ct[-1] + LAG_SEARCH_S[1])
+    ft, fp = ft[window], fp[window]
+    if not len(ft):
+        return None
+    error = np.abs(fp - hermite(ct, cp, cv, ft))
+    lag: float | None = None
+    if float(np.ptp(cp)) >= LAG_MIN_TRAVEL:
+        shifts = np.arange(LAG_SEARCH_S[0], LAG_SEARCH_S[1] + LAG_STEP_S / 2, LAG_STEP_S)
+        shifted = hermite(ct, cp, cv, (ft[None, :] - shifts[:, None]).ravel())
+        cost = ((shifted.reshape(len(shifts), -1) - fp[None, :]) ** 2).sum(axis=1)
+        lag = float(shifts[int(np.argmin(cost))]) * 1000.0
+    return Tracking(lag, float(error.max()), float(error.mean()), len(ft))
 
 
 def interpolated(
@@ -61,6 +182,11 @@ def interpolated(
     return t, pos, vel
 
 
+COMMANDED_LABEL: Final = "commanded (points sent)"
+FEEDBACK_LABEL: Final = "feedback"
+ERROR_LABEL: Final = "feedback − command"
+
+
 def plot_trajectory(
     traj: Trajectory,
     robot: RobotModel,
@@ -69,8 +195,14 @@ def plot_trajectory(
     output: Path,
     *,
     reported: Sequence[Reported] = (),
+    run: RecordedRun | None = None,
 ) -> Any:
-    """Draw and save the figure; returns it (tests inspect its axes and lines)."""
+    """Draw and save the figure; returns it (tests inspect its axes and lines).
+
+    With ``run`` (from a recording) each position panel also shows the commanded
+    points and the feedback, the feedback's legend gives its lag and largest error
+    (:func:`tracking`), and a third column shows feedback − command over time.
+    """
     import matplotlib
 
     matplotlib.use("Agg")
@@ -80,11 +212,15 @@ def plot_trajectory(
     axes_models = {a.name: a for g in robot.groups for a in g.axes}
     t_i, p_i, v_i = interpolated(traj, robot, controller, report)
     n = len(names)
-    fig, grid = plt.subplots(n, 2, figsize=(11, 1.9 * n + 1), sharex=True, squeeze=False)
+    cols = 3 if run is not None else 2
+    fig, grid = plt.subplots(
+        n, cols, figsize=(5.5 * cols, 1.9 * n + 1.2), sharex=True, squeeze=False
+    )
+    lags: list[float] = []
     for j, name in enumerate(names):
         axis = axes_models[name]
         unit = "m" if axis.linear else "rad"
-        ax_p, ax_v = grid[j]
+        ax_p, ax_v = grid[j][0], grid[j][1]
         ax_p.plot(traj.times, traj.positions[:, j], "o", ms=3, label="planned points")
         ax_p.plot(t_i, p_i[:, j], "-", lw=1.2, label="MotoROS interpolation")
         for limit in (axis.lower, axis.upper):
@@ -92,9 +228,11 @@ def plot_trajectory(
         ax_p.lines[-1].set_label("joint limits")
         for rec in reported:
             ax_p.plot(rec.times, rec.positions[:, j], "-", lw=1.0, label=rec.label)
-        # keep the limits visible only when the motion comes near them
         lo = min(float(traj.positions[:, j].min()), float(p_i[:, j].min()))
         hi = max(float(traj.positions[:, j].max()), float(p_i[:, j].max()))
+        if run is not None:
+            lo, hi = _draw_recorded(run, j, unit, ax_p, grid[j][2], lo, hi, lags)
+        # keep the limits visible only when the motion comes near them
         pad = max(0.1 * (hi - lo), 0.02)
         ax_p.set_ylim(max(lo - pad, axis.lower - pad), min(hi + pad, axis.upper + pad))
         ax_p.set_ylabel(f"{name}\n[{unit}]")
@@ -106,17 +244,72 @@ def plot_trajectory(
         vpeak = max(float(np.abs(v_i[:, j]).max()), float(np.abs(traj.velocities[:, j]).max()))
         ax_v.set_ylim(-min(vmax * 1.1, vpeak * 1.2 + 0.05), min(vmax * 1.1, vpeak * 1.2 + 0.05))
         ax_v.set_ylabel(f"[{unit}/s]")
-    grid[0, 0].set_title("position")
-    grid[0, 1].set_title("velocity")
-    grid[-1, 0].set_xlabel("time [s]")
-    grid[-1, 1].set_xlabel("time [s]")
-    grid[0, 0].legend(loc="best", fontsize=7)
-    grid[0, 1].legend(loc="best", fontsize=7)
-    fig.suptitle(
+    grid[0][0].set_title("position")
+    grid[0][1].set_title("velocity")
+    for c in range(cols):
+        grid[-1][c].set_xlabel("time [s]")
+    grid[0][0].legend(loc="best", fontsize=7)
+    grid[0][1].legend(loc="best", fontsize=7)
+    title = (
         f"{robot.name} on {controller.type.value}: {traj.duration:.3f} s planned, "
         f"{report.duration_s:.3f} s as MotoROS runs it ({report.increments} ticks)"
     )
+    if run is not None:
+        grid[0][2].set_title("tracking error (feedback − command)")
+        lag = f"feedback lag {min(lags):.0f}..{max(lags):.0f} ms" if lags else "no lag measured"
+        title += f"\n{run.source}: {lag} (t = 0: the start point accepted)"
+    fig.suptitle(title)
     fig.tight_layout()
     fig.savefig(output, dpi=90)
     plt.close(fig)
     return fig
+
+
+def _draw_recorded(
+    run: RecordedRun,
+    j: int,
+    unit: str,
+    ax_p: Any,
+    ax_e: Any,
+    lo: float,
+    hi: float,
+    lags: list[float],
+) -> tuple[float, float]:
+    """The commanded points and the feedback on ``ax_p``, the error on ``ax_e``;
+    returns the position range widened to them."""
+    cmd = _commanded_joint(run, j)
+    fb = _feedback_joint(run, j)
+    if cmd is not None:
+        ct, cp, _ = cmd
+        ax_p.plot(ct, cp, "+", ms=5, color="black", label=COMMANDED_LABEL)
+        lo, hi = min(lo, float(cp.min())), max(hi, float(cp.max()))
+    track = tracking(run, j)
+    if fb is not None:
+        ft, fp = fb
+        label = FEEDBACK_LABEL
+        if track is not None:
+            lag = "lag n/a (still)" if track.lag_ms is None else f"lag {track.lag_ms:.0f} ms"
+            label += f" ({lag}, max error {track.max_error:.3g} {unit})"
+            if track.lag_ms is not None:
+                lags.append(track.lag_ms)
+        ax_p.plot(ft, fp, "-", lw=1.0, color="tab:green", label=label)
+        lo, hi = min(lo, float(fp.min())), max(hi, float(fp.max()))
+    if cmd is not None and fb is not None and track is not None:
+        ct, cp, cv = cmd
+        ft, fp = fb
+        error = fp - hermite(ct, cp, cv, ft)
+        ax_e.plot(
+            ft,
+            error,
+            "-",
+            lw=1.0,
+            color="tab:green",
+            label=f"{ERROR_LABEL}: mean |e| {track.mean_error:.3g}, "
+            f"max {track.max_error:.3g} {unit}",
+        )
+        ax_e.axhline(0.0, color="grey", lw=0.6)
+    ax_e.set_ylabel(f"[{unit}]")
+    ax_p.legend(loc="best", fontsize=6)
+    if ax_e.lines:
+        ax_e.legend(loc="best", fontsize=6)
+    return lo, hi
