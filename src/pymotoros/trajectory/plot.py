@@ -256,7 +256,12 @@ def plot_trajectory(
     )
     if run is not None:
         grid[0][2].set_title("tracking error (feedback − command)")
-        lag = f"feedback lag {min(lags):.0f}..{max(lags):.0f} ms" if lags else "no lag measured"
+        if not lags:
+            lag = "no lag measured (no joint moved)"
+        elif round(min(lags)) == round(max(lags)):
+            lag = f"feedback lag {min(lags):.0f} ms"
+        else:
+            lag = f"feedback lag {min(lags):.0f}..{max(lags):.0f} ms"
         title += f"\n{run.source}: {lag} (t = 0: the start point accepted)"
     fig.suptitle(title)
     fig.tight_layout()
