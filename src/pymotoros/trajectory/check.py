@@ -359,7 +359,7 @@ def _fsu(
             f"{int(limit)} pulses per {period_ms} ms tick; the trajectory asks up to "
             f"{int(value)}: the FSU drops the rest, MotoROS resends it, and the motion takes "
             f"{after * period_ms / 1000:.3f} s instead of {before * period_ms / 1000:.3f} s "
-            f"(behind the trajectory's times); re-time it at most {pct} % of the axis "
+            f"(behind the trajectory's times); re-time it to at most {pct} % of the axis "
             "speeds or raise the FSU limit",
         )
     ]
