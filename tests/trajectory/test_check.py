@@ -23,7 +23,13 @@ from pymotoros.trajectory import (
     check_trajectory,
     plan_waypoints,
 )
-from pymotoros.trajectory.check import EXIT_OK, EXIT_REFUSED, EXIT_WARNINGS, fsu_clip
+from pymotoros.trajectory.check import (
+    EXIT_OK,
+    EXIT_REFUSED,
+    EXIT_WARNINGS,
+    fsu_clip,
+    fsu_execution,
+)
 from pymotoros.trajectory.planning import MIN_WAYPOINT_STEP, WaypointPlanningError
 
 from .twin_run import TwinOutcome, run_on_twin, twin_start
@@ -345,3 +351,56 @@ def test_an_fsu_limit_the_trajectory_stays_under_changes_nothing(tmp_path: Path)
     assert report.exit_code == EXIT_OK, report.to_json()
     assert report.increments == built_in.increments
     np.testing.assert_array_equal(report.per_group["R1"][1], built_in.per_group["R1"][1])
+
+
+def _fsu_tick_by_tick(groups: list[tuple[GroupAxes, np.ndarray]], pct: int) -> list[np.ndarray]:
+    """The FSU compensation one tick at a time, as the twin's IncMove task runs it
+    (controller/incmove_task.py), without fsu_execution's skipping of unclipped rows."""
+    clips = [[fsu_clip(a, pct)[s] for s in a.axis_slots] for a, _ in groups]
+    maxes = [[a.max_increment[s] for s in a.axis_slots] for a, _ in groups]
+    rows = [inc.tolist() for _, inc in groups]
+    length = max(len(r) for r in rows)
+    to_process = [[0] * len(c) for c in clips]
+    processed = [[0] * len(c) for c in clips]
+    out: list[list[list[int]]] = [[] for _ in groups]
+    missing, k = False, 0
+    while missing or k < length:
+        if missing:
+            sends = []
+            for g in range(len(groups)):
+                rest = [a - b for a, b in zip(to_process[g], processed[g], strict=True)]
+                clamp = [abs(t) or m for t, m in zip(processed[g], maxes[g], strict=True)]
+                sends.append([max(-c, min(c, r)) for r, c in zip(rest, clamp, strict=True)])
+                to_process[g] = rest
+        else:
+            sends = [r[k] if k < len(r) else [0] * len(c) for r, c in zip(rows, clips, strict=True)]
+            to_process = [list(x) for x in sends]
+            k += 1
+        missing = False
+        for g, send in enumerate(sends):
+            done = [max(-c, min(c, x)) for x, c in zip(send, clips[g], strict=True)]
+            processed[g] = done
+            out[g].append(done)
+            missing = missing or done != to_process[g]
+    return [np.array(o, dtype=np.int64) for o in out]
+
+
+@settings(max_examples=30, deadline=None)
+@given(st.integers(1, 100), st.integers(0, 2**32 - 1))
+def test_fsu_execution_equals_the_tick_by_tick_compensation(pct: int, seed: int) -> None:
+    sda = robot_model("sda10f")
+    dx200 = controller_model("dx200")
+    rng = np.random.default_rng(seed)
+    groups = []
+    for gi, group in enumerate(sda.groups[:2]):
+        axes = GroupAxes.from_model(group, dx200)
+        top = np.array([axes.max_increment[s] for s in axes.axis_slots])
+        length = 40 + 10 * gi
+        inc = (rng.uniform(-1, 1, (length, len(top))) * top).astype(np.int64)
+        inc[rng.uniform(size=length) < 0.5] //= 10  # stretches the FSU lets through
+        groups.append((axes, inc))
+    fast = fsu_execution(groups, pct)
+    slow = _fsu_tick_by_tick(groups, pct)
+    for f, s_, (_, inc) in zip(fast, slow, groups, strict=True):
+        np.testing.assert_array_equal(f, s_)
+        np.testing.assert_array_equal(f.sum(axis=0), inc.sum(axis=0))  # nothing is lost

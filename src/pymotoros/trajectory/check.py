@@ -278,33 +278,63 @@ def fsu_execution(groups: Sequence[tuple[GroupAxes, I64Array]], pct: int) -> lis
     cols = [list(axes.axis_slots) for axes, _ in groups]
     clips = [[fsu_clip(axes, pct)[s] for s in c] for (axes, _), c in zip(groups, cols, strict=True)]
     maxes = [[axes.max_increment[s] for s in c] for (axes, _), c in zip(groups, cols, strict=True)]
-    rows = [inc.tolist() for _, inc in groups]
-    length = max((len(r) for r in rows), default=0)
+    length = max((len(inc) for _, inc in groups), default=0)
+    padded = [
+        np.vstack([inc, np.zeros((length - len(inc), len(c)), dtype=np.int64)])
+        for (_, inc), c in zip(groups, cols, strict=True)
+    ]
+    # rows the FSU clips in some group: between them every pulse goes through as sent
+    clipped = np.zeros(length, dtype=bool)
+    for rows_g, clip_g in zip(padded, clips, strict=True):
+        clipped |= np.any(np.abs(rows_g) > np.array(clip_g, dtype=np.int64), axis=1)
+    clipped_at = np.flatnonzero(clipped).tolist()
     zero = [[0] * len(c) for c in cols]
     to_process = [list(z) for z in zero]
     processed = [list(z) for z in zero]
-    out: list[list[list[int]]] = [[] for _ in groups]
+    chunks: list[list[I64Array]] = [[] for _ in groups]
+    ticks: list[list[list[int]]] = [[] for _ in groups]  # since the last chunk
+
+    def flush() -> None:
+        for g, c in enumerate(cols):
+            if ticks[g]:
+                chunks[g].append(np.array(ticks[g], dtype=np.int64).reshape(-1, len(c)))
+                ticks[g] = []
+
     missing = False
     k = 0
+    nxt = 0  # index into clipped_at
     while missing or k < length:
-        if missing:
+        if not missing:
+            while nxt < len(clipped_at) and clipped_at[nxt] < k:
+                nxt += 1
+            stop = clipped_at[nxt] if nxt < len(clipped_at) else length
+            if stop > k:  # nothing clipped before ``stop``: executed as sent
+                flush()
+                for g in range(len(groups)):
+                    chunks[g].append(padded[g][k:stop])
+                k = stop
+                continue
+            sends = [p[k].tolist() for p in padded]
+            to_process = [list(x) for x in sends]
+            k += 1
+        else:
             sends = []
             for g in range(len(groups)):
                 rest = [a - b for a, b in zip(to_process[g], processed[g], strict=True)]
                 clamp = [abs(t) or m for t, m in zip(processed[g], maxes[g], strict=True)]
                 sends.append([max(-c, min(c, r)) for r, c in zip(rest, clamp, strict=True)])
                 to_process[g] = rest
-        else:
-            sends = [r[k] if k < len(r) else list(z) for r, z in zip(rows, zero, strict=True)]
-            to_process = [list(x) for x in sends]
-            k += 1
         missing = False
         for g, send in enumerate(sends):
             done = [max(-c, min(c, x)) for x, c in zip(send, clips[g], strict=True)]
             processed[g] = done
-            out[g].append(done)
+            ticks[g].append(done)
             missing = missing or done != to_process[g]
-    return [np.array(o, dtype=np.int64).reshape(-1, len(c)) for o, c in zip(out, cols, strict=True)]
+    flush()
+    return [
+        np.vstack(parts).astype(np.int64) if parts else np.zeros((0, len(c)), dtype=np.int64)
+        for c, parts in zip(cols, chunks, strict=True)
+    ]
 
 
 def _fsu(
