@@ -32,6 +32,7 @@ from __future__ import annotations
 
 import asyncio
 import contextlib
+import dataclasses
 import statistics
 from collections.abc import Awaitable, Callable, Mapping, Sequence
 from dataclasses import dataclass, field
@@ -354,7 +355,6 @@ def _pairs(
 def _plan(recording: Recording) -> dict[int, list[_Step]]:
     """The steps of each motion and IO connection (index → steps)."""
     plans: dict[int, list[_Step]] = {}
-    number = 0
     for conn in recording.connections:
         if conn.kind is Port.STATE or not conn.sent():
             continue
@@ -385,10 +385,9 @@ def _plan(recording: Recording) -> dict[int, list[_Step]]:
                 for _, reply, _ in group[:-1]
                 if reply is not None
             )
-            number += 1
             steps.append(
                 _Step(
-                    number=number,
+                    number=0,  # set below
                     conn=conn,
                     attempts=attempts,
                     final_reply=final,
@@ -400,7 +399,13 @@ def _plan(recording: Recording) -> dict[int, list[_Step]]:
             )
             previous_done = final.time if final is not None else attempts[-1].time
         plans[conn.index] = steps
-    return plans
+    # numbered in the order the client sent them, across connections
+    ordered = sorted((s for steps in plans.values() for s in steps), key=lambda s: s.first.time)
+    numbers = {id(s): n for n, s in enumerate(ordered, start=1)}
+    return {
+        index: [dataclasses.replace(s, number=numbers[id(s)]) for s in steps]
+        for index, steps in plans.items()
+    }
 
 
 # --------------------------------------------------------------------------- replaying
