@@ -92,6 +92,21 @@ def test_replay_against_a_fresh_twin_gives_an_empty_diff(recorded: dict[str, Pat
     assert human.stdout.rstrip().endswith("MATCH")
 
 
+def test_timing_beyond_the_tolerance_is_listed_not_a_difference(
+    recorded: dict[str, Path],
+) -> None:
+    result = _replay(str(recorded["io"]), "--timing-tolerance", "1e-9", "--json")
+    assert result.exit_code == EXIT_MATCH, result.output
+    timing = _json(result)["timing"]
+    assert timing["tolerance_s"] == 1e-9
+    # no two reply delays agree to a nanosecond
+    assert timing["outside_tolerance"] == [1]
+    (request,) = timing["requests"]
+    assert request["request_type"] == "MOTO_READ_IO_BIT"
+    assert request["recorded_delay_s"] > 0
+    assert request["replayed_delay_s"] > 0
+
+
 def test_a_twin_side_recording_replays_too(recorded: dict[str, Path]) -> None:
     """`sim --record` holds both sessions (move, then io read): the ROS-driver pattern of
     a state port only read and a motion port of requests, plus an IO connection."""
