@@ -49,6 +49,10 @@ _COMMANDS: Final[dict[str, tuple[str, str]]] = {
     "plan": ("pymotoros.cli.trajectory:plan", "Time waypoints within the robot's limits."),
     "run": ("pymotoros.cli.trajectory:run", "Stream exactly the points of a trajectory file."),
     "plot": ("pymotoros.cli.trajectory:plot", "Plot a trajectory per joint (PNG)."),
+    "replay": (
+        "pymotoros.cli.replay:replay",
+        "Replay a recorded session against a fresh twin or a controller; print the diff.",
+    ),
 }
 
 
