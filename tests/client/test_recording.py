@@ -53,6 +53,8 @@ async def test_a_twin_session_reads_back_message_by_message(tmp_path: Path) -> N
     offsets = [m.offset for m in rec.messages]
     assert offsets == sorted(offsets)
     assert rec.duration >= offsets[-1]
+    # the client closed every connection, and the recording shows its FIN
+    assert all(c.closed is not None for c in rec.connections)
     # the state port: topics from the controller only, feedback among them
     for conn in rec.on(Port.STATE):
         assert conn.sent() == ()

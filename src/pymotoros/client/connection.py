@@ -150,6 +150,7 @@ class FrameConnection:
         self.closed = asyncio.Event()
         """Set once the connection is gone, for whatever reason."""
         self._flow = active_flow(port)  # the session recorder, when one is active
+        self._flow_closed = False
         self._task = asyncio.create_task(self._read_loop(), name=f"pymotoros-client-{self}")
 
     def __str__(self) -> str:
@@ -331,6 +332,9 @@ class FrameConnection:
         with contextlib.suppress(asyncio.CancelledError):
             await self._task
         self._fail(self._lost("closed by the client"))
+        if self._flow is not None and not self._flow_closed:
+            self._flow_closed = True
+            self._flow.closed()  # the recording shows the client's FIN
         self._writer.close()
         with contextlib.suppress(OSError, TimeoutError):
             async with asyncio.timeout(CLOSE_TIMEOUT_S):
