@@ -18,8 +18,9 @@ import csv
 import logging
 import math
 import sys
+from concurrent.futures import Future, ThreadPoolExecutor
 from pathlib import Path
-from typing import IO, Final
+from typing import IO, Any, Final
 
 import click
 import numpy as np
@@ -219,20 +220,94 @@ def read_trajectory_fast(path: Path, n: int) -> tuple[np.ndarray, np.ndarray, np
     return data[:, 0], data[:, 1 : n + 1], data[:, n + 1 :]
 
 
-def write_increments_fast(out: IO[bytes], time_ms: np.ndarray, increments: np.ndarray) -> bool:
-    """:func:`write_increments` with pyarrow's writer (same text); False if not installed."""
-    try:
+FLUSH_ENTRIES: Final = 1 << 16
+"""Entries handed to the writer thread at a time: large enough that pyarrow's per-call
+cost is negligible, small enough that writing starts early."""
+
+
+class BlockWriter:
+    """Writes the increments with pyarrow's CSV writer on a thread of its own, block by
+    block while the engine computes the next ones (the engine's ``on_block``).
+
+    pyarrow formats the integers without holding the GIL, so on two cores writing costs
+    little wall time on top of the engine (issue 13). Nothing is opened or written before
+    the first block, i.e. before every point has passed MotoROS's checks: a refused
+    trajectory leaves no output, as on the Python path.
+    """
+
+    def __init__(self, sink: IO[bytes] | Path, n: int) -> None:
         import pyarrow as pa  # optional, and slow to import
         from pyarrow import csv as pacsv
-    except ImportError:
-        return False
-    n = increments.shape[1]
-    out.write((",".join(["time_ms", *(f"i{i}" for i in range(1, n + 1))]) + "\n").encode())
-    columns = [pa.array(np.ascontiguousarray(time_ms, dtype=np.int64))]
-    columns += [pa.array(np.ascontiguousarray(increments[:, j], dtype=np.int64)) for j in range(n)]
-    table = pa.Table.from_arrays(columns, names=[f"c{j}" for j in range(n + 1)])
-    pacsv.write_csv(table, out, write_options=pacsv.WriteOptions(include_header=False))
-    return True
+
+        self._pa, self._pacsv = pa, pacsv
+        self._target = sink
+        self._n = n
+        self._schema = pa.schema([(f"c{j}", pa.int64()) for j in range(n + 1)])
+        self._sink: Any = None
+        self._writer: Any = None
+        self._pool: ThreadPoolExecutor | None = None
+        self._pending: list[Future[None]] = []
+        self._written = 0
+
+    @classmethod
+    def create(cls, sink: IO[bytes] | Path, n: int) -> BlockWriter | None:
+        """A writer, or None when pyarrow is not installed (the Python writer then runs)."""
+        try:
+            return cls(sink, n)
+        except ImportError:
+            return None
+
+    def block(self, time_ms: np.ndarray, increments: np.ndarray, done: int) -> None:
+        """The engine's ``on_block``: entries ``[0, done)`` are final."""
+        if done - self._written >= FLUSH_ENTRIES:
+            self._submit(time_ms, increments, done)
+
+    def finish(self, time_ms: np.ndarray, increments: np.ndarray) -> None:
+        """Write what is left and wait until everything is written (errors raise here)."""
+        self._submit(time_ms, increments, len(time_ms))
+        if self._pool is not None:
+            self._pool.shutdown(wait=True)
+        for future in self._pending:
+            future.result()
+        self._writer.close()
+        self.close()
+
+    def close(self) -> None:
+        """Stop the thread (dropping blocks not yet written) and close a file opened here;
+        once is enough, more is harmless."""
+        if self._pool is not None:
+            self._pool.shutdown(wait=True, cancel_futures=True)
+        sink, self._sink = self._sink, None
+        if sink is None:
+            return
+        if isinstance(self._target, Path):
+            sink.close()
+        else:
+            sink.flush()
+
+    def _submit(self, time_ms: np.ndarray, increments: np.ndarray, done: int) -> None:
+        if self._pool is None:
+            pa = self._pa
+            self._sink = (
+                pa.OSFile(str(self._target), "wb")
+                if isinstance(self._target, Path)
+                else self._target
+            )
+            names = ["time_ms", *(f"i{i}" for i in range(1, self._n + 1))]
+            self._sink.write((",".join(names) + "\n").encode())
+            options = self._pacsv.WriteOptions(include_header=False)
+            self._writer = self._pacsv.CSVWriter(self._sink, self._schema, write_options=options)
+            self._pool = ThreadPoolExecutor(1, thread_name_prefix="pymotoros-csv")
+        lo, self._written = self._written, done
+        if done > lo:
+            job = self._pool.submit(self._write, time_ms[lo:done], increments[lo:done])
+            self._pending.append(job)
+
+    def _write(self, time_ms: np.ndarray, increments: np.ndarray) -> None:
+        pa = self._pa
+        columns = [pa.array(time_ms)]
+        columns += [pa.array(np.ascontiguousarray(increments[:, j])) for j in range(self._n)]
+        self._writer.write_table(pa.Table.from_arrays(columns, schema=self._schema))
 
 
 def write_increments(stream: IO[str], time_ms: np.ndarray, increments: np.ndarray) -> None:
@@ -360,24 +435,31 @@ def _interpolate(
         click.echo(f"warning: {line}; check the file", err=True)
     if len(warnings) > MAX_WARNINGS:
         click.echo(f"warning: {len(warnings) - MAX_WARNINGS} more such points", err=True)
-    try:
-        time_ms, increments = interpolate_arrays(times, pos, vel, axes)
-    except TrajectoryRejectedError as exc:
-        raise _Rejected(f"MotoROS would refuse {exc}") from None
     if output is None:
         sys.stdout.flush()
-        if not (large and write_increments_fast(sys.stdout.buffer, time_ms, increments)):
-            write_increments(sys.stdout, time_ms, increments)
+    writer = (
+        BlockWriter.create(sys.stdout.buffer if output is None else output, n) if large else None
+    )
+    try:
+        time_ms, increments = interpolate_arrays(
+            times, pos, vel, axes, on_block=None if writer is None else writer.block
+        )
+        if writer is not None:
+            writer.finish(time_ms, increments)
+    except TrajectoryRejectedError as exc:
+        raise _Rejected(f"MotoROS would refuse {exc}") from None
+    finally:
+        if writer is not None:
+            writer.close()  # after an error: stops the thread, closes the file
+    if writer is not None:
+        pass  # written
+    elif output is None:
+        write_increments(sys.stdout, time_ms, increments)
         sys.stdout.flush()
-    elif large:
-        with output.open("wb") as raw:
-            if write_increments_fast(raw, time_ms, increments):
-                return
-        with output.open("w", encoding="utf-8", newline="") as out:
-            write_increments(out, time_ms, increments)
     else:
         with output.open("w", encoding="utf-8", newline="") as out:
             write_increments(out, time_ms, increments)
+    if output is not None:
         click.echo(
             f"wrote {len(time_ms)} increments ({n} axes, {len(times)} points) to {output}",
             err=True,

@@ -31,7 +31,7 @@ How it is organised, for speed:
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from typing import Any, Final
 
 import numpy as np
@@ -53,6 +53,9 @@ F32Array = npt.NDArray[np.float32]
 F64Array = npt.NDArray[np.float64]
 I64Array = npt.NDArray[np.int64]
 AnyArray = npt.NDArray[Any]
+
+BlockDone = Callable[[I64Array, I64Array, int], None]
+"""``on_block(time_ms, increments, done)``: entries ``[0, done)`` are final."""
 
 CHUNK: Final = 2048
 """Steps (entries) per block of the position (pulse) kernel: (2048 × 6) float64 = 96
@@ -78,6 +81,7 @@ def batch_increments(
     axes: GroupAxes,
     *,
     workers: int = 1,
+    on_block: BlockDone | None = None,
 ) -> tuple[I64Array, I64Array]:
     """(time_ms (N,), increments (N, num_axes)) of S consecutive segments, in order.
 
@@ -87,7 +91,9 @@ def batch_increments(
     first entry. Column j is controller slot ``axes.axis_slots[j]``. ``workers`` > 1
     computes the blocks of segments on that many threads (numpy releases the GIL in its
     loops); every element is computed by the same operations whatever the split, so the
-    result does not depend on it.
+    result does not depend on it. ``on_block(time_ms, increments, done)`` is called, in
+    the caller's thread, each time entries ``[0, done)`` of the arrays being filled are
+    final, so that a caller can write them while the rest is computed.
     """
     n = axes.num_axes
     size = len(full)
@@ -150,11 +156,14 @@ def batch_increments(
         from concurrent.futures import ThreadPoolExecutor  # only for large batches
 
         with ThreadPoolExecutor(workers) as pool:
-            for _ in pool.map(block, starts):
-                pass
+            for lo, _ in zip(starts, pool.map(block, starts), strict=True):
+                if on_block is not None:
+                    on_block(time_ms, increments, int(stop[min(lo + SEGMENT_CHUNK, size) - 1]))
     else:
         for lo in starts:
             block(lo)
+            if on_block is not None:
+                on_block(time_ms, increments, int(stop[min(lo + SEGMENT_CHUNK, size) - 1]))
     return time_ms, increments
 
 
