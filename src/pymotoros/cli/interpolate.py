@@ -17,7 +17,9 @@ from __future__ import annotations
 import csv
 import logging
 import math
+import os
 import sys
+import time
 from concurrent.futures import Future, ThreadPoolExecutor
 from pathlib import Path
 from typing import IO, Any, Final
@@ -43,6 +45,13 @@ FAST_CSV_BYTES: Final = 1 << 20
 """Files at least this large are read and written with pyarrow's C++ CSV engine when it
 is installed (the ``csv`` extra): importing it costs ~0.2 s, which only pays off on
 large files (issue 13: a 150,000-row file spent 1.65 s in Python's csv module)."""
+
+TIMINGS_ENV: Final = "PYMOTOROS_INTERPOLATE_TIMINGS"
+"""When set (to anything but empty), the command ends by printing one line to stderr:
+``interpolate timings monotonic: start=… read=… check=… engine=… written=…``, the
+``time.monotonic()`` at which each phase ended (``start``: the command begins, after
+the interpreter and the imports). ``bench/bench_interpolate.py`` subtracts its own
+clock to split a whole process into phases; the output is unchanged."""
 
 EXIT_REJECTED: Final = 1
 """A point MotoROS would refuse (the message names point, axis, value, limit, subcode)."""
@@ -305,8 +314,15 @@ class BlockWriter:
 
     def _write(self, time_ms: np.ndarray, increments: np.ndarray) -> None:
         pa = self._pa
-        columns = [pa.array(time_ms)]
-        columns += [pa.array(np.ascontiguousarray(increments[:, j])) for j in range(self._n)]
+        size = len(time_ms)
+        # Arrow arrays over the numpy memory (pa.array would import numpy.ma, ~12 ms).
+        columns = [
+            pa.Array.from_buffers(pa.int64(), size, [None, pa.py_buffer(column)])
+            for column in (
+                np.ascontiguousarray(time_ms, dtype=np.int64),
+                *np.ascontiguousarray(increments.T, dtype=np.int64),
+            )
+        ]
         self._writer.write_table(pa.Table.from_arrays(columns, schema=self._schema))
 
 
@@ -381,10 +397,19 @@ def interpolate(
     naming the point (0 = start), the axis, the value, the limit and the subcode.
     Robots with several control groups (sda10f) are not supported here.
     """
+    marks: list[tuple[str, float]] | None = [] if os.environ.get(TIMINGS_ENV) else None
     try:
-        _interpolate(traj, controller_name, robot_name, ratios, output, deg)
+        _interpolate(traj, controller_name, robot_name, ratios, output, deg, marks)
     except click.BadParameter as exc:
         raise _BadInput(exc.format_message()) from None
+    if marks:
+        text = " ".join(f"{name}={value:.6f}" for name, value in marks)
+        click.echo(f"interpolate timings monotonic: {text}", err=True)
+
+
+def _mark(marks: list[tuple[str, float]] | None, name: str) -> None:
+    if marks is not None:
+        marks.append((name, time.monotonic()))
 
 
 def _interpolate(
@@ -394,7 +419,9 @@ def _interpolate(
     ratios: str | None,
     output: Path | None,
     deg: bool,
+    marks: list[tuple[str, float]] | None = None,
 ) -> None:
+    _mark(marks, "start")
     try:
         robot = robot_model(robot_name)
         controller = controller_model(controller_name)
@@ -426,6 +453,7 @@ def _interpolate(
         with traj.open(newline="", encoding="utf-8") as stream:
             parsed = read_trajectory(stream, n, traj.name)
     times, pos, vel = parsed
+    _mark(marks, "read")
     if deg:
         angular = np.array([not a.linear for a in group.axes])
         pos = np.where(angular, np.radians(pos), pos)
@@ -435,6 +463,7 @@ def _interpolate(
         click.echo(f"warning: {line}; check the file", err=True)
     if len(warnings) > MAX_WARNINGS:
         click.echo(f"warning: {len(warnings) - MAX_WARNINGS} more such points", err=True)
+    _mark(marks, "check")
     if output is None:
         sys.stdout.flush()
     writer = (
@@ -444,6 +473,7 @@ def _interpolate(
         time_ms, increments = interpolate_arrays(
             times, pos, vel, axes, on_block=None if writer is None else writer.block
         )
+        _mark(marks, "engine")
         if writer is not None:
             writer.finish(time_ms, increments)
     except TrajectoryRejectedError as exc:
@@ -459,6 +489,7 @@ def _interpolate(
     else:
         with output.open("w", encoding="utf-8", newline="") as out:
             write_increments(out, time_ms, increments)
+    _mark(marks, "written")
     if output is not None:
         click.echo(
             f"wrote {len(time_ms)} increments ({n} axes, {len(times)} points) to {output}",
