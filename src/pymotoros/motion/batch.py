@@ -19,7 +19,7 @@ How it is organised, for speed:
   (step k of every segment at once, with each segment's terms used in place and, when
   the points are evenly spaced, written to a strided view of the output: no gather, no
   scatter; issue 13 measured this at twice the speed of a gather per step), then the
-  pulses and increments of :data:`CHUNK` entries at a time. Segments longer than
+  pulses of each rank, and the increments of :data:`CHUNK` entries at a time. Segments longer than
   :data:`SHORT_STEPS` steps are computed first, :data:`CHUNK` steps at a time, each
   step taking its segment's terms with one gather. Small blocks keep every temporary
   array in the allocator's reused memory; large temporaries cost more in fresh memory
@@ -102,9 +102,14 @@ def batch_increments(
     last = stop - 1
     time_ms: I64Array = np.empty(total, dtype=np.int64)
     time_ms[last] = end_ms
-    # Every entry's float32 position: the end point for the last entry of a segment.
-    pos_all: F32Array = np.empty((total, n), dtype=np.float32)
-    pos_all[last] = rows[2]
+    # Each entry's absolute target first, turned into increments block by block; the
+    # last entry of a segment is its end point.
+    increments: I64Array = np.empty((total, n), dtype=np.int64)
+    with np.errstate(all="ignore"):
+        ends = pulses(rows[2], axes.factors_ros, axes.float_mode)
+        if not axes.identity_columns:
+            ends = ends[:, axes.columns]
+    increments[last] = ends
     begin = last - full  # entry index of each segment's first entry
     long = full > SHORT_STEPS
     with np.errstate(all="ignore"):
@@ -119,14 +124,9 @@ def batch_increments(
                 begin[where],
                 axes,
                 time_ms,
-                pos_all,
+                increments,
             )
-        short = np.where(long, 0, full)
-        # The target before each segment's first entry: the previous one's end point.
-        ends = pulses(rows[2], axes.factors_ros, axes.float_mode)
-        if not axes.identity_columns:
-            ends = ends[:, axes.columns]
-    increments: I64Array = np.empty((total, n), dtype=np.int64)
+    short = np.where(long, 0, full)
 
     def block(lo: int) -> None:
         hi = min(lo + SEGMENT_CHUNK, size)
@@ -140,15 +140,11 @@ def batch_increments(
                 begin[lo:hi],
                 axes,
                 time_ms,
-                pos_all,
-            )
-            _increments(
-                pos_all,
-                int(begin[lo]),
-                int(stop[hi - 1]),
-                previous if lo == 0 else ends[lo - 1],
-                axes,
                 increments,
+            )
+            # The target before the block: the end point of the segment before it.
+            _difference(
+                increments, int(begin[lo]), int(stop[hi - 1]), previous if lo == 0 else ends[lo - 1]
             )
 
     starts = range(0, size, SEGMENT_CHUNK)
@@ -167,18 +163,13 @@ def batch_increments(
     return time_ms, increments
 
 
-def _increments(
-    pos_all: F32Array, lo: int, hi: int, before: I64Array, axes: GroupAxes, out: I64Array
-) -> None:
-    """Pulses and increments of entries [lo, hi), in blocks: no full-size temporary."""
-    for a in range(lo, hi, CHUNK):
+def _difference(targets: I64Array, lo: int, hi: int, before: I64Array) -> None:
+    """Targets [lo, hi) to increments in place, :data:`CHUNK` entries at a time from the
+    end (so that each chunk still sees the target before it): no full-size temporary."""
+    for a in range(lo + (hi - lo - 1) // CHUNK * CHUNK, lo - 1, -CHUNK):
         b = min(a + CHUNK, hi)
-        part = pulses(pos_all[a:b], axes.factors_ros, axes.float_mode)
-        if not axes.identity_columns:
-            part = part[:, axes.columns]
-        out[a] = part[0] - before
-        np.subtract(part[1:], part[:-1], out=out[a + 1 : b])
-        before = part[-1]
+        np.subtract(targets[a + 1 : b], targets[a : b - 1], out=targets[a + 1 : b])
+        targets[a] -= targets[a - 1] if a > lo else before
 
 
 def _ranked_steps(
@@ -190,9 +181,9 @@ def _ranked_steps(
     begin: I64Array,
     axes: GroupAxes,
     time_ms: I64Array,
-    pos_all: F32Array,
+    targets: I64Array,
 ) -> None:
-    """The steps of a block of short segments, rank by rank: step k of every segment that
+    """The steps' targets of a block of short segments, rank by rank: step k of every segment that
     has one at once. Each segment's terms are used in place (no gather per step), and
     when every segment of the block has the same number of steps (points evenly
     spaced) the results go to a strided view of the output (no scatter)."""
@@ -217,7 +208,7 @@ def _ranked_steps(
     if uniform:
         lo = int(begin[0])
         hi = lo + (steps + 1) * count
-        pos_view = pos_all[lo:hi].reshape(count, steps + 1, -1)
+        target_view = targets[lo:hi].reshape(count, steps + 1, -1)
         time_view = time_ms[lo:hi].reshape(count, steps + 1)
     for k in range(steps):
         if uniform or bool(full.min() > k):
@@ -231,12 +222,15 @@ def _ranked_steps(
             )
         else:
             pos = positions_single(x0[pick], v0[pick], h1[pick], a2[pick], tau)
+        part = pulses(pos, axes.factors_ros, axes.float_mode)
+        if not axes.identity_columns:
+            part = part[:, axes.columns]
         if uniform:
-            pos_view[:, k] = pos
+            target_view[:, k] = part
             time_view[:, k] = first_ms + period * k
         else:
             index = begin[pick] + k
-            pos_all[index] = pos
+            targets[index] = part
             time_ms[index] = first_ms[pick] + period * k
 
 
@@ -249,9 +243,9 @@ def _gathered_steps(
     begin: I64Array,
     axes: GroupAxes,
     time_ms: I64Array,
-    pos_all: F32Array,
+    targets: I64Array,
 ) -> None:
-    """The steps of long segments (all with at least one step), :data:`CHUNK` steps at a
+    """The steps' targets of long segments (all with at least one step), :data:`CHUNK` steps at a
     time, each step taking its segment's terms with one gather."""
     mode = axes.float_mode
     period = axes.period_ms
@@ -278,7 +272,8 @@ def _gathered_steps(
             )
         else:
             pos = positions_single(per[:, 0], per[:, 1], per[:, 2], per[:, 3], tau_k[lo:hi])
-        pos_all[index[lo:hi]] = pos
+        part = pulses(pos, axes.factors_ros, mode)
+        targets[index[lo:hi]] = part if axes.identity_columns else part[:, axes.columns]
 
 
 def queued_targets(
