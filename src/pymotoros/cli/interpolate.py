@@ -481,12 +481,10 @@ def _interpolate(
     finally:
         if writer is not None:
             writer.close()  # after an error: stops the thread, closes the file
-    if writer is not None:
-        pass  # written
-    elif output is None:
+    if writer is None and output is None:
         write_increments(sys.stdout, time_ms, increments)
         sys.stdout.flush()
-    else:
+    elif writer is None and output is not None:
         with output.open("w", encoding="utf-8", newline="") as out:
             write_increments(out, time_ms, increments)
     _mark(marks, "written")
