@@ -4,7 +4,10 @@ byte-for-byte the output of the Python path, and the same errors."""
 from __future__ import annotations
 
 import math
+import os
 import random
+import subprocess
+import sys
 from pathlib import Path
 
 import pytest
@@ -130,3 +133,45 @@ def test_timings_are_printed_on_request_only(
     assert list(marks) == ["start", "read", "check", "engine", "written"]
     values = [float(v) for v in marks.values()]
     assert values == sorted(values)
+
+
+# Imported by the process below instead of pandas: pyarrow's to_numpy() imports pandas
+# when it is installed, which costs ~0.3 s of start-up for nothing.
+_NO_PANDAS = "import os, sys\nprint('pandas was imported', file=sys.stderr)\nos._exit(97)\n"
+_IMPORTS_TO_AVOID = ("fastapi", "uvicorn", "scipy", "matplotlib", "toppra", "pinocchio")
+
+
+def test_the_fast_path_imports_neither_pandas_nor_the_heavy_modules(tmp_path: Path) -> None:
+    fake = tmp_path / "fake" / "pandas"
+    fake.mkdir(parents=True)
+    (fake / "__init__.py").write_text(_NO_PANDAS, encoding="utf-8")
+    traj = tmp_path / "traj.csv"
+    traj.write_text(trajectory_text(50, 5), encoding="utf-8")
+    check = (
+        "import sys, runpy\n"
+        "import pymotoros.cli.interpolate as m\n"
+        "m.FAST_CSV_BYTES = 0\n"
+        "sys.argv = ['pymotoros', 'interpolate', sys.argv[1], '-o', sys.argv[2]]\n"
+        "try:\n"
+        "    runpy.run_module('pymotoros', run_name='__main__')\n"
+        "except SystemExit as exc:\n"
+        "    assert not exc.code, exc.code\n"
+        f"heavy = [m for m in {_IMPORTS_TO_AVOID!r} if m in sys.modules]\n"
+        "assert not heavy, heavy\n"
+    )
+    env = {
+        **os.environ,
+        "PYTHONPATH": os.pathsep.join(
+            [str(tmp_path / "fake"), *filter(None, [os.environ.get("PYTHONPATH")])]
+        ),
+    }
+    done = subprocess.run(  # noqa: S603 - our own interpreter
+        [sys.executable, "-c", check, str(traj), str(tmp_path / "out.csv")],
+        capture_output=True,
+        text=True,
+        check=False,
+        timeout=120,
+        env=env,
+    )
+    assert done.returncode == 0, done.stderr
+    assert (tmp_path / "out.csv").read_text(encoding="utf-8").startswith("time_ms,")
