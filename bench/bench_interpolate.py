@@ -12,7 +12,12 @@ precision), then times, side by side and ``--repeat`` times each (best kept):
   as the baseline;
 
 and checks the two outputs are byte for byte the same. The rate is axis-increments
-(output rows × axes) per second of the whole process, start-up included.
+(output rows × axes) per second of the whole process, start-up included. The new
+path's best run is split into phases from the command's own clock marks
+(``PYMOTOROS_INTERPOLATE_TIMINGS``): interpreter start-up and imports, reading, the
+plausibility check, the engine, the writing left after the engine (the writer thread
+works while the engine computes), and the exit. ``uptime``'s load average is printed
+before and after: on a busy machine the wall times are the machine's, not the code's.
 """
 
 from __future__ import annotations
@@ -20,6 +25,8 @@ from __future__ import annotations
 import argparse
 import math
 import os
+import re
+import resource
 import subprocess
 import sys
 import tempfile
@@ -45,10 +52,51 @@ def write_trajectory(path: Path, rows: int, spacing_ms: int) -> None:
             f.write(",".join(repr(x) for x in [t, *pos, *vel]) + "\n")
 
 
-def timed(argv: list[str]) -> float:
-    t0 = time.perf_counter()
-    subprocess.run(argv, check=True, timeout=600)  # noqa: S603 - our own argv
-    return time.perf_counter() - t0
+PHASES = ("start", "read", "check", "engine", "written")
+PHASE_NAMES = (
+    "interpreter + imports",
+    "read CSV",
+    "plausibility check",
+    "engine",
+    "write (after engine)",
+)
+
+
+def children_cpu() -> float:
+    usage = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return usage.ru_utime + usage.ru_stime
+
+
+def timed(argv: list[str]) -> tuple[float, dict[str, float]]:
+    """Wall time of one process, and its phase marks relative to the launch (plus
+    ``cpu``: its user + system CPU seconds, all threads)."""
+    env = {**os.environ, "PYMOTOROS_INTERPOLATE_TIMINGS": "1"}
+    cpu0 = children_cpu()
+    t0 = time.monotonic()  # CLOCK_MONOTONIC: the clock of the child's marks too
+    done = subprocess.run(  # noqa: S603 - our own argv
+        argv, check=True, timeout=600, env=env, capture_output=True, text=True
+    )
+    wall = time.monotonic() - t0
+    marks = {}
+    found = re.search(r"interpolate timings monotonic: (.*)", done.stderr)
+    if found:
+        for item in found.group(1).split():
+            name, _, value = item.partition("=")
+            marks[name] = float(value) - t0
+    marks["cpu"] = children_cpu() - cpu0
+    return wall, marks
+
+
+def split(wall: float, marks: dict[str, float]) -> str:
+    """One line per phase: seconds and share of the whole process."""
+    if not all(name in marks for name in PHASES):
+        return "    (no timing marks: a pymotoros without PYMOTOROS_INTERPOLATE_TIMINGS)"
+    lines, before = [], 0.0
+    for name, label in zip(PHASES, PHASE_NAMES, strict=True):
+        lines.append(f"    {label:24s} {marks[name] - before:6.3f} s")
+        before = marks[name]
+    lines.append(f"    {'exit':24s} {wall - before:6.3f} s")
+    return "\n".join(lines)
 
 
 def main() -> None:
@@ -83,7 +131,8 @@ def main() -> None:
             "-o",
             str(slow_out),
         ]
-        fast_s, slow_s = [], []
+        fast_s: list[tuple[float, dict[str, float]]] = []
+        slow_s: list[tuple[float, dict[str, float]]] = []
         for _ in range(args.repeat):
             fast_s.append(timed(fast_cmd))
             slow_s.append(timed(slow_cmd))
@@ -95,10 +144,19 @@ def main() -> None:
         f"{args.rows} rows ({size:.1f} MB), points every {args.spacing_ms} ms -> {entries} "
         f"queue entries ({axis_increments / 1e6:.2f} M axis-increments); best of {args.repeat}"
     )
-    for name, s in (("pyarrow CSV (now)", fast_s), ("Python csv (before)", slow_s)):
-        best = min(s)
-        print(f"  {name:20s}: {best:.2f} s whole process, {axis_increments / best / 1e6:.2f} M/s")
-    print(f"  speed-up {min(slow_s) / min(fast_s):.2f}x; outputs identical: {same}")
+    for name, runs in (("pyarrow CSV (now)", fast_s), ("Python csv (before)", slow_s)):
+        walls = sorted(wall for wall, _ in runs)
+        best = walls[0]
+        cpu = min(marks["cpu"] for _, marks in runs)
+        print(
+            f"  {name:20s}: {best:.2f} s whole process, {axis_increments / best / 1e6:.2f} M/s "
+            f"(median {walls[len(walls) // 2]:.2f} s; CPU {cpu:.2f} s, all threads)"
+        )
+    best_fast = min(fast_s, key=lambda run: run[0])
+    print("  phases of the best pyarrow run:")
+    print(split(*best_fast))
+    print(f"  speed-up {min(s for s, _ in slow_s) / best_fast[0]:.2f}x; outputs identical: {same}")
+    print(f"load average {os.getloadavg()[0]:.2f} at the end")
     if not same:
         raise SystemExit("the two paths disagree")
 

@@ -16,6 +16,13 @@ What it measures, each against a ``pymotoros sim`` subprocess on 127.0.0.1 port 
 5. the machine's floor: the same ``Ticker`` and ``LoopClock`` ticking a step that does
    nothing, alone in a fresh process for ``--floor`` seconds. No loop on this machine can
    be more punctual than that; it tells the simulator's own cost from the machine's.
+
+``--breakdown`` measures only where a CHECK_QUEUE_CNT round trip goes (issue 13): the
+simulator runs with clock marks (``time.perf_counter_ns``, the system-wide monotonic
+clock, so the client's and the server's marks compare) around each step of the request
+path, the client marks send and receive, and the median of each step is printed next
+to the asyncio echo baseline, with how often a tick ran inside a round trip and what it
+cost. The marks add their own ~1 µs per step; the totals are given with and without.
 """
 
 from __future__ import annotations
@@ -92,6 +99,198 @@ FLOOR_TICKER = textwrap.dedent(
     asyncio.run(main(float(sys.argv[1])))
     """
 )
+
+
+BREAKDOWN_SIM = textwrap.dedent(
+    """
+    # pymotoros sim with clock marks around each step of a motion request (bench only).
+    import asyncio, atexit, collections, json, os, sys, time
+    import pymotoros.runtime.app as app
+    import pymotoros.runtime.motion_server as ms
+    import pymotoros.runtime.tcp as tcp
+
+    now = time.perf_counter_ns
+    MAX_RECORDS = 100_000  # bounded: one round-trip run is a few thousand
+    marks = {}
+    records = []
+    ticks = collections.deque(maxlen=200_000)  # (start, end) of each tick
+
+    def wrap_sync(owner, name, label, after=True):
+        real = getattr(owner, name)
+        def wrapper(*args, **kwargs):
+            result = real(*args, **kwargs)
+            marks[label] = now()
+            return result
+        setattr(owner, name, wrapper)
+
+    real_feed = asyncio.StreamReader.feed_data
+    def feed_data(self, data):
+        marks.setdefault("feed", now())
+        real_feed(self, data)
+    asyncio.StreamReader.feed_data = feed_data
+
+    real_read = asyncio.StreamReader.read
+    async def read(self, n=-1):
+        data = await real_read(self, n)
+        marks["read"] = now()
+        return data
+    asyncio.StreamReader.read = read
+
+    class Decoder(tcp.FrameDecoder):
+        def next_frame(self):
+            frame = super().next_frame()
+            if frame is not None:
+                marks["frame"] = now()
+            return frame
+    tcp.FrameDecoder = Decoder
+
+    wrap_sync(ms, "check_request", "decoded")
+
+    real_write = asyncio.StreamWriter.write
+    def write(self, data):
+        marks["encoded"] = now()  # the reply's bytes are ready
+        real_write(self, data)
+        marks["written"] = now()
+    asyncio.StreamWriter.write = write
+
+    real_process = ms.MotionServer._process
+    async def process(self, *args):
+        reply = await real_process(self, *args)
+        marks["processed"] = now()
+        return reply
+    ms.MotionServer._process = process
+
+    real_drain = asyncio.StreamWriter.drain
+    async def drain(self):
+        await real_drain(self)
+        marks["drained"] = now()
+        if len(records) < MAX_RECORDS:
+            records.append(dict(marks))
+        marks.clear()
+    asyncio.StreamWriter.drain = drain
+
+    class Ticker(app.Ticker):
+        def __init__(self, step, *args, **kwargs):
+            def timed_step():
+                start = now()
+                step()
+                ticks.append((start, now()))
+            super().__init__(timed_step, *args, **kwargs)
+    app.Ticker = Ticker
+
+    def dump():
+        with open(os.environ["BREAKDOWN_OUT"], "w") as f:
+            json.dump({"records": records, "ticks": list(ticks)}, f)
+    atexit.register(dump)
+
+    from pymotoros.cli.main import main
+    sys.argv = ["pymotoros", "-q", "sim", "--motion-port", "0", "--state-port", "0",
+                "--io-port", "0", "--http-port", "0"]
+    main()
+    """
+)
+
+BREAKDOWN_STEPS = (
+    ("send -> data_received", "send", "feed", "client send, loopback, epoll, loop, recv"),
+    ("data_received -> task", "feed", "read", "future set, task step scheduled and run"),
+    ("reassembly", "read", "frame", "FrameDecoder.feed/next_frame"),
+    ("decode", "frame", "decoded", "check_request: size rules and decode"),
+    ("dispatch", "decoded", "processed", "_process: controller.motion_ctrl, reply object"),
+    ("encode", "processed", "encoded", "reply bytes (encoded, or found already encoded)"),
+    ("send -> client has it", "encoded", "recv", "send syscall, loopback, client wake-up"),
+)
+"""The critical path of one round trip, in order (their medians add up to about the
+whole). After the reply has left, the server still returns from write() and drain()
+(printed apart: it overlaps the client's next request)."""
+
+
+def breakdown(n: int) -> None:
+    """Where a CHECK_QUEUE_CNT round trip goes, step by step (see the module docstring)."""
+    import tempfile
+
+    with tempfile.TemporaryDirectory() as tmp:
+        out = os.path.join(tmp, "marks.json")
+        cmd = [sys.executable, "-c", BREAKDOWN_SIM]
+        env = {**os.environ, "BREAKDOWN_OUT": out}
+        proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, text=True, env=env)  # noqa: S603
+        assert proc.stdout is not None
+        match = READY.fullmatch(proc.stdout.readline().strip())
+        if match is None:
+            proc.kill()
+            raise SystemExit("the instrumented simulator did not start")
+        request = encode(MotoMotionCtrl(0, 0, MotionCommand.CHECK_QUEUE_CNT), ORDER)
+        client = marked_round_trips(int(match.group(1)), request, 76, n)
+        proc.send_signal(signal.SIGTERM)
+        proc.wait(timeout=30)
+        with open(out, encoding="utf-8") as f:
+            dumped = json.load(f)
+    records = dumped["records"][-len(client) :]
+    if len(records) != len(client):
+        raise SystemExit(f"{len(records)} server records for {len(client)} round trips")
+    ticks = dumped["ticks"]
+    echo = echo_round_trips(n)
+    for rec, (send, recv) in zip(records, client, strict=True):
+        rec["send"], rec["recv"] = send, recv
+    total = [(r["recv"] - r["send"]) / 1000 for r in records]
+    print(f"CHECK_QUEUE_CNT round trip, step by step (median over {len(records)}, µs):")
+    steps_sum = 0.0
+    for label, start, end, what in BREAKDOWN_STEPS:
+        values = [(r[end] - r[start]) / 1000 for r in records]
+        median = statistics.median(values)
+        steps_sum += median
+        print(f"  {label:22s} {median:7.1f}  p99 {pct(values, 0.99):7.1f}   {what}")
+    print(
+        f"  whole round trip       {statistics.median(total):7.1f}  p99 {pct(total, 0.99):7.1f}"
+        f"   (sum of the step medians {steps_sum:.1f}; the marks cost ~1 µs per step)"
+    )
+    after = [(r["drained"] - r["encoded"]) / 1000 for r in records]
+    print(f"  after the reply left: write() and drain() return {statistics.median(after):.1f}")
+    print(
+        f"  asyncio echo baseline   {pct(echo, 0.5) * 1e6:7.1f}  p99 {pct(echo, 0.99) * 1e6:7.1f}"
+        f"   ratio p50 {statistics.median(total) / (pct(echo, 0.5) * 1e6):.2f}x (marks included)"
+    )
+    hit, stolen = 0, []
+    index = 0
+    starts = [t[0] for t in ticks]
+    import bisect
+
+    for r in records:
+        index = bisect.bisect_left(starts, r["send"] - 4_000_000)
+        overlap = 0
+        for start, end in ticks[index:]:
+            if start > r["recv"]:
+                break
+            overlap += max(0, min(end, r["recv"]) - max(start, r["send"]))
+        if overlap:
+            hit += 1
+            stolen.append(overlap / 1000)
+    tick_len = [(e - s) / 1000 for s, e in ticks]
+    print(
+        f"  ticker interference: a tick ran inside {hit} of {len(records)} round trips "
+        f"({100 * hit / len(records):.1f} %), taking a median "
+        f"{statistics.median(stolen or [0]):.1f}"
+        f" µs of them; a tick lasts {statistics.median(tick_len or [0]):.1f} µs (median) in "
+        "this idle twin"
+    )
+
+
+def marked_round_trips(port: int, request: bytes, reply_size: int, n: int) -> list[tuple[int, int]]:
+    """(send, receive) perf_counter_ns of ``n`` round trips after 200 of warm-up."""
+    with socket.create_connection(("127.0.0.1", port), timeout=10) as sock:
+        sock.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
+        marks = []
+        for i in range(n + 200):
+            t0 = time.perf_counter_ns()
+            sock.sendall(request)
+            got = 0
+            while got < reply_size:
+                chunk = sock.recv(4096)
+                if not chunk:
+                    raise ConnectionError("server closed")
+                got += len(chunk)
+            if i >= 200:
+                marks.append((t0, time.perf_counter_ns()))
+        return marks
 
 
 def floor_lateness(seconds: float) -> dict[str, float]:
@@ -311,12 +510,22 @@ def main() -> None:
         help="run the simulator under `chrt --fifo N` (SCHED_FIFO real-time priority, needs "
         "root or CAP_SYS_NICE), as a real-time deployment would",
     )
+    parser.add_argument(
+        "--breakdown",
+        action="store_true",
+        help="only split a CHECK_QUEUE_CNT round trip into its steps (instrumented "
+        "simulator, --round-trips of them) next to the echo baseline",
+    )
     args = parser.parse_args()
 
     print(
         f"machine: {os.cpu_count()} cores, Python {sys.version.split()[0]}, "
         f"load average {os.getloadavg()[0]:.2f} at start"
     )
+    if args.breakdown:
+        breakdown(args.round_trips)
+        print(f"load average {os.getloadavg()[0]:.2f} at the end (other work on the machine)")
+        return
 
     startups = []
     for _ in range(args.startups):

@@ -4,7 +4,10 @@ byte-for-byte the output of the Python path, and the same errors."""
 from __future__ import annotations
 
 import math
+import os
 import random
+import subprocess
+import sys
 from pathlib import Path
 
 import pytest
@@ -74,3 +77,101 @@ def test_the_fast_path_falls_back_for_the_precise_error(
 ) -> None:
     monkeypatch.setattr(interpolate_cli, "FAST_CSV_BYTES", ALWAYS)
     test_bad_csv_is_a_clear_error(tmp_path, text, words)
+
+
+@pytest.mark.parametrize("flush", [1, 7, 1 << 16])
+def test_block_by_block_writing_gives_the_same_bytes(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, flush: int
+) -> None:
+    """The writer thread takes blocks of any size while the engine computes (its blocks
+    made small too, so that there are many)."""
+    from pymotoros.motion import batch
+
+    traj = tmp_path / "traj.csv"
+    traj.write_text(trajectory_text(300, 3), encoding="utf-8")
+    slow = run(monkeypatch, NEVER, str(traj))
+    monkeypatch.setattr(interpolate_cli, "FLUSH_ENTRIES", flush)
+    monkeypatch.setattr(batch, "SEGMENT_CHUNK", 5)
+    fast = run(monkeypatch, ALWAYS, str(traj))
+    assert fast[0] == slow[0] == 0
+    assert fast[1] == slow[1]
+    out = tmp_path / "fast.csv"
+    code, _, err = run(monkeypatch, ALWAYS, str(traj), "-o", str(out))
+    assert code == 0
+    assert out.read_bytes() == slow[1]
+    assert f"to {out}" in err
+
+
+def test_a_refused_trajectory_leaves_no_output_on_the_fast_path(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    traj = tmp_path / "traj.csv"
+    traj.write_text(HEADER6 + "0" + ",0" * 12 + "\n0.1,0.1,0,0,0,0,0,0,0,0,4.0,0,0\n")
+    out = tmp_path / "out.csv"
+    code, stdout, err = run(monkeypatch, ALWAYS, str(traj), "-o", str(out))
+    assert code == 1
+    assert "3013" in err
+    assert not out.exists()
+    code, stdout, err = run(monkeypatch, ALWAYS, str(traj))
+    assert code == 1
+    assert stdout == b""
+
+
+def test_timings_are_printed_on_request_only(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    traj = tmp_path / "traj.csv"
+    traj.write_text(trajectory_text(20, 4), encoding="utf-8")
+    plain = run(monkeypatch, ALWAYS, str(traj))
+    assert "timings" not in plain[2]
+    monkeypatch.setenv(interpolate_cli.TIMINGS_ENV, "1")
+    timed = run(monkeypatch, ALWAYS, str(traj))
+    assert timed[1] == plain[1]
+    line = timed[2].strip().splitlines()[-1]
+    assert line.startswith("interpolate timings monotonic: ")
+    marks = dict(item.split("=") for item in line.split(": ", 1)[1].split())
+    assert list(marks) == ["start", "read", "check", "engine", "written"]
+    values = [float(v) for v in marks.values()]
+    assert values == sorted(values)
+
+
+# Imported by the process below instead of pandas: pyarrow's to_numpy() imports pandas
+# when it is installed, which costs ~0.3 s of start-up for nothing.
+_NO_PANDAS = "import os, sys\nprint('pandas was imported', file=sys.stderr)\nos._exit(97)\n"
+_IMPORTS_TO_AVOID = ("fastapi", "uvicorn", "scipy", "matplotlib", "toppra", "pinocchio")
+
+
+def test_the_fast_path_imports_neither_pandas_nor_the_heavy_modules(tmp_path: Path) -> None:
+    fake = tmp_path / "fake" / "pandas"
+    fake.mkdir(parents=True)
+    (fake / "__init__.py").write_text(_NO_PANDAS, encoding="utf-8")
+    traj = tmp_path / "traj.csv"
+    traj.write_text(trajectory_text(50, 5), encoding="utf-8")
+    check = (
+        "import sys, runpy\n"
+        "import pymotoros.cli.interpolate as m\n"
+        "m.FAST_CSV_BYTES = 0\n"
+        "sys.argv = ['pymotoros', 'interpolate', sys.argv[1], '-o', sys.argv[2]]\n"
+        "try:\n"
+        "    runpy.run_module('pymotoros', run_name='__main__')\n"
+        "except SystemExit as exc:\n"
+        "    assert not exc.code, exc.code\n"
+        f"heavy = [m for m in {_IMPORTS_TO_AVOID!r} if m in sys.modules]\n"
+        "assert not heavy, heavy\n"
+    )
+    env = {
+        **os.environ,
+        "PYTHONPATH": os.pathsep.join(
+            [str(tmp_path / "fake"), *filter(None, [os.environ.get("PYTHONPATH")])]
+        ),
+    }
+    done = subprocess.run(  # noqa: S603 - our own interpreter
+        [sys.executable, "-c", check, str(traj), str(tmp_path / "out.csv")],
+        capture_output=True,
+        text=True,
+        check=False,
+        timeout=120,
+        env=env,
+    )
+    assert done.returncode == 0, done.stderr
+    assert (tmp_path / "out.csv").read_text(encoding="utf-8").startswith("time_ms,")

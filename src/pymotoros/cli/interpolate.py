@@ -17,9 +17,12 @@ from __future__ import annotations
 import csv
 import logging
 import math
+import os
 import sys
+import time
+from concurrent.futures import Future, ThreadPoolExecutor
 from pathlib import Path
-from typing import IO, Final
+from typing import IO, Any, Final
 
 import click
 import numpy as np
@@ -42,6 +45,13 @@ FAST_CSV_BYTES: Final = 1 << 20
 """Files at least this large are read and written with pyarrow's C++ CSV engine when it
 is installed (the ``csv`` extra): importing it costs ~0.2 s, which only pays off on
 large files (issue 13: a 150,000-row file spent 1.65 s in Python's csv module)."""
+
+TIMINGS_ENV: Final = "PYMOTOROS_INTERPOLATE_TIMINGS"
+"""When set (to anything but empty), the command ends by printing one line to stderr:
+``interpolate timings monotonic: start=… read=… check=… engine=… written=…``, the
+``time.monotonic()`` at which each phase ended (``start``: the command begins, after
+the interpreter and the imports). ``bench/bench_interpolate.py`` subtracts its own
+clock to split a whole process into phases; the output is unchanged."""
 
 EXIT_REJECTED: Final = 1
 """A point MotoROS would refuse (the message names point, axis, value, limit, subcode)."""
@@ -209,30 +219,124 @@ def read_trajectory_fast(path: Path, n: int) -> tuple[np.ndarray, np.ndarray, np
         return None
     if table.num_rows == 0 or any(column.null_count for column in table.columns):
         return None
-    data = np.column_stack([table.column(i).to_numpy() for i in range(1 + 2 * n)])
+    # Copied straight out of Arrow's buffers, one column per row of ``data``: to_numpy()
+    # would import pandas if it is installed (~0.3 s), for nothing.
+    data = np.empty((len(names), table.num_rows), dtype=np.float64)
+    for j, column in enumerate(table.columns):
+        row = 0
+        for chunk in column.chunks:
+            size = len(chunk)
+            if not size:
+                continue
+            values = chunk.buffers()[1]
+            data[j, row : row + size] = np.frombuffer(
+                values, dtype=np.float64, count=size, offset=chunk.offset * 8
+            )
+            row += size
     if not np.isfinite(data).all():
         return None
     with path.open(encoding="utf-8", newline="") as stream:  # the header's column count
         header = next(csv.reader(stream), None)
     if header is None or len(header) != 1 + 2 * n or all(_is_number(c) for c in header):
         return None  # no header: the Python reader says so
-    return data[:, 0], data[:, 1 : n + 1], data[:, n + 1 :]
+    return data[0], data[1 : n + 1].T, data[n + 1 :].T
 
 
-def write_increments_fast(out: IO[bytes], time_ms: np.ndarray, increments: np.ndarray) -> bool:
-    """:func:`write_increments` with pyarrow's writer (same text); False if not installed."""
-    try:
+FLUSH_ENTRIES: Final = 1 << 16
+"""Entries handed to the writer thread at a time: large enough that pyarrow's per-call
+cost is negligible, small enough that writing starts early."""
+
+
+class BlockWriter:
+    """Writes the increments with pyarrow's CSV writer on a thread of its own, block by
+    block while the engine computes the next ones (the engine's ``on_block``).
+
+    pyarrow formats the integers without holding the GIL, so on two cores writing costs
+    little wall time on top of the engine (issue 13). Nothing is opened or written before
+    the first block, i.e. before every point has passed MotoROS's checks: a refused
+    trajectory leaves no output, as on the Python path.
+    """
+
+    def __init__(self, sink: IO[bytes] | Path, n: int) -> None:
         import pyarrow as pa  # optional, and slow to import
         from pyarrow import csv as pacsv
-    except ImportError:
-        return False
-    n = increments.shape[1]
-    out.write((",".join(["time_ms", *(f"i{i}" for i in range(1, n + 1))]) + "\n").encode())
-    columns = [pa.array(np.ascontiguousarray(time_ms, dtype=np.int64))]
-    columns += [pa.array(np.ascontiguousarray(increments[:, j], dtype=np.int64)) for j in range(n)]
-    table = pa.Table.from_arrays(columns, names=[f"c{j}" for j in range(n + 1)])
-    pacsv.write_csv(table, out, write_options=pacsv.WriteOptions(include_header=False))
-    return True
+
+        self._pa, self._pacsv = pa, pacsv
+        self._target = sink
+        self._n = n
+        self._schema = pa.schema([(f"c{j}", pa.int64()) for j in range(n + 1)])
+        self._sink: Any = None
+        self._writer: Any = None
+        self._pool: ThreadPoolExecutor | None = None
+        self._pending: list[Future[None]] = []
+        self._written = 0
+
+    @classmethod
+    def create(cls, sink: IO[bytes] | Path, n: int) -> BlockWriter | None:
+        """A writer, or None when pyarrow is not installed (the Python writer then runs)."""
+        try:
+            return cls(sink, n)
+        except ImportError:
+            return None
+
+    def block(self, time_ms: np.ndarray, increments: np.ndarray, done: int) -> None:
+        """The engine's ``on_block``: entries ``[0, done)`` are final."""
+        if done - self._written >= FLUSH_ENTRIES:
+            self._submit(time_ms, increments, done)
+
+    def finish(self, time_ms: np.ndarray, increments: np.ndarray) -> None:
+        """Write what is left and wait until everything is written (errors raise here)."""
+        self._submit(time_ms, increments, len(time_ms))
+        if self._pool is not None:
+            self._pool.shutdown(wait=True)
+        for future in self._pending:
+            future.result()
+        self._writer.close()
+        self.close()
+
+    def close(self) -> None:
+        """Stop the thread (dropping blocks not yet written) and close a file opened here;
+        once is enough, more is harmless."""
+        if self._pool is not None:
+            self._pool.shutdown(wait=True, cancel_futures=True)
+        sink, self._sink = self._sink, None
+        if sink is None:
+            return
+        if isinstance(self._target, Path):
+            sink.close()
+        else:
+            sink.flush()
+
+    def _submit(self, time_ms: np.ndarray, increments: np.ndarray, done: int) -> None:
+        if self._pool is None:
+            pa = self._pa
+            self._sink = (
+                pa.OSFile(str(self._target), "wb")
+                if isinstance(self._target, Path)
+                else self._target
+            )
+            names = ["time_ms", *(f"i{i}" for i in range(1, self._n + 1))]
+            self._sink.write((",".join(names) + "\n").encode())
+            options = self._pacsv.WriteOptions(include_header=False)
+            self._writer = self._pacsv.CSVWriter(self._sink, self._schema, write_options=options)
+            self._pool = ThreadPoolExecutor(1, thread_name_prefix="pymotoros-csv")
+        lo, self._written = self._written, done
+        if done > lo:
+            job = self._pool.submit(self._write, time_ms[lo:done], increments[lo:done])
+            self._pending.append(job)
+
+    def _write(self, time_ms: np.ndarray, increments: np.ndarray) -> None:
+        pa = self._pa
+        size = len(time_ms)
+        # Arrow arrays over the numpy memory (pa.array would import numpy.ma, ~12 ms).
+        columns = [
+            pa.Array.from_buffers(pa.int64(), size, [None, pa.py_buffer(column)])
+            for column in (
+                np.ascontiguousarray(time_ms, dtype=np.int64),
+                *np.ascontiguousarray(increments.T, dtype=np.int64),
+            )
+        ]
+        self._writer.write_table(pa.Table.from_arrays(columns, schema=self._schema))
 
 
 def write_increments(stream: IO[str], time_ms: np.ndarray, increments: np.ndarray) -> None:
@@ -306,10 +410,19 @@ def interpolate(
     naming the point (0 = start), the axis, the value, the limit and the subcode.
     Robots with several control groups (sda10f) are not supported here.
     """
+    marks: list[tuple[str, float]] | None = [] if os.environ.get(TIMINGS_ENV) else None
     try:
-        _interpolate(traj, controller_name, robot_name, ratios, output, deg)
+        _interpolate(traj, controller_name, robot_name, ratios, output, deg, marks)
     except click.BadParameter as exc:
         raise _BadInput(exc.format_message()) from None
+    if marks:
+        text = " ".join(f"{name}={value:.6f}" for name, value in marks)
+        click.echo(f"interpolate timings monotonic: {text}", err=True)
+
+
+def _mark(marks: list[tuple[str, float]] | None, name: str) -> None:
+    if marks is not None:
+        marks.append((name, time.monotonic()))
 
 
 def _interpolate(
@@ -319,7 +432,9 @@ def _interpolate(
     ratios: str | None,
     output: Path | None,
     deg: bool,
+    marks: list[tuple[str, float]] | None = None,
 ) -> None:
+    _mark(marks, "start")
     try:
         robot = robot_model(robot_name)
         controller = controller_model(controller_name)
@@ -351,6 +466,7 @@ def _interpolate(
         with traj.open(newline="", encoding="utf-8") as stream:
             parsed = read_trajectory(stream, n, traj.name)
     times, pos, vel = parsed
+    _mark(marks, "read")
     if deg:
         angular = np.array([not a.linear for a in group.axes])
         pos = np.where(angular, np.radians(pos), pos)
@@ -360,24 +476,32 @@ def _interpolate(
         click.echo(f"warning: {line}; check the file", err=True)
     if len(warnings) > MAX_WARNINGS:
         click.echo(f"warning: {len(warnings) - MAX_WARNINGS} more such points", err=True)
-    try:
-        time_ms, increments = interpolate_arrays(times, pos, vel, axes)
-    except TrajectoryRejectedError as exc:
-        raise _Rejected(f"MotoROS would refuse {exc}") from None
+    _mark(marks, "check")
     if output is None:
         sys.stdout.flush()
-        if not (large and write_increments_fast(sys.stdout.buffer, time_ms, increments)):
-            write_increments(sys.stdout, time_ms, increments)
+    writer = (
+        BlockWriter.create(sys.stdout.buffer if output is None else output, n) if large else None
+    )
+    try:
+        time_ms, increments = interpolate_arrays(
+            times, pos, vel, axes, on_block=None if writer is None else writer.block
+        )
+        _mark(marks, "engine")
+        if writer is not None:
+            writer.finish(time_ms, increments)
+    except TrajectoryRejectedError as exc:
+        raise _Rejected(f"MotoROS would refuse {exc}") from None
+    finally:
+        if writer is not None:
+            writer.close()  # after an error: stops the thread, closes the file
+    if writer is None and output is None:
+        write_increments(sys.stdout, time_ms, increments)
         sys.stdout.flush()
-    elif large:
-        with output.open("wb") as raw:
-            if write_increments_fast(raw, time_ms, increments):
-                return
+    elif writer is None and output is not None:
         with output.open("w", encoding="utf-8", newline="") as out:
             write_increments(out, time_ms, increments)
-    else:
-        with output.open("w", encoding="utf-8", newline="") as out:
-            write_increments(out, time_ms, increments)
+    _mark(marks, "written")
+    if output is not None:
         click.echo(
             f"wrote {len(time_ms)} increments ({n} axes, {len(times)} points) to {output}",
             err=True,

@@ -18,7 +18,7 @@ import numpy.typing as npt
 from pymotoros.models import FloatMode
 from pymotoros.models.rules import MAX_POINT_TIME_S, check_speed, check_start, check_time
 from pymotoros.motion.axes import GroupAxes, to_pulses
-from pymotoros.motion.batch import batch_increments
+from pymotoros.motion.batch import BlockDone, batch_increments
 from pymotoros.motion.constants import INT32_MAX
 from pymotoros.motion.numerics import (
     c_int_array,
@@ -57,6 +57,7 @@ def interpolate_arrays(
     axes: GroupAxes,
     *,
     validate: bool = True,
+    on_block: BlockDone | None = None,
 ) -> tuple[I64Array, I64Array]:
     """The increments MotoROS queues for a trajectory given as arrays.
 
@@ -66,7 +67,9 @@ def interpolate_arrays(
     ``axes.axis_slots[j]``. With ``validate`` a point MotoROS would refuse raises
     :class:`~pymotoros.errors.TrajectoryRejectedError` (the first one, as a streaming
     client would meet it). Points not after the current one are dropped with a
-    warning, as MotoROS drops them.
+    warning, as MotoROS drops them. ``on_block`` is told as the leading entries
+    become final (see :func:`~pymotoros.motion.batch.batch_increments`), after every
+    check has passed.
     """
     mode = axes.float_mode
     n = axes.num_axes
@@ -108,6 +111,7 @@ def interpolate_arrays(
         np.asarray(seg_full, dtype=np.int64),
         start_target,
         axes,
+        on_block=on_block,
     )
 
 
