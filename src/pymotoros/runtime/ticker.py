@@ -35,7 +35,6 @@ drops only ticks after the batch's wake-up deadline.
 from __future__ import annotations
 
 import asyncio
-import contextlib
 import heapq
 import itertools
 import logging
@@ -184,6 +183,11 @@ class Ticker:
         self.batched = 0
 
     @property
+    def next_deadline(self) -> float | None:
+        """The deadline of the next tick (clock time), or None while not running."""
+        return self._deadline
+
+    @property
     def batching(self) -> bool:
         """True while the loop sleeps through a batch (nobody observing)."""
         return self._batch_until is not None
@@ -257,10 +261,9 @@ class Ticker:
             await asyncio.wait((sleep, nudge), return_when=asyncio.FIRST_COMPLETED)
         finally:
             self._nudge = None
-            if not sleep.done():
-                sleep.cancel()
-                with contextlib.suppress(asyncio.CancelledError):
-                    await sleep
+            # Not awaited: awaiting the cancelled sleep would swallow a cancellation of
+            # this task arriving meanwhile (both raise CancelledError).
+            sleep.cancel()
             nudge.cancel()
 
     def _end_batch(self) -> None:
