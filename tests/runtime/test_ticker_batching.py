@@ -258,7 +258,7 @@ def batched_event(
         if holder_ready(app) and app().ticker.batched >= n:
             event.set()
 
-    controller.tick = counting_tick  # type: ignore[method-assign]
+    controller.tick = counting_tick
     return event
 
 

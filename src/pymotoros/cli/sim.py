@@ -146,6 +146,20 @@ def _cell(
     help="Write the ports taken as JSON here once listening (removed on exit); "
     "robot commands read it with --ports-file.",
 )
+@click.option(
+    "--realtime",
+    is_flag=True,
+    help="Ask Linux for real-time scheduling (SCHED_FIFO, low priority): steadier ticks "
+    "on a loaded machine; needs CAP_SYS_NICE or ulimit -r, else a warning and normal "
+    "scheduling.",
+)
+@click.option(
+    "--no-idle-batching",
+    "no_idle_batching",
+    is_flag=True,
+    help="Tick every 4 ms even while no client is connected (by default an unobserved "
+    "twin runs its ticks in batches of 100 ms, caught up before anyone looks).",
+)
 @click.pass_context
 def sim(
     ctx: click.Context,
@@ -159,6 +173,8 @@ def sim(
     config_path: Path | None,
     scenario_path: Path | None,
     ports_file: Path | None,
+    realtime: bool = False,
+    no_idle_batching: bool = False,
 ) -> None:
     """Run the virtual controller (MotoROS on 50240/50241/50242, control API on --http-port).
 
@@ -184,9 +200,14 @@ def sim(
         http_port=http_port,
         byte_order=order,
     )
+    if realtime:
+        from pymotoros.runtime.realtime import request_realtime
+
+        request_realtime()  # a warning line if refused; the twin runs on either way
+    app = SimulatorApp(controller, config, idle_batching=False if no_idle_batching else None)
     try:
         try:
-            asyncio.run(run_simulator(SimulatorApp(controller, config), ports_file))
+            asyncio.run(run_simulator(app, ports_file))
         finally:
             if ports_file is not None:
                 ports_file.unlink(missing_ok=True)
