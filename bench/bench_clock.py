@@ -41,6 +41,7 @@ import asyncio
 import contextlib
 import json
 import os
+import signal
 import subprocess
 import sys
 import textwrap
@@ -143,6 +144,19 @@ def start_twins(n: int, extra: list[str]) -> list[Sim]:
         motion, state, io, port = (int(g) for g in match.groups())
         sims.append(Sim(proc, motion, state, io, port, time.perf_counter() - t0))
     return sims
+
+
+def stop_twins(sims: list[Sim]) -> None:
+    """SIGTERM every twin at once, then wait for each (stopping one by one takes long)."""
+    for sim in sims:
+        with contextlib.suppress(ProcessLookupError):
+            sim.proc.send_signal(signal.SIGTERM)
+    for sim in sims:
+        try:
+            sim.proc.wait(timeout=30)
+        except subprocess.TimeoutExpired:
+            sim.proc.kill()
+            sim.proc.wait()
 
 
 async def clients_for(ports: list[tuple[int, int]], seconds: float) -> None:
@@ -340,7 +354,9 @@ def main() -> None:
     table: list[tuple[int, str, str, dict[str, float]]] = []
     for n in args.twins:
         for label, extra in variants:
+            t0 = time.monotonic()
             sims = start_twins(n, extra)
+            print(f"  ({n} twins{label} started in {time.monotonic() - t0:.1f} s)", flush=True)
             try:
                 r = asyncio.run(measure(sims, idle_duration, args.warmup, False, label))
                 table.append((n, "idle", label, r))
@@ -358,9 +374,7 @@ def main() -> None:
                     )
                     table.append((n, "streaming", label, r))
             finally:
-                for sim in sims:
-                    with contextlib.suppress(Exception):
-                        stop_sim(sim)
+                stop_twins(sims)
     if len(variants) > 1:
         print("side by side (p99 worst twin / median twin, ms; CPU per twin %):")
         for n, what, label, r in table:
