@@ -74,7 +74,7 @@ async def running(ticker: Ticker) -> AsyncIterator[None]:
             await task
 
 
-async def step(clock: ManualClock, periods: int) -> None:
+async def step_periods(clock: ManualClock, periods: int) -> None:
     """Move time one period at a time (the same float steps as the ticker's deadlines)."""
     for _ in range(periods):
         clock.advance(PERIOD)
@@ -92,12 +92,12 @@ async def test_idle_ticks_run_back_to_back_at_the_end_of_each_batch() -> None:
     ticker = Ticker(rec, PERIOD, clock, may_batch=Observed())
     async with running(ticker):
         assert ticker.count == 1  # the first tick runs at the start
-        await step(clock, IDLE_BATCH_TICKS - 1)
+        await step_periods(clock, IDLE_BATCH_TICKS - 1)
         assert ticker.count == 1  # deferred: nobody is looking
         assert ticker.batching
-        await step(clock, 1)  # the batch's last deadline
+        await step_periods(clock, 1)  # the batch's last deadline
         assert ticker.count == 1 + IDLE_BATCH_TICKS
-        await step(clock, 2 * IDLE_BATCH_TICKS)
+        await step_periods(clock, 2 * IDLE_BATCH_TICKS)
     assert ticker.count == 1 + 3 * IDLE_BATCH_TICKS
     # every tick ran once, in order, never before its deadline, at most a batch after it
     for index, when in rec.calls:
@@ -118,11 +118,11 @@ async def test_catch_up_runs_exactly_the_ticks_due_none_lost_or_duplicated() -> 
     ticker = Ticker(rec, PERIOD, clock, may_batch=Observed())
     async with running(ticker):
         for periods in (7, 1, 31, 12, 50, 3):  # observations at odd moments
-            await step(clock, periods)
+            await step_periods(clock, periods)
             ticker.catch_up()
             assert ticker.count == passed(clock)
             await settle()  # the loop re-plans its batch
-        await step(clock, 250)
+        await step_periods(clock, 250)
         ticker.catch_up()
         assert ticker.count == passed(clock) == 1 + 354
     assert [index for index, _ in rec.calls] == list(range(ticker.count))
@@ -133,7 +133,7 @@ async def test_catch_up_does_nothing_without_batching() -> None:
     clock = ManualClock()
     ticker = Ticker(lambda: None, PERIOD, clock)
     async with running(ticker):
-        await step(clock, 10)
+        await step_periods(clock, 10)
         assert ticker.catch_up() == 0
         assert not ticker.batching
         assert ticker.count == 11
@@ -149,14 +149,14 @@ async def test_a_waiter_wakes_at_its_ticks_deadline() -> None:
         woke.append((ticker.count, clock.now()))
 
     async with running(ticker):
-        await step(clock, 5)
+        await step_periods(clock, 5)
         assert ticker.count == 1  # batching
         task = asyncio.create_task(waiter())
         await settle()
         assert ticker.count == 6  # wait_ticks counts from an up-to-date controller
-        await step(clock, 2)
+        await step_periods(clock, 2)
         assert not woke
-        await step(clock, 1)
+        await step_periods(clock, 1)
         assert woke == [(9, pytest.approx(8 * PERIOD))]
         await task
 
@@ -166,17 +166,17 @@ async def test_an_observer_makes_it_tick_every_period_again() -> None:
     flag = Observed()
     ticker = Ticker(lambda: None, PERIOD, clock, may_batch=flag)
     async with running(ticker):
-        await step(clock, 10)
+        await step_periods(clock, 10)
         assert ticker.count == 1
         flag.observed = True  # a client connects ...
         assert ticker.catch_up() == 10  # ... and its server catches the controller up
         await settle()
         for k in range(1, 6):
-            await step(clock, 1)
+            await step_periods(clock, 1)
             assert ticker.count == 11 + k  # every period, in real time
         assert not ticker.batching
         flag.observed = False  # it left: batching again from the next tick
-        await step(clock, 2)
+        await step_periods(clock, 2)
         assert ticker.count == 17
         assert ticker.batching
 
@@ -193,6 +193,27 @@ async def test_a_stall_in_a_batch_runs_the_deferred_ticks_and_resyncs_after() ->
     assert ticker.resyncs == 1
     assert ticker.skipped == RESYNC_PERIODS + 20
     assert ticker.count == 1 + (IDLE_BATCH_TICKS - 1) + 1
+
+
+async def test_a_tick_failing_in_a_catch_up_stops_the_loop_not_the_caller() -> None:
+    clock = ManualClock()
+    calls = [0]
+
+    def step() -> None:
+        calls[0] += 1
+        if calls[0] == 5:
+            raise RuntimeError("tick 5 broke")
+
+    ticker = Ticker(step, PERIOD, clock, may_batch=Observed())
+    task = asyncio.create_task(ticker.run())
+    await settle()
+    await step_periods(clock, 10)
+    assert ticker.catch_up() == 0  # the caller (a request, an accept) is not hurt
+    await settle()
+    assert task.done()
+    with pytest.raises(RuntimeError, match="tick 5 broke"):
+        task.result()
+    assert ticker.count == 4
 
 
 async def test_a_batched_controller_equals_one_ticked_in_real_time() -> None:
@@ -216,7 +237,7 @@ async def test_a_batched_controller_equals_one_ticked_in_real_time() -> None:
     async with running(pair[0][2]), running(pair[1][2]):
         for periods in (13, 40, 37, 90, 101, 7):
             for _, clock, _ in pair:
-                await step(clock, periods)
+                await step_periods(clock, periods)
             batched, plain = pair
             batched[2].catch_up()
             assert batched[2].count == plain[2].count
@@ -324,7 +345,7 @@ async def driver_session(batching: bool) -> tuple[list[WireMessage], object, int
         replies.append(await task)
 
     async with app:
-        await step(clock, 500)
+        await step_periods(clock, 500)
         assert app.ticker.batching is batching
         state = await Peer.connect(app.ports.state, Port.STATE)
         motion = await Peer.connect(app.ports.motion, Port.MOTION)
@@ -335,7 +356,7 @@ async def driver_session(batching: bool) -> tuple[list[WireMessage], object, int
         end = JointTrajPtFull.for_joints(0, 1, 0.5, [0.2] + [0.0] * 5, [0.0] * 6)
         await request(motion, start)
         await request(motion, end)
-        await step(clock, 200)
+        await step_periods(clock, 200)
         await request(motion, MotoMotionCtrl(0, 0, MotionCommand.CHECK_QUEUE_CNT))
         await request(motion, MotoMotionCtrl(0, 0, MotionCommand.STOP_TRAJ_MODE))
         await motion.close()

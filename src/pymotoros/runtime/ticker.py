@@ -151,6 +151,7 @@ class Ticker:
         self._batch_until: float | None = None  # ticks due before this were deferred
         self._nudge: asyncio.Future[None] | None = None
         self._next_stall_log = -math.inf
+        self._failure: Exception | None = None  # a tick that failed in catch_up()
 
     def stats(self) -> TickStats:
         n = min(self._samples, len(self._lateness))
@@ -199,11 +200,18 @@ class Ticker:
         batch, so the loop asks ``may_batch`` again (a new client makes it tick every
         period). Without a batch in progress it does nothing: the loop is on time.
         """
-        if self._batch_until is None or self._deadline is None:
+        if self._batch_until is None or self._deadline is None or self._failure is not None:
             return 0
-        ran = self._run_due(self._clock.now(), None)
-        self._end_batch()
-        return ran
+        try:
+            return self._run_due(self._clock.now(), None)
+        except Exception as exc:
+            # A tick that fails here must stop the loop as it would in run() (the
+            # simulator's task group then stops everything), not the caller's request.
+            self._failure = exc
+            logger.error("a tick failed during a catch-up; stopping the interpolation loop")
+            return 0
+        finally:
+            self._end_batch()
 
     async def wait_ticks(self, n: int) -> None:
         """Return after ``n`` more ticks have run (for tests and tools; no polling)."""
@@ -234,6 +242,8 @@ class Ticker:
                 else:
                     self._batch_until = wake
                     await self._sleep_or_nudge(wake)
+                    if self._failure is not None:
+                        raise self._failure
         finally:
             self._batch_until = None
             self._deadline = None
