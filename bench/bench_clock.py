@@ -2,6 +2,8 @@
 
     python bench/bench_clock.py                          # the recorded run
     python bench/bench_clock.py --twins 1 --duration 5   # a quick look
+    python bench/bench_clock.py --alone 0 --contention 0 --realtime both \
+        --client-procs 2 --client-nice 19 --idle-duration 10   # --realtime side by side
 
 For each fleet size in ``--twins`` it starts that many ``pymotoros sim`` processes on
 127.0.0.1 port 0 and measures, over ``--duration`` seconds after a warm-up:
@@ -11,7 +13,15 @@ For each fleet size in ``--twins`` it starts that many ``pymotoros sim`` process
    ``POST /api/tick/reset``);
 2. streaming: the same while each twin has its own motion client streaming a
    trajectory (JOINT_TRAJ_PT_FULL every 100 ms of trajectory time, BUSY retries) and one
-   state client; all the clients run in this process.
+   state client; the clients run in this process, or with ``--client-procs K`` in K
+   processes of their own (at ``--client-nice``, e.g. 19, so that they load the
+   machine without competing with the twins at the same priority).
+
+``--realtime on|off|both`` starts the twins with ``pymotoros sim --realtime``
+(SCHED_FIFO, low priority), without, or each fleet once each way, one after the other
+in the same run; ``--batching off`` starts them with ``--no-idle-batching`` (idle
+batching is on by default since issue 13: an unconnected twin ticks in batches of
+100 ms; the idle figures then measure the batch wake-ups, see docs/sim.md).
 
 Then, side by side in the same run, the clock alone: a do-nothing Ticker on the
 TimerFdClock (the simulator's clock since issue 13), on the ThreadClock (the timer
@@ -31,6 +41,7 @@ import asyncio
 import contextlib
 import json
 import os
+import signal
 import subprocess
 import sys
 import textwrap
@@ -41,6 +52,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 from bench_runtime import (
     ORDER,
+    READY,
     MotionClient,
     Sim,
     http,
@@ -111,11 +123,100 @@ async def stream(sim: Sim, stop: asyncio.Event) -> int:
     return seq
 
 
-async def measure(sims: list[Sim], duration: float, warmup: float, streaming: bool) -> None:
+def start_twins(n: int, extra: list[str]) -> list[Sim]:
+    """Start ``n`` twins at once (their start-ups overlap), each on OS-chosen ports."""
+    cmd = [sys.executable, "-m", "pymotoros", "-q", "sim", *extra]
+    cmd += ["--motion-port", "0", "--state-port", "0", "--io-port", "0", "--http-port", "0"]
+    t0 = time.perf_counter()
+    procs = [
+        subprocess.Popen(cmd, stdout=subprocess.PIPE, text=True)  # noqa: S603 - our own argv
+        for _ in range(n)
+    ]
+    sims = []
+    for proc in procs:
+        assert proc.stdout is not None
+        line = proc.stdout.readline()
+        match = READY.fullmatch(line.strip())
+        if match is None:
+            for p in procs:
+                p.kill()
+            raise SystemExit(f"unexpected first line from pymotoros sim: {line!r}")
+        motion, state, io, port = (int(g) for g in match.groups())
+        sims.append(Sim(proc, motion, state, io, port, time.perf_counter() - t0))
+    return sims
+
+
+def stop_twins(sims: list[Sim]) -> None:
+    """SIGTERM every twin at once, then wait for each (stopping one by one takes long)."""
+    for sim in sims:
+        with contextlib.suppress(ProcessLookupError):
+            sim.proc.send_signal(signal.SIGTERM)
+    for sim in sims:
+        try:
+            sim.proc.wait(timeout=30)
+        except subprocess.TimeoutExpired:
+            sim.proc.kill()
+            sim.proc.wait()
+
+
+async def clients_for(ports: list[tuple[int, int]], seconds: float) -> None:
+    """One streaming motion client and one state reader per twin, for ``seconds``."""
     stop = asyncio.Event()
     counts = [0]
     async with asyncio.TaskGroup() as tg:
-        if streaming:
+        for motion, state in ports:
+            sim = Sim(None, motion, state, 0, 0, 0.0)  # type: ignore[arg-type]
+            tg.create_task(stream(sim, stop))
+            tg.create_task(state_reader(state, stop, counts))
+        await asyncio.sleep(seconds)
+        stop.set()
+
+
+def client_worker(argv: list[str]) -> None:
+    """``bench_clock.py --client-worker NICE SECONDS MOTION:STATE ...`` (a child process)."""
+    nice, seconds = int(argv[0]), float(argv[1])
+    if nice:
+        os.nice(nice)
+    ports = [(int(m), int(s)) for m, s in (a.split(":") for a in argv[2:])]
+    asyncio.run(clients_for(ports, seconds))
+
+
+def spawn_clients(
+    sims: list[Sim], procs: int, nice: int, seconds: float
+) -> list[subprocess.Popen[bytes]]:
+    """The load-generating clients in ``procs`` processes of their own, at ``nice``."""
+    groups = [sims[i::procs] for i in range(min(procs, len(sims)))]
+    return [
+        subprocess.Popen(  # noqa: S603 - our own argv
+            [
+                sys.executable,
+                __file__,
+                "--client-worker",
+                str(nice),
+                str(seconds),
+                *(f"{s.motion}:{s.state}" for s in group),
+            ]
+        )
+        for group in groups
+    ]
+
+
+async def measure(
+    sims: list[Sim],
+    duration: float,
+    warmup: float,
+    streaming: bool,
+    label: str = "",
+    client_procs: int = 0,
+    client_nice: int = 0,
+) -> dict[str, float]:
+    stop = asyncio.Event()
+    counts = [0]
+    children: list[subprocess.Popen[bytes]] = []
+    if streaming and client_procs > 0:
+        children = spawn_clients(sims, client_procs, client_nice, warmup + duration + 2.0)
+    async with asyncio.TaskGroup() as tg:
+        if streaming and not children:
             for sim in sims:
                 tg.create_task(stream(sim, stop))
                 tg.create_task(state_reader(sim.state, stop, counts))
@@ -129,6 +230,14 @@ async def measure(sims: list[Sim], duration: float, warmup: float, streaming: bo
         elapsed = time.monotonic() - t0
         states = [await asyncio.to_thread(http, s, "GET", "/api/state") for s in sims]
         stop.set()
+    for child in children:
+        try:
+            child.wait(timeout=30)
+        except subprocess.TimeoutExpired:
+            child.kill()
+            child.wait()
+        if child.returncode != 0:
+            raise SystemExit(f"a client process failed (exit {child.returncode})")
     cpus = [100 * (b - a) / elapsed for a, b in zip(cpu0, cpu1, strict=True)]
     p99s, maxes, overruns = [], [], 0
     for state in states:
@@ -138,12 +247,22 @@ async def measure(sims: list[Sim], duration: float, warmup: float, streaming: bo
         maxes.append(tick["lateness_ms"]["max"])
         overruns += tick["overruns"]
     what = "streaming" if streaming else "idle"
+    result = {
+        "cpu": sum(cpus) / len(cpus),
+        "cpu_total": sum(cpus),
+        "p99_worst": max(p99s),
+        "p99_median": sorted(p99s)[len(p99s) // 2],
+        "max": max(maxes),
+        "overruns": overruns,
+    }
     print(
-        f"  {len(sims):2d} twins {what:9s}: CPU per twin mean {sum(cpus) / len(cpus):.1f} % "
+        f"  {len(sims):2d} twins {what:9s}{label}: CPU per twin mean {result['cpu']:.1f} % "
         f"(max {max(cpus):.1f} %, total {sum(cpus):.0f} %); lateness p99 worst twin "
-        f"{max(p99s):.3f} ms, median twin {sorted(p99s)[len(p99s) // 2]:.3f} ms; "
-        f"max {max(maxes):.1f} ms; {overruns} overruns"
+        f"{max(p99s):.3f} ms, median twin {result['p99_median']:.3f} ms; "
+        f"max {max(maxes):.1f} ms; {overruns} overruns; load {os.getloadavg()[0]:.2f}",
+        flush=True,
     )
+    return result
 
 
 def clock_alone(kind: str, seconds: float) -> dict[str, float]:
@@ -186,28 +305,84 @@ def contention(seconds: float, warmup: float) -> None:
 
 
 def main() -> None:
+    if sys.argv[1:2] == ["--client-worker"]:
+        client_worker(sys.argv[2:])
+        return
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--twins", type=int, nargs="+", default=[1, 8, 16])
-    parser.add_argument("--duration", type=float, default=30.0)
+    parser.add_argument("--duration", type=float, default=30.0, help="seconds streaming")
+    parser.add_argument(
+        "--idle-duration", type=float, default=None, help="seconds idle (default --duration)"
+    )
     parser.add_argument("--warmup", type=float, default=3.0)
     parser.add_argument("--alone", type=float, default=20.0, help="seconds per clock alone")
     parser.add_argument("--contention", type=float, default=10.0)
     parser.add_argument("--no-stream", action="store_true", help="idle fleets only")
+    parser.add_argument(
+        "--realtime",
+        choices=("off", "on", "both"),
+        default="off",
+        help="start the twins with `pymotoros sim --realtime` (both: each fleet each way)",
+    )
+    parser.add_argument(
+        "--batching",
+        choices=("on", "off", "both"),
+        default="on",
+        help="idle batching (off: --no-idle-batching)",
+    )
+    parser.add_argument(
+        "--client-procs",
+        type=int,
+        default=0,
+        help="run the streaming clients in this many processes of their own (0: here)",
+    )
+    parser.add_argument("--client-nice", type=int, default=0, help="niceness of those processes")
     args = parser.parse_args()
+    idle_duration = args.duration if args.idle_duration is None else args.idle_duration
     print(
         f"machine: {os.cpu_count()} cores, Python {sys.version.split()[0]}, "
         f"load average {os.getloadavg()[0]:.2f} at start"
     )
+    variants: list[tuple[str, list[str]]] = []
+    for rt in ("off", "on") if args.realtime == "both" else (args.realtime,):
+        for batch in ("on", "off") if args.batching == "both" else (args.batching,):
+            extra = (["--realtime"] if rt == "on" else []) + (
+                ["--no-idle-batching"] if batch == "off" else []
+            )
+            label = (" realtime" if rt == "on" else "") + (" unbatched" if batch == "off" else "")
+            variants.append((label, extra))
+    table: list[tuple[int, str, str, dict[str, float]]] = []
     for n in args.twins:
-        sims = [start_sim() for _ in range(n)]
-        try:
-            asyncio.run(measure(sims, args.duration, args.warmup, streaming=False))
-            if not args.no_stream:
-                asyncio.run(measure(sims, args.duration, args.warmup, streaming=True))
-        finally:
-            for sim in sims:
-                with contextlib.suppress(Exception):
-                    stop_sim(sim)
+        for label, extra in variants:
+            t0 = time.monotonic()
+            sims = start_twins(n, extra)
+            print(f"  ({n} twins{label} started in {time.monotonic() - t0:.1f} s)", flush=True)
+            try:
+                r = asyncio.run(measure(sims, idle_duration, args.warmup, False, label))
+                table.append((n, "idle", label, r))
+                if not args.no_stream:
+                    r = asyncio.run(
+                        measure(
+                            sims,
+                            args.duration,
+                            args.warmup,
+                            True,
+                            label,
+                            args.client_procs,
+                            args.client_nice,
+                        )
+                    )
+                    table.append((n, "streaming", label, r))
+            finally:
+                stop_twins(sims)
+    if len(variants) > 1:
+        print("side by side (p99 worst twin / median twin, ms; CPU per twin %):")
+        for n, what, label, r in table:
+            print(
+                f"  {n:2d} twins {what:9s} {label.strip() or 'default':20s} "
+                f"p99 {r['p99_worst']:7.3f} / {r['p99_median']:7.3f}  "
+                f"CPU {r['cpu']:4.1f} %  overruns {r['overruns']:.0f}"
+            )
     if args.alone > 0:
         print(f"the clock alone, a do-nothing 4 ms ticker, {args.alone:.0f} s each:")
         for kind in ("timerfd", "thread", "loop-spin"):

@@ -64,6 +64,8 @@ class RunningTwin:
     controller: VirtualController
     """Live on the twin's thread: change it through :meth:`call` (thread-safe)."""
     _loop: asyncio.AbstractEventLoop
+    _catch_up: Callable[[], object] | None = None
+    """Brings an idle twin's controller up to date (idle batching) before :meth:`call`."""
 
     def call(self, fn: Callable[[VirtualController], T]) -> T:
         """Run ``fn(controller)`` on the twin's event loop, between two ticks; its result.
@@ -75,6 +77,8 @@ class RunningTwin:
 
         def run() -> None:
             try:
+                if self._catch_up is not None:
+                    self._catch_up()
                 future.set_result(fn(self.controller))
             except BaseException as exc:  # handed to the caller
                 future.set_exception(exc)
@@ -135,6 +139,7 @@ class _TwinThread:
                     ports.http,
                     controller,
                     self._loop,
+                    app.catch_up,
                 )
             )
             await self._stop.wait()

@@ -155,6 +155,20 @@ def _cell(
     help="Record the twin's side of every MotoROS connection (any client: the ROS "
     "driver, a PLC) to a pcapng file for Wireshark, `pymotoros replay` and `plot`.",
 )
+@click.option(
+    "--realtime",
+    is_flag=True,
+    help="Ask Linux for real-time scheduling (SCHED_FIFO, low priority): steadier ticks "
+    "on a loaded machine; needs CAP_SYS_NICE or ulimit -r, else a warning and normal "
+    "scheduling.",
+)
+@click.option(
+    "--no-idle-batching",
+    "no_idle_batching",
+    is_flag=True,
+    help="Tick every 4 ms even while no client is connected (by default an unobserved "
+    "twin runs its ticks in batches of 100 ms, caught up before anyone looks).",
+)
 @click.pass_context
 def sim(
     ctx: click.Context,
@@ -169,6 +183,8 @@ def sim(
     scenario_path: Path | None,
     ports_file: Path | None,
     record_path: Path | None = None,
+    realtime: bool = False,
+    no_idle_batching: bool = False,
 ) -> None:
     """Run the virtual controller (MotoROS on 50240/50241/50242, control API on --http-port).
 
@@ -194,7 +210,11 @@ def sim(
         http_port=http_port,
         byte_order=order,
     )
-    app = SimulatorApp(controller, config)
+    if realtime:
+        from pymotoros.runtime.realtime import request_realtime
+
+        request_realtime()  # a warning line if refused; the twin runs on either way
+    app = SimulatorApp(controller, config, idle_batching=False if no_idle_batching else None)
     recorder = None
     if record_path is not None:
         from pymotoros.capture import SessionRecorder

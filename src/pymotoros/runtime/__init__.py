@@ -22,6 +22,7 @@ if TYPE_CHECKING:
     from pymotoros.runtime.app import BoundPorts, SimulatorApp, SimulatorConfig
     from pymotoros.runtime.clock import Clock, LoopClock, ManualClock
     from pymotoros.runtime.http_api import create_http_app
+    from pymotoros.runtime.realtime import request_realtime
     from pymotoros.runtime.ticker import Ticker, TickStats
 
 __all__ = [
@@ -34,6 +35,7 @@ __all__ = [
     "TickStats",
     "Ticker",
     "create_http_app",
+    "request_realtime",
 ]
 
 _WHERE = {
@@ -44,6 +46,7 @@ _WHERE = {
     "LoopClock": "clock",
     "ManualClock": "clock",
     "create_http_app": "http_api",
+    "request_realtime": "realtime",
     "TickStats": "ticker",
     "Ticker": "ticker",
 }

@@ -40,6 +40,7 @@ from pymotoros.runtime.clock import Clock, LoopClock, precise_clock
 from pymotoros.runtime.http_api import create_http_app
 from pymotoros.runtime.io_server import IoServer
 from pymotoros.runtime.motion_server import MotionServer
+from pymotoros.runtime.observers import Observers
 from pymotoros.runtime.state_server import (
     STATE_MESSAGE_GAP_S,
     STATE_PERIOD_S,
@@ -98,6 +99,7 @@ class SimulatorApp:
         config: SimulatorConfig | None = None,
         *,
         clock: Clock | None = None,
+        idle_batching: bool | None = None,
     ) -> None:
         self.controller = controller
         self.config = config or SimulatorConfig()
@@ -106,7 +108,16 @@ class SimulatorApp:
         # selector, or a timer thread; issue 13) instead of spinning the last
         # millisecond; the same time line, so the state stream and the ticker agree.
         tick_clock: Clock = clock or precise_clock()
-        self.ticker = Ticker(controller.tick, controller.period_ms / 1000.0, tick_clock)
+        # Idle batching (issue 13): on by default in real time, off on a given clock
+        # (virtual time steps tick by tick); idle_batching=False turns it off.
+        self.idle_batching = clock is None if idle_batching is None else idle_batching
+        self.observers = Observers(self._client_numbers, self._catch_up)
+        self.ticker = Ticker(
+            controller.tick,
+            controller.period_ms / 1000.0,
+            tick_clock,
+            may_batch=self.observers.may_batch if self.idle_batching else None,
+        )
         order = self.config.byte_order
         self.motion = MotionServer(controller, order)
         self.state = StateServer(
@@ -117,6 +128,8 @@ class SimulatorApp:
             message_gap=self.config.state_message_gap,
         )
         self.io = IoServer(controller, order)
+        for server in (self.motion, self.state, self.io):
+            server.catch_up = self._catch_up
         if hasattr(controller, "drop_motion_hook"):  # a scenario's drop_motion
             controller.drop_motion_hook = self.motion.drop_clients
         self._ports: BoundPorts | None = None
@@ -221,6 +234,17 @@ class SimulatorApp:
             return (None, None, None)
         return (self._ports.motion, self._ports.state, self._ports.io)
 
+    def catch_up(self) -> int:
+        """Bring the controller up to date (idle batching) before reading it directly;
+        the servers and the control API do this themselves. Returns the ticks run."""
+        return self.ticker.catch_up()
+
+    def _catch_up(self) -> None:
+        self.ticker.catch_up()
+
+    def _client_numbers(self) -> tuple[int, int, int]:
+        return (self.motion.clients, self.state.clients, self.io.clients)
+
     def client_counts(self) -> dict[str, int]:
         """Clients connected on each MotoROS port (the web pendant shows them)."""
         return {"motion": self.motion.clients, "state": self.state.clients, "io": self.io.clients}
@@ -306,6 +330,7 @@ class SimulatorApp:
             ports=self.listening_ports,
             clients=self.client_counts,
             after_ticks=self.ticker.wait_ticks,
+            observers=self.observers if self.idle_batching else None,
         )
         config = uvicorn.Config(
             app,

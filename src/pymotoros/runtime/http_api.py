@@ -30,6 +30,7 @@ from pymotoros.controller.api import ControllerSnapshot, PendantMode, TcpSnapsho
 from pymotoros.controller.scenario import parse_scenario
 from pymotoros.runtime.csrf import CsrfGuard
 from pymotoros.runtime.docs_page import install_offline_docs
+from pymotoros.runtime.observers import CatchUpMiddleware, Observers
 from pymotoros.runtime.pendant import install_pendant
 from pymotoros.runtime.target import SimulatedController
 from pymotoros.runtime.ticker import TickStats
@@ -342,6 +343,7 @@ def create_http_app(
     ports: Callable[[], tuple[int | None, int | None, int | None]] | None = None,
     clients: Callable[[], dict[str, int]] | None = None,
     after_ticks: Callable[[int], Awaitable[None]] | None = None,
+    observers: Observers | None = None,
 ) -> FastAPI:
     """The control API of one simulated controller."""
     app = FastAPI(
@@ -355,6 +357,8 @@ def create_http_app(
     )
     install_offline_docs(app)
     app.add_middleware(CsrfGuard)  # the pendant's buttons: refuse other sites' POSTs
+    if observers is not None:  # idle batching: every request sees an up-to-date controller
+        app.add_middleware(CatchUpMiddleware, observers=observers)
     app.add_exception_handler(RequestValidationError, _validation_error)
     app.add_exception_handler(StarletteHTTPException, _http_error)
     app.add_exception_handler(ValueError, _value_error)

@@ -128,7 +128,7 @@ class MotionServer(FramedService):
             if len(self._encoded) >= ENCODED_REPLIES:
                 self._encoded.clear()
             data = self._encoded[message] = encode(message, self._order)
-        conn.writer.write(data)
+        conn.write(data)  # through the connection: `sim --record` sees it
         await conn.writer.drain()
 
     def on_disconnect(self, conn: Connection) -> None:

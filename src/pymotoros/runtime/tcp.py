@@ -141,6 +141,8 @@ class TcpService(ABC):
         self.replaced = 0
         self.recorder: SessionRecorder | None = None
         """Records every accepted connection (``pymotoros sim --record``) when set."""
+        self.catch_up: Callable[[], object] | None = None
+        """Called first on every accept: brings a batching ticker up to date (issue 13)."""
 
     # ----------------------------------------------------------- life cycle
 
@@ -197,6 +199,8 @@ class TcpService(ABC):
     # ----------------------------------------------------------- accepting
 
     def _accept(self, reader: asyncio.StreamReader, writer: asyncio.StreamWriter) -> None:
+        if self.catch_up is not None:
+            self.catch_up()
         conn = Connection(reader, writer)
         tg = self._tg
         if tg is None:  # pragma: no cover - start() sets it before accepting
