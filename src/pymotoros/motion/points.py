@@ -9,6 +9,7 @@ packs a Python float does (§11).
 from __future__ import annotations
 
 import struct
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from typing import Final
 
@@ -37,13 +38,19 @@ class GroupPoint:
 
     @classmethod
     def from_traj(cls, point: TrajPoint, mode: FloatMode) -> GroupPoint:
-        pos_in, vel_in = point.pos, point.vel
+        return cls.from_values(point.time, point.pos, point.vel, mode)
+
+    @classmethod
+    def from_values(
+        cls, time: float, pos_in: Sequence[float], vel_in: Sequence[float], mode: FloatMode
+    ) -> GroupPoint:
+        """:meth:`from_traj` without the TrajPoint (at most 8 positions and velocities)."""
         try:  # the time, the positions and the velocities rounded to float32 at once
             raw = _TIMED.pack(
-                point.time, *pos_in, *_ZEROS[len(pos_in) :], *vel_in, *_ZEROS[len(vel_in) :]
+                time, *pos_in, *_ZEROS[len(pos_in) :], *vel_in, *_ZEROS[len(vel_in) :]
             )
         except OverflowError:  # beyond float32: the wire would carry ±inf
-            raw = _TIMED.pack(f32(point.time), *f32_tuple(pos_in, SLOTS), *f32_tuple(vel_in, SLOTS))
+            raw = _TIMED.pack(f32(time), *f32_tuple(pos_in, SLOTS), *f32_tuple(vel_in, SLOTS))
         values = _TIMED.unpack(raw)
         pos, vel = values[1 : SLOTS + 1], values[SLOTS + 1 :]
         tame = sum(map(abs, pos)) + sum(map(abs, vel)) < TAME_LIMIT  # False for inf and NaN
