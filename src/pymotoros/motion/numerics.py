@@ -278,24 +278,18 @@ def positions_x87_scalar(
     return out
 
 
-_DOUBLE_BITS: dict[int, tuple[struct.Struct, struct.Struct, struct.Struct]] = {}
-_TINY: Final = 1e-30
-"""Below this magnitude the fused scalar check gives up (subnormal doubles have no
-implicit bit, so their low bits are not the ones past float32's precision)."""
-_HUGE: Final = 1e30
-_ABOVE_MID: Final = 1 << 27
+_SINGLES: dict[int, struct.Struct] = {}
+_ROUNDING_SLACK: Final = 2.0**-52
+"""Relative bound (twice the float64 unit roundoff) on the rounding of ``value ± e``."""
+_COEF_ALLOWANCE: Final = COEF_RISK_FACTOR * 2.0**-53
+_POSITION_ALLOWANCE: Final = RISK_FACTOR * 2.0**-53
 
 
-def _bit_structs(count: int) -> tuple[struct.Struct, struct.Struct, struct.Struct]:
-    """``count`` doubles, the same bytes read as int64, and ``count`` float32."""
-    found = _DOUBLE_BITS.get(count)
+def _singles(count: int) -> struct.Struct:
+    """``count`` little-endian float32: packing rounds each double to nearest, even."""
+    found = _SINGLES.get(count)
     if found is None:
-        found = (
-            struct.Struct(f"<{count}d"),
-            struct.Struct(f"<{count}q"),
-            struct.Struct(f"<{count}f"),
-        )
-        _DOUBLE_BITS[count] = found
+        found = _SINGLES[count] = struct.Struct(f"<{count}f")
     return found
 
 
@@ -312,73 +306,76 @@ def small_segment_x87(
     :func:`coefficients_x87_scalar` then :func:`positions_x87_scalar` fused into one
     pass, for the segment of one or two steps that a tick computes when points come as
     often as the period: the same float64 expressions, operand for operand, and the
-    same error bounds (``COEF_RISK_FACTOR``, ``RISK_FACTOR``), but the bits past
-    float32's precision are read for all values at once (one ``struct`` round trip)
-    instead of one ``frexp`` per value. Those are the low bits of the IEEE encoding for
-    every normal double; values below ``_TINY`` (subnormals among them) or above
-    ``_HUGE`` make it give up. None: some value is not provably the x87's, and the
-    caller takes the longer path (longdouble where needed); a float result is the x87's
-    in every case, which is what keeps the paths bit-identical.
+    same error allowances, but checked as an interval. Each float64 value F is within
+    ``e`` of the x87's value X (``e``: ``COEF_RISK_FACTOR`` × 2⁻⁵³ × the magnitudes of
+    a coefficient's two terms, or ``RISK_FACTOR`` × 2⁻⁵³ × :func:`position_bound`'s sum
+    for a position; both at least twice the proven bounds), so X lies in [F − e, F + e];
+    ``|F|`` × 2⁻⁵² more covers the rounding of the two ends. Rounding to float32 is
+    monotonic, so when both ends round to the same float32, X does too, and so does F
+    (where both ends round to zero, from either side, the sign of that zero may differ
+    from the x87's; no pulse, a truncated product, can see it).
+    All ends are rounded in one ``struct`` call and compared as two tuples, which costs
+    far less than a per-value bit test. None (some value straddles a float32 midpoint,
+    overflows float32, or is not a number): the caller takes the longer path, with
+    longdouble where needed. A float result is the x87's in every case, which is what
+    keeps the paths bit-identical.
     """
     n = len(x0)
-    doubles, bits, singles = _bit_structs(2 * n)
     tt = t * t  # exact: 48 significant bits
     ttt = tt * t
-    values: list[float] = []  # a1 of every axis, then a2 of every axis
-    sizes: list[float] = []
-    values_a2: list[float] = []
-    sizes_a2: list[float] = []
+    low1: list[float] = []
+    high1: list[float] = []
+    low2: list[float] = []
+    high2: list[float] = []
+    allowance = _COEF_ALLOWANCE
+    slack = _ROUNDING_SLACK
     for p0, s0, p1, s1 in zip(x0, v0, x1, v1, strict=True):
         d = p1 - p0
         first = (6 * d) / tt
         second = (2 * (s1 + 2 * s0)) / t
-        values.append(first - second)
-        sizes.append(abs(first) + abs(second))
+        a = first - second
+        e = (abs(first) + abs(second)) * allowance + abs(a) * slack
+        low1.append(a - e)
+        high1.append(a + e)
         third = (-12 * d) / ttt
         fourth = (6 * (s1 + s0)) / tt
-        values_a2.append(third + fourth)
-        sizes_a2.append(abs(third) + abs(fourth))
-    values += values_a2
-    sizes += sizes_a2
-    raw = bits.unpack(doubles.pack(*values))
-    for value, size, low in zip(values, sizes, raw, strict=True):
-        if size == 0.0:
-            continue  # every term is 0: the value is exactly 0
-        magnitude = abs(value)
-        if not _TINY < magnitude < _HUGE:
-            return None
-        distance = abs((low & _LOW29) - _MID29)
-        if distance > _ABOVE_MID:
-            distance = _ABOVE_MID
-        if not distance * magnitude > COEF_RISK_FACTOR * size:
-            return None
-    coef = singles.unpack(singles.pack(*values))
+        a = third + fourth
+        e = (abs(third) + abs(fourth)) * allowance + abs(a) * slack
+        low2.append(a - e)
+        high2.append(a + e)
+    ends = _singles(4 * n)
+    try:
+        rounded = ends.unpack(ends.pack(*low1, *low2, *high1, *high2))
+    except OverflowError:  # beyond float32
+        return None
+    coef = rounded[: 2 * n]
+    if coef != rounded[2 * n :]:  # NaN never equals itself, so it lands here too
+        return None
     a1, a2 = coef[:n], coef[n:]
-    bounds: list[float] = []
-    for p, s, a, c in zip(x0, v0, a1, a2, strict=True):
-        h = a / 2
-        bounds.append((abs(p) + abs(s) * t + abs(h) * tt + abs(c) * ttt / 6) * RISK_FACTOR - 1e-300)
-    rows_doubles, row_bits, row_singles = _bit_structs(n)
+    allowance = _POSITION_ALLOWANCE
+    ttt6 = ttt / 6
+    row_ends = _singles(2 * n)
     out: list[tuple[float, ...]] = []
     for tau in taus:
         tau2 = tau * tau
-        row: list[float] = []
+        low: list[float] = []
+        high: list[float] = []
         for p, s, a, c in zip(x0, v0, a1, a2, strict=True):
+            h = a / 2  # exact
             f = p + s * tau
-            f += (a / 2) * tau2
+            f += h * tau2
             f += ((c * tau2) * tau) / 6
-            row.append(f)
-        row_raw = row_bits.unpack(rows_doubles.pack(*row))
-        for f, low, bound in zip(row, row_raw, bounds, strict=True):
-            size = abs(f)
-            if size >= _HUGE or (size < _TINY and size != 0.0):
-                return None
-            distance = abs((low & _LOW29) - _MID29)
-            if distance > _ABOVE_MID:
-                distance = _ABOVE_MID
-            if not distance * size > bound:
-                return None
-        out.append(row_singles.unpack(row_singles.pack(*row)))
+            e = (abs(p) + abs(s) * t + abs(h) * tt + abs(c) * ttt6) * allowance + abs(f) * slack
+            low.append(f - e)
+            high.append(f + e)
+        try:
+            both = row_ends.unpack(row_ends.pack(*low, *high))
+        except OverflowError:
+            return None
+        row = both[:n]
+        if row != both[n:]:
+            return None
+        out.append(row)
     return out
 
 
