@@ -55,12 +55,13 @@ class Plan:
 def plans(draw: st.DrawFn, n_axes: int, limits: tuple[float, ...]) -> Plan:
     """A trajectory from rest at 0 rad: smooth-ish motion within the speed limits, now
     and then a velocity just over a limit (refused or let through by the truncating
-    check) or a point not after the previous one."""
+    check), a point not after the previous one, or a non-finite or huge position."""
     count = draw(st.integers(2, 40))
     regular = draw(st.sampled_from((*SPACINGS_S, None)))
     times = [0.0]
     positions = [(0.0,) * n_axes]
     velocities = [(0.0,) * n_axes]
+    current = positions[0]  # where the motion is (an extreme point does not move it)
     for _ in range(count - 1):
         if regular is None:
             step = draw(
@@ -81,11 +82,15 @@ def plans(draw: st.DrawFn, n_axes: int, limits: tuple[float, ...]) -> Plan:
                 fraction = math.copysign(1.3, fraction)  # over the limit
             vel.append(fraction * limits[j])
         pos = tuple(
-            p + 0.5 * (v0 + v1) * dt
-            for p, v0, v1 in zip(positions[-1], velocities[-1], vel, strict=True)
+            p + 0.5 * (v0 + v1) * dt for p, v0, v1 in zip(current, velocities[-1], vel, strict=True)
         )
+        current = pos
         positions.append(pos)
         velocities.append(tuple(vel))
+        if draw(st.integers(0, 40)) == 0:  # an extreme but legal position on this point
+            j = draw(st.integers(0, n_axes - 1))
+            extreme = draw(st.sampled_from([math.nan, math.inf, -math.inf, 1e30, 3e5]))
+            positions[-1] = (*pos[:j], extreme, *pos[j + 1 :])
     requests = draw(st.lists(st.sampled_from((0, 1, 1, 1, 2)), max_size=64))
     requests.append(1)  # the client sends something in every cycle of its schedule
     return Plan(tuple(times), tuple(positions), tuple(velocities), tuple(requests))

@@ -70,6 +70,7 @@ class TrajectoryPoints:
         self._speed_limits = tuple(a.max_speed[: a.num_axes] for a in self._axes)
         """Per group, check_speed's limit of each axis (ROS order): a velocity within
         it is neither refused nor logged."""
+        self._lowest_limit = tuple(min(limits) for limits in self._speed_limits)
         self._busy_replies = tuple(
             reply(
                 ResultCode.BUSY,
@@ -137,9 +138,12 @@ class TrajectoryPoints:
         ready = GroupPoint.from_values(
             point.time, point.pos[:SLOTS], point.vel[:SLOTS], self._float_modes[g]
         )
-        for v, limit in zip(ready.vel, self._speed_limits[g], strict=False):
-            if not -limit <= v <= limit:  # NaN too: check_speed decides, and may log
-                return None
+        # Within the lowest limit (tame: no NaN, which max() could pass over), or else
+        # within each axis's own; otherwise check_speed decides, and may log.
+        if not (ready.tame and max(map(abs, ready.vel)) <= self._lowest_limit[g]):
+            for v, limit in zip(ready.vel, self._speed_limits[g], strict=False):
+                if not -limit <= v <= limit:
+                    return None
         interp.set_pending_point(ready)
         return SUCCESS
 

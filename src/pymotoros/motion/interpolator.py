@@ -379,13 +379,22 @@ class GroupInterpolator:
             # truncates the exact float64 product (c_int inlined; out of range → pulse()).
             rest = prev[axes.num_axes :]
             for row in rows:
-                target: list[int] = []
-                for x, f in zip(row, factors, strict=True):
-                    product = x * f
-                    target.append(
-                        int(product) if _INT32_LOW < product < _INT32_HIGH else pulse(x, f, mode)
+                products = [x * f for x, f in zip(row, factors, strict=True)]
+                if min(products) > _INT32_LOW and max(products) < _INT32_HIGH:
+                    try:
+                        out.append((*map(int, products), *rest))
+                        continue
+                    except ValueError:  # a NaN that min() and max() passed over
+                        pass
+                out.append(
+                    (
+                        *(
+                            int(p) if _INT32_LOW < p < _INT32_HIGH else pulse(x, f, mode)
+                            for p, x, f in zip(products, row, factors, strict=True)
+                        ),
+                        *rest,
                     )
-                out.append((*target, *rest))
+                )
             return out
         slots = axes.ros_to_slot[: axes.num_axes]
         before = prev

@@ -15,7 +15,7 @@ from typing import Final
 
 from pymotoros.models import FloatMode
 from pymotoros.models.rules import TrajPoint as TrajPoint
-from pymotoros.motion.constants import SLOTS
+from pymotoros.motion.constants import INT32_MAX, INT32_MIN, SLOTS
 from pymotoros.motion.numerics import f32, f32_tuple, float32_seconds_to_ms
 
 
@@ -54,7 +54,12 @@ class GroupPoint:
         values = _TIMED.unpack(raw)
         pos, vel = values[1 : SLOTS + 1], values[SLOTS + 1 :]
         tame = sum(map(abs, pos)) + sum(map(abs, vel)) < TAME_LIMIT  # False for inf and NaN
-        return cls(float32_seconds_to_ms(values[0], mode), pos, vel, tame, raw[4:])
+        product = values[0] * 1000.0  # exact: float32 × 1000 has at most 34 bits
+        if mode is FloatMode.X87_EXTENDED and _INT32_LOW < product < _INT32_HIGH:
+            time_ms = int(product)  # float32_seconds_to_ms, inlined for the x87
+        else:
+            time_ms = float32_seconds_to_ms(values[0], mode)
+        return cls(time_ms, pos, vel, tame, raw[4:])
 
     def packed(self) -> bytes:
         """:attr:`raw`, made now if the point was built without it."""
@@ -62,6 +67,8 @@ class GroupPoint:
 
 
 TAME_LIMIT: Final = 1e15
+_INT32_LOW: Final = float(INT32_MIN) - 1.0
+_INT32_HIGH: Final = float(INT32_MAX) + 1.0
 _POINT: Final = struct.Struct(f"<{2 * SLOTS}f")
 _TIMED: Final = struct.Struct(f"<{2 * SLOTS + 1}f")
 _ZEROS: Final = (0.0,) * SLOTS
