@@ -12,11 +12,20 @@ Prints, for each point spacing, the best of ``--repeat`` runs:
   ("unpreempted"): no tick does 1 ms of work (the costliest, a new segment's
   interpolation, takes a few hundred µs at most); on a busy machine those are the ticks
   during which the process lost the CPU. The number of such ticks is printed;
-* the wall time of the whole loop, point submissions and BUSY answers included;
+* "intake": the time answering the points that were accepted, and "work" = ``tick()``
+  + intake, the figure of issue 13 item 4 (≥ 500× real time is ≤ 8 µs per tick); the
+  BUSY retries are the client's polling and are shown apart (µs per BUSY answer);
+* the wall time of the whole loop, point submissions and BUSY answers included, and
+  the process's CPU time for it (immune to preemption on a busy machine);
 * the controller alone: ticks with the increment queue filled directly (IncMove, servo,
   job, status monitor, no interpolation), to separate the motion engine's share.
 
-Run: ``python bench/bench_controller.py [--seconds 60] [--repeat 3]``
+Each spacing runs the controller's own paths ("fast") and, alternating with them, the
+paths of ``--reference`` (see :data:`PATHS`): ``before`` (points through a Process, the
+two-pass plain-Python segment kernel: the code before issue 13 item 4) or ``numpy``
+(the general paths), with the ratio of the two.
+
+Run: ``python bench/bench_controller.py [--seconds 60] [--repeat 3] [--reference numpy]``
 """
 
 from __future__ import annotations
@@ -78,6 +87,11 @@ class Run(NamedTuple):
     busy: float
     """Seconds answering BUSY."""
     busy_count: int
+    intake_unpreempted: float
+    """``intake`` with every answer over ``PREEMPTED_S`` counted at the median."""
+    cpu: float
+    """CPU seconds of the process for the whole loop (immune to preemption, not to a
+    busy machine's cache and memory contention)."""
 
 
 def run(seconds: float, spacing: float, paths: str = "fast") -> Run:
@@ -101,7 +115,9 @@ def _run(seconds: float, spacing: float) -> Run:
     ticks = 0
     seq = 0
     intake = busy = 0.0
+    intake_times: list[float] = []
     busy_count = 0
+    cpu_start = time.process_time()
     start = clock()
     max_ticks = int(seconds * 1000 / vc.period_ms) * 2 + 1000
     while seq < len(points) or vc.has_queued_motion():
@@ -117,6 +133,7 @@ def _run(seconds: float, spacing: float) -> Run:
                 if not outcome.ok:
                     raise RuntimeError(f"point {seq} refused: {outcome.detail}")
                 intake += t1 - t0
+                intake_times.append(t1 - t0)
                 seq += 1
         t0 = clock()
         tick()
@@ -125,12 +142,28 @@ def _run(seconds: float, spacing: float) -> Run:
         if ticks > max_ticks:
             raise RuntimeError("the trajectory did not finish")
     total = clock() - start
+    cpu = time.process_time() - cpu_start
     in_tick = sum(durations)
     durations.sort()
     median = durations[len(durations) // 2]
     preempted = [d for d in durations if d > PREEMPTED_S]
     unpreempted = in_tick - sum(preempted) + median * len(preempted)
-    return Run(ticks, in_tick, unpreempted, total, len(preempted), intake, busy, busy_count)
+    intake_times.sort()
+    intake_median = intake_times[len(intake_times) // 2]
+    late = [d for d in intake_times if d > PREEMPTED_S]
+    intake_unpreempted = intake - sum(late) + intake_median * len(late)
+    return Run(
+        ticks,
+        in_tick,
+        unpreempted,
+        total,
+        len(preempted),
+        intake,
+        busy,
+        busy_count,
+        intake_unpreempted,
+        cpu,
+    )
 
 
 def controller_alone(ticks: int) -> float:
@@ -185,32 +218,39 @@ def main() -> None:
     )
     print(
         f"{'spacing':>8} {'paths':>7} {'ticks':>6} {'tick()':>7} {'intake':>7} {'work':>6} "
-        f"{'× rt':>5} {'unpre.':>7} {'× rt':>5} {'>1ms':>5} {'BUSY µs':>8} {'loop × rt':>9}"
+        f"{'× rt':>5} {'unpre.':>7} {'× rt':>5} {'>1ms':>5} {'BUSY µs':>8} {'loop × rt':>9} "
+        f"{'CPU × rt':>8}"
     )
     for spacing in args.spacings:
         best: dict[str, Run] = {}
         for _ in range(args.repeat):  # alternate, so both see the same machine
             for paths in ("fast", args.reference):
                 r = run(args.seconds, spacing, paths)
-                if paths not in best or r.unpreempted + r.intake < (
-                    best[paths].unpreempted + best[paths].intake
+                if paths not in best or r.unpreempted + r.intake_unpreempted < (
+                    best[paths].unpreempted + best[paths].intake_unpreempted
                 ):
                     best[paths] = r
         for paths in ("fast", args.reference):
             r = best[paths]
             work = r.in_tick + r.intake
-            trimmed = r.unpreempted + r.intake
+            trimmed = r.unpreempted + r.intake_unpreempted
             busy_us = r.busy / r.busy_count * 1e6 if r.busy_count else 0.0
             print(
                 f"{spacing * 1000:>6.0f}ms {paths:>7} {r.ticks:>6} "
                 f"{r.in_tick / r.ticks * 1e6:>7.2f} {r.intake / r.ticks * 1e6:>7.2f} "
                 f"{work / r.ticks * 1e6:>6.2f} {args.seconds / work:>5.0f} "
                 f"{trimmed / r.ticks * 1e6:>7.2f} {args.seconds / trimmed:>5.0f} "
-                f"{r.preempted:>5} {busy_us:>8.2f} {args.seconds / r.total:>9.0f}"
+                f"{r.preempted:>5} {busy_us:>8.2f} {args.seconds / r.total:>9.0f} "
+                f"{args.seconds / r.cpu:>8.0f}"
             )
         fast, ref = best["fast"], best[args.reference]
-        ratio = (ref.unpreempted + ref.intake) / (fast.unpreempted + fast.intake)
-        print(f"{'':>8} fast is {ratio:.2f}× {args.reference} (unpreempted work)")
+        ratio = (ref.unpreempted + ref.intake_unpreempted) / (
+            fast.unpreempted + fast.intake_unpreempted
+        )
+        print(
+            f"{'':>8} fast is {ratio:.2f}× {args.reference} (unpreempted work), "
+            f"{ref.cpu / fast.cpu:.2f}× (CPU time of the whole loop)"
+        )
     alone = controller_alone(15000)
     print(f"controller alone (queue pre-filled, no interpolation): {alone:.2f} µs/tick")
     load = ", ".join(f"{x:.2f}" for x in os.getloadavg())
