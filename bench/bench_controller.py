@@ -12,21 +12,33 @@ Prints, for each point spacing, the best of ``--repeat`` runs:
   ("unpreempted"): no tick does 1 ms of work (the costliest, a new segment's
   interpolation, takes a few hundred µs at most); on a busy machine those are the ticks
   during which the process lost the CPU. The number of such ticks is printed;
-* the wall time of the whole loop, point submissions and BUSY answers included;
+* "intake": the time answering the points that were accepted, and "work" = ``tick()``
+  + intake, the figure of issue 13 item 4 (≥ 500× real time is ≤ 8 µs per tick); the
+  BUSY retries are the client's polling and are shown apart (µs per BUSY answer);
+* the wall time of the whole loop, point submissions and BUSY answers included, and
+  the process's CPU time for it (immune to preemption on a busy machine);
 * the controller alone: ticks with the increment queue filled directly (IncMove, servo,
   job, status monitor, no interpolation), to separate the motion engine's share.
 
-Run: ``python bench/bench_controller.py [--seconds 60] [--repeat 3]``
+Each spacing runs the controller's own paths ("fast") and, alternating with them, the
+paths of ``--reference`` (see :data:`PATHS`): ``before`` (points through a Process, the
+two-pass plain-Python segment kernel: the code before issue 13 item 4) or ``numpy``
+(the general paths), with the ratio of the two.
+
+Run: ``python bench/bench_controller.py [--seconds 60] [--repeat 3] [--reference numpy]``
 """
 
 from __future__ import annotations
 
 import argparse
 import math
+import os
 import time
+from typing import NamedTuple
 
 from pymotoros.controller import PointData, VirtualController
-from pymotoros.motion import QUEUE_SIZE, Increment
+from pymotoros.controller.trajectory import TrajectoryPoints
+from pymotoros.motion import QUEUE_SIZE, GroupInterpolator, Increment
 from pymotoros.protocol.constants import MotionCommand, ResultCode
 
 
@@ -47,25 +59,81 @@ def trajectory(seconds: float, spacing: float) -> list[PointData]:
 
 PREEMPTED_S = 0.001
 
+PATHS = ("fast", "before", "numpy")
+"""``fast``: the controller as it is. ``before``: points answered through a Process and
+a lone small segment by the two-pass plain-Python kernel (the code before issue 13
+item 4). ``numpy``: points through a Process, every segment by the numpy kernels (the
+general paths the fast ones are tested against)."""
 
-def run(seconds: float, spacing: float) -> tuple[int, float, float, float, int]:
+
+def use_paths(paths: str) -> None:
+    """Switch the controller's streaming paths (class-wide) to ``paths``."""
+    TrajectoryPoints.fast = paths == "fast"
+    GroupInterpolator.scalar = paths != "numpy"
+    GroupInterpolator.fused = paths == "fast"
+
+
+class Run(NamedTuple):
+    ticks: int
+    in_tick: float
+    """Seconds inside ``tick()``."""
+    unpreempted: float
+    """The same with every tick over ``PREEMPTED_S`` counted at the median."""
+    total: float
+    """Seconds of the whole loop, BUSY answers included."""
+    preempted: int
+    intake: float
+    """Seconds answering the points that were accepted (not the BUSY retries)."""
+    busy: float
+    """Seconds answering BUSY."""
+    busy_count: int
+    intake_unpreempted: float
+    """``intake`` with every answer over ``PREEMPTED_S`` counted at the median."""
+    cpu: float
+    """CPU seconds of the process for the whole loop (immune to preemption, not to a
+    busy machine's cache and memory contention)."""
+
+
+def run(seconds: float, spacing: float, paths: str = "fast") -> Run:
+    use_paths(paths)
+    try:
+        return _run(seconds, spacing)
+    finally:
+        use_paths("fast")
+
+
+def _run(seconds: float, spacing: float) -> Run:
     vc = VirtualController()
     vc.wait_for(vc.motion_ctrl(0, MotionCommand.START_TRAJ_MODE))
     points = trajectory(seconds, spacing)
     clock = time.perf_counter
     tick = vc.tick
+    submit = vc.trajectory_point
+    busy_code = ResultCode.BUSY
     durations: list[float] = []
     record = durations.append
     ticks = 0
     seq = 0
+    intake = busy = 0.0
+    intake_times: list[float] = []
+    busy_count = 0
+    cpu_start = time.process_time()
     start = clock()
     max_ticks = int(seconds * 1000 / vc.period_ms) * 2 + 1000
     while seq < len(points) or vc.has_queued_motion():
         if seq < len(points):
-            outcome = vc.wait_for(vc.trajectory_point(seq, points[seq]))
-            if outcome.result != ResultCode.BUSY:
+            t0 = clock()
+            result = submit(seq, points[seq])
+            t1 = clock()
+            outcome = vc.wait_for(result)
+            if outcome.result == busy_code:
+                busy += t1 - t0
+                busy_count += 1
+            else:
                 if not outcome.ok:
                     raise RuntimeError(f"point {seq} refused: {outcome.detail}")
+                intake += t1 - t0
+                intake_times.append(t1 - t0)
                 seq += 1
         t0 = clock()
         tick()
@@ -74,11 +142,28 @@ def run(seconds: float, spacing: float) -> tuple[int, float, float, float, int]:
         if ticks > max_ticks:
             raise RuntimeError("the trajectory did not finish")
     total = clock() - start
+    cpu = time.process_time() - cpu_start
+    in_tick = sum(durations)
     durations.sort()
     median = durations[len(durations) // 2]
     preempted = [d for d in durations if d > PREEMPTED_S]
-    unpreempted = sum(durations) - sum(preempted) + median * len(preempted)
-    return ticks, sum(durations), unpreempted, total, len(preempted)
+    unpreempted = in_tick - sum(preempted) + median * len(preempted)
+    intake_times.sort()
+    intake_median = intake_times[len(intake_times) // 2]
+    late = [d for d in intake_times if d > PREEMPTED_S]
+    intake_unpreempted = intake - sum(late) + intake_median * len(late)
+    return Run(
+        ticks,
+        in_tick,
+        unpreempted,
+        total,
+        len(preempted),
+        intake,
+        busy,
+        busy_count,
+        intake_unpreempted,
+        cpu,
+    )
 
 
 def controller_alone(ticks: int) -> float:
@@ -115,23 +200,61 @@ def main() -> None:
     parser.add_argument(
         "--spacings", type=float, nargs="+", default=[0.1, 0.05, 0.02, 0.004], help="seconds"
     )
+    parser.add_argument(
+        "--reference",
+        choices=[p for p in PATHS if p != "fast"],
+        default="before",
+        help="paths measured beside the controller's own, alternating (see PATHS)",
+    )
     args = parser.parse_args()
-    print(f"{args.seconds:g} s trajectory, 6 axes, HC10 on YRC1000, best of {args.repeat}")
+    load = ", ".join(f"{x:.2f}" for x in os.getloadavg())
     print(
-        f"{'spacing':>8} {'ticks':>7} {'µs/tick':>8} {'× rt':>6} "
-        f"{'unpreempted µs':>14} {'× rt':>6} {'(ticks >1ms)':>12} {'loop s':>7} {'× rt':>6}"
+        f"{args.seconds:g} s trajectory, 6 axes, HC10 on YRC1000, best of {args.repeat}, "
+        f"reference paths: {args.reference}; load average {load}"
+    )
+    print(
+        "work = tick() + answering the accepted points (the BUSY retries are the client's "
+        "polling, shown apart); µs per tick, × real time"
+    )
+    print(
+        f"{'spacing':>8} {'paths':>7} {'ticks':>6} {'tick()':>7} {'intake':>7} {'work':>6} "
+        f"{'× rt':>5} {'unpre.':>7} {'× rt':>5} {'>1ms':>5} {'BUSY µs':>8} {'loop × rt':>9} "
+        f"{'CPU × rt':>8}"
     )
     for spacing in args.spacings:
-        runs = [run(args.seconds, spacing) for _ in range(args.repeat)]
-        ticks, in_tick, trimmed, total, preempted = min(runs, key=lambda r: r[2])
+        best: dict[str, Run] = {}
+        for _ in range(args.repeat):  # alternate, so both see the same machine
+            for paths in ("fast", args.reference):
+                r = run(args.seconds, spacing, paths)
+                if paths not in best or r.unpreempted + r.intake_unpreempted < (
+                    best[paths].unpreempted + best[paths].intake_unpreempted
+                ):
+                    best[paths] = r
+        for paths in ("fast", args.reference):
+            r = best[paths]
+            work = r.in_tick + r.intake
+            trimmed = r.unpreempted + r.intake_unpreempted
+            busy_us = r.busy / r.busy_count * 1e6 if r.busy_count else 0.0
+            print(
+                f"{spacing * 1000:>6.0f}ms {paths:>7} {r.ticks:>6} "
+                f"{r.in_tick / r.ticks * 1e6:>7.2f} {r.intake / r.ticks * 1e6:>7.2f} "
+                f"{work / r.ticks * 1e6:>6.2f} {args.seconds / work:>5.0f} "
+                f"{trimmed / r.ticks * 1e6:>7.2f} {args.seconds / trimmed:>5.0f} "
+                f"{r.preempted:>5} {busy_us:>8.2f} {args.seconds / r.total:>9.0f} "
+                f"{args.seconds / r.cpu:>8.0f}"
+            )
+        fast, ref = best["fast"], best[args.reference]
+        ratio = (ref.unpreempted + ref.intake_unpreempted) / (
+            fast.unpreempted + fast.intake_unpreempted
+        )
         print(
-            f"{spacing * 1000:>6.0f}ms {ticks:>7} {in_tick / ticks * 1e6:>8.2f} "
-            f"{args.seconds / in_tick:>6.0f} {trimmed / ticks * 1e6:>14.2f} "
-            f"{args.seconds / trimmed:>6.0f} {preempted:>12} "
-            f"{total:>7.3f} {args.seconds / total:>6.0f}"
+            f"{'':>8} fast is {ratio:.2f}× {args.reference} (unpreempted work), "
+            f"{ref.cpu / fast.cpu:.2f}× (CPU time of the whole loop)"
         )
     alone = controller_alone(15000)
     print(f"controller alone (queue pre-filled, no interpolation): {alone:.2f} µs/tick")
+    load = ", ".join(f"{x:.2f}" for x in os.getloadavg())
+    print(f"load average at the end: {load}")
 
 
 if __name__ == "__main__":

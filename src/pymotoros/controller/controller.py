@@ -314,6 +314,9 @@ class VirtualController:
         )
 
     def trajectory_point(self, sequence: int, point: PointData) -> Outcome | Pending:
+        now = self._trajectory.trajectory_point_now(sequence, point)
+        if now is not None:  # the streaming hot path: answered without a Process
+            return now
         return self._scheduler.run(
             self._trajectory.trajectory_point(sequence, point),
             lambda: f"JOINT_TRAJ_PT_FULL sequence {sequence} group {point.group_no}",

@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import logging
 from collections.abc import Sequence
-from typing import Final
+from typing import ClassVar, Final
 
 from pymotoros.controller.api import Outcome, PointData
 from pymotoros.controller.commands import MotionCommands
@@ -18,6 +18,7 @@ from pymotoros.controller.context import MotoRosContext
 from pymotoros.controller.processes import Process
 from pymotoros.controller.readiness import Readiness
 from pymotoros.controller.replies import SUCCESS, reply
+from pymotoros.models.rules import MAX_POINT_TIME_S, f32
 from pymotoros.motion import (
     Refusal,
     TrajPoint,
@@ -26,6 +27,7 @@ from pymotoros.motion import (
     check_time,
 )
 from pymotoros.motion.constants import SLOTS
+from pymotoros.motion.points import GroupPoint
 from pymotoros.protocol.constants import (
     MAX_DH_LINKS,
     MAX_GROUPS,
@@ -46,6 +48,11 @@ DhTable = tuple[tuple[tuple[float, float, float, float], ...], ...]
 class TrajectoryPoints:
     """Validation and acceptance of trajectory points; the tool and DH requests."""
 
+    fast: ClassVar[bool] = True
+    """Answer streamed points through :meth:`trajectory_point_now`. Tests and
+    ``bench/bench_controller.py --reference`` turn it off, for the class, to compare
+    with the general path."""
+
     def __init__(self, ctx: MotoRosContext, readiness: Readiness, commands: MotionCommands) -> None:
         cell = ctx.cell
         self._cell = cell
@@ -59,6 +66,11 @@ class TrajectoryPoints:
         self._sets_jog_tool = cell.controller.sets_jog_tool
         self.jog_tool = [0] * self._num_groups
         """The pendant's jog tool per group (SELECT_TOOL sets it, except on FS100)."""
+        self._float_modes = tuple(a.float_mode for a in self._axes)
+        self._speed_limits = tuple(a.max_speed[: a.num_axes] for a in self._axes)
+        """Per group, check_speed's limit of each axis (ROS order): a velocity within
+        it is neither refused nor logged."""
+        self._lowest_limit = tuple(min(limits) for limits in self._speed_limits)
         self._busy_replies = tuple(
             reply(
                 ResultCode.BUSY,
@@ -100,6 +112,40 @@ class TrajectoryPoints:
         if sequence > 0:
             return self._queue_point(g, traj, sequence)
         return self._bad_sequence(sequence)
+
+    def trajectory_point_now(self, sequence: int, point: PointData) -> Outcome | None:
+        """:meth:`trajectory_point`'s answer for a point that needs no more than the
+        usual checks, without a Process; None: ask :meth:`trajectory_point`.
+
+        A client streams one point per period at dense spacing, so this is the intake's
+        hot path: the same checks in the same order, but the float32 point is made once
+        (the speed check reads its velocities) and nothing is built for a point that is
+        accepted or answered BUSY. Anything unusual (sequence 0 or negative, not ready,
+        a bad group or fields, the 4-hour limit, a velocity above an axis limit, which
+        may be refused or logged) returns None before any state changes, and the full
+        path answers it.
+        """
+        if sequence <= 0 or not self.fast or not self._readiness.motion_ready:
+            return None
+        g = point.group_no
+        if not 0 <= g < self._num_groups or point.valid_fields & REQUIRED_FIELDS != REQUIRED_FIELDS:
+            return None
+        interp = self._interpolators[g]
+        if not f32(point.time) < MAX_POINT_TIME_S:  # also NaN: check_time refuses it
+            return None
+        if interp.pending:
+            return self._busy_replies[g]
+        ready = GroupPoint.from_values(
+            point.time, point.pos[:SLOTS], point.vel[:SLOTS], self._float_modes[g]
+        )
+        # Within the lowest limit (tame: no NaN, which max() could pass over), or else
+        # within each axis's own; otherwise check_speed decides, and may log.
+        if not (ready.tame and max(map(abs, ready.vel)) <= self._lowest_limit[g]):
+            for v, limit in zip(ready.vel, self._speed_limits[g], strict=False):
+                if not -limit <= v <= limit:
+                    return None
+        interp.set_pending_point(ready)
+        return SUCCESS
 
     def trajectory_point_ex(self, sequence: int, points: Sequence[PointData]) -> Process:
         """MOTO_JOINT_TRAJ_PT_FULL_EX (2016): §3.5, in its order."""

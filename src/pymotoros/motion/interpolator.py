@@ -29,7 +29,7 @@ from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
 from itertools import repeat
 from operator import add, sub
-from typing import Final
+from typing import ClassVar, Final
 
 import numpy as np
 import numpy.typing as npt
@@ -37,7 +37,7 @@ import numpy.typing as npt
 from pymotoros.models import FloatMode
 from pymotoros.motion.axes import GroupAxes
 from pymotoros.motion.batch import queued_targets
-from pymotoros.motion.constants import QUEUE_SIZE, SLOTS
+from pymotoros.motion.constants import INT32_MAX, INT32_MIN, QUEUE_SIZE, SLOTS
 from pymotoros.motion.numerics import (
     LD,
     coefficients_kernel,
@@ -50,6 +50,7 @@ from pymotoros.motion.numerics import (
     positions_x87_scalar,
     pulse,
     pulses,
+    small_segment_x87,
     velocities,
 )
 from pymotoros.motion.points import ORIGIN, GroupPoint, TrajPoint
@@ -65,6 +66,10 @@ SMALL_SEGMENT_STEPS: Final = 8
 """A segment computed on its own with at most this many steps (besides the last) is
 done in plain Python: below that, numpy's per-call cost exceeds the arithmetic."""
 
+
+_INT32_LOW: Final = float(INT32_MIN) - 1.0
+_INT32_HIGH: Final = float(INT32_MAX) + 1.0
+"""Products strictly between these truncate to an int32 (C's conversion is defined)."""
 
 PIECE_ENTRIES: Final = QUEUE_SIZE
 """Entries of a segment planned (and later computed) at a time. A segment is cut into
@@ -156,6 +161,7 @@ class GroupInterpolator:
         "_leftover",
         "_next",
         "_pending",
+        "_plain_slots",
         "_prev",
         "_prev_at",
         "_uncomputed",
@@ -164,6 +170,14 @@ class GroupInterpolator:
         "queue",
         "tool",
     )
+
+    scalar: ClassVar[bool] = True
+    """Compute a lone small segment in plain Python. The numpy kernels give the same
+    pulses: tests (``tests/motion/test_scalar_paths.py``) and ``bench/bench_controller.py
+    --reference`` turn this off, for the class, to compare the two."""
+    fused: ClassVar[bool] = True
+    """Within the plain-Python path, try :func:`small_segment_x87` first (off: the
+    two-pass coefficients-then-positions form, which is also its fallback)."""
 
     def __init__(self, axes: GroupAxes) -> None:
         self.axes = axes
@@ -186,6 +200,8 @@ class GroupInterpolator:
         self._prev: tuple[int, ...] = (0,) * SLOTS
         self._prev_at: tuple[PlannedSegment, int] | None = None
         """The entry whose target is prevPulsePos, or None: then it is ``_prev``."""
+        self._plain_slots = axes.ros_to_slot[: axes.num_axes] == tuple(range(axes.num_axes))
+        """ROS index j is controller slot j for every axis (all but 7-axis arms)."""
 
     # ------------------------------------------------------------------ state
 
@@ -243,7 +259,16 @@ class GroupInterpolator:
                 f"group {self.axes.name}: a point is already pending (the controller "
                 "must answer BUSY while GroupInterpolator.pending is true)"
             )
-        self._pending = GroupPoint.from_traj(point, self.axes.float_mode)
+        self.set_pending_point(GroupPoint.from_traj(point, self.axes.float_mode))
+
+    def set_pending_point(self, point: GroupPoint) -> None:
+        """:meth:`set_pending` for a point already in its float32 form."""
+        if self._pending is not None:
+            raise RuntimeError(
+                f"group {self.axes.name}: a point is already pending (the controller "
+                "must answer BUSY while GroupInterpolator.pending is true)"
+            )
+        self._pending = point
 
     def clear(self) -> None:
         """Clear the queue and drop the pending point (StopMotion and every clear, §3.6)."""
@@ -340,57 +365,108 @@ class GroupInterpolator:
         self._active = None
         self._pending = None
 
-    def _compute_small(self, segment: PlannedSegment, prev: tuple[int, ...]) -> bool:
-        """One x87 segment of a few steps in plain Python; False if the numpy kernel must
-        do it (FS100, untame values, more steps, or a value too close to a rounding
-        boundary)."""
+    def _targets(
+        self, rows: Iterable[Sequence[float]], prev: tuple[int, ...]
+    ) -> list[tuple[int, ...]]:
+        """prevPulsePos after each row of float32 positions (ROS order, ``num_axes``
+        values): the pulses of the axes' slots, the other slots as in ``prev``."""
         axes = self.axes
-        full = segment.steps
-        start, end = segment.start, segment.end
         mode = axes.float_mode
-        if (
-            full > SMALL_SEGMENT_STEPS
-            or not segment.last
-            or mode is not FloatMode.X87_EXTENDED
-            or not (start.tame and end.tame)
-        ):
+        factors = axes.factors_ros_list
+        out: list[tuple[int, ...]] = []
+        if mode is FloatMode.X87_EXTENDED and self._plain_slots:
+            # Slots 0 … n − 1 in ROS order (every group but a 7-axis arm): the x87
+            # truncates the exact float64 product (c_int inlined; out of range → pulse()).
+            rest = prev[axes.num_axes :]
+            for row in rows:
+                products = [x * f for x, f in zip(row, factors, strict=True)]
+                if min(products) > _INT32_LOW and max(products) < _INT32_HIGH:
+                    try:
+                        out.append((*map(int, products), *rest))
+                        continue
+                    except ValueError:  # a NaN that min() and max() passed over
+                        pass
+                out.append(
+                    (
+                        *(
+                            int(p) if _INT32_LOW < p < _INT32_HIGH else pulse(x, f, mode)
+                            for p, x, f in zip(products, row, factors, strict=True)
+                        ),
+                        *rest,
+                    )
+                )
+            return out
+        slots = axes.ros_to_slot[: axes.num_axes]
+        before = prev
+        for row in rows:
+            spread = list(before)
+            for x, f, slot in zip(row, factors, slots, strict=True):
+                spread[slot] = pulse(x, f, mode)
+            before = tuple(spread)
+            out.append(before)
+        return out
+
+    def _store_small(
+        self,
+        segment: PlannedSegment,
+        prev: tuple[int, ...],
+        times: list[int],
+        rows: list[Sequence[float]],
+    ) -> None:
+        """Queue entries of a segment computed in plain Python (targets from ``rows``)."""
+        chain = [prev, *self._targets(rows, prev)]
+        tool = segment.tool
+        new = tuple.__new__
+        segment.entries = [
+            new(Increment, (time_ms, tuple(map(sub, after, before)), tool))
+            for time_ms, before, after in zip(times, chain, chain[1:], strict=False)
+        ]
+        segment.chain = chain
+        segment.offset = 0
+        self._chain_prev = chain[-1]
+
+    def _compute_small(self, segment: PlannedSegment, prev: tuple[int, ...]) -> bool:
+        """The last piece of a segment with at most :data:`SMALL_SEGMENT_STEPS` steps in
+        plain Python; False if the numpy kernels must do it (FS100, untame values, more
+        steps, or a value the float64 checks cannot vouch for).
+
+        A piece that is only the end point (points as dense as the period) needs no
+        interpolation: its target is the end position in pulses, in either float mode.
+        """
+        full = segment.steps
+        if full > SMALL_SEGMENT_STEPS or not segment.last:
             return False
+        axes = self.axes
         n = axes.num_axes
+        end = segment.end
+        if not full:
+            self._store_small(segment, prev, [end.time_ms], [end.pos[:n]])
+            return True
+        start = segment.start
+        if axes.float_mode is not FloatMode.X87_EXTENDED or not (start.tame and end.tame):
+            return False
         s_ms = start.time_ms
         x0, v0 = start.pos[:n], start.vel[:n]
-        duration = f32((end.time_ms - s_ms) / 1000)
         x1, v1 = end.pos[:n], end.vel[:n]
-        coef = coefficients_x87_scalar(x0, v0, x1, v1, duration) or coefficients_x87_exact(
-            x0, v0, x1, v1, duration
-        )
+        duration = f32((end.time_ms - s_ms) / 1000)
         period = axes.period_ms
         first = segment.grid.first_ms + period * segment.step0
         times = [first + period * k for k in range(full)]
         taus = f32_tuple([(c - s_ms) / 1000 for c in times], full)
-        h1 = [c / 2 for c in coef[:n]]
-        rows = positions_x87_scalar(x0, v0, h1, coef[n:], taus, duration)
+        rows: list[Sequence[float]] | None = None
+        if self.fused:
+            rows = small_segment_x87(x0, v0, x1, v1, duration, taus)  # type: ignore[assignment]
         if rows is None:
-            return False
-        rows.append(end.pos[:n])
+            coef = coefficients_x87_scalar(x0, v0, x1, v1, duration) or coefficients_x87_exact(
+                x0, v0, x1, v1, duration
+            )
+            h1 = [c / 2 for c in coef[:n]]
+            rows = positions_x87_scalar(x0, v0, h1, coef[n:], taus, duration)  # type: ignore[assignment]
+            if rows is None:
+                return False
+        rows.append(x1)
         times.append(end.time_ms)
-        slots = axes.ros_to_slot[:n]
-        factors = axes.factors_ros_list
-        chain = [prev]
-        entries: list[Increment] = []
-        before = prev
-        tool = segment.tool
-        for time_ms, row in zip(times, rows, strict=True):
-            target = list(before)
-            for x, f, slot in zip(row, factors, slots, strict=True):
-                target[slot] = pulse(x, f, mode)
-            after = tuple(target)
-            entries.append(Increment(time_ms, tuple(map(sub, after, before)), tool))
-            chain.append(after)
-            before = after
-        segment.entries = entries
-        segment.chain = chain
-        segment.offset = 0
-        self._chain_prev = before
+        self._store_small(segment, prev, times, rows)
         return True
 
     def _compute(self) -> None:
@@ -401,26 +477,9 @@ class GroupInterpolator:
         self._uncomputed = []
         axes = self.axes
         prev = self._chain_prev
-        if len(segments) == 1 and segments[0].count == 1 and segments[0].last:
-            # A single entry at the end point (points as dense as the period): its
-            # target is the end position in pulses, no interpolation is involved.
-            only = segments[0]
-            mode = axes.float_mode
-            target = list(prev)
-            n = axes.num_axes
-            for x, f, slot in zip(
-                only.end.pos[:n], axes.factors_ros_list, axes.ros_to_slot[:n], strict=True
-            ):
-                target[slot] = pulse(x, f, mode)
-            after = tuple(target)
-            only.entries = [Increment(only.end.time_ms, tuple(map(sub, after, prev)), only.tool)]
-            only.chain = (prev, after)
-            only.offset = 0
-            self._chain_prev = after
+        if len(segments) == 1 and self.scalar and self._compute_small(segments[0], prev):
             return
         n = axes.num_axes
-        if len(segments) == 1 and self._compute_small(segments[0], prev):
-            return
         count = len(segments)
         raw = b"".join([p for s in segments for p in (s.start.packed(), s.end.packed())])
         rows = np.frombuffer(raw, dtype=np.float32).reshape(count, 4, SLOTS)[:, :, :n]

@@ -278,6 +278,107 @@ def positions_x87_scalar(
     return out
 
 
+_SINGLES: dict[int, struct.Struct] = {}
+_ROUNDING_SLACK: Final = 2.0**-52
+"""Relative bound (twice the float64 unit roundoff) on the rounding of ``value ± e``."""
+_COEF_ALLOWANCE: Final = COEF_RISK_FACTOR * 2.0**-53
+_POSITION_ALLOWANCE: Final = RISK_FACTOR * 2.0**-53
+
+
+def _singles(count: int) -> struct.Struct:
+    """``count`` little-endian float32: packing rounds each double to nearest, even."""
+    found = _SINGLES.get(count)
+    if found is None:
+        found = _SINGLES[count] = struct.Struct(f"<{count}f")
+    return found
+
+
+def small_segment_x87(
+    x0: Sequence[float],
+    v0: Sequence[float],
+    x1: Sequence[float],
+    v1: Sequence[float],
+    t: float,
+    taus: Sequence[float],
+) -> list[tuple[float, ...]] | None:
+    """The float32 positions at ``taus`` of a segment of length ``t`` on the x87, or None.
+
+    :func:`coefficients_x87_scalar` then :func:`positions_x87_scalar` fused into one
+    pass, for the segment of one or two steps that a tick computes when points come as
+    often as the period: the same float64 expressions, operand for operand, and the
+    same error allowances, but checked as an interval. Each float64 value F is within
+    ``e`` of the x87's value X (``e``: ``COEF_RISK_FACTOR`` × 2⁻⁵³ × the magnitudes of
+    a coefficient's two terms, or ``RISK_FACTOR`` × 2⁻⁵³ × :func:`position_bound`'s sum
+    for a position; both at least twice the proven bounds), so X lies in [F − e, F + e];
+    ``|F|`` × 2⁻⁵² more covers the rounding of the two ends. Rounding to float32 is
+    monotonic, so when both ends round to the same float32, X does too, and so does F
+    (where both ends round to zero, from either side, the sign of that zero may differ
+    from the x87's; no pulse, a truncated product, can see it).
+    All ends are rounded in one ``struct`` call and compared as two tuples, which costs
+    far less than a per-value bit test. None (some value straddles a float32 midpoint,
+    overflows float32, or is not a number): the caller takes the longer path, with
+    longdouble where needed. A float result is the x87's in every case, which is what
+    keeps the paths bit-identical.
+    """
+    n = len(x0)
+    tt = t * t  # exact: 48 significant bits
+    ttt = tt * t
+    low1: list[float] = []
+    high1: list[float] = []
+    low2: list[float] = []
+    high2: list[float] = []
+    allowance = _COEF_ALLOWANCE
+    slack = _ROUNDING_SLACK
+    for p0, s0, p1, s1 in zip(x0, v0, x1, v1, strict=True):
+        d = p1 - p0
+        first = (6 * d) / tt
+        second = (2 * (s1 + 2 * s0)) / t
+        a = first - second
+        e = (abs(first) + abs(second)) * allowance + abs(a) * slack
+        low1.append(a - e)
+        high1.append(a + e)
+        third = (-12 * d) / ttt
+        fourth = (6 * (s1 + s0)) / tt
+        a = third + fourth
+        e = (abs(third) + abs(fourth)) * allowance + abs(a) * slack
+        low2.append(a - e)
+        high2.append(a + e)
+    ends = _singles(4 * n)
+    try:
+        rounded = ends.unpack(ends.pack(*low1, *low2, *high1, *high2))
+    except OverflowError:  # beyond float32
+        return None
+    coef = rounded[: 2 * n]
+    if coef != rounded[2 * n :]:  # NaN never equals itself, so it lands here too
+        return None
+    a1, a2 = coef[:n], coef[n:]
+    allowance = _POSITION_ALLOWANCE
+    ttt6 = ttt / 6
+    row_ends = _singles(2 * n)
+    out: list[tuple[float, ...]] = []
+    for tau in taus:
+        tau2 = tau * tau
+        low: list[float] = []
+        high: list[float] = []
+        for p, s, a, c in zip(x0, v0, a1, a2, strict=True):
+            h = a / 2  # exact
+            f = p + s * tau
+            f += h * tau2
+            f += ((c * tau2) * tau) / 6
+            e = (abs(p) + abs(s) * t + abs(h) * tt + abs(c) * ttt6) * allowance + abs(f) * slack
+            low.append(f - e)
+            high.append(f + e)
+        try:
+            both = row_ends.unpack(row_ends.pack(*low, *high))
+        except OverflowError:
+            return None
+        row = both[:n]
+        if row != both[n:]:
+            return None
+        out.append(row)
+    return out
+
+
 SCALAR_REDO: Final = 8
 """Up to this many risky coefficients are redone one by one with longdouble scalars."""
 
