@@ -98,6 +98,7 @@ class SimulatorApp:
         config: SimulatorConfig | None = None,
         *,
         clock: Clock | None = None,
+        ticker: Ticker | None = None,
     ) -> None:
         self.controller = controller
         self.config = config or SimulatorConfig()
@@ -106,7 +107,10 @@ class SimulatorApp:
         # selector, or a timer thread; issue 13) instead of spinning the last
         # millisecond; the same time line, so the state stream and the ticker agree.
         tick_clock: Clock = clock or precise_clock()
-        self.ticker = Ticker(controller.tick, controller.period_ms / 1000.0, tick_clock)
+        # Several cells in one process share one ticker that ticks them all in turn
+        # (runtime/fleet.py): its owner runs it; this app only reads and waits on it.
+        self._owns_ticker = ticker is None
+        self.ticker = ticker or Ticker(controller.tick, controller.period_ms / 1000.0, tick_clock)
         order = self.config.byte_order
         self.motion = MotionServer(controller, order)
         self.state = StateServer(
@@ -184,7 +188,7 @@ class SimulatorApp:
                     http = await self._start_http(tg, socks[3]) if len(socks) > 3 else None
                     self._ports = BoundPorts(motion, state, io, http)
                     self._loop_tasks = [
-                        tg.create_task(self.ticker.run(), name="interpolation"),
+                        *self._own_ticker_task(tg),
                         tg.create_task(self.state.broadcast(), name="state-broadcast"),
                     ]
                     if not self._motoros_listening:
@@ -224,6 +228,12 @@ class SimulatorApp:
     def client_counts(self) -> dict[str, int]:
         """Clients connected on each MotoROS port (the web pendant shows them)."""
         return {"motion": self.motion.clients, "state": self.state.clients, "io": self.io.clients}
+
+    def _own_ticker_task(self, tg: asyncio.TaskGroup) -> list[asyncio.Task[None]]:
+        """The interpolation loop's task, unless a shared ticker is run by its owner."""
+        if not self._owns_ticker:
+            return []
+        return [tg.create_task(self.ticker.run(), name="interpolation")]
 
     def _motoros_started(self) -> bool:
         started = getattr(self.controller, "motoros_started", True)
