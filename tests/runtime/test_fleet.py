@@ -82,9 +82,12 @@ async def test_one_ticker_ticks_every_cell_in_order() -> None:
     fleet = _fleet(_Recording("a", log), _Recording("b", log), clock)
     async with fleet, virtual_time(clock):
         await fleet.ticker.wait_ticks(LOCKSTEP_TICKS)
+        loops = [t for t in asyncio.all_tasks() if t.get_name() == "interpolation"]
+        assert len(loops) == 1  # one loop, not one per cell
         await fleet.stop()
     count = fleet.ticker.count
     assert count >= LOCKSTEP_TICKS
+    assert all(app.ticker is fleet.ticker for app in fleet.apps)
     assert log == ["a", "b"] * count
 
 
