@@ -85,6 +85,11 @@ async def test_one_ticker_ticks_every_cell_in_order() -> None:
         loops = [t for t in asyncio.all_tasks() if t.get_name() == "interpolation"]
         assert len(loops) == 1  # one loop, not one per cell
         await fleet.stop()
+    step = fleet.step_stats()
+    assert 0.0 < step.p50 <= step.p99 <= step.max
+    fleet.reset_stats()
+    assert fleet.step_stats().max == 0.0
+    assert fleet.tick_stats().overruns == 0
     count = fleet.ticker.count
     assert count >= LOCKSTEP_TICKS
     assert all(app.ticker is fleet.ticker for app in fleet.apps)

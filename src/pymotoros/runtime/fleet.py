@@ -29,19 +29,23 @@ both, found before anything listens (see :func:`check_port_clashes`).
 from __future__ import annotations
 
 import asyncio
+import math
 import re
+import time
 import tomllib
-from collections.abc import Callable, Sequence
+from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from types import TracebackType
 from typing import Final, Self
 
+import numpy as np
+
 from pymotoros.errors import ConfigError
 from pymotoros.runtime.app import SimulatorApp, SimulatorConfig
 from pymotoros.runtime.clock import Clock, precise_clock
 from pymotoros.runtime.target import SimulatedController
-from pymotoros.runtime.ticker import Ticker, TickStats
+from pymotoros.runtime.ticker import LATENESS_WINDOW, LatenessStats, Ticker, TickStats
 
 __all__ = [
     "PORT_KINDS",
@@ -153,15 +157,42 @@ class FleetCell:
     config: SimulatorConfig
 
 
-def _tick_all(controllers: Sequence[SimulatedController]) -> Callable[[], None]:
-    """One step of the shared loop: every controller's tick, in the cells' order."""
-    ticks = tuple(c.tick for c in controllers)
+class _TickAll:
+    """One step of the shared loop: every controller's tick, in the cells' order.
 
-    def step() -> None:
-        for tick in ticks:
+    It also keeps how long each step took (a ring of the latest
+    :data:`~pymotoros.runtime.ticker.LATENESS_WINDOW` steps): the last cell's tick starts
+    that much after the loop's deadline plus its lateness, which is what bounds how many
+    cells one loop can hold (``bench/bench_cells.py``).
+    """
+
+    def __init__(self, controllers: Sequence[SimulatedController]) -> None:
+        self._ticks = tuple(c.tick for c in controllers)
+        self._durations = np.zeros(LATENESS_WINDOW, dtype=np.float64)
+        self._steps = 0
+
+    def __call__(self) -> None:
+        start = time.perf_counter()
+        for tick in self._ticks:
             tick()
+        self._durations[self._steps % len(self._durations)] = time.perf_counter() - start
+        self._steps += 1
 
-    return step
+    def stats(self) -> LatenessStats:
+        n = min(self._steps, len(self._durations))
+        if not n:
+            return LatenessStats(0.0, 0.0, 0.0)
+        window = self._durations[:n]
+        k50, k99 = max(1, math.ceil(0.5 * n)) - 1, max(1, math.ceil(0.99 * n)) - 1
+        parted = np.partition(window, (k50, k99))
+        return LatenessStats(
+            p50=float(parted[k50]) * 1000.0,
+            p99=float(parted[k99]) * 1000.0,
+            max=float(window.max()) * 1000.0,
+        )
+
+    def reset(self) -> None:
+        self._steps = 0
 
 
 class Fleet:
@@ -196,9 +227,8 @@ class Fleet:
         self.cells = tuple(cells)
         self.names = tuple(names)
         period_s = periods.pop() / 1000.0
-        self.ticker = Ticker(
-            _tick_all([c.controller for c in cells]), period_s, clock or precise_clock()
-        )
+        self._step = _TickAll([c.controller for c in cells])
+        self.ticker = Ticker(self._step, period_s, clock or precise_clock())
         self.apps = tuple(
             SimulatorApp(c.controller, c.config, clock=clock, ticker=self.ticker) for c in cells
         )
@@ -208,6 +238,16 @@ class Fleet:
 
     def tick_stats(self) -> TickStats:
         return self.ticker.stats()
+
+    def step_stats(self) -> LatenessStats:
+        """How long one step (every cell's tick) took, milliseconds: the last cell's tick
+        is that much later than the loop's lateness (:meth:`tick_stats`) says."""
+        return self._step.stats()
+
+    def reset_stats(self) -> None:
+        """Forget the loop's lateness, overruns and step durations (e.g. after a warm-up)."""
+        self.ticker.reset_stats()
+        self._step.reset()
 
     def request_stop(self) -> None:
         """Ask every cell to shut down (safe from a signal handler; idempotent)."""
