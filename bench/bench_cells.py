@@ -21,8 +21,12 @@ Per N and mode: the process's CPU (utime + stime from /proc, % of one core), the
 lateness p50/p99/max and overruns (the first cell's tick), the step's duration p50/p99
 (every cell's tick, in turn: the last cell ticks that much later) and "last cell p99",
 the sum of the two p99s, which is what must stay within the budget. The series stops for
-a mode once it misses the budget or the process uses a whole core; the answer is the
-largest N that met it.
+a mode once it misses the budget or the process uses a whole core (with ``--cells``,
+every N given is measured); the answer is the largest N that met it.
+
+First, without sockets or the machine's noise: the CPU time of one cell's tick, idle and
+streaming (``time.thread_time``, 10,000 ticks): what a step of N cells adds up, so what
+the step durations would be on a quiet machine.
 """
 
 from __future__ import annotations
@@ -159,6 +163,60 @@ def load(ports_file: Path, aligned: bool) -> None:
     asyncio.run(main())
 
 
+# --------------------------------------------------------------------------- one tick's work
+
+
+TICK_PROBE_TICKS: Final = 10_000
+"""Ticks of the tick-cost probe (40 s of controller time, ~1 s to run)."""
+TICK_PROBE_POINT_EVERY: Final = 2
+"""The probe offers the next trajectory point every other tick (BUSY until it fits)."""
+
+
+def tick_cost(streaming: bool) -> tuple[list[float], int]:
+    """CPU time (thread time: not the time the OS gave to others) of each of
+    :data:`TICK_PROBE_TICKS` ticks of one HC10/YRC1000, idle or streaming the same sweep as
+    the clients, through the controller's API (no sockets), µs. Without the machine's
+    noise, this is the work a step of N cells adds up. Also the points sent."""
+    from pymotoros.controller import VirtualController
+    from pymotoros.controller.api import Outcome, Pending, PointData
+
+    controller = VirtualController()
+
+    def resolve(request: Outcome | Pending) -> Outcome:
+        while isinstance(request, Pending) and not request.done:
+            controller.tick()
+        return request.outcome if isinstance(request, Pending) else request
+
+    if streaming:
+        controller.motion_connected()
+        start = resolve(controller.motion_ctrl(0, MotionCommand.START_TRAJ_MODE))
+        if start.result != ResultCode.SUCCESS:
+            raise SystemExit(f"START_TRAJ_MODE failed: {start}")
+    seq, t, costs = 0, 0.0, []
+    for k in range(TICK_PROBE_TICKS):
+        if streaming and k % TICK_PROBE_POINT_EVERY == 0:
+            p = sweep_point(seq, t, 0.5, 4.0)
+            data = PointData(0, p.valid_fields, p.time, tuple(p.pos), tuple(p.vel), tuple(p.acc))
+            if resolve(controller.trajectory_point(seq, data)).result == ResultCode.SUCCESS:
+                seq, t = seq + 1, t + 0.1
+        before = time.thread_time_ns()
+        controller.tick()
+        costs.append((time.thread_time_ns() - before) / 1000.0)
+    return costs, seq
+
+
+def print_tick_cost() -> None:
+    for mode in ("idle", "streaming"):
+        raw, points = tick_cost(mode == "streaming")
+        costs = sorted(raw)
+        n = len(costs)
+        p50, p99, p999 = (costs[min(n - 1, int(q * n))] for q in (0.5, 0.99, 0.999))
+        print(
+            f"one cell's tick, CPU {mode:9s}: p50 {p50:.1f} µs, p99 {p99:.1f} µs, "
+            f"p99.9 {p999:.0f} µs, max {costs[-1]:.0f} µs ({n} ticks, {points} points, no sockets)"
+        )
+
+
 # --------------------------------------------------------------------------- the driver
 
 
@@ -250,6 +308,7 @@ def main() -> None:
         f"machine: {os.cpu_count()} cores, Python {sys.version.split()[0]}, "
         f"load average {os.getloadavg()[0]:.2f} at start; {args.duration:.0f} s per N and mode"
     )
+    print_tick_cost()
     print(
         "   N  mode       CPU %  lateness p50/p99/max ms   overruns  step p50/p99 ms"
         "  last cell p99 ms  points"
