@@ -128,6 +128,10 @@ def test_two_cells_in_one_process(tmp_path: Path) -> None:
                 cell.http,
             )
 
+        # a robot command reading the ports file reaches the first cell
+        result = CliRunner().invoke(cli, ["status", "--ports-file", str(ports_file)])
+        assert result.exit_code == 0, result.output
+
         # a raw client drives each cell, in its own byte order
         for cell, order in zip(found, (ByteOrder.LITTLE, ByteOrder.BIG), strict=True):
             motion = Wire(cell.motion, Port.MOTION, order)
