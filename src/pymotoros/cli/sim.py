@@ -5,7 +5,8 @@ Prints exactly one line on stdout once every listener is up::
     pymotoros sim ready motion=50240 state=50241 io=50242 http=8080
 
 and runs until Ctrl-C or SIGTERM, which stop it cleanly with exit code 0. Logs go
-to stderr (``pymotoros -v sim`` for more).
+to stderr (``pymotoros -v sim`` for more). With ``--config`` repeated, several cells
+run in this process, one ready line each (``cli/sim_cells.py``).
 """
 
 from __future__ import annotations
