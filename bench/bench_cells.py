@@ -21,8 +21,9 @@ Per N and mode: the process's CPU (utime + stime from /proc, % of one core), the
 lateness p50/p99/max and overruns (the first cell's tick), the step's duration p50/p99
 (every cell's tick, in turn: the last cell ticks that much later) and "last cell p99",
 the sum of the two p99s, which is what must stay within the budget. The series stops for
-a mode once it misses the budget or the process uses a whole core (with ``--cells``,
-every N given is measured); the answer is the largest N that met it.
+a mode once two sizes in a row miss the budget (one miss may be the machine's noise) or
+the process uses a whole core (with ``--cells``, every N given is measured); the answer
+is the largest N that met it, with the sizes that did not.
 
 First, without sockets or the machine's noise: the CPU time of one cell's tick, idle and
 streaming (``time.thread_time``, 10,000 ticks): what a step of N cells adds up, so what
@@ -54,6 +55,8 @@ from pymotoros.protocol.messages import MotoMotionCtrl
 CLK_TCK: Final = os.sysconf("SC_CLK_TCK")
 BUDGET_MS: Final = 1.0
 """Issue 13: lateness p99 <= 1 ms."""
+MISSES_TO_STOP: Final = 2
+"""Sizes in a row over the budget that end a doubling series (one may be noise)."""
 CORE_PCT: Final = 95.0
 """A process above this share of one core has no headroom left: the series stops."""
 BUSY_RETRY_S: Final = 0.005
@@ -314,11 +317,12 @@ def main() -> None:
         "  last cell p99 ms  points"
     )
     best: dict[str, int] = {}
-    failed: set[str] = set()
+    missed: dict[str, list[int]] = {"idle": [], "streaming": []}
+    stopped: set[str] = set()
     with tempfile.TemporaryDirectory(prefix="bench-cells-") as tmp:
         for n in sizes:
             for mode in ("idle", "streaming"):
-                if mode in failed and not args.cells:  # doubling: stop at the first miss
+                if mode in stopped:
                     continue
                 streaming = mode == "streaming"
                 r = measure(n, streaming, args.duration, args.warmup, Path(tmp), args.aligned)
@@ -330,18 +334,25 @@ def main() -> None:
                     f"  {r['points']:6d}{'' if r['lockstep'] else '  NOT IN LOCKSTEP'}",
                     flush=True,
                 )
-                if ok and mode not in failed:
+                if ok:
                     best[mode] = n
-                elif not ok:
-                    failed.add(mode)
-            if failed == {"idle", "streaming"} and not args.cells:
+                else:
+                    missed[mode].append(n)
+                # doubling: a saturated core, or misses at two sizes in a row, end the
+                # series (one miss may be the machine's noise: the next size decides)
+                recent = missed[mode][-MISSES_TO_STOP:]
+                in_a_row = len(recent) == MISSES_TO_STOP and recent[0] * 2 == recent[-1]
+                if not args.cells and (r["cpu"] > CORE_PCT or in_a_row):
+                    stopped.add(mode)
+            if stopped == {"idle", "streaming"}:
                 break
     print(f"load average {os.getloadavg()[0]:.2f} at the end")
     for mode in ("idle", "streaming"):
         held = best.get(mode)
         shown = f"{held}" if held else "none"
-        bound = "" if mode in failed else f" (every N measured, up to {sizes[-1]}, met it)"
-        print(f"cells per core at p99 <= {BUDGET_MS:g} ms, {mode}: {shown}{bound}")
+        over = f" (over the budget at N = {', '.join(map(str, missed[mode]))})"
+        shown += over if missed[mode] else ""
+        print(f"cells per core at p99 <= {BUDGET_MS:g} ms, {mode}: {shown}")
 
 
 if __name__ == "__main__":
