@@ -12,7 +12,7 @@ from pathlib import Path
 import pytest
 
 from pymotoros.controller import VirtualController
-from pymotoros.controller.cell import default_cell
+from pymotoros.controller.cell import default_cell, load_cell
 from pymotoros.errors import ConfigError
 from pymotoros.protocol.constants import ByteOrder, MotionCommand, Port, ResultCode
 from pymotoros.protocol.messages import JointTrajPtFull, MotoMotionReply, Ping, PingReply
@@ -232,6 +232,7 @@ def test_cell_ports_are_read_from_the_cell_file(tmp_path: Path) -> None:
     path = tmp_path / "cell.toml"
     path.write_text('[controller]\nmodel = "fs100"\n[ports]\nmotion = 51000\nhttp = 0\n')
     assert read_cell_ports(path) == CellPorts(motion=51000, http=0)
+    assert load_cell(path).controller.type.value == "fs100"  # the controller skips [ports]
     plain = tmp_path / "plain.toml"
     plain.write_text('[controller]\nmodel = "fs100"\n')
     assert read_cell_ports(plain) == CellPorts()
