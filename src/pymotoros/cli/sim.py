@@ -5,7 +5,8 @@ Prints exactly one line on stdout once every listener is up::
     pymotoros sim ready motion=50240 state=50241 io=50242 http=8080
 
 and runs until Ctrl-C or SIGTERM, which stop it cleanly with exit code 0. Logs go
-to stderr (``pymotoros -v sim`` for more).
+to stderr (``pymotoros -v sim`` for more). With ``--config`` repeated, several cells
+run in this process, one ready line each (``cli/sim_cells.py``).
 """
 
 from __future__ import annotations
@@ -18,7 +19,9 @@ import json
 import logging
 import signal
 import sys
+from collections.abc import Callable, Iterator, Sequence
 from pathlib import Path
+from typing import TYPE_CHECKING, Any
 
 import click
 
@@ -28,6 +31,9 @@ from pymotoros.errors import ConfigError
 from pymotoros.models import ROBOTS, ControllerType
 from pymotoros.protocol.constants import TCP_PORT_IO, TCP_PORT_MOTION, TCP_PORT_STATE
 from pymotoros.runtime.app import DEFAULT_HTTP_PORT, SimulatorApp, SimulatorConfig
+
+if TYPE_CHECKING:
+    from pymotoros.capture import SessionRecorder
 
 logger = logging.getLogger(__name__)
 
@@ -45,14 +51,33 @@ def ready_line(motion: int | None, state: int | None, io: int | None, http: int 
     return f"pymotoros sim ready {shown} http={http}"
 
 
-async def run_simulator(app: SimulatorApp, ports_file: Path | None = None) -> None:
-    """Serve until SIGINT/SIGTERM; print the ready line (and write ``ports_file``) once
-    listening."""
+def open_recorder(record_path: Path | None, apps: Sequence[SimulatorApp]) -> SessionRecorder | None:
+    """``--record``: one pcapng file for the twin's side of every connection of every cell
+    (each cell's own ports tell its connections apart)."""
+    if record_path is None:
+        return None
+    from pymotoros.capture import SessionRecorder
+
+    try:
+        recorder = SessionRecorder(record_path)
+    except OSError as exc:
+        raise click.ClickException(
+            f"cannot write the recording {record_path}: {exc.strerror or exc}"
+        ) from exc
+    for app in apps:
+        for server in (app.motion, app.state, app.io):
+            server.recorder = recorder
+    return recorder
+
+
+@contextlib.contextmanager
+def stop_on_signals(request_stop: Callable[[], None]) -> Iterator[None]:
+    """Inside, SIGINT/SIGTERM call ``request_stop`` (one cell or several, cli/sim_cells.py)."""
     loop = asyncio.get_running_loop()
     handled: list[signal.Signals] = []
     for sig in (signal.SIGINT, signal.SIGTERM):
         with contextlib.suppress(NotImplementedError, RuntimeError):
-            loop.add_signal_handler(sig, app.request_stop)
+            loop.add_signal_handler(sig, request_stop)
             handled.append(sig)
     # Everything allocated so far (models, the web stack) is permanent: keep it out of the
     # collector's way so that a full collection cannot stall the 4 ms loop. Done before the
@@ -60,6 +85,16 @@ async def run_simulator(app: SimulatorApp, ports_file: Path | None = None) -> No
     gc.collect()
     gc.freeze()
     try:
+        yield
+    finally:
+        for sig in handled:
+            loop.remove_signal_handler(sig)
+
+
+async def run_simulator(app: SimulatorApp, ports_file: Path | None = None) -> None:
+    """Serve until SIGINT/SIGTERM; print the ready line (and write ``ports_file``) once
+    listening."""
+    with stop_on_signals(app.request_stop):
         async with app:
             ports = app.ports
             motion, state, io = app.listening_ports()
@@ -68,18 +103,57 @@ async def run_simulator(app: SimulatorApp, ports_file: Path | None = None) -> No
             sys.stdout.write(ready_line(motion, state, io, ports.http) + "\n")
             sys.stdout.flush()
             await app.wait_stopped()
-    finally:
-        for sig in handled:
-            loop.remove_signal_handler(sig)
 
 
-def write_ports_file(path: Path, motion: int, state: int, io: int, http: int | None) -> None:
+def write_ports_file(
+    path: Path,
+    motion: int,
+    state: int,
+    io: int,
+    http: int | None,
+    *,
+    cells: list[dict[str, Any]] | None = None,
+) -> None:
     """Write the ports as JSON, atomically (a reader never sees half a file): robot
-    commands read it with ``--ports-file`` / ``PYMOTOROS_PORTS_FILE``."""
-    data = {"motion": motion, "state": state, "io": io, "http": http}
+    commands read it with ``--ports-file`` / ``PYMOTOROS_PORTS_FILE``. With several
+    cells, the top-level ports are the first cell's and ``cells`` lists every cell."""
+    data: dict[str, Any] = {"motion": motion, "state": state, "io": io, "http": http}
+    if cells is not None:
+        data["cells"] = cells
     tmp = path.with_name(path.name + ".tmp")
     tmp.write_text(json.dumps(data) + "\n", encoding="utf-8")
     tmp.replace(path)
+
+
+class RepeatableOption(click.Option):
+    """``--config`` repeats on the command line, but from the environment or a settings
+    file it stays one path, as it was before several cells (never split, not refused)."""
+
+    def value_from_envvar(self, ctx: click.Context) -> Any:
+        value = self.resolve_envvar_value(ctx)
+        return None if value is None else (value,)
+
+    def type_cast_value(self, ctx: click.Context, value: Any) -> Any:
+        if isinstance(value, str | Path):
+            value = (value,)
+        return super().type_cast_value(ctx, value)
+
+
+def cell_file_ports(
+    ctx: click.Context, path: Path, ports: tuple[int, int, int, int]
+) -> tuple[int, int, int, int]:
+    """The ports of one cell: a flag given (command line, environment, settings file)
+    wins, else the cell file's ``[ports]``, else the flag's default."""
+    from pymotoros.runtime.fleet import PORT_KINDS, read_cell_ports
+
+    asked = read_cell_ports(path)
+    chosen = []
+    for kind, port in zip(PORT_KINDS, ports, strict=True):
+        from_file = asked.get(kind)
+        default = ctx.get_parameter_source(f"{kind}_port") is click.core.ParameterSource.DEFAULT
+        chosen.append(from_file if default and from_file is not None else port)
+    motion, state, io, http = chosen
+    return motion, state, io, http
 
 
 def _cell(
@@ -126,10 +200,12 @@ def _cell(
 @click.option(
     "--config",
     "config_path",
+    cls=RepeatableOption,
+    multiple=True,
     type=click.Path(exists=True, dir_okay=False, path_type=Path),
-    default=None,
     metavar="CELL.toml",
-    help="Cell file (controller, robots, tools, boot state); replaces --controller/--robot.",
+    help="Cell file (controller, robots, tools, boot state); replaces --controller/--robot. "
+    "Repeat it to run several cells in this process, one clock for all (docs/sim.md).",
 )
 @click.option(
     "--scenario",
@@ -179,7 +255,7 @@ def sim(
     http_port: int,
     controller_name: str,
     robot_name: str,
-    config_path: Path | None,
+    config_path: tuple[Path, ...],
     scenario_path: Path | None,
     ports_file: Path | None,
     record_path: Path | None = None,
@@ -192,8 +268,30 @@ def sim(
     robot commands. Port 0 lets the OS choose; the ready line (and --ports-file) tells
     which ports were taken.
     """
+    if len(config_path) > 1:
+        from pymotoros.cli.sim_cells import run_cells
+
+        if realtime:
+            from pymotoros.runtime.realtime import request_realtime
+
+            request_realtime()  # a warning line if refused; the cells run on either way
+        run_cells(
+            ctx,
+            config_path,
+            host=host,
+            scenario_path=scenario_path,
+            ports_file=ports_file,
+            record_path=record_path,
+            idle_batching=False if no_idle_batching else None,
+        )
+        return
+    config_file = config_path[0] if config_path else None
     try:
-        cell = _cell(ctx, controller_name, robot_name, config_path)
+        if config_file is not None:  # a [ports] table fills the port flags not given
+            motion_port, state_port, io_port, http_port = cell_file_ports(
+                ctx, config_file, (motion_port, state_port, io_port, http_port)
+            )
+        cell = _cell(ctx, controller_name, robot_name, config_file)
         controller = VirtualController(cell)
         if scenario_path is not None:
             from pymotoros.controller.scenario import load_scenario
@@ -215,18 +313,7 @@ def sim(
 
         request_realtime()  # a warning line if refused; the twin runs on either way
     app = SimulatorApp(controller, config, idle_batching=False if no_idle_batching else None)
-    recorder = None
-    if record_path is not None:
-        from pymotoros.capture import SessionRecorder
-
-        try:
-            recorder = SessionRecorder(record_path)
-        except OSError as exc:
-            raise click.ClickException(
-                f"cannot write the recording {record_path}: {exc.strerror or exc}"
-            ) from exc
-        for server in (app.motion, app.state, app.io):
-            server.recorder = recorder
+    recorder = open_recorder(record_path, [app])
     try:
         try:
             asyncio.run(run_simulator(app, ports_file))

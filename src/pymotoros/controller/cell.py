@@ -326,6 +326,7 @@ def cell_from_dict(
 
     parts = group_parts(data, source)  # the rules the client shares (models/cell.py)
     top.used.update(("groups", "robot"))
+    top.used.add("ports")  # where `pymotoros sim` listens: read by runtime/fleet.py
     entry_tools: list[tuple[ToolConfig, ...]] = []
     entry_s1cxg: list[S1cxgTable | None] = []
     """Per element of ``parts``, the ``[[groups.tools]]`` / ``[groups.s1cxg]`` of its entry."""

@@ -100,6 +100,7 @@ class SimulatorApp:
         *,
         clock: Clock | None = None,
         idle_batching: bool | None = None,
+        ticker: Ticker | None = None,
     ) -> None:
         self.controller = controller
         self.config = config or SimulatorConfig()
@@ -112,7 +113,11 @@ class SimulatorApp:
         # (virtual time steps tick by tick); idle_batching=False turns it off.
         self.idle_batching = clock is None if idle_batching is None else idle_batching
         self.observers = Observers(self._client_numbers, self._catch_up)
-        self.ticker = Ticker(
+        # Several cells in one process share one ticker that ticks them all in turn
+        # (runtime/fleet.py): its owner runs it (and batches only when every cell's
+        # observers allow); this app only reads and waits on it.
+        self._owns_ticker = ticker is None
+        self.ticker = ticker or Ticker(
             controller.tick,
             controller.period_ms / 1000.0,
             tick_clock,
@@ -197,7 +202,7 @@ class SimulatorApp:
                     http = await self._start_http(tg, socks[3]) if len(socks) > 3 else None
                     self._ports = BoundPorts(motion, state, io, http)
                     self._loop_tasks = [
-                        tg.create_task(self.ticker.run(), name="interpolation"),
+                        *self._own_ticker_task(tg),
                         tg.create_task(self.state.broadcast(), name="state-broadcast"),
                     ]
                     if not self._motoros_listening:
@@ -248,6 +253,12 @@ class SimulatorApp:
     def client_counts(self) -> dict[str, int]:
         """Clients connected on each MotoROS port (the web pendant shows them)."""
         return {"motion": self.motion.clients, "state": self.state.clients, "io": self.io.clients}
+
+    def _own_ticker_task(self, tg: asyncio.TaskGroup) -> list[asyncio.Task[None]]:
+        """The interpolation loop's task, unless a shared ticker is run by its owner."""
+        if not self._owns_ticker:
+            return []
+        return [tg.create_task(self.ticker.run(), name="interpolation")]
 
     def _motoros_started(self) -> bool:
         started = getattr(self.controller, "motoros_started", True)
