@@ -337,3 +337,20 @@ def test_plot_recording_without_a_trajectory_is_a_usage_error(
     )
     assert result.exit_code == 2
     assert "holds no trajectory point the controller accepted" in result.output
+
+
+def test_run_with_a_cell_refuses_what_the_cell_would_slow_down_unless_forced(
+    sim: Sim, planned_yaml: Path, fsu_cell: Path
+) -> None:
+    """``run --config``: the pre-flight uses the cell (FSU at 30 %) even though the twin it
+    talks to has no FSU; the refusal leaves the robot where it was, --force runs it."""
+    assert invoke("move", "0", "0", "0", "0", "0", "0", "--enable", *sim.cli_args()).exit_code == 0
+    refused = invoke("run", str(planned_yaml), "--config", str(fsu_cell), *sim.cli_args())
+    assert refused.exit_code == EXIT_WARNINGS
+    assert "not started" in refused.stderr
+    assert "fsu" in refused.stderr
+    forced = invoke(
+        "run", str(planned_yaml), "--config", str(fsu_cell), "--force", "--json", *sim.cli_args()
+    )
+    assert forced.exit_code == 0, forced.output
+    assert np.allclose(json.loads(forced.stdout)["positions"], [0.0] * 6, atol=1e-4)
