@@ -2,9 +2,10 @@
 
 What a client may throw at the ports: mutated frames in random chunkings with abrupt
 disconnects and half-frames left hanging, connection floods, extreme but legal (and
-illegal) values in every field of a trajectory point. Pass means: every reply in time,
-the interpolation loop on time, file descriptors back to baseline, and a normal client
-still served. CI runs a short version; the long one is
+illegal) values in every field of a trajectory point, malformed and oversized bodies on
+every state-changing endpoint of the control API. Pass means: every reply in time, the
+interpolation loop on time, file descriptors back to baseline, memory bounded, and a
+normal client still served. CI runs a short version; the long one is
 
     PYMOTOROS_FUZZ_FRAMES=100000 python -m pytest tests/runtime/test_robustness.py
 
@@ -15,13 +16,19 @@ from __future__ import annotations
 
 import asyncio
 import contextlib
+import json
 import math
 import os
 import random
 import struct
+import time
+from collections.abc import AsyncIterator, Iterable
+from dataclasses import replace
 
+import httpx
 import pytest
 
+from pymotoros.controller import VirtualController
 from pymotoros.protocol.constants import ByteOrder, MotionCommand, Port, ResultCode
 from pymotoros.protocol.framing import encode
 from pymotoros.protocol.messages import (
@@ -33,8 +40,10 @@ from pymotoros.protocol.messages import (
     PingReply,
 )
 from pymotoros.runtime.app import SimulatorApp
+from pymotoros.runtime.body_limit import MAX_BODY_BYTES, MAX_JSON_DEPTH
 
 from .peer import Peer, ctrl
+from .support import LOCAL
 
 LE = ByteOrder.LITTLE
 
@@ -57,8 +66,22 @@ OPEN_STATE_CONNECTIONS = 100
 SEED = 13
 
 
+RSS_GROWTH_BUDGET_MIB = 20.0
+"""Resident memory the twin may gain after its warm-up, whatever a client sends: a few
+MiB of allocator slack; a 14,399 s point used to cost ~1.2 GB, a 50 MB HTTP body 50 MB."""
+
+
 def _fd_count() -> int:
     return len(os.listdir("/proc/self/fd"))
+
+
+def _rss_mib() -> float:
+    """This process's resident set (the twin runs in it), from /proc/self/status."""
+    with open("/proc/self/status") as status:
+        for line in status:
+            if line.startswith("VmRSS:"):
+                return int(line.split()[1]) / 1024
+    raise AssertionError("no VmRSS line in /proc/self/status")
 
 
 needs_proc = pytest.mark.skipif(not os.path.isdir("/proc/self/fd"), reason="Linux /proc")
@@ -241,3 +264,218 @@ async def test_extreme_values_in_every_field_are_answered_in_time(app: Simulator
     await assert_served(app)
     assert app.tick_stats().skipped <= STALL_BUDGET_TICKS, app.tick_stats()
     await peer.close()
+
+
+# --------------------------------------------------------------------------- memory
+
+
+async def fuzz_port(app: SimulatorApp, port: int, frames: int, rng: random.Random) -> None:
+    """``frames`` mutated frames to one port in one connection, random chunks, then gone."""
+    reader, writer = await asyncio.open_connection("127.0.0.1", port)
+    drainer = asyncio.create_task(drain(reader))
+    blob = b"".join(mutate(rng, rng.choice(seeds())) for _ in range(frames))
+    for pos in range(0, len(blob), 512):
+        if writer.is_closing():
+            break
+        writer.write(blob[pos : pos + 512])
+        with contextlib.suppress(ConnectionError):
+            await writer.drain()
+    writer.transport.abort()
+    drainer.cancel()
+    with contextlib.suppress(asyncio.CancelledError):
+        await drainer
+
+
+async def far_point_then_stop(app: SimulatorApp, ticks: int) -> None:
+    """A legal point 14,399 s away (MotoROS's limit is 14,400 s), executed for ``ticks``
+    periods, then STOP_MOTION: the segment that used to be computed whole."""
+    peer = await Peer.connect(app.ports.motion, Port.MOTION)
+    zero = [0.0] * 6
+    assert await ctrl(peer, MotionCommand.START_TRAJ_MODE) == (ResultCode.SUCCESS, 0)
+    async with asyncio.timeout(REPLY_BUDGET_S):
+        await peer.request(JointTrajPtFull.for_joints(0, 0, 0.0, zero, zero))
+    async with asyncio.timeout(REPLY_BUDGET_S):
+        reply = await peer.request(JointTrajPtFull.for_joints(0, 1, 14399.0, [1.0] * 6, zero))
+    assert isinstance(reply, MotoMotionReply)
+    await app.ticker.wait_ticks(ticks)
+    async with asyncio.timeout(REPLY_BUDGET_S):
+        await ctrl(peer, MotionCommand.STOP_MOTION)
+    await peer.close()
+
+
+@needs_proc
+async def test_memory_stays_bounded(app: SimulatorApp) -> None:
+    """Warm up once (imports, buffers, the allocator's first arenas), then do it all
+    again, longer: the resident set may not grow by more than the budget."""
+    rng = random.Random(SEED + 1)
+    async with asyncio.timeout(120.0):
+        for port in (app.ports.motion, app.ports.state, app.ports.io):
+            await fuzz_port(app, port, 300, rng)
+        await far_point_then_stop(app, 25)
+        await assert_served(app)
+        before = _rss_mib()
+        for _ in range(3):
+            for port in (app.ports.motion, app.ports.state, app.ports.io):
+                await fuzz_port(app, port, max(FRAMES // 3, 300), rng)
+        await far_point_then_stop(app, 250)  # a second into the 14,399 s segment
+        await assert_served(app)
+    growth = _rss_mib() - before
+    assert growth < RSS_GROWTH_BUDGET_MIB, f"RSS grew {growth:.1f} MiB after warm-up"
+
+
+# --------------------------------------------------------------------------- HTTP bodies
+
+
+@pytest.fixture
+async def http_app() -> AsyncIterator[SimulatorApp]:
+    """The twin with its control API, everything on loopback port 0."""
+    async with SimulatorApp(VirtualController(), replace(LOCAL, http_port=0)) as sim:
+        yield sim
+
+
+HUGE_BODY_BYTES = 50 * 1024 * 1024
+"""The oversized body sent in chunks (issue 13's example: 50 MB)."""
+
+CHUNK_BYTES = 64 * 1024
+
+
+async def http_request(
+    port: int, path: str, headers: dict[str, str], chunks: Iterable[bytes], *, chunked: bool
+) -> tuple[int, dict[str, object]]:
+    """A raw HTTP/1.1 POST whose body is sent chunk by chunk until the server answers
+    (a well-behaved client library would insist on sending the whole body first)."""
+    reader, writer = await asyncio.open_connection("127.0.0.1", port)
+    head = [f"POST {path} HTTP/1.1", "Host: 127.0.0.1", "Connection: close"]
+    head += [f"{k}: {v}" for k, v in headers.items()]
+    if chunked:
+        head.append("Transfer-Encoding: chunked")
+    writer.write(("\r\n".join(head) + "\r\n\r\n").encode())
+
+    async def response() -> tuple[int, dict[str, object]]:
+        status_line = await reader.readline()
+        length = 0
+        while (line := await reader.readline()) not in (b"\r\n", b""):
+            name, _, value = line.decode().partition(":")
+            if name.lower() == "content-length":
+                length = int(value)
+        body = await reader.readexactly(length)
+        return int(status_line.split()[1]), json.loads(body)
+
+    answer = asyncio.create_task(response())
+    try:
+        for chunk in chunks:
+            if answer.done() or writer.is_closing():
+                break
+            writer.write(b"%x\r\n%s\r\n" % (len(chunk), chunk) if chunked else chunk)
+            try:
+                await writer.drain()
+            except ConnectionError:
+                break
+        else:
+            if chunked and not answer.done():
+                writer.write(b"0\r\n\r\n")
+        async with asyncio.timeout(10.0):
+            return await answer
+    finally:
+        answer.cancel()
+        writer.transport.abort()
+
+
+def post_endpoints(schema: dict[str, dict[str, dict[str, object]]]) -> list[str]:
+    """Every state-changing endpoint the control API documents."""
+    return sorted(path for path, ops in schema["paths"].items() if "post" in ops)
+
+
+MALFORMED: list[tuple[str, bytes, str]] = [
+    ("invalid JSON", b'{"on": tru', "application/json"),
+    ("not an object", b"[1, 2, 3]", "application/json"),
+    ("a string", b'"pressed"', "application/json"),
+    ("wrong types", b'{"on": "yes", "pressed": 1, "mode": 7, "code": "x", "events": 3}',
+     "application/json"),
+    ("unknown fields only", b'{"surprise": true}', "application/json"),
+    ("not UTF-8", b"\xff\xfe\x00{", "application/json"),
+    ("deeply nested", b"[" * 100_000 + b"]" * 100_000, "application/json"),
+    ("deeply nested object", b'{"a":' * (MAX_JSON_DEPTH + 1) + b"1" + b"}" * (MAX_JSON_DEPTH + 1),
+     "application/json"),
+    ("wrong content type", b'{"on": true}', "text/plain"),
+    ("form data", b"on=true", "application/x-www-form-urlencoded"),
+]  # fmt: skip
+"""Bodies no endpoint accepts: (what, body, content type)."""
+
+NO_BODY_ENDPOINTS = frozenset({"/api/reset", "/api/tick/reset"})
+"""POSTs that take no body (and so ignore one)."""
+
+
+async def ping_loop(app: SimulatorApp, stop: asyncio.Event, worst: list[float]) -> None:
+    """A normal motion client pinging throughout: its slowest round trip."""
+    peer = await Peer.connect(app.ports.motion, Port.MOTION)
+    while not stop.is_set():
+        began = time.perf_counter()
+        async with asyncio.timeout(REPLY_BUDGET_S):
+            assert await peer.request(Ping()) == PingReply()
+        worst[0] = max(worst[0], time.perf_counter() - began)
+        await app.ticker.wait_ticks(5)
+    await peer.close()
+
+
+@needs_proc
+async def test_malformed_and_oversized_http_bodies(http_app: SimulatorApp) -> None:
+    app = http_app
+    assert app.ports.http
+    port = app.ports.http
+    url = f"http://127.0.0.1:{port}"
+    async with httpx.AsyncClient(base_url=url, timeout=5.0) as client:
+        endpoints = post_endpoints((await client.get("/openapi.json")).json())
+        assert "/api/estop" in endpoints
+        assert "/api/scenario" in endpoints
+        before = (await client.get("/api/state")).json()
+        stop, worst = asyncio.Event(), [0.0]
+        pinger = asyncio.create_task(ping_loop(app, stop, worst))
+        app.ticker.reset_stats()
+        rss_before = _rss_mib()
+        async with asyncio.timeout(120.0):
+            for path in endpoints:
+                if path in NO_BODY_ENDPOINTS:
+                    continue
+                for what, body, content_type in MALFORMED:
+                    r = await client.post(
+                        path, content=body, headers={"content-type": content_type}
+                    )
+                    assert 400 <= r.status_code < 500, (path, what, r.status_code, r.text)
+                    error = r.json()["error"]
+                    assert path in error, (path, what, error)
+                    assert "error parsing the body" not in error, (path, what, error)
+                # announced too large: refused before a byte of it is read
+                status, doc = await http_request(
+                    port, path, {"Content-Type": "application/json",
+                                 "Content-Length": str(HUGE_BODY_BYTES)},
+                    [b" " * CHUNK_BYTES], chunked=False,
+                )  # fmt: skip
+                assert status == 413, (path, doc)
+                assert str(MAX_BODY_BYTES) in str(doc["error"]), doc
+            # not announced: chunked, 50 MB of it, refused once past the limit
+            for path in ("/api/hold", "/api/scenario"):
+                chunk = b" " * CHUNK_BYTES
+                status, doc = await http_request(
+                    port, path, {"Content-Type": "application/json"},
+                    (chunk for _ in range(HUGE_BODY_BYTES // CHUNK_BYTES)), chunked=True,
+                )  # fmt: skip
+                assert status == 413, (path, doc)
+                assert "more than the control API takes" in str(doc["error"])
+            # just under the limit is still read and judged on its content
+            status, doc = await http_request(
+                port, "/api/hold", {"Content-Type": "application/json"},
+                [b'{"on": true}' + b" " * (MAX_BODY_BYTES - 20)], chunked=True,
+            )  # fmt: skip
+            assert status == 200, doc
+        rss_growth = _rss_mib() - rss_before
+        stop.set()
+        await pinger
+        after = (await client.get("/api/state")).json()
+    assert worst[0] < REPLY_BUDGET_S
+    assert after["hold"] is True  # only the one good body changed anything
+    assert {k: after[k] for k in ("mode", "estop", "servo", "alarms", "remote")} == {
+        k: before[k] for k in ("mode", "estop", "servo", "alarms", "remote")
+    }
+    assert rss_growth < RSS_GROWTH_BUDGET_MIB, f"RSS grew {rss_growth:.1f} MiB"
+    assert app.tick_stats().skipped <= STALL_BUDGET_TICKS, app.tick_stats()

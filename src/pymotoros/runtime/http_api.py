@@ -28,6 +28,7 @@ from starlette.exceptions import HTTPException as StarletteHTTPException
 from pymotoros import __version__
 from pymotoros.controller.api import ControllerSnapshot, PendantMode, TcpSnapshot
 from pymotoros.controller.scenario import parse_scenario
+from pymotoros.runtime.body_limit import BodyLimit
 from pymotoros.runtime.csrf import CsrfGuard
 from pymotoros.runtime.docs_page import install_offline_docs
 from pymotoros.runtime.pendant import install_pendant
@@ -355,6 +356,7 @@ def create_http_app(
     )
     install_offline_docs(app)
     app.add_middleware(CsrfGuard)  # the pendant's buttons: refuse other sites' POSTs
+    app.add_middleware(BodyLimit)  # outermost: no body read beyond MAX_BODY_BYTES
     app.add_exception_handler(RequestValidationError, _validation_error)
     app.add_exception_handler(StarletteHTTPException, _http_error)
     app.add_exception_handler(ValueError, _value_error)
