@@ -23,7 +23,7 @@ import struct
 from collections.abc import Callable
 
 import pytest
-from hypothesis import given, settings
+from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 from test_message_roundtrip import MESSAGES
 
@@ -40,7 +40,11 @@ ORDERS = [ByteOrder.LITTLE, ByteOrder.BIG]
 
 
 def examples(n: int) -> Callable[[Callable[..., None]], Callable[..., None]]:
-    return settings(max_examples=n * SCALE, deadline=None)
+    """Bounded examples; no time limits (this shared 2-core machine and CI runners are
+    slow at times, which says nothing about the codec)."""
+    return settings(
+        max_examples=n * SCALE, deadline=None, suppress_health_check=[HealthCheck.too_slow]
+    )
 
 
 def cut(data: bytes, cuts: list[int]) -> list[bytes]:
