@@ -7,6 +7,10 @@
 #
 # The ready line (`pymotoros sim ready motion=... state=... io=... http=...`) is the
 # first line on stdout; the control API's GET /api/state is the health check.
+# `--host 0.0.0.0`: a container's loopback is unreachable from `docker run -p`, so the
+# twin listens on every interface of its own network namespace (the sim warns: the
+# control API has no authentication; publish its port only where you trust the network).
+# Linted by hadolint and checked against the CLI by tests/test_dockerfile.py.
 FROM python:3.11-slim
 
 WORKDIR /opt/pymotoros
@@ -15,7 +19,8 @@ COPY src ./src
 RUN python -m pip install --no-cache-dir . \
     && rm -rf /opt/pymotoros/src
 
-USER nobody
+# nobody (65534 in Debian): numeric, so the runtime need not resolve the name (DL3066)
+USER 65534:65534
 EXPOSE 50240 50241 50242 8080
 HEALTHCHECK --interval=10s --timeout=3s --start-period=20s \
     CMD ["python", "-c", "import urllib.request; urllib.request.urlopen('http://127.0.0.1:8080/api/state', timeout=2)"]

@@ -1,8 +1,10 @@
 """A pytest plugin: the ``pymotoros_twin`` fixture, a started twin on OS-chosen ports.
 
-Enable it in a ``conftest.py`` (or with ``-p pymotoros.pytest_plugin``)::
-
-    pytest_plugins = ["pymotoros.pytest_plugin"]
+Installing pymotoros registers it with pytest (a ``pytest11`` entry point): there is
+nothing to enable, and adding it again (``pytest_plugins = [...]`` or ``-p``) is an
+error. Because every pytest run of anyone with pymotoros installed loads this module,
+importing it is cheap and does nothing: the controller and the servers are imported by
+the fixture, when a test asks for a twin::
 
     def test_my_driver(pymotoros_twin):
         drive_robot("127.0.0.1", pymotoros_twin.motion, pymotoros_twin.state)
@@ -24,19 +26,20 @@ package imports it.
 
 from __future__ import annotations
 
-import asyncio
 import concurrent.futures
 import threading
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Final, TypeVar
+from typing import TYPE_CHECKING, Final, TypeVar
 
 import pytest
 
-from pymotoros.controller import VirtualController
-from pymotoros.controller.cell import CellConfig, default_cell, load_cell
-from pymotoros.runtime.app import SimulatorApp, SimulatorConfig
+if TYPE_CHECKING:  # imported by the fixture, not by every pytest run (see above)
+    import asyncio
+
+    from pymotoros.controller import VirtualController
+    from pymotoros.controller.cell import CellConfig
 
 __all__ = ["RunningTwin", "pymotoros_twin"]
 
@@ -111,6 +114,8 @@ class _TwinThread:
             raise RuntimeError(f"the pymotoros twin did not stop within {STOP_TIMEOUT_S} s")
 
     def _run(self) -> None:
+        import asyncio
+
         try:
             asyncio.run(self._main())
         except BaseException as exc:  # reported to the test
@@ -118,6 +123,11 @@ class _TwinThread:
                 self._started.set_exception(exc)
 
     async def _main(self) -> None:
+        import asyncio
+
+        from pymotoros.controller import VirtualController
+        from pymotoros.runtime.app import SimulatorApp, SimulatorConfig
+
         self._loop = asyncio.get_running_loop()
         self._stop = asyncio.Event()
         controller = VirtualController(self._cell)
@@ -146,6 +156,8 @@ class _TwinThread:
 
 
 def _cell_for(request: pytest.FixtureRequest) -> tuple[CellConfig, bool]:
+    from pymotoros.controller.cell import default_cell, load_cell
+
     marker = request.node.get_closest_marker(MARKER)
     kwargs = dict(marker.kwargs) if marker is not None else {}
     unknown = set(kwargs) - {"cell", "robot", "controller", "http"}

@@ -213,11 +213,11 @@ def coefficients_x87_scalar(
     for value, size in zip(values, sizes, strict=True):
         if size == 0.0:
             continue
+        if not abs(value) < 1e30:  # first: NaN and infinities have no significand bits
+            return None
         low = int(frexp(value)[0] * scale) & _LOW29  # the 29 bits past float32
         distance = min(abs(low - _MID29), 1 << 27)
         if not distance * abs(value) > COEF_RISK_FACTOR * size:
-            return None
-        if not abs(value) < 1e30:
             return None
     return list(f32_tuple(values, len(values)))
 

@@ -28,6 +28,7 @@ from starlette.exceptions import HTTPException as StarletteHTTPException
 from pymotoros import __version__
 from pymotoros.controller.api import ControllerSnapshot, PendantMode, TcpSnapshot
 from pymotoros.controller.scenario import parse_scenario
+from pymotoros.runtime.body_limit import BodyLimit
 from pymotoros.runtime.csrf import CsrfGuard
 from pymotoros.runtime.docs_page import install_offline_docs
 from pymotoros.runtime.observers import CatchUpMiddleware, Observers
@@ -359,6 +360,7 @@ def create_http_app(
     app.add_middleware(CsrfGuard)  # the pendant's buttons: refuse other sites' POSTs
     if observers is not None:  # idle batching: every request sees an up-to-date controller
         app.add_middleware(CatchUpMiddleware, observers=observers)
+    app.add_middleware(BodyLimit)  # outermost: no body read beyond MAX_BODY_BYTES
     app.add_exception_handler(RequestValidationError, _validation_error)
     app.add_exception_handler(StarletteHTTPException, _http_error)
     app.add_exception_handler(ValueError, _value_error)

