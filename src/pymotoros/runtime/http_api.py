@@ -363,7 +363,7 @@ def create_http_app(
         listening = ports() if ports is not None else (None, None, None)
         return state_model(controller.snapshot(), tick_stats(), listening)
 
-    install_pendant(app, controller, lambda: state().model_dump(), clients, after_ticks)
+    install_pendant(app, controller, tick_stats, ports, clients, after_ticks)
 
     @app.get("/api/state", response_model=StateModel, tags=["state"])
     async def get_state() -> StateModel:

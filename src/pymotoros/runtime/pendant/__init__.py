@@ -10,11 +10,14 @@ WebSocket support, no hand-rolled framing). One feed task builds the state docum
 every :data:`FEED_PERIOD_S` (10 ticks at 4 ms, right after a tick when the simulator
 passes its ticker) and hands the *latest* one, JSON-encoded once, to every open tab: the cost on
 the event loop is one snapshot per period whatever the number of tabs, and a slow tab
-skips frames instead of queueing them.
+skips frames instead of queueing them. The document is built from the controller's
+frozen snapshot with plain dicts (:mod:`.document`), not through the control API's
+pydantic models: it is the only per-period work the pendant adds to the loop.
 
-The 3D view is drawn by the page on a ``<canvas>`` from the joint frames of each
-group's kinematic chain (:meth:`pymotoros.kinematics.Chain.joint_frames`), computed
-here for the feedback and the command (the "ghost").
+The 3D view is drawn by the page on a ``<canvas>`` from the joint positions of each
+group's kinematic chain (:class:`.document.Skeleton`, the ``xyz`` of
+:meth:`pymotoros.kinematics.Chain.joint_frames`), computed here for the feedback and the
+command (the "ghost").
 """
 
 from __future__ import annotations
@@ -32,10 +35,14 @@ from fastapi import FastAPI, WebSocket, WebSocketDisconnect
 from fastapi.responses import FileResponse, RedirectResponse
 from fastapi.staticfiles import StaticFiles
 
+from pymotoros.controller.api import ControllerSnapshot
 from pymotoros.errors import KinematicsError
-from pymotoros.kinematics import Chain, chain_for
+from pymotoros.kinematics import chain_for
+from pymotoros.runtime.pendant.document import Ports, Skeleton, errors_document, state_document
+from pymotoros.runtime.target import SimulatedController
+from pymotoros.runtime.ticker import TickStats
 
-__all__ = ["FEED_PERIOD_S", "PendantFeed", "install_pendant"]
+__all__ = ["FEED_PERIOD_S", "PendantDocument", "PendantFeed", "install_pendant"]
 
 logger = logging.getLogger(__name__)
 
@@ -57,22 +64,18 @@ STATIC_DIR: Final = files("pymotoros.runtime.pendant") / "static"
 class PendantFeed:
     """Builds the pendant's state document at :data:`FEED_PERIOD_S` while a tab listens.
 
-    ``build`` returns the ``GET /api/state`` document (a dict); the feed adds the joint
-    frames for the 3D view. The task runs only while at least one tab is connected.
+    ``build`` returns the whole document (:class:`PendantDocument`). The task runs only
+    while at least one tab is connected.
     """
 
     def __init__(
         self,
         build: Callable[[], dict[str, Any]],
-        chains: list[Chain | None],
         period_s: float = FEED_PERIOD_S,
-        extras: Callable[[], dict[str, Any]] | None = None,
         pace: Callable[[], Awaitable[None]] | None = None,
     ) -> None:
         self._build = build
-        self._extras = extras
         self._pace = pace
-        self._chains = chains
         self._period_s = period_s
         self._latest: str | None = None
         self._seq = 0
@@ -85,19 +88,8 @@ class PendantFeed:
         return self._listeners
 
     def document(self) -> dict[str, Any]:
-        """One state document with the joint frames (also ``GET /api/pendant/state``)."""
-        doc = self._build()
-        if self._extras is not None:
-            doc["pendant"] = self._extras()
-        for group, chain in zip(doc["groups"], self._chains, strict=False):
-            if chain is None or len(group["feedback_rad"]) != chain.num_joints:
-                group["frames"] = None
-                continue
-            group["frames"] = {
-                "feedback": [f["xyz"] for f in chain.joint_frames(group["feedback_rad"])],
-                "command": [f["xyz"] for f in chain.joint_frames(group["command_rad"])],
-            }
-        return doc
+        """One state document with the joint positions (also ``GET /api/pendant/state``)."""
+        return self._build()
 
     async def _run(self) -> None:
         loop = asyncio.get_running_loop()
@@ -150,15 +142,56 @@ class PendantFeed:
                 self._task = None
 
 
-def _extras(
-    controller: object, clients: Callable[[], dict[str, int]] | None
-) -> Callable[[], dict[str, Any]]:
-    """What a pendant shows beyond ``GET /api/state``: why motion is not ready, the
-    INIT_ROS job's line, MotoROS's outputs, the clients per port. Each part only where
-    the controller offers it (a test double may not)."""
+class PendantDocument:
+    """The pendant's document: ``GET /api/state``'s, each group's joint positions for the
+    3D view (``frames``), and under ``pendant`` what a pendant shows beyond the control
+    API: eco mode, the operator errors, why motion is not ready, the INIT_ROS job's line,
+    MotoROS's outputs, the clients per port. Each extra only where the controller offers
+    it (a test double may not)."""
 
-    def read() -> dict[str, Any]:
-        out: dict[str, Any] = {}
+    def __init__(
+        self,
+        controller: SimulatedController,
+        tick_stats: Callable[[], TickStats],
+        ports: Callable[[], Ports] | None = None,
+        clients: Callable[[], dict[str, int]] | None = None,
+    ) -> None:
+        self._snapshot = controller.snapshot
+        self._controller = controller
+        self._tick_stats = tick_stats
+        self._ports = ports
+        self._clients = clients
+        self._skeletons: list[Skeleton | None] = []
+        cell = getattr(controller, "cell", None)
+        for group in getattr(cell, "groups", ()):
+            try:
+                self._skeletons.append(Skeleton(chain_for(group)))
+            except KinematicsError:
+                self._skeletons.append(None)
+
+    def __call__(self) -> dict[str, Any]:
+        snapshot = self._snapshot()
+        ports = self._ports() if self._ports is not None else (None, None, None)
+        doc = state_document(snapshot, self._tick_stats(), ports)
+        skeletons = self._skeletons
+        for i, group in enumerate(doc["groups"]):
+            skeleton = skeletons[i] if i < len(skeletons) else None
+            if skeleton is None or len(group["feedback_rad"]) != skeleton.num_joints:
+                group["frames"] = None  # no kinematic model: no 3D view for this group
+                continue
+            group["frames"] = {
+                "feedback": skeleton.points(group["feedback_rad"]),
+                "command": skeleton.points(group["command_rad"]),
+            }
+        doc["pendant"] = self._extras(snapshot)
+        return doc
+
+    def _extras(self, snapshot: ControllerSnapshot) -> dict[str, Any]:
+        controller = self._controller
+        out: dict[str, Any] = {"errors": errors_document(snapshot)}
+        operator = getattr(controller, "operator_state", None)  # VirtualController's
+        if operator is not None:
+            out["eco"] = bool(operator.eco)
         motoros = getattr(controller, "motoros", None)
         reason = getattr(motoros, "not_ready_reason", None)
         if reason is not None:
@@ -176,28 +209,16 @@ def _extras(
                 }
                 for i in range(MOTOROS_OUTPUTS)
             ]
-        if clients is not None:
-            out["clients"] = clients()
+        if self._clients is not None:
+            out["clients"] = self._clients()
         return out
-
-    return read
-
-
-def _chains(controller: object) -> list[Chain | None]:
-    cell = getattr(controller, "cell", None)
-    out: list[Chain | None] = []
-    for group in getattr(cell, "groups", ()):
-        try:
-            out.append(chain_for(group))
-        except KinematicsError:
-            out.append(None)
-    return out
 
 
 def install_pendant(
     app: FastAPI,
-    controller: object,
-    build: Callable[[], dict[str, Any]],
+    controller: SimulatedController,
+    tick_stats: Callable[[], TickStats],
+    ports: Callable[[], Ports] | None = None,
     clients: Callable[[], dict[str, int]] | None = None,
     after_ticks: Callable[[int], Awaitable[None]] | None = None,
 ) -> None:
@@ -212,7 +233,7 @@ def install_pendant(
         period_ms = int(getattr(controller, "period_ms", DEFAULT_PERIOD_MS))
         ticks = max(1, round(FEED_PERIOD_S * 1000 / period_ms))
         pace = functools.partial(after_ticks, ticks)
-    feed = PendantFeed(build, _chains(controller), extras=_extras(controller, clients), pace=pace)
+    feed = PendantFeed(PendantDocument(controller, tick_stats, ports, clients), pace=pace)
     app.state.pendant_feed = feed
     app.mount("/pendant", StaticFiles(directory=str(STATIC_DIR)), name="pendant")
 
