@@ -54,7 +54,7 @@ TAB_PROCESS = textwrap.dedent(
     """
     import asyncio, sys, time, urllib.request
     from wsproto import ConnectionType, WSConnection
-    from wsproto.events import AcceptConnection, CloseConnection, Request, TextMessage
+    from wsproto.events import AcceptConnection, CloseConnection, Ping, Request, TextMessage
 
     port, tabs = int(sys.argv[1]), int(sys.argv[2])
     base = f"http://127.0.0.1:{port}"
@@ -69,8 +69,10 @@ TAB_PROCESS = textwrap.dedent(
             for event in ws.events():
                 if isinstance(event, TextMessage) and event.message_finished:
                     counts[i] += 1
+                elif isinstance(event, Ping):  # uvicorn's keep-alive, every 20 s
+                    writer.write(ws.send(event.response()))
                 elif isinstance(event, CloseConnection):
-                    return
+                    raise SystemExit(f"tab {i}: the simulator closed the feed")
                 elif not isinstance(event, (AcceptConnection, TextMessage)):
                     raise SystemExit(f"tab {i}: unexpected {event!r}")
 
@@ -81,9 +83,13 @@ TAB_PROCESS = textwrap.dedent(
         counts = [0] * tabs
         tasks = [asyncio.create_task(tab(counts, i)) for i in range(tabs)]
         t0 = time.monotonic()
-        await asyncio.to_thread(sys.stdin.readline)  # the benchmark says when to stop
+        stop = asyncio.ensure_future(asyncio.to_thread(sys.stdin.readline))  # when to stop
+        done, _ = await asyncio.wait([stop, *tasks], return_when=asyncio.FIRST_COMPLETED)
         elapsed = time.monotonic() - t0
         for t in tasks:
+            if t in done:
+                t.result()  # a tab's failure ends the process with its message
+                raise SystemExit("a tab's feed ended early")
             t.cancel()
         cpu = time.process_time()
         print(" ".join(f"{c / elapsed:.1f}" for c in counts), f"{cpu / elapsed:.4f}", flush=True)

@@ -18,11 +18,13 @@ import websocket
 
 from pymotoros.controller import VirtualController
 from pymotoros.controller.cell import default_cell, load_cell
+from pymotoros.controller.scenario import parse_scenario
 from pymotoros.kinematics import chain_for
 from pymotoros.models.robots import ROBOTS
 from pymotoros.runtime.app import SimulatorApp
-from pymotoros.runtime.http_api import create_http_app
+from pymotoros.runtime.http_api import create_http_app, state_model
 from pymotoros.runtime.pendant import FEED_PERIOD_S
+from pymotoros.runtime.pendant.document import Skeleton, state_document
 from pymotoros.runtime.ticker import LatenessStats, TickStats
 
 from .support import LOCAL
@@ -173,3 +175,104 @@ def test_multi_group_cell_file_has_frames_per_group() -> None:
     doc = create_http_app(controller, lambda: STATS).state.pendant_feed.document()
     assert [g["name"] for g in doc["groups"]] == ["R1", "R2"]
     assert all(g["frames"] is not None for g in doc["groups"])
+
+
+def _as_json(doc: object) -> object:
+    return json.loads(json.dumps(doc))
+
+
+def _busy(controller: VirtualController) -> VirtualController:
+    """A controller with something in every part of the state document."""
+    controller.raise_alarm(4107, 3, "from the test")
+    controller.raise_error(2020, 1, "an operator error")
+    controller.set_fsu(joint_speed_pct=40, tcp_speed_mm_s=None, off=False)
+    controller.load_scenario(
+        parse_scenario({"events": [{"at": 0.0, "action": "hold", "on": True}]}, source="the test")
+    )
+    for _ in range(3):
+        controller.tick()
+    return controller
+
+
+@pytest.mark.parametrize(
+    "make",
+    [
+        lambda: VirtualController(),
+        lambda: _busy(VirtualController()),
+        lambda: _busy(VirtualController(cell=load_cell(CELLS / "two_hc10_dx100.toml"))),
+        lambda: VirtualController(cell=default_cell(robot="sda10f")),
+    ],
+    ids=["boot", "alarms-errors-fsu-events", "two-groups", "sda10f"],
+)
+def test_feed_document_is_the_control_apis_state_without_pydantic(make: Any) -> None:
+    """The feed builds GET /api/state's document by hand (it runs 25 times a second on
+    the loop): as JSON it must be the same document, key for key."""
+    controller = make()
+    snapshot = controller.snapshot()
+    ports = (50240, 50241, None)
+    by_hand = state_document(snapshot, STATS, ports)
+    by_model = state_model(snapshot, STATS, ports).model_dump_json()
+    assert _as_json(by_hand) == json.loads(by_model)
+    assert list(by_hand) == list(json.loads(by_model))  # same key order too
+
+
+def test_pendant_shows_operator_errors_and_eco_off(controller: VirtualController) -> None:
+    _busy(controller)
+    doc = create_http_app(controller, lambda: STATS).state.pendant_feed.document()
+    assert doc["pendant"]["errors"] == [{"code": 2020, "subcode": 1, "text": "an operator error"}]
+    assert [a["code"] for a in doc["alarms"]] == [4107]
+    assert doc["pendant"]["eco"] is False
+
+
+def test_pendant_shows_eco_mode(tmp_path: Path) -> None:
+    cell = tmp_path / "eco.toml"
+    cell.write_text(
+        'name = "eco"\n[[groups]]\nrobot = "hc10"\n[initial]\nservo = true\neco = true\n'
+    )
+    controller = VirtualController(cell=load_cell(cell))
+    feed = create_http_app(controller, lambda: STATS).state.pendant_feed
+    assert feed.document()["pendant"]["eco"] is True
+    controller.set_servo(False)  # servo off ends eco mode
+    controller.tick()
+    assert feed.document()["pendant"]["eco"] is controller.operator_state.eco is False
+
+
+@pytest.mark.parametrize("robot", sorted(ROBOTS))
+def test_skeleton_points_are_the_chains_joint_positions(robot: str) -> None:
+    """The feed's cheap forward kinematics gives the same positions as
+    ``Chain.joint_frames`` at any pose, also when the pose changes back and forth."""
+    for group in default_cell(robot=robot).groups:
+        chain = chain_for(group)
+        skeleton = Skeleton(chain)
+        n = chain.num_joints
+        poses = [[0.3 * (i + 1) * (-1) ** i for i in range(n)], [0.0] * n]
+        for q in poses + poses:
+            assert skeleton.points(q) == [f["xyz"] for f in chain.joint_frames(q)]
+        with pytest.raises(ValueError, match=f"expected {n} joint values"):
+            skeleton.points([0.0] * (n + 1))
+
+
+def _extensions(url: str, origin: str) -> str:
+    ws = websocket.create_connection(
+        url,
+        timeout=WS_TIMEOUT_S,
+        origin=origin,
+        header=["Sec-WebSocket-Extensions: permessage-deflate; client_max_window_bits"],
+    )
+    try:
+        ws.recv()
+        headers = ws.getheaders() or {}
+        return str(headers.get("sec-websocket-extensions", ""))
+    finally:
+        ws.close()
+
+
+async def test_feed_is_not_compressed_even_when_the_browser_offers_it(
+    controller: VirtualController,
+) -> None:
+    """Browsers offer permessage-deflate; compressing every document for every tab would
+    cost the interpolation loop CPU for nothing on a local link."""
+    async with SimulatorApp(controller, replace(LOCAL, http_port=0)) as sim:
+        base = f"127.0.0.1:{sim.ports.http}"
+        extensions = await asyncio.to_thread(_extensions, f"ws://{base}/ws/state", f"http://{base}")
+        assert "deflate" not in extensions
