@@ -4,6 +4,7 @@ joint frames, and state-changing requests from other sites are refused (CSRF).""
 from __future__ import annotations
 
 import asyncio
+import itertools
 import json
 import math
 import re
@@ -23,7 +24,7 @@ from pymotoros.kinematics import chain_for
 from pymotoros.models.robots import ROBOTS
 from pymotoros.runtime.app import SimulatorApp
 from pymotoros.runtime.http_api import create_http_app, state_model
-from pymotoros.runtime.pendant import FEED_PERIOD_S
+from pymotoros.runtime.pendant import FEED_PERIOD_S, Captured, PendantDocument, PendantFeed
 from pymotoros.runtime.pendant.document import Skeleton, state_document
 from pymotoros.runtime.ticker import LatenessStats, TickStats
 
@@ -276,3 +277,88 @@ async def test_feed_is_not_compressed_even_when_the_browser_offers_it(
         base = f"127.0.0.1:{sim.ports.http}"
         extensions = await asyncio.to_thread(_extensions, f"ws://{base}/ws/state", f"http://{base}")
         assert "deflate" not in extensions
+
+
+class _Ticks:
+    """A stand-in for ``Ticker.wait_ticks`` that the test advances tick by tick."""
+
+    def __init__(self) -> None:
+        self.count = 0
+        self._waiters: list[tuple[int, asyncio.Future[None]]] = []
+
+    async def after(self, n: int) -> None:
+        future = asyncio.get_running_loop().create_future()
+        self._waiters.append((self.count + n, future))
+        await future
+
+    async def tick(self) -> None:
+        self.count += 1
+        for target, future in list(self._waiters):
+            if target <= self.count:
+                self._waiters.remove((target, future))
+                future.set_result(None)
+        for _ in range(LOOP_TURNS_PER_TICK):  # let every woken task run to its next wait
+            await asyncio.sleep(0)
+
+
+LOOP_TURNS_PER_TICK = 20
+"""Event-loop turns after each virtual tick: more than the feed's tasks need to settle."""
+
+
+class _Tab:
+    """A WebSocket that records on which tick each document was sent."""
+
+    def __init__(self, ticks: _Ticks, events: list[tuple[int, str]], name: str) -> None:
+        self._ticks, self._events, self._name = ticks, events, name
+
+    async def accept(self) -> None:
+        return None
+
+    async def send_text(self, text: str) -> None:
+        assert json.loads(text)["groups"]
+        self._events.append((self._ticks.count, self._name))
+
+
+async def test_feed_work_is_spread_over_the_ticks_of_its_period(
+    controller: VirtualController,
+) -> None:
+    """Capture after one tick, render and encode after the next, then one tab per tick:
+    no tick is followed by more than one piece of the feed's work (module docstring)."""
+    ticks = _Ticks()
+    events: list[tuple[int, str]] = []
+
+    class Recording(PendantDocument):
+        def capture(self) -> Captured:
+            events.append((ticks.count, "capture"))
+            return super().capture()
+
+        def render(self, captured: Captured) -> dict[str, Any]:
+            events.append((ticks.count, "render"))
+            return super().render(captured)
+
+    period = round(FEED_PERIOD_S * 1000 / controller.period_ms)
+    feed = PendantFeed(
+        Recording(controller, lambda: STATS), after_ticks=ticks.after, period_ticks=period
+    )
+    tabs = [
+        asyncio.create_task(feed.serve(_Tab(ticks, events, f"tab{i}")))  # type: ignore[arg-type]
+        for i in range(3)
+    ]
+    await asyncio.sleep(0)
+    for _ in range(3 * period):
+        await ticks.tick()
+    for task in tabs:
+        task.cancel()
+    await asyncio.gather(*tabs, return_exceptions=True)
+    captures = [t for t, what in events if what == "capture"]
+    assert len(captures) >= 3
+    assert {b - a for a, b in itertools.pairwise(captures)} == {period}
+    for start in captures[:-1]:
+        in_period = sorted((t, w) for t, w in events if start <= t < start + period)
+        assert in_period == [
+            (start, "capture"),
+            (start + 1, "render"),
+            (start + 2, "tab0"),
+            (start + 3, "tab1"),
+            (start + 4, "tab2"),
+        ]
