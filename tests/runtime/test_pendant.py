@@ -362,3 +362,46 @@ async def test_feed_work_is_spread_over_the_ticks_of_its_period(
             (start + 3, "tab1"),
             (start + 4, "tab2"),
         ]
+
+
+SCENARIOS = Path(__file__).resolve().parents[2] / "examples" / "scenarios"
+
+
+async def test_page_loads_a_toml_scenario_file_as_the_cli_does(
+    api: httpx.AsyncClient, controller: VirtualController
+) -> None:
+    """The "Load scenario" button sends the file's text; the simulator parses it the way
+    ``pymotoros sim --scenario`` does, so the example files work as they are."""
+    for path in sorted(SCENARIOS.glob("*.toml")):
+        r = await api.post(
+            "/api/pendant/scenario", json={"name": path.name, "toml": path.read_text()}
+        )
+        assert r.status_code == 200, (path.name, r.text)
+    toml = '[[events]]\nat = 0.0\naction = "hold"\non = true\n'
+    r = await api.post("/api/pendant/scenario", json={"name": "hold.toml", "toml": toml})
+    assert r.status_code == 200
+    assert "pendant" in r.json()
+    controller.tick()
+    assert controller.snapshot().hold is True
+
+
+@pytest.mark.parametrize(
+    ("toml", "message"),
+    [
+        ("[[events]\n", "hold.toml: not valid TOML"),
+        ('[[events]]\nat = 0.0\naction = "fly"\n', "hold.toml: events[0]"),
+        ("title = 1\n", "hold.toml: title: unknown key"),
+    ],
+)
+async def test_a_wrong_scenario_file_is_refused_with_its_name_and_the_reason(
+    api: httpx.AsyncClient, controller: VirtualController, toml: str, message: str
+) -> None:
+    r = await api.post("/api/pendant/scenario", json={"name": "hold.toml", "toml": toml})
+    assert r.status_code == 400
+    assert message in r.json()["error"]
+    r = await api.post(
+        "/api/pendant/scenario",
+        json={"name": "x.toml", "toml": "[[events]]\n"},
+        headers={"Origin": "http://evil.example"},
+    )
+    assert r.status_code == HTTP_FORBIDDEN

@@ -37,6 +37,7 @@ import asyncio
 import contextlib
 import json
 import logging
+import tomllib
 from collections.abc import Awaitable, Callable
 from dataclasses import dataclass
 from importlib.resources import files
@@ -45,9 +46,11 @@ from typing import Any, Final
 from fastapi import FastAPI, WebSocket, WebSocketDisconnect
 from fastapi.responses import FileResponse, RedirectResponse
 from fastapi.staticfiles import StaticFiles
+from pydantic import BaseModel, ConfigDict, Field
 
 from pymotoros.controller.api import ControllerSnapshot
-from pymotoros.errors import KinematicsError
+from pymotoros.controller.scenario import parse_scenario
+from pymotoros.errors import ConfigError, KinematicsError
 from pymotoros.kinematics import chain_for
 from pymotoros.runtime.pendant.document import Ports, Skeleton, errors_document, state_document
 from pymotoros.runtime.target import SimulatedController
@@ -70,6 +73,20 @@ OT889_ADDRESS: Final = 11120
 """IO address of OT#889 (controller/readiness.py: ros_ready)."""
 
 STATIC_DIR: Final = files("pymotoros.runtime.pendant") / "static"
+
+MAX_SCENARIO_CHARS: Final = 1_000_000
+"""A scenario file is a few hundred bytes (examples/scenarios/); a megabyte is a mistake."""
+
+
+class ScenarioFileBody(BaseModel):
+    """A scenario file as the page reads it from the engineer's disk."""
+
+    model_config = ConfigDict(extra="forbid", strict=True, frozen=True)
+    name: str = Field(max_length=255, description="the file's name (for error messages)")
+    toml: str = Field(
+        max_length=MAX_SCENARIO_CHARS,
+        description="the file's text: [[events]] tables, as `pymotoros sim --scenario` reads",
+    )
 
 
 class PendantFeed:
@@ -293,6 +310,20 @@ def install_pendant(
         """The pendant's document: ``GET /api/state`` plus each group's joint positions
         (``frames.feedback``/``frames.command``: x, y, z in m per joint, then flange,
         tool0 and tcp) for the 3D view."""
+        return feed.document()
+
+    @app.post("/api/pendant/scenario", tags=["safety"])
+    async def scenario_file(body: ScenarioFileBody) -> dict[str, Any]:
+        """Load a scenario *file* (TOML, the format of ``pymotoros sim --scenario``), as
+        the pendant's "Load scenario" button does; ``POST /api/scenario`` takes the same
+        events as JSON. Answers with the pendant's document."""
+        try:
+            data = tomllib.loads(body.toml)
+        except tomllib.TOMLDecodeError as exc:
+            raise ConfigError(f"{body.name}: not valid TOML: {exc}") from exc
+        scenario = parse_scenario(data, source=body.name)
+        logger.info("operator: scenario file %s with %d events", body.name, len(scenario.events))
+        controller.load_scenario(scenario)
         return feed.document()
 
     @app.websocket("/ws/state")

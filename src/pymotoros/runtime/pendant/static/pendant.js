@@ -231,7 +231,11 @@
     $("btn-m-write").onclick = () => post("/api/io", { address: M_BASE + Number($("m-number").value), value: Number($("m-value").value) });
     $("btn-scenario").onclick = async () => {
       const file = $("scenario-file").files[0];
-      if (!file) { say("choose a scenario file (JSON: {\"events\": [...]}) first"); return; }
+      if (!file) { say("choose a scenario file (.toml with [[events]], or JSON {\"events\": [...]}) first"); return; }
+      if (file.name.toLowerCase().endsWith(".toml")) {   // parsed by the simulator, as --scenario
+        post("/api/pendant/scenario", { name: file.name, toml: await file.text() });
+        return;
+      }
       let doc;
       try { doc = JSON.parse(await file.text()); } catch (err) { say("not JSON: " + err); return; }
       post("/api/scenario", Array.isArray(doc) ? { events: doc } : doc);
