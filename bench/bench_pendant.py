@@ -31,12 +31,14 @@ from __future__ import annotations
 
 import argparse
 import asyncio
+import bisect
 import contextlib
 import json
 import os
 import statistics
 import subprocess
 import sys
+import tempfile
 import textwrap
 import time
 from collections.abc import Iterator
@@ -45,10 +47,12 @@ from typing import Any
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
-from bench_runtime import Sim, running_sim, stream_and_listen
+from bench_runtime import READY, Sim, running_sim, stop_sim, stream_and_listen
 
 TABS = 3
 """The issue's number of pendant tabs."""
+MIN_PHASE_SAMPLES = 20
+"""Phases with fewer ticks (the odd one at a resync) are not worth a line."""
 
 TAB_PROCESS = textwrap.dedent(
     """
@@ -95,6 +99,51 @@ TAB_PROCESS = textwrap.dedent(
         print(" ".join(f"{c / elapsed:.1f}" for c in counts), f"{cpu / elapsed:.4f}", flush=True)
 
     asyncio.run(main())
+    """
+)
+
+
+TRACED_SIM = textwrap.dedent(
+    """
+    import atexit, gc, json, sys, time
+    from pymotoros.runtime import pendant, ticker
+
+    out, argv = sys.argv[1], sys.argv[2:]
+    ticks, collections, captures, started = [], [], [], [0.0]
+
+    def on_gc(phase, info):
+        if phase == "start":
+            started[0] = time.monotonic()
+        else:
+            collections.append((started[0], time.monotonic() - started[0], info["generation"]))
+
+    gc.callbacks.append(on_gc)
+    init = ticker.Ticker.__init__
+
+    def traced_init(self, step, period, clock, **kw):
+        def traced_step():  # the lateness the ticker has just recorded for this tick
+            late = float(self._lateness[(self._samples - 1) % len(self._lateness)])
+            ticks.append((time.monotonic(), late))
+            step()
+        init(self, traced_step, period, clock, **kw)
+
+    ticker.Ticker.__init__ = traced_init
+    capture = pendant.PendantDocument.capture
+
+    def traced_capture(self):
+        captures.append(time.monotonic())
+        return capture(self)
+
+    pendant.PendantDocument.capture = traced_capture
+
+    def dump():
+        with open(out, "w") as f:
+            json.dump({"ticks": ticks, "gc": collections, "captures": captures}, f)
+
+    atexit.register(dump)
+    from pymotoros.cli.main import main
+    sys.argv = ["pymotoros", *argv]
+    main()
     """
 )
 
@@ -183,6 +232,61 @@ def one_run(duration: float, warmup: float, tabs: str, nice: int = 0) -> dict[st
         return result
 
 
+def phases(duration: float, warmup: float) -> None:
+    """Where the late ticks are, in one run with tabs: lateness by the tick's place in
+    the feed's 10-tick period (1 = the first tick after the feed captured the state),
+    and the garbage collector's pauses. A feed that delays the loop shows as phases
+    later than the others; the machine's own noise is the same in every phase."""
+    with tempfile.TemporaryDirectory() as tmp:
+        trace = Path(tmp) / "trace.json"
+        argv = ["-q", "sim", "--motion-port", "0", "--state-port", "0", "--io-port", "0"]
+        cmd = [sys.executable, "-c", TRACED_SIM, str(trace), *argv, "--http-port", "0"]
+        proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, text=True)  # noqa: S603
+        assert proc.stdout is not None
+        match = READY.fullmatch(proc.stdout.readline().strip())
+        if match is None:
+            proc.kill()
+            raise SystemExit("the traced simulator did not start")
+        motion, state, io, http = (int(g) for g in match.groups())
+        sim = Sim(proc, motion, state, io, http, startup_s=0.0)
+        try:
+            with websocket_tabs(sim):
+                asyncio.run(stream_and_listen(sim, duration, warmup))
+        finally:
+            stop_sim(sim)
+        data = json.loads(trace.read_text())
+    captures = data["captures"]
+    times = [t for t, _ in data["ticks"]]
+    late = [1000.0 * x for _, x in data["ticks"]]
+    first = bisect.bisect_left(times, times[-1] - duration)  # the measured stretch
+    by_phase: dict[int, list[float]] = {}
+    for i in range(first, len(times)):
+        c = bisect.bisect_left(captures, times[i]) - 1  # the last capture before tick i
+        if c < 0:
+            continue
+        phase = i - bisect.bisect_right(times, captures[c]) + 1
+        by_phase.setdefault(phase, []).append(late[i])
+    print(f"lateness (ms) by phase in the feed's period, {duration:.0f} s with {TABS} tabs:")
+    for phase in sorted(by_phase):
+        v = sorted(by_phase[phase])
+        if len(v) < MIN_PHASE_SAMPLES:
+            continue
+        print(
+            f"  phase {phase:2d}: n {len(v):5d} mean {statistics.fmean(v):.3f} "
+            f"p90 {v[int(0.9 * len(v))]:.3f} p99 {v[int(0.99 * len(v))]:.3f}"
+        )
+    start = times[first]
+    pauses = [(t, d * 1000.0, g) for t, d, g in data["gc"] if t >= start]
+    worst = sorted(range(first, len(times)), key=lambda i: late[i])[-max(1, len(late) // 100) :]
+    near = sum(1 for i in worst if any(times[i - 1] <= t <= times[i] for t, _, _ in pauses))
+    print(
+        f"garbage collections: {len(pauses)} "
+        f"(by generation {[sum(1 for p in pauses if p[2] == g) for g in range(3)]}), "
+        f"longest {max((d for _, d, _ in pauses), default=0.0):.2f} ms; "
+        f"{near} of the {len(worst)} latest ticks had a collection just before"
+    )
+
+
 def pct(shares: list[float]) -> float:
     return round(100 * statistics.median(shares), 1)
 
@@ -204,9 +308,18 @@ def main() -> None:
         help="run the WebSocket tabs under nice N: tells the simulator's own cost from "
         "the CPU the tabs' process takes from it on a 2-core machine",
     )
+    parser.add_argument(
+        "--phases",
+        action="store_true",
+        help="instead: one traced run with tabs; lateness by place in the feed's period, "
+        "and the garbage collector's pauses (where the tabs' cost comes from)",
+    )
     args = parser.parse_args()
     if args.rounds < 1 or args.duration <= 0:
         parser.error("--rounds must be at least 1 and --duration positive")
+    if args.phases:
+        phases(args.duration, args.warmup)
+        return
     kind = "browser" if args.browser else "websocket"
     p99: dict[str, list[float]] = {"none": [], kind: []}
     cpu: dict[str, list[float]] = {"none": [], kind: []}
