@@ -24,7 +24,13 @@ from pymotoros.kinematics import chain_for
 from pymotoros.models.robots import ROBOTS
 from pymotoros.runtime.app import SimulatorApp
 from pymotoros.runtime.http_api import create_http_app, state_model
-from pymotoros.runtime.pendant import FEED_PERIOD_S, Captured, PendantDocument, PendantFeed
+from pymotoros.runtime.pendant import (
+    FEED_PERIOD_S,
+    TICK_STATS_REFRESH_TICKS,
+    Captured,
+    PendantDocument,
+    PendantFeed,
+)
 from pymotoros.runtime.pendant.document import Skeleton, state_document
 from pymotoros.runtime.ticker import LatenessStats, TickStats
 
@@ -405,3 +411,26 @@ async def test_a_wrong_scenario_file_is_refused_with_its_name_and_the_reason(
         headers={"Origin": "http://evil.example"},
     )
     assert r.status_code == HTTP_FORBIDDEN
+
+
+def test_feed_recomputes_the_loops_percentiles_once_a_second_with_an_exact_tick_count(
+    controller: VirtualController,
+) -> None:
+    """``Ticker.stats`` costs about 0.25 ms (the whole lateness window is partitioned):
+    the feed asks for it once per TICK_STATS_REFRESH_TICKS ticks and advances the count
+    itself in between."""
+    calls: list[int] = []
+
+    def stats() -> TickStats:
+        calls.append(controller.snapshot().tick_count)
+        return replace(STATS, count=controller.snapshot().tick_count)
+
+    document = PendantDocument(controller, stats)
+    period = round(FEED_PERIOD_S * 1000 / controller.period_ms)
+    for _ in range(3 * TICK_STATS_REFRESH_TICKS // period):
+        doc = document()
+        assert doc["tick"]["count"] == controller.snapshot().tick_count
+        for _ in range(period):
+            controller.tick()
+    assert len(calls) == 3
+    assert [b - a for a, b in itertools.pairwise(calls)] == [TICK_STATS_REFRESH_TICKS] * 2
