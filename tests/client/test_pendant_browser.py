@@ -53,6 +53,23 @@ PLOT_SAMPLES = 60
 """About 2.4 s of updates at 25 Hz before the screenshot, so the plots show a trend."""
 SPEED_SCALE = 0.15
 """Slow enough that the move lasts several seconds while the page is looked at."""
+PLOT_MIN_SAMPLES = 10
+"""Updates before the per-group plots are looked at: enough for a line to be drawn."""
+MIN_PLOT_COLOURS = 4
+"""A blank plot is one colour; a label and dashed and solid lines in joint colours give more."""
+SDA10F_ECO_CELL = """
+name = "SDA10F in eco mode: two arms and the two torso axes"
+
+[controller]
+model = "fs100"
+
+[[groups]]
+robot = "sda10f"
+
+[initial]
+servo = true
+eco = true
+"""
 
 pytestmark = [
     pytest.mark.timeout(180),
@@ -230,6 +247,37 @@ def test_pendant_in_a_real_browser_offline(sim: Sim, browser: WebDriver) -> None
     finally:
         pool.shutdown(wait=True, cancel_futures=True)
         robot.close()
+
+
+def test_every_group_has_its_live_plot_and_eco_mode_shows(
+    browser: WebDriver, tmp_path: Path
+) -> None:
+    """A multi-group cell (SDA10F) gets one command-vs-feedback plot per group, each
+    drawn; the controller state shows eco mode, and its end when servo power goes off."""
+    cell = tmp_path / "sda10f_eco.toml"
+    cell.write_text(SDA10F_ECO_CELL)
+    with running_sim("--config", str(cell)) as sim:
+        groups = [g["name"] for g in sim.api("/api/state")["groups"]]
+        assert len(groups) > 1
+        browser.get(f"http://127.0.0.1:{sim.http}/")
+        _wait(browser, lambda d: d.find_element(By.ID, "link").text == "live", "the live feed")
+        _wait(
+            browser,
+            lambda d: d.execute_script("return window.pendant.history.length") >= PLOT_MIN_SAMPLES,
+            "plot history",
+        )
+        plots = browser.execute_script(
+            'return Array.from(document.querySelectorAll("#plot-groups canvas.plot-joints"))'
+            ".map((c) => c.id);"
+        )
+        assert plots == [f"plot-joints-{i}" for i in range(len(groups))]
+        for plot in plots:
+            png = browser.find_element(By.ID, plot).screenshot_as_png
+            assert _colours(browser, png) >= MIN_PLOT_COLOURS, plot
+        assert "ECO" in browser.find_element(By.ID, "st-eco").text
+        sim.api("/api/servo", {"on": False})
+        _wait(browser, lambda d: d.find_element(By.ID, "st-eco").text == "off", "eco mode off")
+        assert _non_local(_requested_urls(browser)) == []
 
 
 def test_non_local_requests_are_blocked(sim: Sim, browser: WebDriver) -> None:

@@ -7,8 +7,10 @@ from collections.abc import AsyncIterator
 
 import httpx
 import pytest
+from fastapi import FastAPI
 
 from pymotoros.controller import VirtualController
+from pymotoros.runtime.docs_page import install_offline_docs
 from pymotoros.runtime.http_api import create_http_app
 from pymotoros.runtime.ticker import LatenessStats, TickStats
 
@@ -41,3 +43,21 @@ async def test_docs_page_references_only_local_assets(api: httpx.AsyncClient) ->
     assert "javascript" in bundle.headers["content-type"]
     css = await api.get("/docs/assets/swagger-ui.css")
     assert "text/css" in css.headers["content-type"]
+
+
+async def test_redoc_is_not_served_from_a_cdn_but_leads_to_the_offline_docs(
+    api: httpx.AsyncClient,
+) -> None:
+    """FastAPI's ReDoc page loads its script from a CDN (blank offline): /redoc sends the
+    reader to /docs instead."""
+    response = await api.get("/redoc")
+    assert response.status_code == 307
+    assert response.headers["location"] == "/docs"
+    assert "cdn" not in (await api.get("/docs")).text.lower()
+
+
+def test_an_app_with_fastapis_cdn_pages_is_refused() -> None:
+    with pytest.raises(ValueError, match="redoc_url=None"):
+        install_offline_docs(FastAPI(docs_url=None))
+    with pytest.raises(ValueError, match="docs_url=None"):
+        install_offline_docs(FastAPI(redoc_url=None))

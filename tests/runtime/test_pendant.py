@@ -4,6 +4,7 @@ joint frames, and state-changing requests from other sites are refused (CSRF).""
 from __future__ import annotations
 
 import asyncio
+import itertools
 import json
 import math
 import re
@@ -18,11 +19,19 @@ import websocket
 
 from pymotoros.controller import VirtualController
 from pymotoros.controller.cell import default_cell, load_cell
+from pymotoros.controller.scenario import parse_scenario
 from pymotoros.kinematics import chain_for
 from pymotoros.models.robots import ROBOTS
 from pymotoros.runtime.app import SimulatorApp
-from pymotoros.runtime.http_api import create_http_app
-from pymotoros.runtime.pendant import FEED_PERIOD_S
+from pymotoros.runtime.http_api import create_http_app, state_model
+from pymotoros.runtime.pendant import (
+    FEED_PERIOD_S,
+    TICK_STATS_REFRESH_TICKS,
+    Captured,
+    PendantDocument,
+    PendantFeed,
+)
+from pymotoros.runtime.pendant.document import Skeleton, state_document
 from pymotoros.runtime.ticker import LatenessStats, TickStats
 
 from .support import LOCAL
@@ -173,3 +182,255 @@ def test_multi_group_cell_file_has_frames_per_group() -> None:
     doc = create_http_app(controller, lambda: STATS).state.pendant_feed.document()
     assert [g["name"] for g in doc["groups"]] == ["R1", "R2"]
     assert all(g["frames"] is not None for g in doc["groups"])
+
+
+def _as_json(doc: object) -> object:
+    return json.loads(json.dumps(doc))
+
+
+def _busy(controller: VirtualController) -> VirtualController:
+    """A controller with something in every part of the state document."""
+    controller.raise_alarm(4107, 3, "from the test")
+    controller.raise_error(2020, 1, "an operator error")
+    controller.set_fsu(joint_speed_pct=40, tcp_speed_mm_s=None, off=False)
+    controller.load_scenario(
+        parse_scenario({"events": [{"at": 0.0, "action": "hold", "on": True}]}, source="the test")
+    )
+    for _ in range(3):
+        controller.tick()
+    return controller
+
+
+@pytest.mark.parametrize(
+    "make",
+    [
+        lambda: VirtualController(),
+        lambda: _busy(VirtualController()),
+        lambda: _busy(VirtualController(cell=load_cell(CELLS / "two_hc10_dx100.toml"))),
+        lambda: VirtualController(cell=default_cell(robot="sda10f")),
+    ],
+    ids=["boot", "alarms-errors-fsu-events", "two-groups", "sda10f"],
+)
+def test_feed_document_is_the_control_apis_state_without_pydantic(make: Any) -> None:
+    """The feed builds GET /api/state's document by hand (it runs 25 times a second on
+    the loop): as JSON it must be the same document, key for key."""
+    controller = make()
+    snapshot = controller.snapshot()
+    ports = (50240, 50241, None)
+    by_hand = state_document(snapshot, STATS, ports)
+    by_model = state_model(snapshot, STATS, ports).model_dump_json()
+    assert _as_json(by_hand) == json.loads(by_model)
+    assert list(by_hand) == list(json.loads(by_model))  # same key order too
+
+
+def test_pendant_shows_operator_errors_and_eco_off(controller: VirtualController) -> None:
+    _busy(controller)
+    doc = create_http_app(controller, lambda: STATS).state.pendant_feed.document()
+    assert doc["pendant"]["errors"] == [{"code": 2020, "subcode": 1, "text": "an operator error"}]
+    assert [a["code"] for a in doc["alarms"]] == [4107]
+    assert doc["pendant"]["eco"] is False
+
+
+def test_pendant_shows_eco_mode(tmp_path: Path) -> None:
+    cell = tmp_path / "eco.toml"
+    cell.write_text(
+        'name = "eco"\n[[groups]]\nrobot = "hc10"\n[initial]\nservo = true\neco = true\n'
+    )
+    controller = VirtualController(cell=load_cell(cell))
+    feed = create_http_app(controller, lambda: STATS).state.pendant_feed
+    assert feed.document()["pendant"]["eco"] is True
+    controller.set_servo(False)  # servo off ends eco mode
+    controller.tick()
+    assert feed.document()["pendant"]["eco"] is controller.operator_state.eco is False
+
+
+@pytest.mark.parametrize("robot", sorted(ROBOTS))
+def test_skeleton_points_are_the_chains_joint_positions(robot: str) -> None:
+    """The feed's cheap forward kinematics gives the same positions as
+    ``Chain.joint_frames`` at any pose, also when the pose changes back and forth."""
+    for group in default_cell(robot=robot).groups:
+        chain = chain_for(group)
+        skeleton = Skeleton(chain)
+        n = chain.num_joints
+        poses = [[0.3 * (i + 1) * (-1) ** i for i in range(n)], [0.0] * n]
+        for q in poses + poses:
+            assert skeleton.points(q) == [f["xyz"] for f in chain.joint_frames(q)]
+        with pytest.raises(ValueError, match=f"expected {n} joint values"):
+            skeleton.points([0.0] * (n + 1))
+
+
+def _extensions(url: str, origin: str) -> str:
+    ws = websocket.create_connection(
+        url,
+        timeout=WS_TIMEOUT_S,
+        origin=origin,
+        header=["Sec-WebSocket-Extensions: permessage-deflate; client_max_window_bits"],
+    )
+    try:
+        ws.recv()
+        headers = ws.getheaders() or {}
+        return str(headers.get("sec-websocket-extensions", ""))
+    finally:
+        ws.close()
+
+
+async def test_feed_is_not_compressed_even_when_the_browser_offers_it(
+    controller: VirtualController,
+) -> None:
+    """Browsers offer permessage-deflate; compressing every document for every tab would
+    cost the interpolation loop CPU for nothing on a local link."""
+    async with SimulatorApp(controller, replace(LOCAL, http_port=0)) as sim:
+        base = f"127.0.0.1:{sim.ports.http}"
+        extensions = await asyncio.to_thread(_extensions, f"ws://{base}/ws/state", f"http://{base}")
+        assert "deflate" not in extensions
+
+
+class _Ticks:
+    """A stand-in for ``Ticker.wait_ticks`` that the test advances tick by tick."""
+
+    def __init__(self) -> None:
+        self.count = 0
+        self._waiters: list[tuple[int, asyncio.Future[None]]] = []
+
+    async def after(self, n: int) -> None:
+        future = asyncio.get_running_loop().create_future()
+        self._waiters.append((self.count + n, future))
+        await future
+
+    async def tick(self) -> None:
+        self.count += 1
+        for target, future in list(self._waiters):
+            if target <= self.count:
+                self._waiters.remove((target, future))
+                future.set_result(None)
+        for _ in range(LOOP_TURNS_PER_TICK):  # let every woken task run to its next wait
+            await asyncio.sleep(0)
+
+
+LOOP_TURNS_PER_TICK = 20
+"""Event-loop turns after each virtual tick: more than the feed's tasks need to settle."""
+
+
+class _Tab:
+    """A WebSocket that records on which tick each document was sent."""
+
+    def __init__(self, ticks: _Ticks, events: list[tuple[int, str]], name: str) -> None:
+        self._ticks, self._events, self._name = ticks, events, name
+
+    async def accept(self) -> None:
+        return None
+
+    async def send_text(self, text: str) -> None:
+        assert json.loads(text)["groups"]
+        self._events.append((self._ticks.count, self._name))
+
+
+async def test_feed_work_is_spread_over_the_ticks_of_its_period(
+    controller: VirtualController,
+) -> None:
+    """Capture after one tick, render and encode after the next, then one tab per tick:
+    no tick is followed by more than one piece of the feed's work (module docstring)."""
+    ticks = _Ticks()
+    events: list[tuple[int, str]] = []
+
+    class Recording(PendantDocument):
+        def capture(self) -> Captured:
+            events.append((ticks.count, "capture"))
+            return super().capture()
+
+        def render(self, captured: Captured) -> dict[str, Any]:
+            events.append((ticks.count, "render"))
+            return super().render(captured)
+
+    period = round(FEED_PERIOD_S * 1000 / controller.period_ms)
+    feed = PendantFeed(
+        Recording(controller, lambda: STATS), after_ticks=ticks.after, period_ticks=period
+    )
+    tabs = [
+        asyncio.create_task(feed.serve(_Tab(ticks, events, f"tab{i}")))  # type: ignore[arg-type]
+        for i in range(3)
+    ]
+    await asyncio.sleep(0)
+    for _ in range(3 * period):
+        await ticks.tick()
+    for task in tabs:
+        task.cancel()
+    await asyncio.gather(*tabs, return_exceptions=True)
+    captures = [t for t, what in events if what == "capture"]
+    assert len(captures) >= 3
+    assert {b - a for a, b in itertools.pairwise(captures)} == {period}
+    for start in captures[:-1]:
+        in_period = sorted((t, w) for t, w in events if start <= t < start + period)
+        assert in_period == [
+            (start, "capture"),
+            (start + 1, "render"),
+            (start + 2, "tab0"),
+            (start + 3, "tab1"),
+            (start + 4, "tab2"),
+        ]
+
+
+SCENARIOS = Path(__file__).resolve().parents[2] / "examples" / "scenarios"
+
+
+async def test_page_loads_a_toml_scenario_file_as_the_cli_does(
+    api: httpx.AsyncClient, controller: VirtualController
+) -> None:
+    """The "Load scenario" button sends the file's text; the simulator parses it the way
+    ``pymotoros sim --scenario`` does, so the example files work as they are."""
+    for path in sorted(SCENARIOS.glob("*.toml")):
+        r = await api.post(
+            "/api/pendant/scenario", json={"name": path.name, "toml": path.read_text()}
+        )
+        assert r.status_code == 200, (path.name, r.text)
+    toml = '[[events]]\nat = 0.0\naction = "hold"\non = true\n'
+    r = await api.post("/api/pendant/scenario", json={"name": "hold.toml", "toml": toml})
+    assert r.status_code == 200
+    assert "pendant" in r.json()
+    controller.tick()
+    assert controller.snapshot().hold is True
+
+
+@pytest.mark.parametrize(
+    ("toml", "message"),
+    [
+        ("[[events]\n", "hold.toml: not valid TOML"),
+        ('[[events]]\nat = 0.0\naction = "fly"\n', "hold.toml: events[0]"),
+        ("title = 1\n", "hold.toml: title: unknown key"),
+    ],
+)
+async def test_a_wrong_scenario_file_is_refused_with_its_name_and_the_reason(
+    api: httpx.AsyncClient, controller: VirtualController, toml: str, message: str
+) -> None:
+    r = await api.post("/api/pendant/scenario", json={"name": "hold.toml", "toml": toml})
+    assert r.status_code == 400
+    assert message in r.json()["error"]
+    r = await api.post(
+        "/api/pendant/scenario",
+        json={"name": "x.toml", "toml": "[[events]]\n"},
+        headers={"Origin": "http://evil.example"},
+    )
+    assert r.status_code == HTTP_FORBIDDEN
+
+
+def test_feed_recomputes_the_loops_percentiles_once_a_second_with_an_exact_tick_count(
+    controller: VirtualController,
+) -> None:
+    """``Ticker.stats`` costs about 0.25 ms (the whole lateness window is partitioned):
+    the feed asks for it once per TICK_STATS_REFRESH_TICKS ticks and advances the count
+    itself in between."""
+    calls: list[int] = []
+
+    def stats() -> TickStats:
+        calls.append(controller.snapshot().tick_count)
+        return replace(STATS, count=controller.snapshot().tick_count)
+
+    document = PendantDocument(controller, stats)
+    period = round(FEED_PERIOD_S * 1000 / controller.period_ms)
+    for _ in range(3 * TICK_STATS_REFRESH_TICKS // period):
+        doc = document()
+        assert doc["tick"]["count"] == controller.snapshot().tick_count
+        for _ in range(period):
+            controller.tick()
+    assert len(calls) == 3
+    assert [b - a for a, b in itertools.pairwise(calls)] == [TICK_STATS_REFRESH_TICKS] * 2

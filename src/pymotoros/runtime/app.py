@@ -349,6 +349,9 @@ class SimulatorApp:
             lifespan="off",
             access_log=False,
             timeout_graceful_shutdown=1,
+            # the pendant's feed: compressing each document for each tab would cost the
+            # loop CPU for nothing on a local link
+            ws_per_message_deflate=False,
         )
         config.load()  # the slow part of uvicorn's start-up, done before the loop starts ticking
         server = _EmbeddedUvicorn(config)

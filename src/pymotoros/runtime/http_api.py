@@ -351,6 +351,7 @@ def create_http_app(
         title="pymotoros control API",
         version=__version__,
         docs_url=None,  # /docs is served offline by install_offline_docs below
+        redoc_url=None,  # ReDoc needs a CDN: install_offline_docs redirects /redoc to /docs
         description=(
             "The operator of the virtual controller: pendant keys, E-stop, mode switch, "
             'alarms and forced IO. Errors are 4xx with {"error": "..."}.'
@@ -369,7 +370,7 @@ def create_http_app(
         listening = ports() if ports is not None else (None, None, None)
         return state_model(controller.snapshot(), tick_stats(), listening)
 
-    install_pendant(app, controller, lambda: state().model_dump(), clients, after_ticks)
+    install_pendant(app, controller, tick_stats, ports, clients, after_ticks)
 
     @app.get("/api/state", response_model=StateModel, tags=["state"])
     async def get_state() -> StateModel:

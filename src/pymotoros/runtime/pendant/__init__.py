@@ -10,32 +10,54 @@ WebSocket support, no hand-rolled framing). One feed task builds the state docum
 every :data:`FEED_PERIOD_S` (10 ticks at 4 ms, right after a tick when the simulator
 passes its ticker) and hands the *latest* one, JSON-encoded once, to every open tab: the cost on
 the event loop is one snapshot per period whatever the number of tabs, and a slow tab
-skips frames instead of queueing them.
+skips frames instead of queueing them. The document is built from the controller's
+frozen snapshot with plain dicts (:mod:`.document`), not through the control API's
+pydantic models: it is the only per-period work the pendant adds to the loop.
 
-The 3D view is drawn by the page on a ``<canvas>`` from the joint frames of each
-group's kinematic chain (:meth:`pymotoros.kinematics.Chain.joint_frames`), computed
-here for the feedback and the command (the "ghost").
+That work is kept small and cut in pieces because of how Linux schedules a loaded
+machine: its scheduler (EEVDF) lets a task that has just used more than its share of a
+CPU wait at its next wake-ups, so a burst of work right after one tick delays the next
+ticks. Measured on a loaded 2-core machine, the two ticks after the feed's work were late
+by 0.9 and 0.6 ms on average against 0.45 ms for the other eight (the garbage collector
+played no part: a few collections per minute, none before a late tick). So the
+controller's state is captured right after a tick (its snapshot, about 0.1 ms; the
+loop's lateness percentiles, 0.25 ms to compute, only once a second), turned
+into the document and encoded after the next tick (about 0.1 ms), and sent to the tabs
+one per tick over the ticks that follow (about 0.07 ms each, uvicorn's WebSocket send),
+all within the feed's 10-tick period.
+
+The 3D view is drawn by the page on a ``<canvas>`` from the joint positions of each
+group's kinematic chain (:class:`.document.Skeleton`, the ``xyz`` of
+:meth:`pymotoros.kinematics.Chain.joint_frames`), computed here for the feedback and the
+command (the "ghost").
 """
 
 from __future__ import annotations
 
 import asyncio
 import contextlib
-import functools
 import json
 import logging
+import tomllib
 from collections.abc import Awaitable, Callable
+from dataclasses import dataclass, replace
 from importlib.resources import files
 from typing import Any, Final
 
 from fastapi import FastAPI, WebSocket, WebSocketDisconnect
 from fastapi.responses import FileResponse, RedirectResponse
 from fastapi.staticfiles import StaticFiles
+from pydantic import BaseModel, ConfigDict, Field
 
-from pymotoros.errors import KinematicsError
-from pymotoros.kinematics import Chain, chain_for
+from pymotoros.controller.api import ControllerSnapshot
+from pymotoros.controller.scenario import parse_scenario
+from pymotoros.errors import ConfigError, KinematicsError
+from pymotoros.kinematics import chain_for
+from pymotoros.runtime.pendant.document import Ports, Skeleton, errors_document, state_document
+from pymotoros.runtime.target import SimulatedController
+from pymotoros.runtime.ticker import TickStats
 
-__all__ = ["FEED_PERIOD_S", "PendantFeed", "install_pendant"]
+__all__ = ["FEED_PERIOD_S", "PendantDocument", "PendantFeed", "install_pendant"]
 
 logger = logging.getLogger(__name__)
 
@@ -53,31 +75,47 @@ OT889_ADDRESS: Final = 11120
 
 STATIC_DIR: Final = files("pymotoros.runtime.pendant") / "static"
 
+TICK_STATS_REFRESH_TICKS: Final = 250
+"""The feed recomputes the loop's lateness percentiles once a second (250 ticks at 4 ms)."""
+
+MAX_SCENARIO_CHARS: Final = 1_000_000
+"""A scenario file is a few hundred bytes (examples/scenarios/); a megabyte is a mistake."""
+
+
+class ScenarioFileBody(BaseModel):
+    """A scenario file as the page reads it from the engineer's disk."""
+
+    model_config = ConfigDict(extra="forbid", strict=True, frozen=True)
+    name: str = Field(max_length=255, description="the file's name (for error messages)")
+    toml: str = Field(
+        max_length=MAX_SCENARIO_CHARS,
+        description="the file's text: [[events]] tables, as `pymotoros sim --scenario` reads",
+    )
+
 
 class PendantFeed:
     """Builds the pendant's state document at :data:`FEED_PERIOD_S` while a tab listens.
 
-    ``build`` returns the ``GET /api/state`` document (a dict); the feed adds the joint
-    frames for the 3D view. The task runs only while at least one tab is connected.
+    ``build`` returns the whole document (:class:`PendantDocument`). The task runs only
+    while at least one tab is connected.
     """
 
     def __init__(
         self,
-        build: Callable[[], dict[str, Any]],
-        chains: list[Chain | None],
+        build: PendantDocument,
         period_s: float = FEED_PERIOD_S,
-        extras: Callable[[], dict[str, Any]] | None = None,
-        pace: Callable[[], Awaitable[None]] | None = None,
+        after_ticks: Callable[[int], Awaitable[None]] | None = None,
+        period_ticks: int = 1,
     ) -> None:
         self._build = build
-        self._extras = extras
-        self._pace = pace
-        self._chains = chains
+        self._after_ticks = after_ticks
+        self._period_ticks = max(1, period_ticks)
         self._period_s = period_s
         self._latest: str | None = None
         self._seq = 0
         self._changed = asyncio.Condition()
         self._listeners = 0
+        self._slots = 0
         self._task: asyncio.Task[None] | None = None
 
     @property
@@ -85,26 +123,18 @@ class PendantFeed:
         return self._listeners
 
     def document(self) -> dict[str, Any]:
-        """One state document with the joint frames (also ``GET /api/pendant/state``)."""
-        doc = self._build()
-        if self._extras is not None:
-            doc["pendant"] = self._extras()
-        for group, chain in zip(doc["groups"], self._chains, strict=False):
-            if chain is None or len(group["feedback_rad"]) != chain.num_joints:
-                group["frames"] = None
-                continue
-            group["frames"] = {
-                "feedback": [f["xyz"] for f in chain.joint_frames(group["feedback_rad"])],
-                "command": [f["xyz"] for f in chain.joint_frames(group["command_rad"])],
-            }
-        return doc
+        """One state document with the joint positions (also ``GET /api/pendant/state``)."""
+        return self._build()
 
     async def _run(self) -> None:
         loop = asyncio.get_running_loop()
         deadline = loop.time()
         while self._listeners > 0:
             try:
-                doc = self.document()
+                captured = self._build.capture()
+                if self._after_ticks is not None and self._period_ticks > 2:
+                    await self._after_ticks(1)  # the rest after the next tick (docstring)
+                doc = self._build.render(captured)
             except Exception:  # a broken snapshot must not kill the page's feed silently
                 logger.exception("pendant feed: building the state failed")
                 raise
@@ -113,8 +143,8 @@ class PendantFeed:
                 self._latest = text
                 self._seq += 1
                 self._changed.notify_all()
-            if self._pace is not None:
-                await self._pace()
+            if self._after_ticks is not None:
+                await self._after_ticks(self._period_ticks - (1 if self._period_ticks > 2 else 0))
                 continue
             # absolute deadlines: the build's duration does not stretch the period
             deadline += self._period_s
@@ -131,14 +161,20 @@ class PendantFeed:
         if self._task is None or self._task.done():
             self._task = asyncio.create_task(self._run(), name="pendant-feed")
         seen = [-1]  # the sequence number of the document sent last
+        # Tabs take turns, one per tick after the tick the document was built after, so
+        # that no tick is followed by the whole feed's work (module docstring).
+        slot = 1 + self._slots % max(1, self._period_ticks - 2)
+        self._slots += 1
         try:
             while True:
                 async with self._changed:
                     await self._changed.wait_for(
                         lambda: self._latest is not None and self._seq != seen[0]
                     )
-                    seen[0], doc = self._seq, self._latest or ""
-                await ws.send_text(doc)
+                    seen[0] = self._seq
+                if self._after_ticks is not None and self._period_ticks > 1:
+                    await self._after_ticks(slot)
+                await ws.send_text(self._latest or "")
         except (WebSocketDisconnect, RuntimeError):
             pass  # the tab closed; RuntimeError: sent after the close
         finally:
@@ -150,15 +186,90 @@ class PendantFeed:
                 self._task = None
 
 
-def _extras(
-    controller: object, clients: Callable[[], dict[str, int]] | None
-) -> Callable[[], dict[str, Any]]:
-    """What a pendant shows beyond ``GET /api/state``: why motion is not ready, the
-    INIT_ROS job's line, MotoROS's outputs, the clients per port. Each part only where
-    the controller offers it (a test double may not)."""
+@dataclass(frozen=True, slots=True)
+class Captured:
+    """The controller's state at one instant, as the pendant's document needs it."""
 
-    def read() -> dict[str, Any]:
-        out: dict[str, Any] = {}
+    snapshot: ControllerSnapshot
+    tick: TickStats
+    ports: Ports
+    extras: dict[str, Any]
+
+
+class PendantDocument:
+    """The pendant's document: ``GET /api/state``'s, each group's joint positions for the
+    3D view (``frames``), and under ``pendant`` what a pendant shows beyond the control
+    API: eco mode, the operator errors, why motion is not ready, the INIT_ROS job's line,
+    MotoROS's outputs, the clients per port. Each extra only where the controller offers
+    it (a test double may not)."""
+
+    def __init__(
+        self,
+        controller: SimulatedController,
+        tick_stats: Callable[[], TickStats],
+        ports: Callable[[], Ports] | None = None,
+        clients: Callable[[], dict[str, int]] | None = None,
+    ) -> None:
+        self._snapshot = controller.snapshot
+        self._controller = controller
+        self._tick_stats = tick_stats
+        self._stats: TickStats | None = None
+        self._stats_tick = 0
+        self._ports = ports
+        self._clients = clients
+        self._skeletons: list[Skeleton | None] = []
+        cell = getattr(controller, "cell", None)
+        for group in getattr(cell, "groups", ()):
+            try:
+                self._skeletons.append(Skeleton(chain_for(group)))
+            except KinematicsError:
+                self._skeletons.append(None)
+
+    def __call__(self) -> dict[str, Any]:
+        return self.render(self.capture())
+
+    def capture(self) -> Captured:
+        """Everything read from the controller, at one instant (between two ticks)."""
+        snapshot = self._snapshot()
+        ports = self._ports() if self._ports is not None else (None, None, None)
+        return Captured(snapshot, self._loop_stats(snapshot), ports, self._extras(snapshot))
+
+    def _loop_stats(self, snapshot: ControllerSnapshot) -> TickStats:
+        """The loop's statistics, their percentiles at most :data:`TICK_STATS_REFRESH_TICKS`
+        old: computing them is the feed's largest cost (``Ticker.stats`` partitions the
+        whole lateness window, about 0.25 ms) and a 60 s window's p99 hardly moves in a
+        second. The tick count stays exact: it advances with the controller's ticks."""
+        cached, at = self._stats, self._stats_tick
+        age = snapshot.tick_count - at
+        if cached is None or not 0 <= age < TICK_STATS_REFRESH_TICKS:
+            self._stats = cached = self._tick_stats()
+            self._stats_tick = snapshot.tick_count
+            return cached
+        return replace(cached, count=cached.count + age)
+
+    def render(self, captured: Captured) -> dict[str, Any]:
+        """The document of a capture: reads nothing from the controller, so it may run
+        later (after the next tick) and still describe the captured instant."""
+        doc = state_document(captured.snapshot, captured.tick, captured.ports)
+        skeletons = self._skeletons
+        for i, group in enumerate(doc["groups"]):
+            skeleton = skeletons[i] if i < len(skeletons) else None
+            if skeleton is None or len(group["feedback_rad"]) != skeleton.num_joints:
+                group["frames"] = None  # no kinematic model: no 3D view for this group
+                continue
+            group["frames"] = {
+                "feedback": skeleton.points(group["feedback_rad"]),
+                "command": skeleton.points(group["command_rad"]),
+            }
+        doc["pendant"] = captured.extras
+        return doc
+
+    def _extras(self, snapshot: ControllerSnapshot) -> dict[str, Any]:
+        controller = self._controller
+        out: dict[str, Any] = {"errors": errors_document(snapshot)}
+        operator = getattr(controller, "operator_state", None)  # VirtualController's
+        if operator is not None:
+            out["eco"] = bool(operator.eco)
         motoros = getattr(controller, "motoros", None)
         reason = getattr(motoros, "not_ready_reason", None)
         if reason is not None:
@@ -176,43 +287,32 @@ def _extras(
                 }
                 for i in range(MOTOROS_OUTPUTS)
             ]
-        if clients is not None:
-            out["clients"] = clients()
+        if self._clients is not None:
+            out["clients"] = self._clients()
         return out
-
-    return read
-
-
-def _chains(controller: object) -> list[Chain | None]:
-    cell = getattr(controller, "cell", None)
-    out: list[Chain | None] = []
-    for group in getattr(cell, "groups", ()):
-        try:
-            out.append(chain_for(group))
-        except KinematicsError:
-            out.append(None)
-    return out
 
 
 def install_pendant(
     app: FastAPI,
-    controller: object,
-    build: Callable[[], dict[str, Any]],
+    controller: SimulatedController,
+    tick_stats: Callable[[], TickStats],
+    ports: Callable[[], Ports] | None = None,
     clients: Callable[[], dict[str, int]] | None = None,
     after_ticks: Callable[[int], Awaitable[None]] | None = None,
 ) -> None:
     """Serve the pendant at ``/`` (assets under ``/pendant``) and its feed at ``/ws/state``.
 
     ``after_ticks(n)`` (the interpolation loop's ``Ticker.wait_ticks``) paces the feed
-    on the loop: each document is built right after a tick, so its work falls in the
-    idle part of a period instead of colliding with the next tick's deadline.
+    on the loop: each document is built right after a tick, and each tab is sent it
+    right after one of the following ticks, so the work falls in the idle part of a
+    period in small pieces instead of colliding with the next tick's deadline.
     """
-    pace: Callable[[], Awaitable[None]] | None = None
-    if after_ticks is not None:
-        period_ms = int(getattr(controller, "period_ms", DEFAULT_PERIOD_MS))
-        ticks = max(1, round(FEED_PERIOD_S * 1000 / period_ms))
-        pace = functools.partial(after_ticks, ticks)
-    feed = PendantFeed(build, _chains(controller), extras=_extras(controller, clients), pace=pace)
+    period_ms = int(getattr(controller, "period_ms", DEFAULT_PERIOD_MS))
+    feed = PendantFeed(
+        PendantDocument(controller, tick_stats, ports, clients),
+        after_ticks=after_ticks,
+        period_ticks=max(1, round(FEED_PERIOD_S * 1000 / period_ms)),
+    )
     app.state.pendant_feed = feed
     app.mount("/pendant", StaticFiles(directory=str(STATIC_DIR)), name="pendant")
 
@@ -229,6 +329,20 @@ def install_pendant(
         """The pendant's document: ``GET /api/state`` plus each group's joint positions
         (``frames.feedback``/``frames.command``: x, y, z in m per joint, then flange,
         tool0 and tcp) for the 3D view."""
+        return feed.document()
+
+    @app.post("/api/pendant/scenario", tags=["safety"])
+    async def scenario_file(body: ScenarioFileBody) -> dict[str, Any]:
+        """Load a scenario *file* (TOML, the format of ``pymotoros sim --scenario``), as
+        the pendant's "Load scenario" button does; ``POST /api/scenario`` takes the same
+        events as JSON. Answers with the pendant's document."""
+        try:
+            data = tomllib.loads(body.toml)
+        except tomllib.TOMLDecodeError as exc:
+            raise ConfigError(f"{body.name}: not valid TOML: {exc}") from exc
+        scenario = parse_scenario(data, source=body.name)
+        logger.info("operator: scenario file %s with %d events", body.name, len(scenario.events))
+        controller.load_scenario(scenario)
         return feed.document()
 
     @app.websocket("/ws/state")

@@ -5,6 +5,7 @@
   const M_BASE = 1000000;          // M-register n is IO address 1000000 + n (control API)
   const PLOT_SECONDS = 10;         // history shown by the plots
   const RECONNECT_MS = 1000;       // retry delay after the feed closed
+  const PLOT_W = 560, PLOT_H = 160; // one command-vs-feedback plot per group, in pixels
   const COLORS = ["#4fc3f7", "#ffb74d", "#81c784", "#e57373", "#ba68c8", "#fff176", "#90a4ae", "#f06292"];
   const $ = (id) => document.getElementById(id);
   const state = { last: null, updates: 0, history: [], view: { yaw: -0.7, pitch: 0.4, dist: 2.4, cx: 0, cy: 0, cz: 0.5 } };
@@ -62,6 +63,9 @@
     $("st-ready").innerHTML = doc.motion_ready ? '<span class="yes">ready</span>' : '<span class="no">not ready</span>';
     $("st-motoros").textContent = doc.motoros;
     const extra = doc.pendant || {};
+    // eco mode: servo power on, drives off after the idle time; brakes hold the axes
+    $("st-eco").innerHTML = extra.eco === undefined ? "–" :
+      (extra.eco ? '<span class="no">ECO: drives off, brakes on</span>' : '<span class="yes">off</span>');
     if (extra.not_ready) {
       const n = extra.not_ready;
       $("st-notready").textContent = doc.motion_ready ? "–" : `${n.subcode} ${n.name}: ${n.meaning}${n.why ? " (" + n.why + ")" : ""}`;
@@ -80,8 +84,9 @@
     const t = doc.tick;
     $("st-tick").textContent = `${t.count} ticks of ${t.period_ms} ms, lateness p50 ${t.lateness_ms.p50.toFixed(3)} ` +
       `p99 ${t.lateness_ms.p99.toFixed(3)} max ${t.lateness_ms.max.toFixed(3)} ms, ${t.overruns} overruns`;
-    $("alarms").innerHTML = doc.alarms.length === 0 ? "<li>none</li>" :
-      doc.alarms.map((a) => `<li>${a.code} / ${a.subcode}: ${escapeHtml(a.text)}</li>`).join("");
+    const faults = doc.alarms.map((a) => ["alarm", a]).concat((extra.errors || []).map((e) => ["error", e]));
+    $("alarms").innerHTML = faults.length === 0 ? "<li>none</li>" :
+      faults.map(([kind, a]) => `<li class="${kind}">${kind} ${a.code} / ${a.subcode}: ${escapeHtml(a.text)}</li>`).join("");
     $("events").innerHTML = doc.events.length === 0 ? "<li>none</li>" :
       doc.events.slice(-8).map((e) => `<li>${e.t.toFixed(2)} s ${escapeHtml(e.action)}${e.error ? " (" + escapeHtml(e.error) + ")" : ""}</li>`).join("");
     $("estop-light").classList.toggle("on", doc.estop);
@@ -110,19 +115,33 @@
     ctx.stroke(); ctx.setLineDash([]);
   }
 
-  function drawPlots(now) {
-    const c = $("plot-joints"), ctx = c.getContext("2d");
-    ctx.clearRect(0, 0, c.width, c.height);
-    const g0 = state.history.length ? state.history[state.history.length - 1].groups[0] : null;
-    if (g0) {
-      let lo = Infinity, hi = -Infinity;
-      for (const s of state.history) for (const v of s.groups[0].c.concat(s.groups[0].f)) { lo = Math.min(lo, v); hi = Math.max(hi, v); }
-      for (let j = 0; j < g0.c.length; j++) {
-        drawSeries(ctx, c.width, c.height, now, state.history.map((s) => [s.t, s.groups[0].c[j]]), lo, hi, COLORS[j % COLORS.length], [4, 3]);
-        drawSeries(ctx, c.width, c.height, now, state.history.map((s) => [s.t, s.groups[0].f[j]]), lo, hi, COLORS[j % COLORS.length]);
-      }
-      ctx.fillStyle = "#aab"; ctx.fillText("group 1: dashed command, solid feedback (rad)", 6, 12);
+  // One canvas per group, made when the group first appears (SDA10F: two arms, two torso axes).
+  function plotCanvas(gi) {
+    const box = $("plot-groups");
+    while (box.children.length <= gi) {
+      const c = document.createElement("canvas");
+      c.width = PLOT_W; c.height = PLOT_H; c.className = "plot-joints";
+      c.id = "plot-joints-" + box.children.length;
+      box.appendChild(c);
     }
+    return box.children[gi];
+  }
+
+  function drawPlots(now) {
+    const latest = state.history.length ? state.history[state.history.length - 1].groups : [];
+    latest.forEach((g, gi) => {
+      const c = plotCanvas(gi), ctx = c.getContext("2d");
+      ctx.clearRect(0, 0, c.width, c.height);
+      const rows = state.history.filter((s) => s.groups[gi]);
+      let lo = Infinity, hi = -Infinity;
+      for (const s of rows) for (const v of s.groups[gi].c.concat(s.groups[gi].f)) { lo = Math.min(lo, v); hi = Math.max(hi, v); }
+      for (let j = 0; j < g.c.length; j++) {
+        drawSeries(ctx, c.width, c.height, now, rows.map((s) => [s.t, s.groups[gi].c[j]]), lo, hi, COLORS[j % COLORS.length], [4, 3]);
+        drawSeries(ctx, c.width, c.height, now, rows.map((s) => [s.t, s.groups[gi].f[j]]), lo, hi, COLORS[j % COLORS.length]);
+      }
+      const name = state.last && state.last.groups[gi] ? state.last.groups[gi].name : "group " + (gi + 1);
+      ctx.fillStyle = "#aab"; ctx.fillText(`${name}: dashed command, solid feedback (rad)`, 6, 12);
+    });
     const l = $("plot-lateness"), lctx = l.getContext("2d");
     lctx.clearRect(0, 0, l.width, l.height);
     const hi = Math.max(1, ...state.history.map((s) => s.late));
@@ -212,7 +231,11 @@
     $("btn-m-write").onclick = () => post("/api/io", { address: M_BASE + Number($("m-number").value), value: Number($("m-value").value) });
     $("btn-scenario").onclick = async () => {
       const file = $("scenario-file").files[0];
-      if (!file) { say("choose a scenario file (JSON: {\"events\": [...]}) first"); return; }
+      if (!file) { say("choose a scenario file (.toml with [[events]], or JSON {\"events\": [...]}) first"); return; }
+      if (file.name.toLowerCase().endsWith(".toml")) {   // parsed by the simulator, as --scenario
+        post("/api/pendant/scenario", { name: file.name, toml: await file.text() });
+        return;
+      }
       let doc;
       try { doc = JSON.parse(await file.text()); } catch (err) { say("not JSON: " + err); return; }
       post("/api/scenario", Array.isArray(doc) ? { events: doc } : doc);

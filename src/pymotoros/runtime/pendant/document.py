@@ -1,0 +1,130 @@
+"""The pendant's state document, built straight from the controller's frozen snapshot.
+
+The feed sends this document 25 times a second, on the event loop that also runs the
+4 ms interpolation ticks, so every microsecond it takes is taken from the loop's idle
+time. It is therefore built without the control API's pydantic models: plain dicts and
+lists, filled once from :class:`~pymotoros.controller.api.ControllerSnapshot`, in the
+same shape and key order as ``GET /api/state`` (``StateModel``; a test holds the two
+equal, so a field added there must be added here too), then JSON-encoded once for every
+tab.
+
+The 3D view needs each joint's position only (not the orientations
+:meth:`pymotoros.kinematics.Chain.joint_frames` also computes): :class:`Skeleton` runs
+Pinocchio's forward kinematics on the chain's model with its own workspace and reads
+the translations, and reuses its answer while the joints stand still.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from typing import Any, Final
+
+import numpy as np
+import pinocchio as pin
+
+from pymotoros.controller.api import ControllerSnapshot, PendantMode, TcpSnapshot
+from pymotoros.kinematics import Chain
+from pymotoros.runtime.ticker import TickStats
+
+__all__ = ["END_FRAMES", "Skeleton", "state_document"]
+
+END_FRAMES: Final = ("flange", "tool0", "tcp")
+"""The frames drawn after the joints (the order of ``Chain.joint_frames``)."""
+
+Ports = tuple[int | None, int | None, int | None]
+
+
+class Skeleton:
+    """Positions (m, ``base_link``) of a chain's joints, then flange, tool0 and tcp."""
+
+    def __init__(self, chain: Chain) -> None:
+        self._model = chain.model
+        self._data = chain.model.createData()  # its own workspace: the chain's is shared
+        self.num_joints = chain.num_joints
+        self._frames = [int(self._model.getFrameId(name)) for name in END_FRAMES]
+        self._last_q: tuple[float, ...] | None = None
+        self._last: list[list[float]] = []
+
+    def points(self, q: Sequence[float]) -> list[list[float]]:
+        """The positions at ``q`` (ROS joint order, rad or m). Do not mutate the answer:
+        it is reused for the next call at the same ``q``."""
+        key = tuple(q)
+        if key == self._last_q:
+            return self._last
+        if len(key) != self.num_joints:
+            raise ValueError(f"expected {self.num_joints} joint values, got {len(key)}")
+        data = self._data
+        pin.framesForwardKinematics(self._model, data, np.array(key, dtype=float))
+        joints, frames = data.oMi, data.oMf  # placements in the world (base_link)
+        out = [joints[i].translation.tolist() for i in range(1, self.num_joints + 1)]
+        out += [frames[f].translation.tolist() for f in self._frames]
+        self._last_q, self._last = key, out
+        return out
+
+
+def _tcp(tcp: TcpSnapshot | None) -> dict[str, Any] | None:
+    if tcp is None:
+        return None
+    return {
+        "command": list(tcp.command),
+        "feedback": list(tcp.feedback),
+        "speed_mm_s": {"command": tcp.command_speed_mm_s, "feedback": tcp.feedback_speed_mm_s},
+    }
+
+
+def _alarms(alarms: Sequence[Any]) -> list[dict[str, Any]]:
+    return [{"code": a.code, "subcode": a.subcode, "text": a.text} for a in alarms]
+
+
+def state_document(snapshot: ControllerSnapshot, tick: TickStats, ports: Ports) -> dict[str, Any]:
+    """``GET /api/state``'s document (``state_model(...).model_dump()``), without pydantic."""
+    late = tick.lateness_ms
+    return {
+        "mode": "play" if snapshot.mode is PendantMode.PLAY else "teach",
+        "remote": snapshot.remote,
+        "servo": snapshot.servo,
+        "estop": snapshot.estop,
+        "hold": snapshot.hold,
+        "alarms": _alarms(snapshot.alarms),
+        "motion_ready": snapshot.motion_ready,
+        "groups": [
+            {
+                "name": g.name,
+                "joint_names": list(g.joint_names),
+                "command_rad": list(g.command_rad),
+                "feedback_rad": list(g.feedback_rad),
+                "command_pulse": list(g.command_pulse),
+                "queue": g.queue,
+                "tool": g.tool,
+                "tcp": _tcp(g.tcp),
+            }
+            for g in snapshot.groups
+        ],
+        "tick": {
+            "period_ms": tick.period_ms,
+            "count": tick.count,
+            "overruns": tick.overruns,
+            "lateness_ms": {"p50": late.p50, "p99": late.p99, "max": late.max},
+        },
+        "fsu": {
+            "joint_speed_pct": snapshot.fsu_joint_speed_pct,
+            "tcp_speed_mm_s": snapshot.fsu_tcp_speed_mm_s,
+        },
+        "pfl": snapshot.pfl,
+        "events": [
+            {
+                "t": e.t,
+                "action": e.action,
+                **dict(e.params),
+                **({"error": e.error} if e.error else {}),
+            }
+            for e in snapshot.events
+        ],
+        "motoros": snapshot.motoros,
+        "ports": {"motion": ports[0], "state": ports[1], "io": ports[2]},
+    }
+
+
+def errors_document(snapshot: ControllerSnapshot) -> list[dict[str, Any]]:
+    """The operator errors (not alarms) with code, subcode and text, as the pendant lists them."""
+    return _alarms(snapshot.errors)
