@@ -213,8 +213,10 @@ def browser_tabs(sim: Sim) -> Iterator[list[float]]:
         driver.quit()
 
 
-def one_run(duration: float, warmup: float, tabs: str, nice: int = 0) -> dict[str, Any]:
-    with running_sim() as sim:
+def one_run(
+    duration: float, warmup: float, tabs: str, nice: int = 0, fifo: int = 0
+) -> dict[str, Any]:
+    with running_sim(fifo=fifo) as sim:
         cpu0, t0 = cpu_seconds(sim.proc.pid), time.monotonic()
         tab_cpu: float | None = None
         if tabs == "none":
@@ -309,6 +311,14 @@ def main() -> None:
         "the CPU the tabs' process takes from it on a 2-core machine",
     )
     parser.add_argument(
+        "--sim-fifo",
+        type=int,
+        default=0,
+        help="run the simulator under `chrt --fifo N` (SCHED_FIFO, as `pymotoros sim "
+        "--realtime` asks for) in both runs: the scheduler then cannot delay a tick "
+        "for the CPU the feed used just before it",
+    )
+    parser.add_argument(
         "--phases",
         action="store_true",
         help="instead: one traced run with tabs; lateness by place in the feed's period, "
@@ -329,7 +339,7 @@ def main() -> None:
         order = ("none", kind) if r % 2 == 0 else (kind, "none")
         this_round: dict[str, float] = {}
         for tabs in order:
-            res = one_run(args.duration, args.warmup, tabs, args.tab_nice)
+            res = one_run(args.duration, args.warmup, tabs, args.tab_nice, args.sim_fifo)
             tick = res["tick"]
             late = tick["lateness_ms"]
             p99[tabs].append(late["p99"])
