@@ -425,6 +425,29 @@ class GroupInterpolator:
         segment.offset = 0
         self._chain_prev = chain[-1]
 
+    def _store_end_x87(self, segment: PlannedSegment, prev: tuple[int, ...], n: int) -> None:
+        """:meth:`_store_small` of a piece that is only its end point, x87, slots in ROS
+        order: the one entry a tick queues when points come every period.
+
+        The same target as :meth:`_targets` (each product truncated, or :func:`pulse`
+        out of the int32 range) without its per-row generality; the plain-Python
+        segment tests compare it with the numpy kernels.
+        """
+        end = segment.end
+        products = [x * f for x, f in zip(end.pos, self.axes.factors_ros_list, strict=False)]
+        target: tuple[int, ...] | None = None
+        if min(products) > _INT32_LOW and max(products) < _INT32_HIGH:
+            with contextlib.suppress(ValueError):  # a NaN that min() and max() passed over
+                target = (*map(int, products), *prev[n:])
+        if target is None:
+            target = self._targets([end.pos[:n]], prev)[0]
+        segment.entries = [
+            tuple.__new__(Increment, (end.time_ms, tuple(map(sub, target, prev)), segment.tool))
+        ]
+        segment.chain = (prev, target)
+        segment.offset = 0
+        self._chain_prev = target
+
     def _compute_small(self, segment: PlannedSegment, prev: tuple[int, ...]) -> bool:
         """The last piece of a segment with at most :data:`SMALL_SEGMENT_STEPS` steps in
         plain Python; False if the numpy kernels must do it (FS100, untame values, more
@@ -440,7 +463,10 @@ class GroupInterpolator:
         n = axes.num_axes
         end = segment.end
         if not full:
-            self._store_small(segment, prev, [end.time_ms], [end.pos[:n]])
+            if axes.float_mode is FloatMode.X87_EXTENDED and self._plain_slots:
+                self._store_end_x87(segment, prev, n)
+            else:
+                self._store_small(segment, prev, [end.time_ms], [end.pos[:n]])
             return True
         start = segment.start
         if axes.float_mode is not FloatMode.X87_EXTENDED or not (start.tame and end.tame):
