@@ -67,6 +67,17 @@ SMALL_SEGMENT_STEPS: Final = 8
 done in plain Python: below that, numpy's per-call cost exceeds the arithmetic."""
 
 
+SMALL_GRID_CACHE: Final = 4096
+"""Most (segment length, first step, steps, period) keys :data:`_SMALL_GRIDS` holds.
+Points at a fixed spacing repeat a handful of keys; the cap only bounds what a client
+sending arbitrary times can make it hold (a few hundred KiB)."""
+
+_SMALL_GRIDS: dict[tuple[int, int, int, int], tuple[float, tuple[float, ...]]] = {}
+"""T and the τ of each step, as float32, of a small segment, by (length ms, first step
+− start ms, steps, period ms): they depend on these integers alone, and at a fixed
+spacing every segment has one of a few, so a tick looks them up instead of rounding
+them again (x87 plain-Python path, :meth:`GroupInterpolator._compute_small`)."""
+
 _INT32_LOW: Final = float(INT32_MIN) - 1.0
 _INT32_HIGH: Final = float(INT32_MAX) + 1.0
 """Products strictly between these truncate to an int32 (C's conversion is defined)."""
@@ -474,11 +485,19 @@ class GroupInterpolator:
         s_ms = start.time_ms
         x0, v0 = start.pos[:n], start.vel[:n]
         x1, v1 = end.pos[:n], end.vel[:n]
-        duration = f32((end.time_ms - s_ms) / 1000)
         period = axes.period_ms
         first = segment.grid.first_ms + period * segment.step0
         times = [first + period * k for k in range(full)]
-        taus = f32_tuple([(c - s_ms) / 1000 for c in times], full)
+        key = (end.time_ms - s_ms, first - s_ms, full, period)
+        found = _SMALL_GRIDS.get(key)
+        if found is None:
+            found = (
+                f32(key[0] / 1000),
+                f32_tuple([(key[1] + period * k) / 1000 for k in range(full)], full),
+            )
+            if len(_SMALL_GRIDS) < SMALL_GRID_CACHE:
+                _SMALL_GRIDS[key] = found
+        duration, taus = found
         rows: list[Sequence[float]] | None = None
         if self.fused:
             rows = small_segment_x87(x0, v0, x1, v1, duration, taus)  # type: ignore[assignment]
