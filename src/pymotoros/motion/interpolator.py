@@ -446,11 +446,12 @@ class GroupInterpolator:
         """
         end = segment.end
         products = [x * f for x, f in zip(end.pos, self.axes.factors_ros_list, strict=False)]
-        target: tuple[int, ...] | None = None
-        if min(products) > _INT32_LOW and max(products) < _INT32_HIGH:
-            with contextlib.suppress(ValueError):  # a NaN that min() and max() passed over
-                target = (*map(int, products), *prev[n:])
-        if target is None:
+        target: tuple[int, ...]
+        try:  # not contextlib.suppress: its context manager costs more than the rest here
+            if not (min(products) > _INT32_LOW and max(products) < _INT32_HIGH):
+                raise ValueError
+            target = (*map(int, products), *prev[n:])
+        except ValueError:  # out of the int32 range, or a NaN that min() and max() passed
             target = self._targets([end.pos[:n]], prev)[0]
         segment.entries = [
             tuple.__new__(Increment, (end.time_ms, tuple(map(sub, target, prev)), segment.tool))
