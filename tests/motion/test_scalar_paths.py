@@ -128,3 +128,37 @@ def test_tick_engine_with_and_without_the_plain_python_paths(
     times, incs = interpolate(points, axes, validate=False)
     offline = list(zip(times.tolist(), incs.tolist(), strict=True))
     assert results == [offline] * 3
+
+
+@settings(max_examples=60, deadline=None)
+@given(
+    st.lists(
+        st.one_of(
+            st.floats(-3.0, 3.0, width=32),
+            st.sampled_from([3e4, -3e4, 1e6, math.nan, math.inf]),  # pulses beyond int32
+        ),
+        min_size=6,
+        max_size=6,
+    ),
+    st.integers(1, 12),
+)
+def test_end_point_only_segments_with_and_without_the_plain_python_path(
+    odd: list[float], where: int
+) -> None:
+    """Points exactly one period apart give segments that are only their end point
+    (:meth:`GroupInterpolator._store_end_x87` on the x87 with slots in ROS order):
+    the same entries as the numpy kernels, also when a product leaves the int32 range
+    or is not a number (the general conversion then decides)."""
+    axes = axes_for("hc10", "yrc1000")
+    points = [
+        TrajPoint(k * 0.004 + 0.0005, tuple(0.01 * k * (j + 1) for j in range(6)), (0.0,) * 6)
+        for k in range(14)
+    ]
+    points[where] = TrajPoint(points[where].time, tuple(odd), (0.0,) * 6)
+    results = []
+    for scalar in (True, False):
+        with pytest.MonkeyPatch.context() as mp:
+            mp.setattr(GroupInterpolator, "scalar", scalar)
+            results.append(queued_by_ticks(points, axes))
+    assert results[0] == results[1]
+    assert len(results[0]) == len(points) - 1  # one entry per segment: the end point

@@ -67,6 +67,17 @@ SMALL_SEGMENT_STEPS: Final = 8
 done in plain Python: below that, numpy's per-call cost exceeds the arithmetic."""
 
 
+SMALL_GRID_CACHE: Final = 4096
+"""Most (segment length, first step, steps, period) keys :data:`_SMALL_GRIDS` holds.
+Points at a fixed spacing repeat a handful of keys; the cap only bounds what a client
+sending arbitrary times can make it hold (a few hundred KiB)."""
+
+_SMALL_GRIDS: dict[tuple[int, int, int, int], tuple[float, tuple[float, ...]]] = {}
+"""T and the τ of each step, as float32, of a small segment, by (length ms, first step
+− start ms, steps, period ms): they depend on these integers alone, and at a fixed
+spacing every segment has one of a few, so a tick looks them up instead of rounding
+them again (x87 plain-Python path, :meth:`GroupInterpolator._compute_small`)."""
+
 _INT32_LOW: Final = float(INT32_MIN) - 1.0
 _INT32_HIGH: Final = float(INT32_MAX) + 1.0
 """Products strictly between these truncate to an int32 (C's conversion is defined)."""
@@ -425,6 +436,30 @@ class GroupInterpolator:
         segment.offset = 0
         self._chain_prev = chain[-1]
 
+    def _store_end_x87(self, segment: PlannedSegment, prev: tuple[int, ...], n: int) -> None:
+        """:meth:`_store_small` of a piece that is only its end point, x87, slots in ROS
+        order: the one entry a tick queues when points come every period.
+
+        The same target as :meth:`_targets` (each product truncated, or :func:`pulse`
+        out of the int32 range) without its per-row generality; the plain-Python
+        segment tests compare it with the numpy kernels.
+        """
+        end = segment.end
+        products = [x * f for x, f in zip(end.pos, self.axes.factors_ros_list, strict=False)]
+        target: tuple[int, ...]
+        try:  # not contextlib.suppress: its context manager costs more than the rest here
+            if not (min(products) > _INT32_LOW and max(products) < _INT32_HIGH):
+                raise ValueError
+            target = (*map(int, products), *prev[n:])
+        except ValueError:  # out of the int32 range, or a NaN that min() and max() passed
+            target = self._targets([end.pos[:n]], prev)[0]
+        segment.entries = [
+            tuple.__new__(Increment, (end.time_ms, tuple(map(sub, target, prev)), segment.tool))
+        ]
+        segment.chain = (prev, target)
+        segment.offset = 0
+        self._chain_prev = target
+
     def _compute_small(self, segment: PlannedSegment, prev: tuple[int, ...]) -> bool:
         """The last piece of a segment with at most :data:`SMALL_SEGMENT_STEPS` steps in
         plain Python; False if the numpy kernels must do it (FS100, untame values, more
@@ -440,7 +475,10 @@ class GroupInterpolator:
         n = axes.num_axes
         end = segment.end
         if not full:
-            self._store_small(segment, prev, [end.time_ms], [end.pos[:n]])
+            if axes.float_mode is FloatMode.X87_EXTENDED and self._plain_slots:
+                self._store_end_x87(segment, prev, n)
+            else:
+                self._store_small(segment, prev, [end.time_ms], [end.pos[:n]])
             return True
         start = segment.start
         if axes.float_mode is not FloatMode.X87_EXTENDED or not (start.tame and end.tame):
@@ -448,11 +486,19 @@ class GroupInterpolator:
         s_ms = start.time_ms
         x0, v0 = start.pos[:n], start.vel[:n]
         x1, v1 = end.pos[:n], end.vel[:n]
-        duration = f32((end.time_ms - s_ms) / 1000)
         period = axes.period_ms
         first = segment.grid.first_ms + period * segment.step0
         times = [first + period * k for k in range(full)]
-        taus = f32_tuple([(c - s_ms) / 1000 for c in times], full)
+        key = (end.time_ms - s_ms, first - s_ms, full, period)
+        found = _SMALL_GRIDS.get(key)
+        if found is None:
+            found = (
+                f32(key[0] / 1000),
+                f32_tuple([(key[1] + period * k) / 1000 for k in range(full)], full),
+            )
+            if len(_SMALL_GRIDS) < SMALL_GRID_CACHE:
+                _SMALL_GRIDS[key] = found
+        duration, taus = found
         rows: list[Sequence[float]] | None = None
         if self.fused:
             rows = small_segment_x87(x0, v0, x1, v1, duration, taus)  # type: ignore[assignment]
