@@ -24,6 +24,7 @@ segment computed on its own (the queue ran dry) with few steps is done in plain 
 from __future__ import annotations
 
 import contextlib
+import functools
 import logging
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
@@ -68,15 +69,25 @@ done in plain Python: below that, numpy's per-call cost exceeds the arithmetic."
 
 
 SMALL_GRID_CACHE: Final = 4096
-"""Most (segment length, first step, steps, period) keys :data:`_SMALL_GRIDS` holds.
+"""Most (segment length, first step, steps, period) keys :func:`_small_grid` remembers.
 Points at a fixed spacing repeat a handful of keys; the cap only bounds what a client
 sending arbitrary times can make it hold (a few hundred KiB)."""
 
-_SMALL_GRIDS: dict[tuple[int, int, int, int], tuple[float, tuple[float, ...]]] = {}
-"""T and the τ of each step, as float32, of a small segment, by (length ms, first step
-− start ms, steps, period ms): they depend on these integers alone, and at a fixed
-spacing every segment has one of a few, so a tick looks them up instead of rounding
-them again (x87 plain-Python path, :meth:`GroupInterpolator._compute_small`)."""
+
+@functools.lru_cache(maxsize=SMALL_GRID_CACHE)
+def _small_grid(
+    length_ms: int, first_ms: int, steps: int, period_ms: int
+) -> tuple[float, tuple[float, ...]]:
+    """T and the τ of each step, as float32, of a small segment of ``length_ms`` whose
+    first step is ``first_ms`` after its start (x87 plain-Python path,
+    :meth:`GroupInterpolator._compute_small`). They depend on these integers alone, and
+    at a fixed spacing every segment has one of a few, so a tick looks them up instead
+    of rounding them again: a memo of a pure function, bounded, never state."""
+    return (
+        f32(length_ms / 1000),
+        f32_tuple([(first_ms + period_ms * k) / 1000 for k in range(steps)], steps),
+    )
+
 
 _INT32_LOW: Final = float(INT32_MIN) - 1.0
 _INT32_HIGH: Final = float(INT32_MAX) + 1.0
@@ -489,16 +500,7 @@ class GroupInterpolator:
         period = axes.period_ms
         first = segment.grid.first_ms + period * segment.step0
         times = [first + period * k for k in range(full)]
-        key = (end.time_ms - s_ms, first - s_ms, full, period)
-        found = _SMALL_GRIDS.get(key)
-        if found is None:
-            found = (
-                f32(key[0] / 1000),
-                f32_tuple([(key[1] + period * k) / 1000 for k in range(full)], full),
-            )
-            if len(_SMALL_GRIDS) < SMALL_GRID_CACHE:
-                _SMALL_GRIDS[key] = found
-        duration, taus = found
+        duration, taus = _small_grid(end.time_ms - s_ms, first - s_ms, full, period)
         rows: list[Sequence[float]] | None = None
         if self.fused:
             rows = small_segment_x87(x0, v0, x1, v1, duration, taus)  # type: ignore[assignment]
