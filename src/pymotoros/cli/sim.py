@@ -19,7 +19,7 @@ import json
 import logging
 import signal
 import sys
-from collections.abc import Callable, Iterator, Sequence
+from collections.abc import Callable, Coroutine, Iterator, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -313,10 +313,31 @@ def sim(
 
         request_realtime()  # a warning line if refused; the twin runs on either way
     app = SimulatorApp(controller, config, idle_batching=False if no_idle_batching else None)
-    recorder = open_recorder(record_path, [app])
+    recorder = open_recorder(record_path, [app])  # before the coroutine: it may refuse
+    serve(
+        run_simulator(app, ports_file),
+        host=host,
+        ports_file=ports_file,
+        recorder=recorder,
+        port_hint="let the OS choose with --motion-port 0 --state-port 0 --io-port 0 "
+        "--http-port 0 --ports-file FILE",
+    )
+
+
+def serve(
+    main: Coroutine[Any, Any, None],
+    *,
+    host: str,
+    ports_file: Path | None,
+    recorder: SessionRecorder | None,
+    port_hint: str,
+) -> None:
+    """Run ``main`` (one cell or several) to its end; remove the ports file and close the
+    recording whatever happened, and turn a port already in use into an error that says
+    what to do (``port_hint``)."""
     try:
         try:
-            asyncio.run(run_simulator(app, ports_file))
+            asyncio.run(main)
         finally:
             if ports_file is not None:
                 ports_file.unlink(missing_ok=True)
@@ -324,8 +345,7 @@ def sim(
                 recorder.close()
     except OSError as exc:  # e.g. a port already in use
         hint = (
-            "; another controller or sim holds the port: stop it, or let the OS choose "
-            "with --motion-port 0 --state-port 0 --io-port 0 --http-port 0 --ports-file FILE"
+            f"; another controller or sim holds the port: stop it, or {port_hint}"
             if exc.errno == errno.EADDRINUSE
             else ""
         )

@@ -19,8 +19,6 @@ are usage errors. ``--host`` applies to every cell.
 
 from __future__ import annotations
 
-import asyncio
-import errno
 import sys
 from collections.abc import Sequence
 from pathlib import Path
@@ -28,7 +26,7 @@ from typing import Any
 
 import click
 
-from pymotoros.cli.sim import open_recorder, ready_line, stop_on_signals, write_ports_file
+from pymotoros.cli.sim import open_recorder, ready_line, serve, stop_on_signals, write_ports_file
 from pymotoros.controller import VirtualController
 from pymotoros.controller.cell import load_cell
 from pymotoros.errors import ConfigError
@@ -117,23 +115,14 @@ def run_cells(
         fleet = Fleet(cells, idle_batching=idle_batching)
     except ConfigError as exc:
         raise click.UsageError(str(exc)) from exc
-    recorder = open_recorder(record_path, fleet.apps)
-    try:
-        try:
-            asyncio.run(run_fleet(fleet, paths, titles, ports_file))
-        finally:
-            if ports_file is not None:
-                ports_file.unlink(missing_ok=True)
-            if recorder is not None:
-                recorder.close()
-    except OSError as exc:  # e.g. a port already in use
-        hint = (
-            "; another controller or sim holds the port: stop it, or remove that port "
-            "from the cell file's [ports] table (the OS then chooses one)"
-            if exc.errno == errno.EADDRINUSE
-            else ""
-        )
-        raise click.ClickException(f"cannot listen on {host}: {exc}{hint}") from exc
+    recorder = open_recorder(record_path, fleet.apps)  # before the coroutine: it may refuse
+    serve(
+        run_fleet(fleet, paths, titles, ports_file),
+        host=host,
+        ports_file=ports_file,
+        recorder=recorder,
+        port_hint="remove that port from the cell file's [ports] table (the OS then chooses one)",
+    )
 
 
 async def run_fleet(
