@@ -135,6 +135,7 @@ class SimulatorApp:
         self.io = IoServer(controller, order)
         for server in (self.motion, self.state, self.io):
             server.catch_up = self._catch_up
+            server.log_clock = self.clock.now  # log flood limits in the app's time
         if hasattr(controller, "drop_motion_hook"):  # a scenario's drop_motion
             controller.drop_motion_hook = self.motion.drop_clients
         self._ports: BoundPorts | None = None

@@ -47,8 +47,17 @@ __all__ = ["IoServer", "handle_io_request", "log_rejection"]
 logger = logging.getLogger(__name__)
 
 
-def _log_io_refusal(port: str, what: str, target: int, code: IoResultCode, value: int) -> None:
-    if code != IoResultCode.OK:
+def _log_io_refusal(
+    port: str,
+    what: str,
+    target: int,
+    code: IoResultCode,
+    value: int,
+    conn: Connection | None = None,
+) -> None:
+    if code != IoResultCode.OK and (
+        conn is None or conn.log.allow("refused IO requests", logger, logging.INFO)
+    ):
         logger.info(
             "%s: %s %d (value %d) refused: %s",
             port,
@@ -62,7 +71,10 @@ def _log_io_refusal(port: str, what: str, target: int, code: IoResultCode, value
 def log_rejection(
     conn: Connection, frame: Frame, verdict: Reject, order: ByteOrder, port: Port
 ) -> None:
-    """One warning per protocol error, with the sizes behind it (motion and IO ports)."""
+    """One warning per protocol error, with the sizes behind it (motion and IO ports);
+    past the client's allowance only counted (runtime/log_limit.py)."""
+    if not conn.log.allow("refused frames", logger, logging.WARNING):
+        return
     expected = expected_size(frame.msg_type, port, frame.body, order)
     if expected is None:
         why = f"type {frame.msg_type} is not served on the {port.value} port"
@@ -78,34 +90,37 @@ def log_rejection(
     )
 
 
-def handle_io_request(controller: MotoRosController, msg: WireMessage, port: str) -> Message | None:
+def handle_io_request(
+    controller: MotoRosController, msg: WireMessage, port: str, conn: Connection | None = None
+) -> Message | None:
     """The reply to an IO request, or None if ``msg`` is not an IO request of this port.
 
     M-register requests are only IO-port messages; the motion server never passes them.
+    Refusals are logged within ``conn``'s allowance (runtime/log_limit.py) when given.
     """
     if isinstance(msg, MotoReadIoBit):
         read = controller.read_io_bit(msg.io_address)
-        _log_io_refusal(port, "read bit", msg.io_address, read.result_code, 0)
+        _log_io_refusal(port, "read bit", msg.io_address, read.result_code, 0, conn)
         return MotoReadIoBitReply(read.value, int(read.result_code))
     if isinstance(msg, MotoWriteIoBit):
         code = controller.write_io_bit(msg.io_address, msg.io_value)
-        _log_io_refusal(port, "write bit", msg.io_address, code, msg.io_value)
+        _log_io_refusal(port, "write bit", msg.io_address, code, msg.io_value, conn)
         return MotoWriteIoBitReply(int(code))
     if isinstance(msg, MotoReadIoGroup):
         read = controller.read_io_group(msg.io_address)
-        _log_io_refusal(port, "read group", msg.io_address, read.result_code, 0)
+        _log_io_refusal(port, "read group", msg.io_address, read.result_code, 0, conn)
         return MotoReadIoGroupReply(read.value, int(read.result_code))
     if isinstance(msg, MotoWriteIoGroup):
         code = controller.write_io_group(msg.io_address, msg.io_value)
-        _log_io_refusal(port, "write group", msg.io_address, code, msg.io_value)
+        _log_io_refusal(port, "write group", msg.io_address, code, msg.io_value, conn)
         return MotoWriteIoGroupReply(int(code))
     if isinstance(msg, MotoReadMRegister):
         read = controller.read_mregister(msg.register_number)
-        _log_io_refusal(port, "read M-register", msg.register_number, read.result_code, 0)
+        _log_io_refusal(port, "read M-register", msg.register_number, read.result_code, 0, conn)
         return MotoReadMRegisterReply(read.value, int(read.result_code))
     if isinstance(msg, MotoWriteMRegister):
         code = controller.write_mregister(msg.register_number, msg.value)
-        _log_io_refusal(port, "write M-register", msg.register_number, code, msg.value)
+        _log_io_refusal(port, "write M-register", msg.register_number, code, msg.value, conn)
         return MotoWriteMRegisterReply(int(code))
     return None
 
@@ -142,7 +157,7 @@ class IoServer(FramedService):
             return verdict.reply
         reply = None
         if isinstance(verdict, Accept):
-            reply = handle_io_request(self._controller, verdict.message, "io")
+            reply = handle_io_request(self._controller, verdict.message, "io", conn)
         if reply is None:  # pragma: no cover - check_request only accepts IO types here
             return IoErrorReply(ResultCode.INVALID, InvalidSubcode.MSGTYPE)
         return reply

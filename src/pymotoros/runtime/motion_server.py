@@ -149,11 +149,14 @@ class MotionServer(FramedService):
         self.requests += 1
         verdict = check_request(frame, self._order, Port.MOTION)
         if isinstance(verdict, Close):
-            logger.warning(
-                "motion: client %s sent %s; closing the connection as MotoROS does",
-                conn.peer,
-                verdict.reason,
-            )
+            # One line per connection, but a flood of connects can repeat it: the port's
+            # allowance (runtime/log_limit.py).
+            if self.log.allow("connections closed for their message type", logger, logging.WARNING):
+                logger.warning(
+                    "motion: client %s sent %s; closing the connection as MotoROS does",
+                    conn.peer,
+                    verdict.reason,
+                )
             raise _CloseConnectionError
         if isinstance(verdict, Reject):
             log_rejection(conn, frame, verdict, self._order, Port.MOTION)
@@ -179,6 +182,10 @@ class MotionServer(FramedService):
         c = self._controller
         if isinstance(msg, MotoMotionCtrl):
             outcome = await self._resolve(c.motion_ctrl(msg.group_no, msg.command))
+            if outcome.close_connection and not self.log.allow(
+                "connections closed on request", logger, logging.INFO
+            ):
+                raise _CloseConnectionError
             if outcome.close_connection:
                 logger.info(
                     "motion: client %s: %s succeeded; closing without reply",
@@ -214,6 +221,10 @@ class MotionServer(FramedService):
             return self._reply(outcome, msg.group_no, msg.sequence, MsgType.MOTO_SELECT_TOOL)
         if isinstance(msg, MotoGetDhParameters):
             dh = c.dh_parameters()
+            if dh is None and not self.log.allow(
+                "connections closed for DH parameters", logger, logging.WARNING
+            ):
+                raise _CloseConnectionError
             if dh is None:
                 logger.warning(
                     "motion: client %s: DH parameters unavailable; closing the connection "
@@ -224,7 +235,7 @@ class MotionServer(FramedService):
             return MotoGetDhParametersReply.for_groups(dh)
         if isinstance(msg, Ping):
             return PingReply()
-        reply = handle_io_request(c, msg, "motion")
+        reply = handle_io_request(c, msg, "motion", conn)
         if reply is None:  # pragma: no cover - check_request answers unknown types itself
             return MotoMotionReply(-1, -1, msg_type, ResultCode.INVALID, InvalidSubcode.MSGTYPE)
         return reply
@@ -264,7 +275,13 @@ class MotionServer(FramedService):
         if outcome.ok:
             return
         level = logging.DEBUG if outcome.result == ResultCode.BUSY or quiet else logging.WARNING
-        if logger.isEnabledFor(level):
+        # DEBUG lines are the opted-in full protocol trace; WARNINGs are the client's
+        # allowance (runtime/log_limit.py).
+        if (
+            logger.isEnabledFor(level)
+            if level == logging.DEBUG
+            else conn.log.allow("refused requests", logger, level)
+        ):
             logger.log(
                 level,
                 "motion: client %s: %s -> %s / %s%s",

@@ -156,12 +156,13 @@ class StateServer(TcpService):
                     while await conn.read(READ_CHUNK):
                         pass  # MotoROS ignores anything a state client sends
                 except OSError as exc:  # a reset (clients often close with unread data), a timeout
-                    logger.info("state: client %s: connection lost (%s)", conn.peer, exc)
+                    if conn.logged:  # within the port's allowance (runtime/log_limit.py)
+                        logger.info("state: client %s: connection lost (%s)", conn.peer, exc)
                 finally:
                     sender.cancel()
         finally:
             self._clients.pop(conn, None)
-            if client.dropped:
+            if client.dropped and conn.logged:
                 logger.info(
                     "state: client %s received %d cycles; %d replaced by newer ones (slow reader)",
                     conn.peer,
@@ -189,5 +190,6 @@ class StateServer(TcpService):
                     await writer.drain()
                 client.sent += 1
         except (ConnectionError, OSError) as exc:
-            logger.info("state: client %s: send failed (%s)", client.conn.peer, exc)
+            if client.conn.logged:
+                logger.info("state: client %s: send failed (%s)", client.conn.peer, exc)
             client.conn.close()  # wakes the reader with EOF

@@ -30,6 +30,7 @@ from pymotoros.runtime.connections import (
     configure_socket,
     peer_name,
 )
+from pymotoros.runtime.log_limit import LogLimiter
 
 __all__ = ["Connection", "FramedService", "TcpService", "bind_socket", "is_loopback"]
 
@@ -76,6 +77,12 @@ def bind_unlistened(host: str, port: int) -> socket.socket:
     return sock
 
 
+def loop_time() -> float:
+    """The running event loop's monotonic time: the log limiters' clock unless the
+    application gives its own (``TcpService.log_clock``)."""
+    return asyncio.get_running_loop().time()
+
+
 def _peer_port(writer: asyncio.StreamWriter) -> int | None:
     """The client's TCP port, None for an in-memory client (the recorder makes one up)."""
     peer = writer.get_extra_info("peername")
@@ -89,14 +96,25 @@ class Connection:
     that records the connection when ``pymotoros sim --record`` is on (``flow``).
     """
 
-    __slots__ = ("flow", "peer", "reader", "writer")
+    __slots__ = ("flow", "log", "logged", "peer", "reader", "writer")
 
-    def __init__(self, reader: asyncio.StreamReader, writer: asyncio.StreamWriter) -> None:
+    def __init__(
+        self,
+        reader: asyncio.StreamReader,
+        writer: asyncio.StreamWriter,
+        service: str = "tcp",
+        now: Callable[[], float] = loop_time,
+    ) -> None:
         self.reader = reader
         self.writer = writer
         self.peer = peer_name(writer)
         self.flow: Flow | None = None
         """This connection in the session recording, if one is being made."""
+        self.log = LogLimiter(f"{service}: client {self.peer}", now)
+        """Bounds the lines this client makes the server log (runtime/log_limit.py)."""
+        self.logged = True
+        """Whether this connection's life cycle (connected, lost, disconnected) is
+        logged: False once the port's connection lines are being only counted."""
 
     async def read(self, n: int) -> bytes:
         """Up to ``n`` bytes from the client (b"" at EOF), recorded."""
@@ -143,6 +161,10 @@ class TcpService(ABC):
         """Records every accepted connection (``pymotoros sim --record``) when set."""
         self.catch_up: Callable[[], object] | None = None
         """Called first on every accept: brings a batching ticker up to date (issue 13)."""
+        self.log_clock: Callable[[], float] = loop_time
+        """The clock of the log limiters (the application's clock when it has one)."""
+        self.log = LogLimiter(self.name, lambda: self.log_clock())
+        """Bounds the connection lines a flood of connects makes this port log."""
 
     # ----------------------------------------------------------- life cycle
 
@@ -191,6 +213,7 @@ class TcpService(ABC):
             self._server.close()
             await self._server.wait_closed()
             self._server = None
+        self.log.close()  # the totals of connection lines a flood left unlogged
 
     @property
     def clients(self) -> int:
@@ -201,7 +224,7 @@ class TcpService(ABC):
     def _accept(self, reader: asyncio.StreamReader, writer: asyncio.StreamWriter) -> None:
         if self.catch_up is not None:
             self.catch_up()
-        conn = Connection(reader, writer)
+        conn = Connection(reader, writer, self.name, self.log_clock)
         tg = self._tg
         if tg is None:  # pragma: no cover - start() sets it before accepting
             writer.close()
@@ -210,24 +233,26 @@ class TcpService(ABC):
         admission = self._slots.admit(conn, queued)
         if admission.kind is AdmissionKind.REFUSE:
             self.refused += 1
-            logger.warning(
-                "%s: refused %s: all %d connection slots are taken and motion is queued "
-                "(MotoROS closes the newcomer while the robot moves)",
-                self.name,
-                conn.peer,
-                self._slots.capacity,
-            )
+            if self.log.allow("refused connections", logger, logging.WARNING):
+                logger.warning(
+                    "%s: refused %s: all %d connection slots are taken and motion is queued "
+                    "(MotoROS closes the newcomer while the robot moves)",
+                    self.name,
+                    conn.peer,
+                    self._slots.capacity,
+                )
             writer.close()
             return
         if admission.kind is AdmissionKind.REPLACE and admission.evicted is not None:
             self.replaced += 1
-            logger.warning(
-                "%s: %s replaces %s in slot 0 (all %d slots taken, no motion queued)",
-                self.name,
-                conn.peer,
-                admission.evicted.peer,
-                self._slots.capacity,
-            )
+            if self.log.allow("replaced connections", logger, logging.WARNING):
+                logger.warning(
+                    "%s: %s replaces %s in slot 0 (all %d slots taken, no motion queued)",
+                    self.name,
+                    conn.peer,
+                    admission.evicted.peer,
+                    self._slots.capacity,
+                )
             self._evict(admission.evicted)
         self.accepted += 1
         configure_socket(writer)
@@ -250,18 +275,21 @@ class TcpService(ABC):
             task.cancel()
 
     async def _run(self, conn: Connection) -> None:
-        logger.info(
-            "%s: client %s connected (%d/%d)",
-            self.name,
-            conn.peer,
-            len(self._slots),
-            self._slots.capacity,
-        )
+        conn.logged = self.log.allow("connections", logger, logging.INFO)
+        if conn.logged:
+            logger.info(
+                "%s: client %s connected (%d/%d)",
+                self.name,
+                conn.peer,
+                len(self._slots),
+                self._slots.capacity,
+            )
         try:
             self.on_connect(conn)
             await self.serve_connection(conn)
         except (OSError, asyncio.IncompleteReadError) as exc:  # resets, keep-alive timeouts
-            logger.info("%s: client %s: connection lost (%s)", self.name, conn.peer, exc)
+            if conn.logged:
+                logger.info("%s: client %s: connection lost (%s)", self.name, conn.peer, exc)
         except Exception:
             logger.exception("%s: client %s: handler failed; closing it", self.name, conn.peer)
         finally:
@@ -271,7 +299,9 @@ class TcpService(ABC):
             with contextlib.suppress(Exception, asyncio.CancelledError):
                 async with asyncio.timeout(CLOSE_TIMEOUT_S):
                     await conn.writer.wait_closed()
-            logger.info("%s: client %s disconnected", self.name, conn.peer)
+            if conn.logged:
+                logger.info("%s: client %s disconnected", self.name, conn.peer)
+            conn.log.close()  # the totals of what this client's flood left unlogged
             if released:
                 try:
                     self.on_disconnect(conn)
@@ -327,13 +357,14 @@ class FramedService(TcpService):
                     frame = decoder.next_frame()
                 except RemoteProtocolError as exc:
                     dropped = decoder.discard()
-                    self._log.warning(
-                        "%s: client %s: %s; %d bytes dropped, answered INVALID/3001",
-                        self.name,
-                        conn.peer,
-                        exc,
-                        len(dropped),
-                    )
+                    if conn.log.allow("refused frames", self._log, logging.WARNING):
+                        self._log.warning(
+                            "%s: client %s: %s; %d bytes dropped, answered INVALID/3001",
+                            self.name,
+                            conn.peer,
+                            exc,
+                            len(dropped),
+                        )
                     await self.send(conn, self._bad_prefix_reply)
                     break
                 if frame is None:

@@ -1,0 +1,264 @@
+"""Log floods (issue 13): what a client makes the twin log is bounded.
+
+The limiter alone on a fake clock, then a running twin fed thousands of refused frames,
+refused IO requests and connects, with the limiters' clock replaced by a fake one so
+that the bursts and summaries are exact whatever the machine's speed.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import logging
+import re
+import struct
+
+import pytest
+
+from pymotoros.protocol.constants import Port
+from pymotoros.protocol.messages import MotoReadIoBit, MotoReadIoBitReply, Ping, PingReply
+from pymotoros.runtime.app import SimulatorApp
+from pymotoros.runtime.log_limit import LOG_BURST, LOG_SUMMARY_INTERVAL_S, LogLimiter
+
+from .peer import Peer
+
+log = logging.getLogger("test.log_limit")
+
+FLOOD = 2_500
+"""Bad frames per batch in the integration tests (two batches: 5,000 in all)."""
+
+UNKNOWN_TYPE = 9999
+"""A message type MotoROS does not know: answered INVALID/3003, connection kept (§1.5)."""
+
+BAD_IO_ADDRESS = 99_999_999
+"""An IO address outside every range of the IO map: refused with a result code (§6.1)."""
+
+
+class FakeClock:
+    """Monotonic seconds that move only when the test says so."""
+
+    def __init__(self) -> None:
+        self.t = 100.0
+
+    def __call__(self) -> float:
+        return self.t
+
+
+def lines(caplog: pytest.LogCaptureFixture, pattern: str) -> list[str]:
+    return [r.getMessage() for r in caplog.records if re.search(pattern, r.getMessage())]
+
+
+def counted(message: str) -> int:
+    """The count a summary or total line reports ("12,345 more refused frames …")."""
+    match = re.search(r": ([\d,]+) (?:more )?\w", message)
+    assert match, message
+    return int(match.group(1).replace(",", ""))
+
+
+# ------------------------------------------------------------------ the limiter alone
+
+
+@pytest.fixture
+def clock() -> FakeClock:
+    return FakeClock()
+
+
+def limiter(clock: FakeClock, burst: int = 3, interval: float = 5.0) -> LogLimiter:
+    return LogLimiter("motion: client 1.2.3.4:5", clock, burst=burst, interval=interval)
+
+
+def test_the_first_lines_of_a_burst_are_logged_then_counted(
+    clock: FakeClock, caplog: pytest.LogCaptureFixture
+) -> None:
+    caplog.set_level(logging.INFO, logger="test.log_limit")
+    lim = limiter(clock)
+    decisions = [lim.allow("refused frames", log, logging.WARNING) for _ in range(10)]
+    assert decisions == [True] * 3 + [False] * 7
+    assert lim.suppressed("refused frames") == 7
+    assert not caplog.records  # nothing written by the limiter within the interval
+
+
+def test_a_summary_at_most_once_per_interval_with_the_exact_count(
+    clock: FakeClock, caplog: pytest.LogCaptureFixture
+) -> None:
+    caplog.set_level(logging.INFO, logger="test.log_limit")
+    lim = limiter(clock)
+    for _ in range(1_003):  # 3 logged, 1,000 counted, all at once
+        lim.allow("refused frames", log, logging.WARNING)
+    clock.t += 1.0
+    for _ in range(500):  # still within the interval of the first counted line
+        lim.allow("refused frames", log, logging.WARNING)
+    assert not caplog.records
+    clock.t += 4.0  # 5 s after the first counted line, only 1 s after the last one
+    assert lim.allow("refused frames", log, logging.WARNING) is False  # still a burst
+    [summary] = [r.getMessage() for r in caplog.records]
+    assert summary.startswith(
+        "motion: client 1.2.3.4:5: 1,500 more refused frames in the last 5.0 s"
+    )
+    assert "logging of them is limited: the first 3 of a burst are logged" in summary
+    assert caplog.records[0].levelno == logging.WARNING  # the level of what it counts
+
+
+def test_a_quiet_interval_ends_the_burst(
+    clock: FakeClock, caplog: pytest.LogCaptureFixture
+) -> None:
+    caplog.set_level(logging.INFO, logger="test.log_limit")
+    lim = limiter(clock)
+    for _ in range(5):
+        lim.allow("refused frames", log, logging.WARNING)
+    clock.t += 5.0  # nothing for a whole interval
+    assert lim.allow("refused frames", log, logging.WARNING) is True  # a fresh allowance
+    [summary] = [r.getMessage() for r in caplog.records]
+    assert ": 2 more refused frames in the last 5.0 s" in summary
+    assert [lim.allow("refused frames", log, logging.WARNING) for _ in range(3)] == [
+        True,
+        True,
+        False,
+    ]
+    clock.t += 4.9  # not quiet long enough
+    assert lim.allow("refused frames", log, logging.WARNING) is False
+
+
+def test_kinds_are_counted_separately_and_totals_written_at_close(
+    clock: FakeClock, caplog: pytest.LogCaptureFixture
+) -> None:
+    caplog.set_level(logging.INFO, logger="test.log_limit")
+    lim = limiter(clock)
+    for _ in range(8):
+        lim.allow("refused frames", log, logging.WARNING)
+    io = [lim.allow("refused IO requests", log, logging.INFO) for _ in range(4)]
+    assert io == [True, True, True, False]
+    lim.allow("connections", log, logging.INFO)  # one line: nothing to report at close
+    lim.close()
+    messages = [(r.levelno, r.getMessage()) for r in caplog.records]
+    assert len(messages) == 2
+    assert messages[0][0] == logging.WARNING
+    assert messages[0][1].startswith("motion: client 1.2.3.4:5: 5 refused frames in all were not")
+    assert messages[1][0] == logging.INFO
+    assert messages[1][1].startswith("motion: client 1.2.3.4:5: 1 refused IO requests in all")
+
+
+def test_a_disabled_level_is_neither_logged_nor_counted(
+    clock: FakeClock, caplog: pytest.LogCaptureFixture
+) -> None:
+    caplog.set_level(logging.WARNING, logger="test.log_limit")
+    lim = limiter(clock)
+    assert not any(lim.allow("refused IO requests", log, logging.INFO) for _ in range(10))
+    assert lim.suppressed("refused IO requests") == 0
+    lim.close()
+    assert not caplog.records
+
+
+@pytest.mark.parametrize(("burst", "interval"), [(-1, 5.0), (3, 0.0), (3, float("nan"))])
+def test_nonsense_settings_are_refused(clock: FakeClock, burst: int, interval: float) -> None:
+    with pytest.raises(ValueError, match="must be"):
+        LogLimiter("x", clock, burst=burst, interval=interval)
+
+
+# ------------------------------------------------------------------ a running twin
+
+
+def unknown_frames(count: int) -> bytes:
+    """``count`` well-framed requests of an unknown type (prefix, type, comm, reply code)."""
+    return struct.pack("<iiii", 12, UNKNOWN_TYPE, 2, 0) * count
+
+
+async def served(peer: Peer, count: int) -> None:
+    """Wait for ``count`` replies: each was logged (or counted) before it was sent."""
+    for _ in range(count):
+        await peer.frame()
+
+
+async def hang_up(app_port_tasks: list[asyncio.Task[None]], peer: Peer) -> None:
+    await peer.close()
+    done, _ = await asyncio.wait(app_port_tasks, timeout=5.0)
+    assert len(done) == len(app_port_tasks), "the server did not notice the client leave"
+
+
+async def test_a_flood_of_bad_frames_logs_a_bounded_number_of_lines(
+    app: SimulatorApp, caplog: pytest.LogCaptureFixture
+) -> None:
+    clock = FakeClock()
+    app.motion.log_clock = clock
+    caplog.set_level(logging.INFO, logger="pymotoros.runtime")
+    peer = await Peer.connect(app.ports.motion, Port.MOTION)
+    me = f"127.0.0.1:{peer.writer.get_extra_info('sockname')[1]}"
+    await peer.send_raw(unknown_frames(FLOOD))
+    await served(peer, FLOOD)
+    tasks = list(app.motion._tasks.values())  # its handler has started
+    clock.t += LOG_SUMMARY_INTERVAL_S
+    await peer.send_raw(unknown_frames(FLOOD))
+    await served(peer, FLOOD)
+    assert await peer.request(Ping()) == PingReply()  # the client is still served
+    await hang_up(tasks, peer)
+
+    mine = re.escape(me)
+    refused = lines(caplog, rf"client {mine}: answered INVALID/3003 .*type {UNKNOWN_TYPE}")
+    summaries = lines(caplog, rf"client {mine}: [\d,]+ more refused frames")
+    totals = lines(caplog, rf"client {mine}: [\d,]+ refused frames in all were not logged")
+    # Two bursts (the fake clock jumped a whole interval between them): each logs its
+    # first LOG_BURST frames; the first one's count is reported when the second starts.
+    assert len(refused) == 2 * LOG_BURST
+    assert [counted(s) for s in summaries] == [FLOOD - LOG_BURST]
+    assert "in the last 5.0 s" in summaries[0]
+    assert [counted(t) for t in totals] == [2 * (FLOOD - LOG_BURST)]
+    assert len(lines(caplog, mine)) <= 2 * LOG_BURST + 2 + 2  # + connected, disconnected
+
+
+async def test_a_flood_of_refused_io_requests_is_bounded_on_both_ports(
+    app: SimulatorApp, caplog: pytest.LogCaptureFixture
+) -> None:
+    clock = FakeClock()
+    app.motion.log_clock = app.io.log_clock = clock
+    caplog.set_level(logging.INFO, logger="pymotoros.runtime")
+    for tcp_port, port, tasks_of in (
+        (app.ports.io, Port.IO, app.io),
+        (app.ports.motion, Port.MOTION, app.motion),
+    ):
+        peer = await Peer.connect(tcp_port, port)
+        request = MotoReadIoBit(BAD_IO_ADDRESS)
+        reply = await peer.request(request)
+        tasks = list(tasks_of._tasks.values())  # its handler has started
+        assert isinstance(reply, MotoReadIoBitReply)
+        assert reply.result_code != 0
+        for _ in range(FLOOD // 50):  # pipelined, 50 at a time
+            for _ in range(50):
+                await peer.send(request)
+            await served(peer, 50)
+        await hang_up(tasks, peer)
+        name = port.value
+        refused = lines(caplog, rf"^{name}: read bit {BAD_IO_ADDRESS} \(value 0\) refused")
+        totals = lines(caplog, rf"^{name}: client [\d.:]+: [\d,]+ refused IO requests in all")
+        assert len(refused) == LOG_BURST
+        assert [counted(t) for t in totals] == [FLOOD + 1 - LOG_BURST]
+
+
+async def test_a_flood_of_connects_logs_a_bounded_number_of_lines(
+    app: SimulatorApp, caplog: pytest.LogCaptureFixture
+) -> None:
+    connects = 100
+    clock = FakeClock()
+    app.io.log_clock = clock
+    caplog.set_level(logging.INFO, logger="pymotoros.runtime")
+    peers: list[Peer] = []
+    for _ in range(connects):  # one IO slot: each newcomer replaces the previous client
+        peer = await Peer.connect(app.ports.io, Port.IO)
+        await peer.request(MotoReadIoBit(1))  # served: its handler has started
+        peers.append(peer)
+    assert app.io.replaced == connects - 1
+    clock.t += LOG_SUMMARY_INTERVAL_S
+    last = await Peer.connect(app.ports.io, Port.IO)
+    await last.request(MotoReadIoBit(1))
+    assert await last.request(MotoReadIoBit(1)) is not None  # the port still serves
+    for peer in [*peers, last]:
+        await peer.close()
+
+    connected = lines(caplog, r"^io: client [\d.:]+ connected")
+    replaced = lines(caplog, r"^io: [\d.:]+ replaces ")
+    assert len(connected) == LOG_BURST + 1  # a burst, then a fresh one after a quiet interval
+    assert len(replaced) == LOG_BURST + 1
+    [connections] = lines(caplog, r"^io: [\d,]+ more connections in the last 5.0 s")
+    [replacements] = lines(caplog, r"^io: [\d,]+ more replaced connections")
+    assert counted(connections) == connects - LOG_BURST
+    assert counted(replacements) == connects - 1 - LOG_BURST
+    # The disconnects of connections that were not logged are not logged either.
+    assert len(lines(caplog, r"^io: client [\d.:]+ disconnected")) <= LOG_BURST + 1
