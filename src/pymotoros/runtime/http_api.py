@@ -33,6 +33,7 @@ from pymotoros.runtime.csrf import CsrfGuard
 from pymotoros.runtime.docs_page import install_offline_docs
 from pymotoros.runtime.observers import CatchUpMiddleware, Observers
 from pymotoros.runtime.pendant import install_pendant
+from pymotoros.runtime.strict_json import StrictJsonRoute
 from pymotoros.runtime.target import SimulatedController
 from pymotoros.runtime.ticker import TickStats
 
@@ -357,6 +358,7 @@ def create_http_app(
             'alarms and forced IO. Errors are 4xx with {"error": "..."}.'
         ),
     )
+    app.router.route_class = StrictJsonRoute  # a JSON body naming a key twice: 422
     install_offline_docs(app)
     app.add_middleware(CsrfGuard)  # the pendant's buttons: refuse other sites' POSTs
     if observers is not None:  # idle batching: every request sees an up-to-date controller
