@@ -12,12 +12,21 @@ import logging
 import re
 import struct
 
+import httpx
 import pytest
 
+from pymotoros.controller import VirtualController
 from pymotoros.protocol.constants import Port
 from pymotoros.protocol.messages import MotoReadIoBit, MotoReadIoBitReply, Ping, PingReply
 from pymotoros.runtime.app import SimulatorApp
-from pymotoros.runtime.log_limit import LOG_BURST, LOG_SUMMARY_INTERVAL_S, LogLimiter
+from pymotoros.runtime.http_api import create_http_app
+from pymotoros.runtime.log_limit import (
+    _API_LIMITER,
+    LOG_BURST,
+    LOG_SUMMARY_INTERVAL_S,
+    LogLimiter,
+)
+from pymotoros.runtime.ticker import LatenessStats, TickStats
 
 from .peer import Peer
 
@@ -58,7 +67,7 @@ def counted(message: str) -> int:
 
 
 @pytest.fixture
-def clock() -> FakeClock:
+def fake_clock() -> FakeClock:
     return FakeClock()
 
 
@@ -67,10 +76,10 @@ def limiter(clock: FakeClock, burst: int = 3, interval: float = 5.0) -> LogLimit
 
 
 def test_the_first_lines_of_a_burst_are_logged_then_counted(
-    clock: FakeClock, caplog: pytest.LogCaptureFixture
+    fake_clock: FakeClock, caplog: pytest.LogCaptureFixture
 ) -> None:
     caplog.set_level(logging.INFO, logger="test.log_limit")
-    lim = limiter(clock)
+    lim = limiter(fake_clock)
     decisions = [lim.allow("refused frames", log, logging.WARNING) for _ in range(10)]
     assert decisions == [True] * 3 + [False] * 7
     assert lim.suppressed("refused frames") == 7
@@ -78,17 +87,17 @@ def test_the_first_lines_of_a_burst_are_logged_then_counted(
 
 
 def test_a_summary_at_most_once_per_interval_with_the_exact_count(
-    clock: FakeClock, caplog: pytest.LogCaptureFixture
+    fake_clock: FakeClock, caplog: pytest.LogCaptureFixture
 ) -> None:
     caplog.set_level(logging.INFO, logger="test.log_limit")
-    lim = limiter(clock)
+    lim = limiter(fake_clock)
     for _ in range(1_003):  # 3 logged, 1,000 counted, all at once
         lim.allow("refused frames", log, logging.WARNING)
-    clock.t += 1.0
+    fake_clock.t += 1.0
     for _ in range(500):  # still within the interval of the first counted line
         lim.allow("refused frames", log, logging.WARNING)
     assert not caplog.records
-    clock.t += 4.0  # 5 s after the first counted line, only 1 s after the last one
+    fake_clock.t += 4.0  # 5 s after the first counted line, only 1 s after the last one
     assert lim.allow("refused frames", log, logging.WARNING) is False  # still a burst
     [summary] = [r.getMessage() for r in caplog.records]
     assert summary.startswith(
@@ -99,13 +108,13 @@ def test_a_summary_at_most_once_per_interval_with_the_exact_count(
 
 
 def test_a_quiet_interval_ends_the_burst(
-    clock: FakeClock, caplog: pytest.LogCaptureFixture
+    fake_clock: FakeClock, caplog: pytest.LogCaptureFixture
 ) -> None:
     caplog.set_level(logging.INFO, logger="test.log_limit")
-    lim = limiter(clock)
+    lim = limiter(fake_clock)
     for _ in range(5):
         lim.allow("refused frames", log, logging.WARNING)
-    clock.t += 5.0  # nothing for a whole interval
+    fake_clock.t += 5.0  # nothing for a whole interval
     assert lim.allow("refused frames", log, logging.WARNING) is True  # a fresh allowance
     [summary] = [r.getMessage() for r in caplog.records]
     assert ": 2 more refused frames in the last 5.0 s" in summary
@@ -114,15 +123,15 @@ def test_a_quiet_interval_ends_the_burst(
         True,
         False,
     ]
-    clock.t += 4.9  # not quiet long enough
+    fake_clock.t += 4.9  # not quiet long enough
     assert lim.allow("refused frames", log, logging.WARNING) is False
 
 
 def test_kinds_are_counted_separately_and_totals_written_at_close(
-    clock: FakeClock, caplog: pytest.LogCaptureFixture
+    fake_clock: FakeClock, caplog: pytest.LogCaptureFixture
 ) -> None:
     caplog.set_level(logging.INFO, logger="test.log_limit")
-    lim = limiter(clock)
+    lim = limiter(fake_clock)
     for _ in range(8):
         lim.allow("refused frames", log, logging.WARNING)
     io = [lim.allow("refused IO requests", log, logging.INFO) for _ in range(4)]
@@ -138,10 +147,10 @@ def test_kinds_are_counted_separately_and_totals_written_at_close(
 
 
 def test_a_disabled_level_is_neither_logged_nor_counted(
-    clock: FakeClock, caplog: pytest.LogCaptureFixture
+    fake_clock: FakeClock, caplog: pytest.LogCaptureFixture
 ) -> None:
     caplog.set_level(logging.WARNING, logger="test.log_limit")
-    lim = limiter(clock)
+    lim = limiter(fake_clock)
     assert not any(lim.allow("refused IO requests", log, logging.INFO) for _ in range(10))
     assert lim.suppressed("refused IO requests") == 0
     lim.close()
@@ -149,9 +158,9 @@ def test_a_disabled_level_is_neither_logged_nor_counted(
 
 
 @pytest.mark.parametrize(("burst", "interval"), [(-1, 5.0), (3, 0.0), (3, float("nan"))])
-def test_nonsense_settings_are_refused(clock: FakeClock, burst: int, interval: float) -> None:
+def test_nonsense_settings_are_refused(fake_clock: FakeClock, burst: int, interval: float) -> None:
     with pytest.raises(ValueError, match="must be"):
-        LogLimiter("x", clock, burst=burst, interval=interval)
+        LogLimiter("x", fake_clock, burst=burst, interval=interval)
 
 
 # ------------------------------------------------------------------ a running twin
@@ -262,3 +271,31 @@ async def test_a_flood_of_connects_logs_a_bounded_number_of_lines(
     assert counted(replacements) == connects - 1 - LOG_BURST
     # The disconnects of connections that were not logged are not logged either.
     assert len(lines(caplog, r"^io: client [\d.:]+ disconnected")) <= LOG_BURST + 1
+
+
+async def test_a_flood_of_bad_http_requests_logs_a_bounded_number_of_lines(
+    controller: VirtualController, caplog: pytest.LogCaptureFixture
+) -> None:
+    requests = 300
+    clock = FakeClock()
+    app = create_http_app(controller, lambda: TickStats(4.0, 0, 0, 0, 0, LatenessStats(0, 0, 0)))
+    setattr(app.state, _API_LIMITER, LogLimiter("control API", clock))
+    caplog.set_level(logging.INFO, logger="pymotoros.runtime")
+    transport = httpx.ASGITransport(app=app)
+    async with httpx.AsyncClient(transport=transport, base_url="http://sim") as api:
+        for index in range(requests):
+            kind = index % 3  # malformed JSON, a refused value, a repeated key
+            body = [b"{not json", b'{"address": -1, "value": 1}', b'{"on": true, "on": true}']
+            path = "/api/io" if kind == 1 else "/api/hold"
+            r = await api.post(
+                path, content=body[kind], headers={"content-type": "application/json"}
+            )
+            assert r.status_code == 422
+        clock.t += LOG_SUMMARY_INTERVAL_S
+        assert (await api.post("/api/hold", content=b"{")).status_code == 422
+        assert (await api.post("/api/hold", json={"on": True})).status_code == 200
+
+    refused = lines(caplog, r"^control API refused a request: ")
+    [summary] = lines(caplog, r"^control API: [\d,]+ more refused requests in the last 5.0 s")
+    assert len(refused) == LOG_BURST + 1  # a burst, then a fresh one after a quiet interval
+    assert counted(summary) == requests - LOG_BURST

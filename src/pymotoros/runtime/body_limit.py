@@ -26,6 +26,8 @@ from starlette.datastructures import Headers
 from starlette.responses import JSONResponse
 from starlette.types import ASGIApp, Message, Receive, Scope, Send
 
+from pymotoros.runtime.log_limit import api_refusal_allowed
+
 __all__ = ["MAX_BODY_BYTES", "MAX_JSON_DEPTH", "BodyLimit", "nests_deeper_than"]
 
 logger = logging.getLogger(__name__)
@@ -154,5 +156,6 @@ class BodyLimit:
 
     @staticmethod
     async def _refuse(scope: Scope, receive: Receive, send: Send, status: int, text: str) -> None:
-        logger.info("control API refused a request: %s", text)
+        if api_refusal_allowed(scope, logger, logging.INFO):  # a flood: counted
+            logger.info("control API refused a request: %s", text)
         await JSONResponse({"error": text}, status_code=status)(scope, receive, send)

@@ -18,6 +18,8 @@ from starlette.datastructures import Headers
 from starlette.responses import JSONResponse
 from starlette.types import ASGIApp, Receive, Scope, Send
 
+from pymotoros.runtime.log_limit import api_refusal_allowed
+
 __all__ = ["CsrfGuard", "same_origin"]
 
 logger = logging.getLogger(__name__)
@@ -73,7 +75,8 @@ class CsrfGuard:
             f"refused a cross-site request to {path} from origin {seen!r}: only pages served "
             "by this simulator may change its state (send no Origin header from scripts)"
         )
-        logger.warning("%s", message)
+        if api_refusal_allowed(scope, logger, logging.WARNING):  # a flood: counted
+            logger.warning("%s", message)
         if kind == "websocket":
             await send({"type": "websocket.close", "code": 1008, "reason": "cross-site"})
             return

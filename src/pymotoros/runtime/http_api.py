@@ -31,6 +31,7 @@ from pymotoros.controller.scenario import parse_scenario
 from pymotoros.runtime.body_limit import BodyLimit
 from pymotoros.runtime.csrf import CsrfGuard
 from pymotoros.runtime.docs_page import install_offline_docs
+from pymotoros.runtime.log_limit import api_refusal_allowed
 from pymotoros.runtime.observers import CatchUpMiddleware, Observers
 from pymotoros.runtime.pendant import install_pendant
 from pymotoros.runtime.strict_json import StrictJsonRoute
@@ -303,7 +304,8 @@ def _describe_validation(exc: RequestValidationError) -> str:
 async def _validation_error(request: Request, exc: Exception) -> JSONResponse:
     detail = _describe_validation(exc) if isinstance(exc, RequestValidationError) else str(exc)
     message = f"{request.method} {request.url.path}: {detail}"
-    logger.info("control API refused a request: %s", message)
+    if api_refusal_allowed(request.scope, logger, logging.INFO):  # a flood: counted
+        logger.info("control API refused a request: %s", message)
     return JSONResponse({"error": message}, status_code=422)
 
 
@@ -325,7 +327,8 @@ async def _http_error(request: Request, exc: Exception) -> JSONResponse:
 
 async def _value_error(request: Request, exc: Exception) -> JSONResponse:
     message = f"{request.method} {request.url.path}: {exc}"
-    logger.info("control API refused a request: %s", message)
+    if api_refusal_allowed(request.scope, logger, logging.INFO):  # a flood: counted
+        logger.info("control API refused a request: %s", message)
     return JSONResponse({"error": message}, status_code=400)
 
 

@@ -20,11 +20,18 @@ one in tests): the limiter never reads the wall clock itself.
 
 from __future__ import annotations
 
+import asyncio
 import logging
-from collections.abc import Callable
-from typing import Final
+from collections.abc import Callable, Mapping
+from typing import Any, Final
 
-__all__ = ["LOG_BURST", "LOG_SUMMARY_INTERVAL_S", "LogLimiter"]
+__all__ = [
+    "LOG_BURST",
+    "LOG_SUMMARY_INTERVAL_S",
+    "LogLimiter",
+    "api_refusal_allowed",
+    "loop_time",
+]
 
 LOG_BURST: Final = 20
 """Lines of one kind logged in full at the start of a burst, per source: a client's
@@ -35,6 +42,16 @@ LOG_SUMMARY_INTERVAL_S: Final = 5.0
 """Shortest time between two summary lines of one kind from one source, and the quiet
 time that ends a burst: a flood costs one line per 5 s, long enough not to block the
 loop on a slow terminal, short enough that an ongoing flood stays visible."""
+
+
+_API_LIMITER: Final = "pymotoros_refusal_log"
+"""Attribute of a control API's ``app.state`` holding its limiter of refusal lines."""
+
+
+def loop_time() -> float:
+    """The running event loop's monotonic time: the servers' limiters' clock unless the
+    application gives its own (``TcpService.log_clock``)."""
+    return asyncio.get_running_loop().time()
 
 
 class _Kind:
@@ -154,3 +171,20 @@ class LogLimiter:
             f"logging of them is limited: the first {self.burst} of a burst are logged, "
             f"then a count at most every {self.interval:g} s"
         )
+
+
+def api_refusal_allowed(scope: Mapping[str, Any], logger: logging.Logger, level: int) -> bool:
+    """Whether the control API logs one more refused request (:meth:`LogLimiter.allow`).
+
+    HTTP requests have no lasting connection to count by, so each control API (one per
+    cell) has one allowance, kept in its ``app.state``: a script hammering it with bad
+    requests costs a burst of lines and then a count every few seconds.
+    """
+    state = getattr(scope.get("app"), "state", None)
+    if state is None:  # not inside a Starlette application: nothing to keep it in
+        return logger.isEnabledFor(level)
+    limiter = getattr(state, _API_LIMITER, None)
+    if not isinstance(limiter, LogLimiter):
+        limiter = LogLimiter("control API", loop_time)
+        setattr(state, _API_LIMITER, limiter)
+    return limiter.allow("refused requests", logger, level)

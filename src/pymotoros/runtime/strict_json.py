@@ -28,6 +28,8 @@ from fastapi.routing import APIRoute
 from starlette.requests import Request
 from starlette.responses import JSONResponse, Response
 
+from pymotoros.runtime.log_limit import api_refusal_allowed
+
 __all__ = ["DuplicateKeyError", "StrictJsonRoute", "loads_strict"]
 
 logger = logging.getLogger(__name__)
@@ -138,5 +140,6 @@ def _refuse(request: Request, exc: DuplicateKeyError) -> JSONResponse:
         f"{request.method} {request.url.path}: {exc}; JSON parsers disagree on which of "
         "the values counts, so the control API takes none: send each key once"
     )
-    logger.info("control API refused a request: %s", message)
+    if api_refusal_allowed(request.scope, logger, logging.INFO):  # a flood: counted
+        logger.info("control API refused a request: %s", message)
     return JSONResponse({"error": message}, status_code=DUPLICATE_KEY_STATUS)

@@ -30,7 +30,7 @@ from pymotoros.runtime.connections import (
     configure_socket,
     peer_name,
 )
-from pymotoros.runtime.log_limit import LogLimiter
+from pymotoros.runtime.log_limit import LogLimiter, loop_time
 
 __all__ = ["Connection", "FramedService", "TcpService", "bind_socket", "is_loopback"]
 
@@ -75,12 +75,6 @@ def bind_unlistened(host: str, port: int) -> socket.socket:
         raise
     sock.setblocking(False)
     return sock
-
-
-def loop_time() -> float:
-    """The running event loop's monotonic time: the log limiters' clock unless the
-    application gives its own (``TcpService.log_clock``)."""
-    return asyncio.get_running_loop().time()
 
 
 def _peer_port(writer: asyncio.StreamWriter) -> int | None:
@@ -291,7 +285,8 @@ class TcpService(ABC):
             if conn.logged:
                 logger.info("%s: client %s: connection lost (%s)", self.name, conn.peer, exc)
         except Exception:
-            logger.exception("%s: client %s: handler failed; closing it", self.name, conn.peer)
+            if self.log.allow("failed handlers", logger, logging.ERROR):
+                logger.exception("%s: client %s: handler failed; closing it", self.name, conn.peer)
         finally:
             self._tasks.pop(conn, None)
             released = self._slots.release(conn)
