@@ -29,6 +29,7 @@ import subprocess
 import sys
 import tempfile
 import time
+from typing import IO
 
 UNKNOWN = struct.pack("<iiii", 12, 9999, 2, 0)
 """A whole request of an unknown type: prefix 12, type 9999, SERVICE_REQUEST, reply code 0."""
@@ -50,11 +51,15 @@ def main() -> None:
     parser.add_argument("--timeout", type=float, default=20.0, help="seconds without a reply")
     args = parser.parse_args()
 
-    log = tempfile.TemporaryFile()
+    with tempfile.TemporaryFile() as log:
+        run(args, log)
+
+
+def run(args: argparse.Namespace, log: IO[bytes]) -> None:
     stderr = subprocess.PIPE if args.stderr == "unread-pipe" else log
     command = [sys.executable, "-m", "pymotoros", "-v", "sim", "--motion-port", "0",
                "--state-port", "0", "--io-port", "0", "--http-port", "0"]  # fmt: skip
-    sim = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=stderr, text=True)
+    sim = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=stderr, text=True)  # noqa: S603
     try:
         assert sim.stdout is not None
         ready = sim.stdout.readline()
@@ -84,7 +89,7 @@ def main() -> None:
         sock.close()
     finally:
         sim.terminate()
-        out, err = sim.communicate(timeout=30)
+        _, err = sim.communicate(timeout=30)
     if args.stderr == "unread-pipe":
         text = err.encode() if isinstance(err, str) else (err or b"")
     else:
