@@ -26,11 +26,17 @@ How it is organised, for speed:
   pages than in arithmetic, so only the results are allocated at full size;
 * :func:`queued_targets` (the tick engine's queue, a few hundred entries) does the
   grid bookkeeping in Python and sends every entry through one position kernel: at
-  that size the cost is the number of numpy calls.
+  that size the cost is the number of numpy calls;
+* :func:`segment_targets` (the tick engine's oldest queued segment on its own, when
+  IncMove reaches it in real time) makes that count as small as it goes: coefficients
+  in plain Python (one segment's dozen values), the τ column memoised per grid, one
+  position kernel, no gather. About a third of the numpy calls of
+  :func:`queued_targets`, so that no single tick pays for a whole queue.
 """
 
 from __future__ import annotations
 
+import functools
 from collections.abc import Callable, Sequence
 from typing import Any, Final
 
@@ -40,8 +46,12 @@ import numpy.typing as npt
 from pymotoros.models import FloatMode
 from pymotoros.motion.axes import GroupAxes
 from pymotoros.motion.numerics import (
+    RISK_FACTOR,
     coefficients_kernel,
     coefficients_x87_checked,
+    coefficients_x87_exact,
+    coefficients_x87_interval,
+    f32,
     ms_to_seconds,
     position_bound,
     positions_single,
@@ -327,6 +337,88 @@ def queued_targets(
             pos = positions_single(per32[:, 0], per32[:, 1], per32[:, 2], per32[:, 3], tau)
         part = pulses(pos, axes.factors_ros, mode)
     return times, part if axes.identity_columns else part[:, axes.columns]
+
+
+TAU_CACHE: Final = 1024
+"""Most (first step, steps, period) keys :func:`_tau_column` remembers: points at a
+fixed spacing repeat a handful; the cap bounds what arbitrary times can make it hold
+(at most 200 float64 per key: a few MiB at worst)."""
+
+
+@functools.lru_cache(maxsize=TAU_CACHE)
+def _tau_column(lead_ms: int, steps: int, period_ms: int) -> tuple[F64Array, F32Array]:
+    """τ of ``steps`` steps whose first is ``lead_ms`` after the segment's start, as
+    :func:`queued_targets` makes them (float32 values; (steps, 1) as float64 for the
+    x87 kernel and as float32 for the FS100 one). A memo of a pure function of these
+    integers, read-only so that no caller can change what the next one gets."""
+    tau = ms_to_seconds(np.arange(lead_ms, lead_ms + period_ms * steps, period_ms))[:, None]
+    wide = tau.astype(np.float64)
+    tau.flags.writeable = False
+    wide.flags.writeable = False
+    return wide, tau
+
+
+def segment_targets(
+    start: tuple[Sequence[float], Sequence[float]],
+    end: tuple[Sequence[float], Sequence[float]],
+    length_ms: int,
+    lead_ms: int,
+    steps: int,
+    with_end: bool,
+    axes: GroupAxes,
+) -> I64Array:
+    """Absolute targets (``steps`` + ``with_end`` rows, columns as
+    :func:`queued_targets`) of one segment (or piece): what :func:`queued_targets`
+    returns for it alone, with about a third of the numpy calls.
+
+    ``start`` and ``end`` are (positions, velocities), ``num_axes`` float32 values each
+    in ROS order, all finite and tame (:attr:`~pymotoros.motion.points.GroupPoint.tame`:
+    no operation overflows, so numpy's error state is left alone); ``length_ms`` is the
+    segment's length, ``lead_ms`` its first step's offset from its start. Every value
+    is the one :func:`queued_targets` computes, by the same reasoning: on the x87 the
+    coefficients come from :func:`coefficients_x87_interval` (checked in float64) or
+    :func:`coefficients_x87_exact` (longdouble), both the x87's float32 values as
+    :func:`coefficients_x87_checked` gives them (a zero's sign aside, which no pulse
+    sees), and the positions from :func:`positions_x87_checked` itself (element by
+    element the same operations, on a (steps, n) block instead of a gathered one, with
+    the same bound); on the FS100 the coefficient and position kernels are the general
+    path's, each element computed by the same float32 operations. The end entry is the
+    end position in pulses, as there.
+    """
+    mode = axes.float_mode
+    x0, v0 = start
+    x1, v1 = end
+    n = len(x0)
+    pos: F32Array = np.empty((steps + with_end, n), dtype=np.float32)
+    if with_end:
+        pos[steps] = x1
+    if steps:
+        wide, tau = _tau_column(lead_ms, steps, axes.period_ms)
+        duration = f32(length_ms / 1000)  # ms_to_seconds, as a Python float
+        if mode is FloatMode.X87_EXTENDED:
+            coef: Sequence[float] | None = coefficients_x87_interval(x0, v0, x1, v1, duration)
+            if coef is None:
+                coef = coefficients_x87_exact(x0, v0, x1, v1, duration)
+            h1 = [c / 2 for c in coef[:n]]  # a1/2: exact
+            a2 = coef[n:]
+            # position_bound's expression, element by element in the same float64
+            # operations (Python floats are float64).
+            t, tt = duration, duration * duration
+            ttt = tt * t
+            bound = [
+                (abs(p) + abs(s) * t + abs(h) * tt + abs(c) * ttt / 6) * RISK_FACTOR - 1e-300
+                for p, s, h, c in zip(x0, v0, h1, a2, strict=True)
+            ]
+            terms = np.array([x0, v0, h1, a2, bound])
+            pos[:steps] = positions_x87_checked(
+                terms[0], terms[1], terms[2], terms[3], wide, terms[4]
+            )
+        else:
+            rows = np.array([x0, v0, x1, v1], dtype=np.float32)[:, None]
+            x0s, v0s, a1s, a2s = _terms_single(rows, np.array([[duration]], dtype=np.float32))[0]
+            pos[:steps] = positions_single(x0s, v0s, a1s, a2s, tau)
+    part = pulses(pos, axes.factors_ros, mode)
+    return part if axes.identity_columns else part[:, axes.columns]
 
 
 def _terms_x87(rows: F32Array, duration: F32Array) -> F64Array:

@@ -37,7 +37,7 @@ import numpy.typing as npt
 
 from pymotoros.models import FloatMode
 from pymotoros.motion.axes import GroupAxes
-from pymotoros.motion.batch import queued_targets
+from pymotoros.motion.batch import queued_targets, segment_targets
 from pymotoros.motion.constants import INT32_MAX, INT32_MIN, QUEUE_SIZE, SLOTS
 from pymotoros.motion.numerics import (
     LD,
@@ -201,9 +201,15 @@ class GroupInterpolator:
     """Within the plain-Python path, try :func:`small_segment_x87` first (off: the
     two-pass coefficients-then-positions form, which is also its fallback)."""
 
+    front: ClassVar[bool] = True
+    """Compute the queue's segments one at a time, the oldest when IncMove reaches it
+    (:meth:`_compute_front`); off: all of them at once when the first is due (the path
+    before issue 13's second round, ``bench/bench_tick_spikes.py --reference``). Same
+    pulses either way; on, no tick pays for more than one segment."""
+
     def __init__(self, axes: GroupAxes) -> None:
         self.axes = axes
-        self.queue = IncrementQueue(self._compute)
+        self.queue = IncrementQueue(self._compute, self._compute_front)
         """The 200-entry increment queue (``count`` for CHECK_QUEUE_CNT)."""
         self.tool = 0
         """Tool for segments interpolated from now on (SELECT_TOOL sets it, §5.8)."""
@@ -543,6 +549,68 @@ class GroupInterpolator:
             for s in segments
         ]
         times, targets = queued_targets(rows.transpose(1, 0, 2), grids, axes)
+        self._store(segments, times, targets, prev)
+
+    def _compute_front(self) -> None:
+        """Compute the oldest planned segment not computed yet, alone: what IncMove
+        needs next (the queue's ``due``), so that the pulses of a full queue are not all
+        paid in one tick.
+
+        A small one goes to the plain-Python path as a lone segment always did; the
+        others to :func:`segment_targets`, whose values are those of
+        :func:`queued_targets` (``tests/motion/test_front_path.py`` compares them).
+        Points that are not tame (NaN, infinities, huge values) take the general kernel.
+        With :attr:`front` off, every planned segment is computed together as before.
+        """
+        segments = self._uncomputed
+        if not segments:
+            return
+        if not self.front:
+            self._compute()
+            return
+        segment = segments[0]
+        del segments[0]
+        prev = self._chain_prev
+        if self.scalar and self._compute_small(segment, prev):
+            return
+        axes = self.axes
+        n = axes.num_axes
+        start, end = segment.start, segment.end
+        period = axes.period_ms
+        first = segment.grid.first_ms + period * segment.step0
+        steps = segment.steps
+        times = list(range(first, first + period * steps, period))
+        if segment.last:
+            times.append(end.time_ms)
+        if start.tame and end.tame:
+            targets = segment_targets(
+                (start.pos[:n], start.vel[:n]),
+                (end.pos[:n], end.vel[:n]),
+                end.time_ms - start.time_ms,
+                first - start.time_ms,
+                steps,
+                segment.last,
+                axes,
+            )
+        else:
+            raw = start.packed() + end.packed()
+            rows = np.frombuffer(raw, dtype=np.float32).reshape(4, 1, SLOTS)[:, :, :n]
+            grid = (start.time_ms, end.time_ms, first, steps, segment.last)
+            times, targets = queued_targets(rows, [grid], axes)
+        self._store([segment], times, targets, prev)
+
+    def _store(
+        self,
+        segments: list[PlannedSegment],
+        times: list[int],
+        targets: I64Array,
+        prev: tuple[int, ...],
+    ) -> None:
+        """Give computed segments their entries from the absolute ``targets`` of their
+        entries in order (columns as :func:`queued_targets`'s); ``prev`` is prevPulsePos
+        before the first."""
+        axes = self.axes
+        n = axes.num_axes
         # Row 0: prevPulsePos before the first segment; the slots without an axis keep it.
         chain = np.empty((len(times) + 1, SLOTS), dtype=np.int64)
         chain[:] = prev
