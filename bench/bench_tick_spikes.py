@@ -94,10 +94,16 @@ def run(ticks: int, slow_us: float, *, front: bool) -> None:
     batches: dict[int, int] = {}
     gc_us: dict[int, float] = {}
     gc_started = [0]
+    gc_by_generation: dict[int, list[float]] = {}
+    depth = [0]
     original = interpolator.GroupInterpolator._compute
     original_front = interpolator.GroupInterpolator._compute_front
 
     def timed(self: interpolator.GroupInterpolator, method: Any) -> None:
+        if depth[0]:  # _compute_front calling _compute: counted once, by the outer call
+            method(self)
+            return
+        depth[0] += 1
         before_count = sum(s.count for s in self._uncomputed)
         before = time.perf_counter_ns()
         method(self)
@@ -106,6 +112,7 @@ def run(ticks: int, slow_us: float, *, front: bool) -> None:
         compute_us[tick_no] = compute_us.get(tick_no, 0.0) + spent
         if entries:
             batches[tick_no] = batches.get(tick_no, 0) + entries
+        depth[0] -= 1
 
     def timed_compute(self: interpolator.GroupInterpolator) -> None:
         timed(self, original)
@@ -117,9 +124,10 @@ def run(ticks: int, slow_us: float, *, front: bool) -> None:
         if phase == "start":
             gc_started[0] = time.perf_counter_ns()
         else:
-            gc_us[tick_no] = (
-                gc_us.get(tick_no, 0.0) + (time.perf_counter_ns() - gc_started[0]) / 1e3
-            )
+            spent = (time.perf_counter_ns() - gc_started[0]) / 1e3
+            gc_by_generation.setdefault(info["generation"], []).append(spent)
+            if tick_no >= 0:
+                gc_us[tick_no] = gc_us.get(tick_no, 0.0) + spent
 
     interpolator.GroupInterpolator._compute = timed_compute  # type: ignore[method-assign]
     interpolator.GroupInterpolator._compute_front = timed_front  # type: ignore[method-assign]
@@ -181,6 +189,11 @@ def run(ticks: int, slow_us: float, *, front: bool) -> None:
         )
     if gc_us:
         print(f"ticks with a GC: {len(gc_us)}, GC {quantiles(list(gc_us.values()))}")
+    for generation, spent in sorted(gc_by_generation.items()):
+        print(
+            f"  generation-{generation} collections (in and out of ticks): {len(spent)}, "
+            f"{quantiles(spent)}"
+        )
     print(
         f"ticks over {slow_us:.0f} µs: {len(slow)}; with a pulse computation "
         f"{len(in_batch)}, with a GC {len(in_gc)}, with neither {len(neither)}"

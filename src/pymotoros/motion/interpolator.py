@@ -93,6 +93,15 @@ _INT32_LOW: Final = float(INT32_MIN) - 1.0
 _INT32_HIGH: Final = float(INT32_MAX) + 1.0
 """Products strictly between these truncate to an int32 (C's conversion is defined)."""
 
+FRONT_MIN_ENTRIES: Final = 20
+"""The oldest queued segment is computed alone (:meth:`GroupInterpolator._compute_front`)
+from this many entries (points 80 ms or more apart at 4 ms); shorter ones with all the
+planned segments at once. Alone, a segment costs ~40 µs whatever its length, against
+~0.75 µs per entry in a full batch (bench/bench_tick_spikes.py, issue 13's second
+round): spread over fewer than 20 ticks that would cost virtual time more than 2 µs a
+tick, taking 50 ms spacing under 500× real time (bench/bench_controller.py --reference
+batch). Points that dense keep the batch and its rarer, longer tick."""
+
 PIECE_ENTRIES: Final = QUEUE_SIZE
 """Entries of a segment planned (and later computed) at a time. A segment is cut into
 pieces of this many entries, each planned when the queue has taken the previous one,
@@ -556,11 +565,11 @@ class GroupInterpolator:
         needs next (the queue's ``due``), so that the pulses of a full queue are not all
         paid in one tick.
 
-        A small one goes to the plain-Python path as a lone segment always did; the
-        others to :func:`segment_targets`, whose values are those of
-        :func:`queued_targets` (``tests/motion/test_front_path.py`` compares them).
-        Points that are not tame (NaN, infinities, huge values) take the general kernel.
-        With :attr:`front` off, every planned segment is computed together as before.
+        It goes to :func:`segment_targets`, whose values are those of
+        :func:`queued_targets` (``tests/motion/test_front_path.py`` compares them);
+        points that are not tame (NaN, infinities, huge values) take the general kernel.
+        A segment of fewer than :data:`FRONT_MIN_ENTRIES` entries is computed with every
+        planned one, as with :attr:`front` off (:meth:`_compute`).
         """
         segments = self._uncomputed
         if not segments:
@@ -569,10 +578,11 @@ class GroupInterpolator:
             self._compute()
             return
         segment = segments[0]
+        if segment.count < FRONT_MIN_ENTRIES:
+            self._compute()
+            return
         del segments[0]
         prev = self._chain_prev
-        if self.scalar and self._compute_small(segment, prev):
-            return
         axes = self.axes
         n = axes.num_axes
         start, end = segment.start, segment.end
