@@ -151,13 +151,13 @@ def test_positions_next_to_a_float32_midpoint_take_the_longdouble_fallback(
     fallback must be taken (else this test proves nothing) and every target must be the
     batch path's and the long-double model's."""
     fallbacks = [0]
-    real = numerics.positions_x87
+    real = batch.positions_x87
 
     def counting(*args: np.ndarray) -> np.ndarray:
         fallbacks[0] += args[0].size
         return real(*args)
 
-    monkeypatch.setattr(numerics, "positions_x87", counting)
+    monkeypatch.setattr(batch, "positions_x87", counting)  # segment_targets' fallback only
     axes = axes_for("hc10", "yrc1000")
     rng = np.random.default_rng(20261124)
     for _ in range(300):
@@ -271,13 +271,13 @@ def test_coefficients_that_nearly_vanish_are_the_x87s(monkeypatch: pytest.Monkey
     axes = axes_for("hc10", "yrc1000")
     rng = np.random.default_rng(20261125)
     given_terms: list[tuple[list[float], list[float]]] = []
-    real = batch.positions_x87_checked
+    real = batch.positions_x87_interval
 
     def spying(*args: np.ndarray) -> np.ndarray:
-        given_terms.append((args[2].tolist(), args[3].tolist()))
+        given_terms.append((args[0][2].tolist(), args[0][3].tolist()))
         return real(*args)
 
-    monkeypatch.setattr(batch, "positions_x87_checked", spying)
+    monkeypatch.setattr(batch, "positions_x87_interval", spying)
     differ = unsure = 0
     for _ in range(200):
         length = int(rng.integers(20, 250)) * PERIOD_MS + int(rng.integers(1, PERIOD_MS + 1))
