@@ -14,11 +14,13 @@ A segment's step grid, and so the number and times of its entries, is integer
 arithmetic; its pulses are not needed before IncMove reaches them. So ``fill`` plans
 the segment in pieces of :data:`PIECE_ENTRIES` entries, the next one when the queue
 has taken the last (so no point, however far away, makes a tick do more work), and
-queues them as the real task does, within the 200 limit; the pulses of all queued
-pieces are computed together, vectorised
-(:func:`pymotoros.motion.batch.queued_targets`), when the first of them is due. The
-results are those of the step-by-step loop; a tick costs a few tuple operations. A
-segment computed on its own (the queue ran dry) with few steps is done in plain Python.
+queues them as the real task does, within the 200 limit; their pulses are computed
+when IncMove reaches them: the oldest piece alone when it has
+:data:`FRONT_MIN_ENTRIES` entries or more (:func:`pymotoros.motion.batch.segment_targets`,
+so that no tick pays for a whole queue), otherwise every queued piece together,
+vectorised (:func:`pymotoros.motion.batch.queued_targets`). The results are those of
+the step-by-step loop; a tick costs a few tuple operations. A segment computed on its
+own (the queue ran dry) with few steps is done in plain Python.
 """
 
 from __future__ import annotations
@@ -96,7 +98,7 @@ _INT32_HIGH: Final = float(INT32_MAX) + 1.0
 FRONT_MIN_ENTRIES: Final = 20
 """The oldest queued segment is computed alone (:meth:`GroupInterpolator._compute_front`)
 from this many entries (points 80 ms or more apart at 4 ms); shorter ones with all the
-planned segments at once. Alone, a segment costs ~40 µs whatever its length, against
+planned segments at once. Alone, a segment costs ~50 µs whatever its length, against
 ~0.75 µs per entry in a full batch (bench/bench_tick_spikes.py, issue 13's second
 round): spread over fewer than 20 ticks that would cost virtual time more than 2 µs a
 tick, taking 50 ms spacing under 500× real time (bench/bench_controller.py --reference
@@ -213,8 +215,10 @@ class GroupInterpolator:
     front: ClassVar[bool] = True
     """Compute the queue's segments one at a time, the oldest when IncMove reaches it
     (:meth:`_compute_front`); off: all of them at once when the first is due (the path
-    before issue 13's second round, ``bench/bench_tick_spikes.py --reference``). Same
-    pulses either way; on, no tick pays for more than one segment."""
+    before issue 13's second round; ``bench/bench_tick_spikes.py --paths``,
+    ``bench/bench_cells.py --reference`` and ``bench/bench_controller.py --reference
+    batch`` compare the two). Same pulses either way; on, no tick pays for more than one
+    segment of :data:`FRONT_MIN_ENTRIES` entries or more."""
 
     def __init__(self, axes: GroupAxes) -> None:
         self.axes = axes
