@@ -324,3 +324,19 @@ def test_interval_coefficients_are_the_x87s(values: list[float], t_ms: int) -> N
     rows = np.array([x0, v0, x1, v1], dtype=np.float64)[:, None]
     checked = numerics.coefficients_x87_checked(rows, np.array([[t]])).ravel().tolist()
     assert list(got) == checked
+
+
+def test_pieces_deep_into_a_long_segment_are_not_memoised() -> None:
+    """Each later piece of a 14,399 s segment has its own first-step offset: the τ memo
+    keeps only whole segments' grids, so a client cannot fill it with them."""
+    axes = axes_for("hc10", "yrc1000")
+    rows = ([0.0] * 6, [0.0] * 6), ([0.5] * 6, [0.0] * 6)
+    batch._tau_column.cache_clear()
+    for piece in range(1, 50):
+        lead = 4 + PERIOD_MS * QUEUE_SIZE * piece
+        batch.segment_targets(*rows, 14_399_000, lead, QUEUE_SIZE, False, axes)
+    assert batch._tau_column.cache_info().currsize == 0
+    batch.segment_targets(*rows, 100, 4, 24, True, axes)
+    batch.segment_targets(*rows, 100, 4, 24, True, axes)
+    assert batch._tau_column.cache_info().currsize == 1
+    assert batch._tau_column.cache_info().hits == 1

@@ -341,10 +341,13 @@ def queued_targets(
     return times, part if axes.identity_columns else part[:, axes.columns]
 
 
-TAU_CACHE: Final = 1024
-"""Most (first step, steps, period) keys :func:`_tau_column` remembers: points at a
-fixed spacing repeat a handful; the cap bounds what arbitrary times can make it hold
-(at most 200 float64 per key: a few MiB at worst)."""
+TAU_CACHE: Final = 256
+"""Most (first step, steps, period) keys :func:`_tau_column` remembers. Only a piece's
+own grid is remembered (its first step within one period of its start: every whole
+segment, and the first piece of a long one), so the keys are at most period × 200 and
+points at a fixed spacing repeat a handful; the cap bounds the memo to about 2 MiB
+(200 steps × 44 bytes per key) whatever the client sends. The later pieces of a long
+segment, each with its own offset, are computed afresh."""
 
 
 @functools.lru_cache(maxsize=TAU_CACHE)
@@ -442,7 +445,9 @@ def segment_targets(
     if with_end:
         pos[steps] = x1
     if steps:
-        wide, tau, powers = _tau_column(lead_ms, steps, axes.period_ms)
+        period = axes.period_ms
+        column = _tau_column if lead_ms <= period else _tau_column.__wrapped__
+        wide, tau, powers = column(lead_ms, steps, period)
         duration = f32(length_ms / 1000)  # ms_to_seconds, as a Python float
         if mode is FloatMode.X87_EXTENDED:
             coef: Sequence[float] | None = coefficients_x87_interval(x0, v0, x1, v1, duration)
