@@ -354,13 +354,13 @@ segment, each with its own offset, are computed afresh."""
 def _tau_column(lead_ms: int, steps: int, period_ms: int) -> tuple[F64Array, F32Array, F64Array]:
     """τ of ``steps`` steps whose first is ``lead_ms`` after the segment's start, as
     :func:`queued_targets` makes them (float32 values; (steps, 1) as float64 for the
-    x87 kernel and as float32 for the FS100 one), and (steps, 4, 1) float64 powers
+    x87 kernel and as float32 for the FS100 one), and (steps, 4) float64 powers
     1, τ, τ², τ³/6 for :func:`positions_x87_interval`. A memo of a pure function of
     these integers, read-only so that no caller can change what the next one gets."""
     tau = ms_to_seconds(np.arange(lead_ms, lead_ms + period_ms * steps, period_ms))[:, None]
     wide = tau.astype(np.float64)
     tau2 = wide * wide  # exact: 48 bits
-    powers = np.stack((np.ones_like(wide), wide, tau2, tau2 * wide / 6), axis=1)
+    powers = np.hstack((np.ones_like(wide), wide, tau2, tau2 * wide / 6))
     for array in (tau, wide, powers):
         array.flags.writeable = False
     return wide, tau, powers
@@ -381,17 +381,19 @@ def positions_x87_interval(
     """The x87's float32 positions of one segment, checked as an interval.
 
     ``terms`` (4, n) float64: x0, v0, a1/2 and a2 (float32 values); ``wide`` (K, 1) and
-    ``powers`` (K, 4, 1) from :func:`_tau_column`; ``sizes`` (n,) the magnitude sums M
+    ``powers`` (K, 4) from :func:`_tau_column`; ``sizes`` (n,) the magnitude sums M
     of each axis's terms over the whole segment (so over every τ ≤ T). F = x0 + v0·τ +
-    a1/2·τ² + a2·(τ³/6) in two numpy calls instead of the ten of
-    :func:`~pymotoros.motion.numerics.positions_x87_checked`'s expression; the x87's value
+    a1/2·τ² + a2·(τ³/6) as one matrix product (powers · terms: the summation order and
+    any fused multiply-add are the library's, which the bound allows) instead of the ten
+    numpy calls of :func:`~pymotoros.motion.numerics.positions_x87_checked`'s
+    expression; the x87's value
     X lies within :data:`POSITION_WIDTH` × M of F, and rounding to float32 is monotonic,
     so where F − w and F + w round to the same float32, X does too (the argument of
     :func:`~pymotoros.motion.numerics.small_segment_x87`, vectorised). The other elements
     are recomputed in longdouble, as the x87 does
     (:func:`~pymotoros.motion.numerics.positions_x87`). Values must be tame (no overflow).
     """
-    value = (powers * terms).sum(axis=1)
+    value = np.dot(powers, terms)
     width = [m * POSITION_WIDTH for m in sizes]
     ends: F32Array = (value + np.array([[[-w for w in width]], [width]])).astype(np.float32)
     low: F32Array = ends[0]
