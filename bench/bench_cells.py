@@ -28,6 +28,11 @@ is the largest N that met it, with the sizes that did not.
 First, without sockets or the machine's noise: the CPU time of one cell's tick, idle and
 streaming (``time.thread_time``, 10,000 ticks): what a step of N cells adds up, so what
 the step durations would be on a quiet machine.
+
+``--reference`` adds a third mode, ``streaming-batch``, right after each streaming run:
+the same with every queued segment's pulses computed at once when the first is due
+(``GroupInterpolator.front`` off, the path before issue 13's second round), so the two
+are compared side by side in one run.
 """
 
 from __future__ import annotations
@@ -72,14 +77,18 @@ CELL = Path(__file__).resolve().parents[1] / "examples" / "cells" / "hc10_yrc100
 # --------------------------------------------------------------------------- the cells' process
 
 
-def serve(paths: list[Path], ports_file: Path) -> None:
+def serve(paths: list[Path], ports_file: Path, batch: bool = False) -> None:
     """The measured process: N cells served as ``pymotoros sim`` serves them. SIGUSR1
-    resets the statistics (end of the warm-up); at SIGTERM it prints them as JSON."""
+    resets the statistics (end of the warm-up); at SIGTERM it prints them as JSON.
+    ``batch``: every queued segment computed at once (``GroupInterpolator.front`` off)."""
     from pymotoros.cli.sim_cells import run_fleet
     from pymotoros.controller import VirtualController
     from pymotoros.controller.cell import load_cell
+    from pymotoros.motion import GroupInterpolator
     from pymotoros.runtime.app import SimulatorConfig
     from pymotoros.runtime.fleet import Fleet, FleetCell, cell_names
+
+    GroupInterpolator.front = not batch
 
     cells, titles = [], []
     for name, path in zip(cell_names(paths), paths, strict=True):
@@ -175,14 +184,16 @@ TICK_PROBE_POINT_EVERY: Final = 2
 """The probe offers the next trajectory point every other tick (BUSY until it fits)."""
 
 
-def tick_cost(streaming: bool) -> tuple[list[float], int]:
+def tick_cost(streaming: bool, batch: bool = False) -> tuple[list[float], int]:
     """CPU time (thread time: not the time the OS gave to others) of each of
     :data:`TICK_PROBE_TICKS` ticks of one HC10/YRC1000, idle or streaming the same sweep as
     the clients, through the controller's API (no sockets), µs. Without the machine's
     noise, this is the work a step of N cells adds up. Also the points sent."""
     from pymotoros.controller import VirtualController
     from pymotoros.controller.api import Outcome, Pending, PointData
+    from pymotoros.motion import GroupInterpolator
 
+    GroupInterpolator.front = not batch
     controller = VirtualController()
 
     def resolve(request: Outcome | Pending) -> Outcome:
@@ -205,17 +216,18 @@ def tick_cost(streaming: bool) -> tuple[list[float], int]:
         before = time.thread_time_ns()
         controller.tick()
         costs.append((time.thread_time_ns() - before) / 1000.0)
+    GroupInterpolator.front = True
     return costs, seq
 
 
-def print_tick_cost() -> None:
-    for mode in ("idle", "streaming"):
-        raw, points = tick_cost(mode == "streaming")
+def print_tick_cost(modes: tuple[str, ...]) -> None:
+    for mode in modes:
+        raw, points = tick_cost(mode.startswith("streaming"), batch=mode == "streaming-batch")
         costs = sorted(raw)
         n = len(costs)
         p50, p99, p999 = (costs[min(n - 1, int(q * n))] for q in (0.5, 0.99, 0.999))
         print(
-            f"one cell's tick, CPU {mode:9s}: p50 {p50:.1f} µs, p99 {p99:.1f} µs, "
+            f"one cell's tick, CPU {mode:15s}: p50 {p50:.1f} µs, p99 {p99:.1f} µs, "
             f"p99.9 {p999:.0f} µs, max {costs[-1]:.0f} µs ({n} ticks, {points} points, no sockets)"
         )
 
@@ -235,7 +247,13 @@ def me(*args: str, nice: int = 0) -> list[str]:
 
 
 def measure(
-    n: int, streaming: bool, duration: float, warmup: float, tmp: Path, aligned: bool
+    n: int,
+    streaming: bool,
+    duration: float,
+    warmup: float,
+    tmp: Path,
+    aligned: bool,
+    batch: bool = False,
 ) -> dict[str, Any]:
     paths = []
     for i in range(n):
@@ -243,7 +261,7 @@ def measure(
         path.write_text(CELL.read_text())
         paths.append(path)
     ports_file = tmp / f"ports-{n}.json"
-    args = ["--serve", str(ports_file), *map(str, paths)]
+    args = ["--serve", str(ports_file), *(["--batch"] if batch else []), *map(str, paths)]
     cells = subprocess.Popen(me(*args), stdout=subprocess.PIPE, text=True)  # noqa: S603
     assert cells.stdout is not None
     loadgen: subprocess.Popen[str] | None = None
@@ -294,12 +312,18 @@ def main() -> None:
     parser.add_argument(
         "--aligned", action="store_true", help="start every streaming client at once (worst case)"
     )
+    parser.add_argument(
+        "--reference",
+        action="store_true",
+        help="also stream with every queued segment computed at once (streaming-batch)",
+    )
     parser.add_argument("--serve", type=Path, help=argparse.SUPPRESS)
+    parser.add_argument("--batch", action="store_true", help=argparse.SUPPRESS)
     parser.add_argument("--load", type=Path, help=argparse.SUPPRESS)
     parser.add_argument("paths", type=Path, nargs="*", help=argparse.SUPPRESS)
     args = parser.parse_args()
     if args.serve is not None:
-        serve(args.paths, args.serve)
+        serve(args.paths, args.serve, args.batch)
         return
     if args.load is not None:
         load(args.load, args.aligned)
@@ -311,24 +335,28 @@ def main() -> None:
         f"machine: {os.cpu_count()} cores, Python {sys.version.split()[0]}, "
         f"load average {os.getloadavg()[0]:.2f} at start; {args.duration:.0f} s per N and mode"
     )
-    print_tick_cost()
+    modes = ("idle", "streaming", "streaming-batch") if args.reference else ("idle", "streaming")
+    print_tick_cost(modes[1:])
     print(
-        "   N  mode       CPU %  lateness p50/p99/max ms   overruns  step p50/p99 ms"
+        "   N  mode             CPU %  lateness p50/p99/max ms   overruns  step p50/p99 ms"
         "  last cell p99 ms  points"
     )
     best: dict[str, int] = {}
-    missed: dict[str, list[int]] = {"idle": [], "streaming": []}
+    missed: dict[str, list[int]] = {mode: [] for mode in modes}
     stopped: set[str] = set()
     with tempfile.TemporaryDirectory(prefix="bench-cells-") as tmp:
         for n in sizes:
-            for mode in ("idle", "streaming"):
+            for mode in modes:
                 if mode in stopped:
                     continue
-                streaming = mode == "streaming"
-                r = measure(n, streaming, args.duration, args.warmup, Path(tmp), args.aligned)
+                streaming = mode.startswith("streaming")
+                batch = mode == "streaming-batch"
+                r = measure(
+                    n, streaming, args.duration, args.warmup, Path(tmp), args.aligned, batch
+                )
                 ok = r["last"] <= BUDGET_MS and r["cpu"] <= CORE_PCT
                 print(
-                    f"{n:4d}  {mode:9s} {r['cpu']:6.1f}  {r['p50']:6.3f} / {r['p99']:6.3f} / "
+                    f"{n:4d}  {mode:15s} {r['cpu']:6.1f}  {r['p50']:6.3f} / {r['p99']:6.3f} / "
                     f"{r['max']:6.1f}  {r['overruns']:8d}  {r['step_p50']:6.3f} / "
                     f"{r['step_p99']:6.3f}  {r['last']:8.3f} {'ok ' if ok else 'OVER'}"
                     f"  {r['points']:6d}{'' if r['lockstep'] else '  NOT IN LOCKSTEP'}",
@@ -344,10 +372,10 @@ def main() -> None:
                 in_a_row = len(recent) == MISSES_TO_STOP and recent[0] * 2 == recent[-1]
                 if not args.cells and (r["cpu"] > CORE_PCT or in_a_row):
                     stopped.add(mode)
-            if stopped == {"idle", "streaming"}:
+            if stopped == set(modes):
                 break
     print(f"load average {os.getloadavg()[0]:.2f} at the end")
-    for mode in ("idle", "streaming"):
+    for mode in modes:
         held = best.get(mode)
         shown = f"{held}" if held else "none"
         over = f" (over the budget at N = {', '.join(map(str, missed[mode]))})"

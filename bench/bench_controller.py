@@ -25,7 +25,7 @@ paths of ``--reference`` (see :data:`PATHS`): ``before`` (points through a Proce
 two-pass plain-Python segment kernel: the code before issue 13 item 4) or ``numpy``
 (the general paths), with the ratio of the two.
 
-Run: ``python bench/bench_controller.py [--seconds 60] [--repeat 3] [--reference numpy]``
+Run: ``python bench/bench_controller.py [--seconds 60] [--repeat 3] [--reference batch]``
 """
 
 from __future__ import annotations
@@ -59,18 +59,21 @@ def trajectory(seconds: float, spacing: float) -> list[PointData]:
 
 PREEMPTED_S = 0.001
 
-PATHS = ("fast", "before", "numpy")
+PATHS = ("fast", "before", "numpy", "batch")
 """``fast``: the controller as it is. ``before``: points answered through a Process and
 a lone small segment by the two-pass plain-Python kernel (the code before issue 13
 item 4). ``numpy``: points through a Process, every segment by the numpy kernels (the
-general paths the fast ones are tested against)."""
+general paths the fast ones are tested against). ``batch``: ``fast`` but every queued
+segment computed at once when the first is due (``GroupInterpolator.front`` off: the
+code before issue 13's second round computed the queue's segments one at a time)."""
 
 
 def use_paths(paths: str) -> None:
     """Switch the controller's streaming paths (class-wide) to ``paths``."""
-    TrajectoryPoints.fast = paths == "fast"
+    TrajectoryPoints.fast = paths in ("fast", "batch")
     GroupInterpolator.scalar = paths != "numpy"
-    GroupInterpolator.fused = paths == "fast"
+    GroupInterpolator.fused = paths in ("fast", "batch")
+    GroupInterpolator.front = paths == "fast"
 
 
 class Run(NamedTuple):

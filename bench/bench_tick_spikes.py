@@ -9,7 +9,13 @@ computation (``GroupInterpolator._compute``, wrapped here) and any garbage colle
 statistics for a do-nothing loop and the hypervisor steal over the run (``/proc/stat``)
 to tell the code from the machine.
 
-Usage: ``python bench/bench_tick_spikes.py [--ticks 10000] [--slow-us 200]``
+``--paths`` runs the loop once per path, alternately, ``--rounds`` times, in one process:
+``front`` (the queue's oldest segment computed alone when IncMove reaches it,
+``GroupInterpolator.front``, the default since issue 13's second round) and ``batch``
+(every queued segment at once when the first is due, the path before it).
+
+Usage: ``python bench/bench_tick_spikes.py [--ticks 10000] [--slow-us 200]
+[--paths front batch] [--rounds 1]``
 """
 
 from __future__ import annotations
@@ -55,38 +61,76 @@ def steal_jiffies() -> int:
     return int(fields[8]) if len(fields) > 8 else 0
 
 
+PATHS: Final = ("front", "batch")
+"""``front``: GroupInterpolator.front on (one segment per computation); ``batch``: off."""
+MAX_ROUNDS: Final = 20
+"""Bound on --rounds (each round runs every path once)."""
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--ticks", type=int, default=10_000, help="ticks to run (bounded)")
     parser.add_argument("--slow-us", type=float, default=200.0, help="a slow tick, µs")
+    parser.add_argument(
+        "--paths", nargs="+", choices=PATHS, default=list(PATHS), help="computation paths to run"
+    )
+    parser.add_argument("--rounds", type=int, default=1, help="times each path runs, alternately")
     args = parser.parse_args()
     if not 0 < args.ticks <= 1_000_000:
         raise SystemExit("--ticks must be between 1 and 1,000,000")
+    if not 0 < args.rounds <= MAX_ROUNDS:
+        raise SystemExit(f"--rounds must be between 1 and {MAX_ROUNDS}")
+    for round_no in range(args.rounds):
+        for path in args.paths:
+            print(f"--- path {path}, round {round_no + 1} of {args.rounds}")
+            run(args.ticks, args.slow_us, front=path == "front")
 
+
+def run(ticks: int, slow_us: float, *, front: bool) -> None:
+    """One streaming run of ``ticks`` ticks with the given computation path; prints."""
+    interpolator.GroupInterpolator.front = front
     tick_no = 0
     compute_us: dict[int, float] = {}
     batches: dict[int, int] = {}
     gc_us: dict[int, float] = {}
     gc_started = [0]
+    gc_by_generation: dict[int, list[float]] = {}
+    depth = [0]
     original = interpolator.GroupInterpolator._compute
+    original_front = interpolator.GroupInterpolator._compute_front
 
-    def timed_compute(self: interpolator.GroupInterpolator) -> None:
-        entries = sum(s.count for s in self._uncomputed)
+    def timed(self: interpolator.GroupInterpolator, method: Any) -> None:
+        if depth[0]:  # _compute_front calling _compute: counted once, by the outer call
+            method(self)
+            return
+        depth[0] += 1
+        before_count = sum(s.count for s in self._uncomputed)
         before = time.perf_counter_ns()
-        original(self)
-        compute_us[tick_no] = compute_us.get(tick_no, 0.0) + (time.perf_counter_ns() - before) / 1e3
+        method(self)
+        spent = (time.perf_counter_ns() - before) / 1e3
+        entries = before_count - sum(s.count for s in self._uncomputed)
+        compute_us[tick_no] = compute_us.get(tick_no, 0.0) + spent
         if entries:
             batches[tick_no] = batches.get(tick_no, 0) + entries
+        depth[0] -= 1
+
+    def timed_compute(self: interpolator.GroupInterpolator) -> None:
+        timed(self, original)
+
+    def timed_front(self: interpolator.GroupInterpolator) -> None:
+        timed(self, original_front)
 
     def on_gc(phase: str, info: dict[str, Any]) -> None:
         if phase == "start":
             gc_started[0] = time.perf_counter_ns()
         else:
-            gc_us[tick_no] = (
-                gc_us.get(tick_no, 0.0) + (time.perf_counter_ns() - gc_started[0]) / 1e3
-            )
+            spent = (time.perf_counter_ns() - gc_started[0]) / 1e3
+            gc_by_generation.setdefault(info["generation"], []).append(spent)
+            if tick_no >= 0:
+                gc_us[tick_no] = gc_us.get(tick_no, 0.0) + spent
 
     interpolator.GroupInterpolator._compute = timed_compute  # type: ignore[method-assign]
+    interpolator.GroupInterpolator._compute_front = timed_front  # type: ignore[method-assign]
     gc.callbacks.append(on_gc)
     controller = VirtualController()
 
@@ -105,7 +149,7 @@ def main() -> None:
     seq, t = 0, 0.0
     wall: list[float] = []
     cpu: list[float] = []
-    for k in range(args.ticks):
+    for k in range(ticks):
         tick_no = -1  # work outside tick() (the point offered) is not the tick's
         if k % POINT_EVERY == 0:
             p = sweep_point(seq, t, SWEEP_AMPLITUDE, SWEEP_PERIOD)
@@ -118,19 +162,21 @@ def main() -> None:
         cpu.append((time.thread_time_ns() - c) / 1e3)
         wall.append((time.perf_counter_ns() - w) / 1e3)
     gc.callbacks.remove(on_gc)
+    interpolator.GroupInterpolator._compute = original  # type: ignore[method-assign]
+    interpolator.GroupInterpolator._compute_front = original_front  # type: ignore[method-assign]
 
     idle: list[float] = []
-    for _ in range(args.ticks):  # the same count of do-nothing "ticks"
+    for _ in range(ticks):  # the same count of do-nothing "ticks"
         w = time.perf_counter_ns()
         idle.append((time.perf_counter_ns() - w) / 1e3)
     steal = steal_jiffies() - steal0
 
-    slow = [k for k in range(args.ticks) if wall[k] > args.slow_us]
+    slow = [k for k in range(ticks) if wall[k] > slow_us]
     in_batch = [k for k in slow if k in batches]
     in_gc = [k for k in slow if k in gc_us]
     neither = [k for k in slow if k not in batches and k not in gc_us]
     print(f"load average {load0:.2f} at start, {os.getloadavg()[0]:.2f} at end; {seq} points")
-    print(f"tick wall   : {quantiles(wall)} ({args.ticks} ticks, no sockets)")
+    print(f"tick wall   : {quantiles(wall)} ({ticks} ticks, no sockets)")
     print(f"tick thread : {quantiles(cpu)}")
     print(f"do-nothing  : {quantiles(idle)}")
     print(f"steal over the run: {steal} jiffies")
@@ -138,13 +184,18 @@ def main() -> None:
     costs = sorted(compute_us[k] for k in batches)
     if costs:
         print(
-            f"batch computations in tick(): {len(costs)}, entries {sizes[0]}-{sizes[-1]}, "
+            f"pulse computations in tick(): {len(costs)}, entries {sizes[0]}-{sizes[-1]}, "
             f"cost {quantiles(costs)}"
         )
     if gc_us:
         print(f"ticks with a GC: {len(gc_us)}, GC {quantiles(list(gc_us.values()))}")
+    for generation, spent in sorted(gc_by_generation.items()):
+        print(
+            f"  generation-{generation} collections (in and out of ticks): {len(spent)}, "
+            f"{quantiles(spent)}"
+        )
     print(
-        f"ticks over {args.slow_us:.0f} µs: {len(slow)}; with a batch computation "
+        f"ticks over {slow_us:.0f} µs: {len(slow)}; with a pulse computation "
         f"{len(in_batch)}, with a GC {len(in_gc)}, with neither {len(neither)}"
     )
     for k in sorted(slow, key=lambda k: -wall[k])[:10]:

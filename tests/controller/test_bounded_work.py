@@ -27,16 +27,24 @@ BOUND = QUEUE_SIZE + interpolator.PIECE_ENTRIES
 
 @pytest.fixture
 def batch_sizes(monkeypatch: pytest.MonkeyPatch) -> list[int]:
-    """Record the number of entries of every vectorised batch the interpolator computes."""
+    """Record the number of entries of every vectorised computation the interpolator
+    makes: batches of queued segments and the oldest queued segment alone."""
     sizes: list[int] = []
     real = interpolator.queued_targets
+    real_one = interpolator.segment_targets
 
     def counting(*args: object, **kwargs: object) -> object:
         times, targets = real(*args, **kwargs)  # type: ignore[arg-type]
         sizes.append(len(times))
         return times, targets
 
+    def counting_one(*args: object, **kwargs: object) -> object:
+        targets = real_one(*args, **kwargs)  # type: ignore[arg-type]
+        sizes.append(len(targets))
+        return targets
+
     monkeypatch.setattr(interpolator, "queued_targets", counting)
+    monkeypatch.setattr(interpolator, "segment_targets", counting_one)
     return sizes
 
 

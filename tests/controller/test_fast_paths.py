@@ -101,15 +101,17 @@ Record = list[tuple[str, object]]
 
 @contextmanager
 def general_paths(on: bool) -> Iterator[None]:
-    """Switch the controller to its general paths (Process intake, numpy kernels)."""
-    saved = TrajectoryPoints.fast, GroupInterpolator.scalar
+    """Switch the controller to its general paths (Process intake, numpy kernels, every
+    queued segment computed at once)."""
+    saved = TrajectoryPoints.fast, GroupInterpolator.scalar, GroupInterpolator.front
     if on:
         TrajectoryPoints.fast = False
         GroupInterpolator.scalar = False
+        GroupInterpolator.front = False
     try:
         yield
     finally:
-        TrajectoryPoints.fast, GroupInterpolator.scalar = saved
+        TrajectoryPoints.fast, GroupInterpolator.scalar, GroupInterpolator.front = saved
 
 
 def stream(cell: tuple[str, str], plan: Plan, monkeypatch: pytest.MonkeyPatch) -> Record:

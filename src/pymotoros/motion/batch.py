@@ -26,11 +26,17 @@ How it is organised, for speed:
   pages than in arithmetic, so only the results are allocated at full size;
 * :func:`queued_targets` (the tick engine's queue, a few hundred entries) does the
   grid bookkeeping in Python and sends every entry through one position kernel: at
-  that size the cost is the number of numpy calls.
+  that size the cost is the number of numpy calls;
+* :func:`segment_targets` (the tick engine's oldest queued segment on its own, when
+  IncMove reaches it in real time) makes that count as small as it goes: coefficients
+  in plain Python (one segment's dozen values), the τ column memoised per grid, one
+  position kernel, no gather. About a third of the numpy calls of
+  :func:`queued_targets`, so that no single tick pays for a whole queue.
 """
 
 from __future__ import annotations
 
+import functools
 from collections.abc import Callable, Sequence
 from typing import Any, Final
 
@@ -40,11 +46,17 @@ import numpy.typing as npt
 from pymotoros.models import FloatMode
 from pymotoros.motion.axes import GroupAxes
 from pymotoros.motion.numerics import (
+    LD,
+    RISK_FACTOR,
     coefficients_kernel,
     coefficients_x87_checked,
+    coefficients_x87_exact,
+    coefficients_x87_interval,
+    f32,
     ms_to_seconds,
     position_bound,
     positions_single,
+    positions_x87,
     positions_x87_checked,
     pulses,
 )
@@ -327,6 +339,138 @@ def queued_targets(
             pos = positions_single(per32[:, 0], per32[:, 1], per32[:, 2], per32[:, 3], tau)
         part = pulses(pos, axes.factors_ros, mode)
     return times, part if axes.identity_columns else part[:, axes.columns]
+
+
+TAU_CACHE: Final = 256
+"""Most (first step, steps, period) keys :func:`_tau_column` remembers. Only a piece's
+own grid is remembered (its first step within one period of its start: every whole
+segment, and the first piece of a long one), so the keys are at most period × 200 and
+points at a fixed spacing repeat a handful; the cap bounds the memo to about 2 MiB
+(200 steps × 44 bytes per key) whatever the client sends. The later pieces of a long
+segment, each with its own offset, are computed afresh."""
+
+
+@functools.lru_cache(maxsize=TAU_CACHE)
+def _tau_column(lead_ms: int, steps: int, period_ms: int) -> tuple[F64Array, F32Array, F64Array]:
+    """τ of ``steps`` steps whose first is ``lead_ms`` after the segment's start, as
+    :func:`queued_targets` makes them (float32 values; (steps, 1) as float64 for the
+    x87 kernel and as float32 for the FS100 one), and (steps, 4) float64 powers
+    1, τ, τ², τ³/6 for :func:`positions_x87_interval`. A memo of a pure function of
+    these integers, read-only so that no caller can change what the next one gets."""
+    tau = ms_to_seconds(np.arange(lead_ms, lead_ms + period_ms * steps, period_ms))[:, None]
+    wide = tau.astype(np.float64)
+    tau2 = wide * wide  # exact: 48 bits
+    powers = np.hstack((np.ones_like(wide), wide, tau2, tau2 * wide / 6))
+    for array in (tau, wide, powers):
+        array.flags.writeable = False
+    return wide, tau, powers
+
+
+POSITION_WIDTH: Final = (RISK_FACTOR + 4.0) * 2.0**-53
+"""Half-width of :func:`positions_x87_interval`'s interval, relative to the magnitude sum
+M of a segment's terms (x0, v0·T, a1/2·T², a2·T³/6). Its float64 value F differs from the
+exact position by at most 6.01 × 2⁻⁵³ × M (each term at most three roundings, the three
+sums one each, whatever the order or fused multiply-adds) and the x87's by far less
+(2⁻⁶⁴ per operation), so RISK_FACTOR (33) × 2⁻⁵³ × M covers |F − x87| more than five
+times over; 4 × 2⁻⁵³ × M more covers the rounding of F ± the half-width (|F| ≤ 1.01 M)."""
+
+
+def positions_x87_interval(
+    terms: F64Array, wide: F64Array, powers: F64Array, sizes: Sequence[float]
+) -> F32Array:
+    """The x87's float32 positions of one segment, checked as an interval.
+
+    ``terms`` (4, n) float64: x0, v0, a1/2 and a2 (float32 values); ``wide`` (K, 1) and
+    ``powers`` (K, 4) from :func:`_tau_column`; ``sizes`` (n,) the magnitude sums M
+    of each axis's terms over the whole segment (so over every τ ≤ T). F = x0 + v0·τ +
+    a1/2·τ² + a2·(τ³/6) as one matrix product (powers · terms: the summation order and
+    any fused multiply-add are the library's, which the bound allows) instead of the ten
+    numpy calls of :func:`~pymotoros.motion.numerics.positions_x87_checked`'s
+    expression; the x87's value
+    X lies within :data:`POSITION_WIDTH` × M of F, and rounding to float32 is monotonic,
+    so where F − w and F + w round to the same float32, X does too (the argument of
+    :func:`~pymotoros.motion.numerics.small_segment_x87`, vectorised). The other elements
+    are recomputed in longdouble, as the x87 does
+    (:func:`~pymotoros.motion.numerics.positions_x87`). Values must be tame (no overflow).
+    """
+    value = np.dot(powers, terms)
+    width = [m * POSITION_WIDTH for m in sizes]
+    ends: F32Array = (value + np.array([[[-w for w in width]], [width]])).astype(np.float32)
+    low: F32Array = ends[0]
+    unsure = low != ends[1]
+    if unsure.any():
+        rows, cols = np.nonzero(unsure)
+        lt = wide[rows, 0].astype(LD)
+        low[rows, cols] = positions_x87(
+            terms[0, cols].astype(LD),
+            terms[1, cols].astype(LD),
+            terms[2, cols].astype(LD),
+            terms[3, cols].astype(LD),
+            lt,
+            lt * lt,
+        )
+    return low
+
+
+def segment_targets(
+    start: tuple[Sequence[float], Sequence[float]],
+    end: tuple[Sequence[float], Sequence[float]],
+    length_ms: int,
+    lead_ms: int,
+    steps: int,
+    with_end: bool,
+    axes: GroupAxes,
+) -> I64Array:
+    """Absolute targets (``steps`` + ``with_end`` rows, columns as
+    :func:`queued_targets`) of one segment (or piece): what :func:`queued_targets`
+    returns for it alone, with about a third of the numpy calls.
+
+    ``start`` and ``end`` are (positions, velocities), ``num_axes`` float32 values each
+    in ROS order, all finite and tame (:attr:`~pymotoros.motion.points.GroupPoint.tame`:
+    no operation overflows, so numpy's error state is left alone); ``length_ms`` is the
+    segment's length, ``lead_ms`` its first step's offset from its start. Every value
+    is the one :func:`queued_targets` computes, by the same reasoning: on the x87 the
+    coefficients come from :func:`coefficients_x87_interval` (checked in float64) or
+    :func:`coefficients_x87_exact` (longdouble), both the x87's float32 values as
+    :func:`coefficients_x87_checked` gives them (a zero's sign aside, which no pulse
+    sees), and the positions from :func:`positions_x87_interval`, the x87's float32
+    values as :func:`positions_x87_checked` gives them (both checked against the
+    same error bound, or recomputed in longdouble); on the FS100 the coefficient and
+    position kernels are the general path's, each element computed by the same float32
+    operations. The end entry is the end position in pulses, as there.
+    """
+    mode = axes.float_mode
+    x0, v0 = start
+    x1, v1 = end
+    n = len(x0)
+    pos: F32Array = np.empty((steps + with_end, n), dtype=np.float32)
+    if with_end:
+        pos[steps] = x1
+    if steps:
+        period = axes.period_ms
+        column = _tau_column if lead_ms <= period else _tau_column.__wrapped__
+        wide, tau, powers = column(lead_ms, steps, period)
+        duration = f32(length_ms / 1000)  # ms_to_seconds, as a Python float
+        if mode is FloatMode.X87_EXTENDED:
+            coef: Sequence[float] | None = coefficients_x87_interval(x0, v0, x1, v1, duration)
+            if coef is None:
+                coef = coefficients_x87_exact(x0, v0, x1, v1, duration)
+            h1 = [c / 2 for c in coef[:n]]  # a1/2: exact
+            a2 = coef[n:]
+            t, tt = duration, duration * duration
+            ttt6 = tt * t / 6
+            sizes = [
+                abs(p) + abs(s) * t + abs(h) * tt + abs(c) * ttt6
+                for p, s, h, c in zip(x0, v0, h1, a2, strict=True)
+            ]
+            terms = np.array([x0, v0, h1, a2])
+            pos[:steps] = positions_x87_interval(terms, wide, powers, sizes)
+        else:
+            rows = np.array([x0, v0, x1, v1], dtype=np.float32)[:, None]
+            x0s, v0s, a1s, a2s = _terms_single(rows, np.array([[duration]], dtype=np.float32))[0]
+            pos[:steps] = positions_single(x0s, v0s, a1s, a2s, tau)
+    part = pulses(pos, axes.factors_ros, mode)
+    return part if axes.identity_columns else part[:, axes.columns]
 
 
 def _terms_x87(rows: F32Array, duration: F32Array) -> F64Array:

@@ -14,11 +14,13 @@ A segment's step grid, and so the number and times of its entries, is integer
 arithmetic; its pulses are not needed before IncMove reaches them. So ``fill`` plans
 the segment in pieces of :data:`PIECE_ENTRIES` entries, the next one when the queue
 has taken the last (so no point, however far away, makes a tick do more work), and
-queues them as the real task does, within the 200 limit; the pulses of all queued
-pieces are computed together, vectorised
-(:func:`pymotoros.motion.batch.queued_targets`), when the first of them is due. The
-results are those of the step-by-step loop; a tick costs a few tuple operations. A
-segment computed on its own (the queue ran dry) with few steps is done in plain Python.
+queues them as the real task does, within the 200 limit; their pulses are computed
+when IncMove reaches them: the oldest piece alone when it has
+:data:`FRONT_MIN_ENTRIES` entries or more (:func:`pymotoros.motion.batch.segment_targets`,
+so that no tick pays for a whole queue), otherwise every queued piece together,
+vectorised (:func:`pymotoros.motion.batch.queued_targets`). The results are those of
+the step-by-step loop; a tick costs a few tuple operations. A segment computed on its
+own (the queue ran dry) with few steps is done in plain Python.
 """
 
 from __future__ import annotations
@@ -37,7 +39,7 @@ import numpy.typing as npt
 
 from pymotoros.models import FloatMode
 from pymotoros.motion.axes import GroupAxes
-from pymotoros.motion.batch import queued_targets
+from pymotoros.motion.batch import queued_targets, segment_targets
 from pymotoros.motion.constants import INT32_MAX, INT32_MIN, QUEUE_SIZE, SLOTS
 from pymotoros.motion.numerics import (
     LD,
@@ -92,6 +94,15 @@ def _small_grid(
 _INT32_LOW: Final = float(INT32_MIN) - 1.0
 _INT32_HIGH: Final = float(INT32_MAX) + 1.0
 """Products strictly between these truncate to an int32 (C's conversion is defined)."""
+
+FRONT_MIN_ENTRIES: Final = 20
+"""The oldest queued segment is computed alone (:meth:`GroupInterpolator._compute_front`)
+from this many entries (points 80 ms or more apart at 4 ms); shorter ones with all the
+planned segments at once. Alone, a segment costs ~50 µs whatever its length, against
+~0.75 µs per entry in a full batch (bench/bench_tick_spikes.py, issue 13's second
+round): spread over fewer than 20 ticks that would cost virtual time more than 2 µs a
+tick, taking 50 ms spacing under 500× real time (bench/bench_controller.py --reference
+batch). Points that dense keep the batch and its rarer, longer tick."""
 
 PIECE_ENTRIES: Final = QUEUE_SIZE
 """Entries of a segment planned (and later computed) at a time. A segment is cut into
@@ -201,9 +212,17 @@ class GroupInterpolator:
     """Within the plain-Python path, try :func:`small_segment_x87` first (off: the
     two-pass coefficients-then-positions form, which is also its fallback)."""
 
+    front: ClassVar[bool] = True
+    """Compute the queue's segments one at a time, the oldest when IncMove reaches it
+    (:meth:`_compute_front`); off: all of them at once when the first is due (the path
+    before issue 13's second round; ``bench/bench_tick_spikes.py --paths``,
+    ``bench/bench_cells.py --reference`` and ``bench/bench_controller.py --reference
+    batch`` compare the two). Same pulses either way; on, no tick pays for more than one
+    segment of :data:`FRONT_MIN_ENTRIES` entries or more."""
+
     def __init__(self, axes: GroupAxes) -> None:
         self.axes = axes
-        self.queue = IncrementQueue(self._compute)
+        self.queue = IncrementQueue(self._compute, self._compute_front)
         """The 200-entry increment queue (``count`` for CHECK_QUEUE_CNT)."""
         self.tool = 0
         """Tool for segments interpolated from now on (SELECT_TOOL sets it, §5.8)."""
@@ -543,6 +562,69 @@ class GroupInterpolator:
             for s in segments
         ]
         times, targets = queued_targets(rows.transpose(1, 0, 2), grids, axes)
+        self._store(segments, times, targets, prev)
+
+    def _compute_front(self) -> None:
+        """Compute the oldest planned segment not computed yet, alone: what IncMove
+        needs next (the queue's ``due``), so that the pulses of a full queue are not all
+        paid in one tick.
+
+        It goes to :func:`segment_targets`, whose values are those of
+        :func:`queued_targets` (``tests/motion/test_front_path.py`` compares them);
+        points that are not tame (NaN, infinities, huge values) take the general kernel.
+        A segment of fewer than :data:`FRONT_MIN_ENTRIES` entries is computed with every
+        planned one, as with :attr:`front` off (:meth:`_compute`).
+        """
+        segments = self._uncomputed
+        if not segments:
+            return
+        if not self.front:
+            self._compute()
+            return
+        segment = segments[0]
+        if segment.count < FRONT_MIN_ENTRIES:
+            self._compute()
+            return
+        del segments[0]
+        prev = self._chain_prev
+        axes = self.axes
+        n = axes.num_axes
+        start, end = segment.start, segment.end
+        period = axes.period_ms
+        first = segment.grid.first_ms + period * segment.step0
+        steps = segment.steps
+        times = list(range(first, first + period * steps, period))
+        if segment.last:
+            times.append(end.time_ms)
+        if start.tame and end.tame:
+            targets = segment_targets(
+                (start.pos[:n], start.vel[:n]),
+                (end.pos[:n], end.vel[:n]),
+                end.time_ms - start.time_ms,
+                first - start.time_ms,
+                steps,
+                segment.last,
+                axes,
+            )
+        else:
+            raw = start.packed() + end.packed()
+            rows = np.frombuffer(raw, dtype=np.float32).reshape(4, 1, SLOTS)[:, :, :n]
+            grid = (start.time_ms, end.time_ms, first, steps, segment.last)
+            times, targets = queued_targets(rows, [grid], axes)
+        self._store([segment], times, targets, prev)
+
+    def _store(
+        self,
+        segments: list[PlannedSegment],
+        times: list[int],
+        targets: I64Array,
+        prev: tuple[int, ...],
+    ) -> None:
+        """Give computed segments their entries from the absolute ``targets`` of their
+        entries in order (columns as :func:`queued_targets`'s); ``prev`` is prevPulsePos
+        before the first."""
+        axes = self.axes
+        n = axes.num_axes
         # Row 0: prevPulsePos before the first segment; the slots without an axis keep it.
         chain = np.empty((len(times) + 1, SLOTS), dtype=np.int64)
         chain[:] = prev

@@ -293,32 +293,14 @@ def _singles(count: int) -> struct.Struct:
     return found
 
 
-def small_segment_x87(
-    x0: Sequence[float],
-    v0: Sequence[float],
-    x1: Sequence[float],
-    v1: Sequence[float],
-    t: float,
-    taus: Sequence[float],
-) -> list[tuple[float, ...]] | None:
-    """The float32 positions at ``taus`` of a segment of length ``t`` on the x87, or None.
-
-    :func:`coefficients_x87_scalar` then :func:`positions_x87_scalar` fused into one
-    pass, for the segment of one or two steps that a tick computes when points come as
-    often as the period: the same float64 expressions, operand for operand, and the
-    same error allowances, but checked as an interval. Each float64 value F is within
-    ``e`` of the x87's value X (``e``: ``COEF_RISK_FACTOR`` × 2⁻⁵³ × the magnitudes of
-    a coefficient's two terms, or ``RISK_FACTOR`` × 2⁻⁵³ × :func:`position_bound`'s sum
-    for a position; both at least twice the proven bounds), so X lies in [F − e, F + e];
-    ``|F|`` × 2⁻⁵² more covers the rounding of the two ends. Rounding to float32 is
-    monotonic, so when both ends round to the same float32, X does too, and so does F
-    (where both ends round to zero, from either side, the sign of that zero may differ
-    from the x87's; no pulse, a truncated product, can see it).
-    All ends are rounded in one ``struct`` call and compared as two tuples, which costs
-    far less than a per-value bit test. None (some value straddles a float32 midpoint,
-    overflows float32, or is not a number): the caller takes the longer path, with
-    longdouble where needed. A float result is the x87's in every case, which is what
-    keeps the paths bit-identical.
+def coefficients_x87_interval(
+    x0: Sequence[float], v0: Sequence[float], x1: Sequence[float], v1: Sequence[float], t: float
+) -> tuple[float, ...] | None:
+    """a1 (n values) then a2 (n values) as the x87 stores them, or None if unsure: the
+    coefficient half of :func:`small_segment_x87` (see there for the interval argument),
+    which its callers share. Cheaper than :func:`coefficients_x87_scalar` (one
+    ``struct`` round trip instead of a bit test per value), and the same values
+    whenever both answer.
     """
     n = len(x0)
     tt = t * t  # exact: 48 significant bits
@@ -351,6 +333,43 @@ def small_segment_x87(
     coef = rounded[: 2 * n]
     if coef != rounded[2 * n :]:  # NaN never equals itself, so it lands here too
         return None
+    return coef
+
+
+def small_segment_x87(
+    x0: Sequence[float],
+    v0: Sequence[float],
+    x1: Sequence[float],
+    v1: Sequence[float],
+    t: float,
+    taus: Sequence[float],
+) -> list[tuple[float, ...]] | None:
+    """The float32 positions at ``taus`` of a segment of length ``t`` on the x87, or None.
+
+    :func:`coefficients_x87_scalar` then :func:`positions_x87_scalar` fused into one
+    pass, for the segment of one or two steps that a tick computes when points come as
+    often as the period: the same float64 expressions, operand for operand, and the
+    same error allowances, but checked as an interval. Each float64 value F is within
+    ``e`` of the x87's value X (``e``: ``COEF_RISK_FACTOR`` × 2⁻⁵³ × the magnitudes of
+    a coefficient's two terms, or ``RISK_FACTOR`` × 2⁻⁵³ × :func:`position_bound`'s sum
+    for a position; both at least twice the proven bounds), so X lies in [F − e, F + e];
+    ``|F|`` × 2⁻⁵² more covers the rounding of the two ends. Rounding to float32 is
+    monotonic, so when both ends round to the same float32, X does too, and so does F
+    (where both ends round to zero, from either side, the sign of that zero may differ
+    from the x87's; no pulse, a truncated product, can see it).
+    All ends are rounded in one ``struct`` call and compared as two tuples, which costs
+    far less than a per-value bit test. None (some value straddles a float32 midpoint,
+    overflows float32, or is not a number): the caller takes the longer path, with
+    longdouble where needed. A float result is the x87's in every case, which is what
+    keeps the paths bit-identical.
+    """
+    coef = coefficients_x87_interval(x0, v0, x1, v1, t)
+    if coef is None:
+        return None
+    n = len(x0)
+    tt = t * t
+    ttt = tt * t
+    slack = _ROUNDING_SLACK
     a1, a2 = coef[:n], coef[n:]
     allowance = _POSITION_ALLOWANCE
     ttt6 = ttt / 6

@@ -2,9 +2,10 @@
 
 The tick-by-tick engine queues a segment's entries before computing their pulses: it
 knows their number and times from the step grid alone. The pulses of every segment
-waiting in the queue are computed together, vectorised, when IncMove reaches them
-(:meth:`IncrementQueue.realise`). Counting, CHECK_QUEUE_CNT and the 200-entry limit
-see the same queue either way.
+waiting in the queue are computed when IncMove reaches them: all together, vectorised
+(:meth:`IncrementQueue.realise`), or, with a ``compute_front`` callback, the oldest
+segment at a time (:meth:`IncrementQueue.due`), so that no tick pays for the whole
+queue. Counting, CHECK_QUEUE_CNT and the 200-entry limit see the same queue either way.
 """
 
 from __future__ import annotations
@@ -44,14 +45,20 @@ class LazyEntries(Protocol):
 class IncrementQueue:
     """The bounded FIFO between AddToIncQueue and IncMove."""
 
-    __slots__ = ("_compute", "_entries", "_lazy", "_lazy_count")
+    __slots__ = ("_compute", "_compute_front", "_entries", "_lazy", "_lazy_count")
 
-    def __init__(self, compute: Callable[[], None] | None = None) -> None:
+    def __init__(
+        self,
+        compute: Callable[[], None] | None = None,
+        compute_front: Callable[[], None] | None = None,
+    ) -> None:
         self._entries: deque[Increment] = deque()
         self._lazy: deque[tuple[LazyEntries, int, int]] = deque()
         self._lazy_count = 0
         self._compute = compute
         """Computes every segment with queued but uncomputed entries (set by the owner)."""
+        self._compute_front = compute_front
+        """Computes at least the oldest uncomputed segment, in queue order (optional)."""
 
     def __len__(self) -> int:
         return len(self._entries) + self._lazy_count
@@ -115,12 +122,34 @@ class IncrementQueue:
         """The computed entries, oldest first, for IncMove to pop from.
 
         IncMove may join an entry with the next one, so when fewer than two are
-        computed every queued segment is computed first (in one go).
+        computed, queued entries are computed first: segment by segment from the oldest
+        with a ``compute_front`` callback, until two are; otherwise all in one go.
         """
         entries = self._entries
         if len(entries) < 2 and self._lazy:
-            self.realise()
+            if self._compute_front is None:
+                self.realise()
+            else:
+                self._realise_front()
         return entries
+
+    def _realise_front(self) -> None:
+        """Move the oldest queued chunks to the computed entries until two are there,
+        computing their segments one at a time."""
+        entries = self._entries
+        lazy = self._lazy
+        compute_front = self._compute_front
+        while lazy and len(entries) < 2:
+            segment, start, stop = lazy[0]
+            computed = segment.entries
+            if computed is None and compute_front is not None:
+                compute_front()
+                computed = segment.entries
+            if computed is None:
+                raise RuntimeError("a queued segment was not computed")
+            lazy.popleft()
+            self._lazy_count -= stop - start
+            entries.extend(computed[start:stop])
 
     def realise(self) -> None:
         """Compute the pulses of every queued entry."""
