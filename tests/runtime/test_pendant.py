@@ -302,9 +302,11 @@ class _Ticks:
 
     def __init__(self) -> None:
         self.count = 0
+        self.waits = 0
         self._waiters: list[tuple[int, asyncio.Future[None]]] = []
 
     async def after(self, n: int) -> None:
+        self.waits += 1
         future = asyncio.get_running_loop().create_future()
         self._waiters.append((self.count + n, future))
         await future
@@ -355,9 +357,14 @@ async def test_feed_work_is_spread_over_the_ticks_of_its_period(
             return super().render(captured)
 
     period = round(FEED_PERIOD_S * 1000 / controller.period_ms)
-    feed = PendantFeed(
-        Recording(controller, lambda: STATS), after_ticks=ticks.after, period_ticks=period
-    )
+    waiting_at_publish: list[int] = []
+
+    class Feed(PendantFeed):
+        def _publish(self, text: str) -> None:
+            waiting_at_publish.append(len(self._waiting))
+            super()._publish(text)
+
+    feed = Feed(Recording(controller, lambda: STATS), after_ticks=ticks.after, period_ticks=period)
     tabs = [
         asyncio.create_task(feed.serve(_Tab(ticks, events, f"tab{i}")))  # type: ignore[arg-type]
         for i in range(3)
@@ -380,6 +387,13 @@ async def test_feed_work_is_spread_over_the_ticks_of_its_period(
             (start + 3, "tab1"),
             (start + 4, "tab2"),
         ]
+    # each wake-up costs the loop: the feed waits twice per period, each tab once (its
+    # slot one period on), plus each tab's first wait for its slot
+    periods = len(captures)
+    assert ticks.waits <= periods * (2 + len(tabs)) + len(tabs)
+    # after the first document no tab waits for a publication: it is woken only by its slot
+    assert waiting_at_publish[0] == len(tabs)
+    assert set(waiting_at_publish[1:]) == {0}
 
 
 SCENARIOS = Path(__file__).resolve().parents[2] / "examples" / "scenarios"

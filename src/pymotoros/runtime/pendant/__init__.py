@@ -168,13 +168,12 @@ class PendantFeed:
             if not future.done():
                 future.set_result(None)
 
-    async def _next_document(self, seen: int) -> tuple[int, str]:
-        """The latest document once it is newer than sequence number ``seen``."""
+    async def _next_document(self, seen: int) -> None:
+        """Return once the latest document is newer than sequence number ``seen``."""
         while self._latest is None or self._seq == seen:
             future: asyncio.Future[None] = asyncio.get_running_loop().create_future()
             self._waiting.append(future)
             await future
-        return self._seq, self._latest
 
     async def serve(self, ws: WebSocket) -> None:
         """Send the latest document to ``ws`` each time a new one is built."""
@@ -182,17 +181,26 @@ class PendantFeed:
         self._listeners += 1
         if self._task is None or self._task.done():
             self._task = asyncio.create_task(self._run(), name="pendant-feed")
-        seen = -1  # the sequence number of the document sent last
+        # The sequence number of the document sent last: a tab that joins starts with the
+        # next document, in its own slot, like the others.
+        seen = self._seq
         # Tabs take turns, one per tick after the tick the document was built after, so
         # that no tick is followed by the whole feed's work (module docstring).
         slot = 1 + self._slots % max(1, self._period_ticks - 2)
         self._slots += 1
+        paced = self._after_ticks is not None and self._period_ticks > 1
         try:
             while True:
-                seen, text = await self._next_document(seen)
-                if self._after_ticks is not None and self._period_ticks > 1:
-                    await self._after_ticks(slot)
+                if self._latest is None or self._seq == seen:  # the first, or a late one
+                    await self._next_document(seen)
+                    if paced and self._after_ticks is not None:
+                        await self._after_ticks(slot)
+                seen, text = self._seq, self._latest or ""
                 await ws.send_text(text)
+                if paced and self._after_ticks is not None:
+                    # The feed is paced on the same ticks: one period on, this tab's slot
+                    # comes again with a new document, so the tab wakes once per document.
+                    await self._after_ticks(self._period_ticks)
         except (WebSocketDisconnect, RuntimeError):
             pass  # the tab closed; RuntimeError: sent after the close
         finally:
