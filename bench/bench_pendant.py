@@ -135,10 +135,42 @@ TRACED_SIM = textwrap.dedent(
         return capture(self)
 
     pendant.PendantDocument.capture = traced_capture
+    costs = {}  # piece of the feed's work -> [calls, CPU seconds]
+
+    def costed(name, f):  # the process's CPU time, not wall time: preemption excluded
+        def timed(*args):
+            c0 = time.process_time()
+            try:
+                return f(*args)
+            finally:
+                cost = costs.setdefault(name, [0, 0.0])
+                cost[0] += 1
+                cost[1] += time.process_time() - c0
+        return timed
+
+    def costed_async(name, f):
+        async def timed(*args):
+            c0 = time.process_time()
+            try:
+                return await f(*args)
+            finally:
+                cost = costs.setdefault(name, [0, 0.0])
+                cost[0] += 1
+                cost[1] += time.process_time() - c0
+        return timed
+
+    from pymotoros.controller import VirtualController
+    from starlette.websockets import WebSocket
+    pendant.PendantDocument.capture = costed("capture", pendant.PendantDocument.capture)
+    VirtualController.snapshot = costed("  of which snapshot", VirtualController.snapshot)
+    pendant.PendantDocument.render = costed("render", pendant.PendantDocument.render)
+    pendant.encode = costed("encode", pendant.encode)
+    WebSocket.send_text = costed_async("send to one tab", WebSocket.send_text)
 
     def dump():
         with open(out, "w") as f:
-            json.dump({"ticks": ticks, "gc": collections, "captures": captures}, f)
+            json.dump({"ticks": ticks, "gc": collections, "captures": captures,
+                       "costs": costs}, f)
 
     atexit.register(dump)
     from pymotoros.cli.main import main
@@ -277,6 +309,9 @@ def phases(duration: float, warmup: float) -> None:
             f"  phase {phase:2d}: n {len(v):5d} mean {statistics.fmean(v):.3f} "
             f"p90 {v[int(0.9 * len(v))]:.3f} p99 {v[int(0.99 * len(v))]:.3f}"
         )
+    print("the feed's work on the loop, CPU µs per call (process time, whole run):")
+    for name, (calls, seconds) in data["costs"].items():
+        print(f"  {name:20s} {1e6 * seconds / max(1, calls):7.1f} ({calls} calls)")
     start = times[first]
     pauses = [(t, d * 1000.0, g) for t, d, g in data["gc"] if t >= start]
     worst = sorted(range(first, len(times)), key=lambda i: late[i])[-max(1, len(late) // 100) :]
@@ -322,7 +357,8 @@ def main() -> None:
         "--phases",
         action="store_true",
         help="instead: one traced run with tabs; lateness by place in the feed's period, "
-        "and the garbage collector's pauses (where the tabs' cost comes from)",
+        "the CPU each piece of the feed's work takes on the loop, and the garbage "
+        "collector's pauses (where the tabs' cost comes from)",
     )
     args = parser.parse_args()
     if args.rounds < 1 or args.duration <= 0:

@@ -17,7 +17,7 @@ import httpx
 import pytest
 import websocket
 
-from pymotoros.controller import VirtualController
+from pymotoros.controller import VirtualController, signals
 from pymotoros.controller.cell import default_cell, load_cell
 from pymotoros.controller.scenario import parse_scenario
 from pymotoros.kinematics import chain_for
@@ -31,7 +31,7 @@ from pymotoros.runtime.pendant import (
     PendantDocument,
     PendantFeed,
 )
-from pymotoros.runtime.pendant.document import Skeleton, state_document
+from pymotoros.runtime.pendant.document import Skeleton, encode, state_document
 from pymotoros.runtime.ticker import LatenessStats, TickStats
 
 from .support import LOCAL
@@ -201,16 +201,28 @@ def _busy(controller: VirtualController) -> VirtualController:
     return controller
 
 
-@pytest.mark.parametrize(
-    "make",
-    [
-        lambda: VirtualController(),
-        lambda: _busy(VirtualController()),
-        lambda: _busy(VirtualController(cell=load_cell(CELLS / "two_hc10_dx100.toml"))),
-        lambda: VirtualController(cell=default_cell(robot="sda10f")),
-    ],
-    ids=["boot", "alarms-errors-fsu-events", "two-groups", "sda10f"],
-)
+def _pfl_stop(controller: VirtualController) -> VirtualController:
+    """A collaborative robot (PFL on) whose safety unit signals a PFL stop."""
+    assert controller.cell.pfl
+    controller.force_io(signals.PFL_STOP, 1)
+    for _ in range(3):
+        controller.tick()
+    return controller
+
+
+STATES = {
+    "boot": lambda: VirtualController(),
+    "alarms-errors-fsu-events": lambda: _busy(VirtualController()),
+    "two-groups": lambda: _busy(VirtualController(cell=load_cell(CELLS / "two_hc10_dx100.toml"))),
+    "sda10f": lambda: VirtualController(cell=default_cell(robot="sda10f")),
+    "pfl-fsu": lambda: _pfl_stop(
+        _busy(VirtualController(cell=load_cell(CELLS / "hc10_yrc1000.toml")))
+    ),
+}
+"""Controller states with something in every part of the document."""
+
+
+@pytest.mark.parametrize("make", STATES.values(), ids=STATES.keys())
 def test_feed_document_is_the_control_apis_state_without_pydantic(make: Any) -> None:
     """The feed builds GET /api/state's document by hand (it runs 25 times a second on
     the loop): as JSON it must be the same document, key for key."""
@@ -290,9 +302,11 @@ class _Ticks:
 
     def __init__(self) -> None:
         self.count = 0
+        self.waits = 0
         self._waiters: list[tuple[int, asyncio.Future[None]]] = []
 
     async def after(self, n: int) -> None:
+        self.waits += 1
         future = asyncio.get_running_loop().create_future()
         self._waiters.append((self.count + n, future))
         await future
@@ -343,9 +357,14 @@ async def test_feed_work_is_spread_over_the_ticks_of_its_period(
             return super().render(captured)
 
     period = round(FEED_PERIOD_S * 1000 / controller.period_ms)
-    feed = PendantFeed(
-        Recording(controller, lambda: STATS), after_ticks=ticks.after, period_ticks=period
-    )
+    waiting_at_publish: list[int] = []
+
+    class Feed(PendantFeed):
+        def _publish(self, text: str) -> None:
+            waiting_at_publish.append(len(self._waiting))
+            super()._publish(text)
+
+    feed = Feed(Recording(controller, lambda: STATS), after_ticks=ticks.after, period_ticks=period)
     tabs = [
         asyncio.create_task(feed.serve(_Tab(ticks, events, f"tab{i}")))  # type: ignore[arg-type]
         for i in range(3)
@@ -368,6 +387,13 @@ async def test_feed_work_is_spread_over_the_ticks_of_its_period(
             (start + 3, "tab1"),
             (start + 4, "tab2"),
         ]
+    # each wake-up costs the loop: the feed waits twice per period, each tab once (its
+    # slot one period on), plus each tab's first wait for its slot
+    periods = len(captures)
+    assert ticks.waits <= periods * (2 + len(tabs)) + len(tabs)
+    # after the first document no tab waits for a publication: it is woken only by its slot
+    assert waiting_at_publish[0] == len(tabs)
+    assert set(waiting_at_publish[1:]) == {0}
 
 
 SCENARIOS = Path(__file__).resolve().parents[2] / "examples" / "scenarios"
@@ -434,3 +460,39 @@ def test_feed_recomputes_the_loops_percentiles_once_a_second_with_an_exact_tick_
             controller.tick()
     assert len(calls) == 3
     assert [b - a for a, b in itertools.pairwise(calls)] == [TICK_STATS_REFRESH_TICKS] * 2
+
+
+@pytest.mark.parametrize("make", STATES.values(), ids=STATES.keys())
+def test_feed_encodes_the_document_as_the_stdlib_json_would(make: Any) -> None:
+    """The feed encodes with orjson (a fraction of the stdlib's time on the loop): what
+    the tabs parse must be what ``json.dumps``'s text parses to, every float bit for bit
+    and every key in its place (only an exponent's spelling may differ: 1e-6, 1e-06)."""
+    controller = make()
+    for _ in range(2):
+        doc = create_http_app(controller, lambda: STATS).state.pendant_feed.document()
+        by_orjson = json.loads(encode(doc))
+        by_stdlib = json.loads(json.dumps(doc))
+        assert by_orjson == by_stdlib
+        assert json.dumps(by_orjson) == json.dumps(by_stdlib)  # key order, float bits
+        for _ in range(25):  # moving or not, the floats change
+            controller.tick()
+
+
+def test_pfl_and_fsu_cell_document() -> None:
+    controller = STATES["pfl-fsu"]()
+    doc = create_http_app(controller, lambda: STATS).state.pendant_feed.document()
+    assert doc["pfl"] != "off"
+    assert doc["fsu"]["joint_speed_pct"] == 40
+
+
+def test_pendant_reads_motoros_outputs_as_single_bits(controller: VirtualController) -> None:
+    """OT#889..896 are read as one IO group; each must be the bit ``read_io_bit`` gives."""
+    document = create_http_app(controller, lambda: STATS).state.pendant_feed.document
+    for pattern in (0b1010_0101, 0b0101_1010, 0):
+        for i in range(8):
+            controller.io.set(11120 + i, (pattern >> i) & 1)
+        outputs = document()["pendant"]["outputs"]
+        assert [o["value"] for o in outputs] == [
+            controller.read_io_bit(11120 + i).value for i in range(8)
+        ]
+        assert [o["value"] for o in outputs] == [(pattern >> i) & 1 for i in range(8)]

@@ -20,11 +20,19 @@ CPU wait at its next wake-ups, so a burst of work right after one tick delays th
 ticks. Measured on a loaded 2-core machine, the two ticks after the feed's work were late
 by 0.9 and 0.6 ms on average against 0.45 ms for the other eight (the garbage collector
 played no part: a few collections per minute, none before a late tick). So the
-controller's state is captured right after a tick (its snapshot, about 0.1 ms; the
-loop's lateness percentiles, 0.25 ms to compute, only once a second), turned
-into the document and encoded after the next tick (about 0.1 ms), and sent to the tabs
-one per tick over the ticks that follow (about 0.07 ms each, uvicorn's WebSocket send),
-all within the feed's 10-tick period.
+controller's state is captured right after a tick (its snapshot; the loop's lateness
+percentiles, 0.25 ms to compute, only once a second), turned into the document and
+encoded after the next tick, and sent to the tabs one per tick over the ticks that
+follow (uvicorn's WebSocket send), all within the feed's 10-tick period. Each tab's task
+wakes once per document, at its slot (the feed and the tabs are paced on the same
+ticks), and the document is encoded by orjson.
+
+What each piece costs inside a streaming simulator (``bench/bench_pendant.py --phases``,
+CPU time, 2-core VM; several times what the same calls take in a tight loop, where the
+interpreter's caches stay warm): the capture ~0.38 ms, of which ~0.29 ms is the
+controller's snapshot (the TCP pose and speed by forward kinematics: the same work as
+``GET /api/state``); the document ~0.1 ms (mostly the 3D view's joint positions); the
+encoding ~0.03 ms; each tab's send ~0.07 ms.
 
 The 3D view is drawn by the page on a ``<canvas>`` from the joint positions of each
 group's kinematic chain (:class:`.document.Skeleton`, the ``xyz`` of
@@ -36,11 +44,10 @@ from __future__ import annotations
 
 import asyncio
 import contextlib
-import json
 import logging
 import tomllib
 from collections.abc import Awaitable, Callable
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 from importlib.resources import files
 from typing import Any, Final
 
@@ -53,7 +60,13 @@ from pymotoros.controller.api import ControllerSnapshot
 from pymotoros.controller.scenario import parse_scenario
 from pymotoros.errors import ConfigError, KinematicsError
 from pymotoros.kinematics import chain_for
-from pymotoros.runtime.pendant.document import Ports, Skeleton, errors_document, state_document
+from pymotoros.runtime.pendant.document import (
+    Ports,
+    Skeleton,
+    encode,
+    errors_document,
+    state_document,
+)
 from pymotoros.runtime.target import SimulatedController
 from pymotoros.runtime.ticker import TickStats
 
@@ -72,6 +85,9 @@ MOTOROS_FIRST_OUTPUT: Final = 889
 MOTOROS_OUTPUTS: Final = 8
 OT889_ADDRESS: Final = 11120
 """IO address of OT#889 (controller/readiness.py: ros_ready)."""
+IO_GROUP_BITS: Final = 10
+"""IO group ``n`` holds the bits at addresses ``n×10+0..7`` (MotoPlus addressing,
+``IoImage.read_group``): OT#889..896 are group 1112, bit 0 = OT#889."""
 
 STATIC_DIR: Final = files("pymotoros.runtime.pendant") / "static"
 
@@ -113,7 +129,7 @@ class PendantFeed:
         self._period_s = period_s
         self._latest: str | None = None
         self._seq = 0
-        self._changed = asyncio.Condition()
+        self._waiting: list[asyncio.Future[None]] = []
         self._listeners = 0
         self._slots = 0
         self._task: asyncio.Task[None] | None = None
@@ -138,11 +154,7 @@ class PendantFeed:
             except Exception:  # a broken snapshot must not kill the page's feed silently
                 logger.exception("pendant feed: building the state failed")
                 raise
-            text = json.dumps(doc, separators=(",", ":"))  # once, whatever the number of tabs
-            async with self._changed:
-                self._latest = text
-                self._seq += 1
-                self._changed.notify_all()
+            self._publish(encode(doc))  # once, whatever the number of tabs
             if self._after_ticks is not None:
                 await self._after_ticks(self._period_ticks - (1 if self._period_ticks > 2 else 0))
                 continue
@@ -154,27 +166,49 @@ class PendantFeed:
                 delay = 0
             await asyncio.sleep(delay)
 
+    def _publish(self, text: str) -> None:
+        """Make ``text`` the latest document and wake the tabs waiting for one (each on
+        its own future: no lock to take in turn, as an ``asyncio.Condition`` would)."""
+        self._latest = text
+        self._seq += 1
+        waiting, self._waiting = self._waiting, []
+        for future in waiting:
+            if not future.done():
+                future.set_result(None)
+
+    async def _next_document(self, seen: int) -> None:
+        """Return once the latest document is newer than sequence number ``seen``."""
+        while self._latest is None or self._seq == seen:
+            future: asyncio.Future[None] = asyncio.get_running_loop().create_future()
+            self._waiting.append(future)
+            await future
+
     async def serve(self, ws: WebSocket) -> None:
         """Send the latest document to ``ws`` each time a new one is built."""
         await ws.accept()
         self._listeners += 1
         if self._task is None or self._task.done():
             self._task = asyncio.create_task(self._run(), name="pendant-feed")
-        seen = [-1]  # the sequence number of the document sent last
+        # The sequence number of the document sent last: a tab that joins starts with the
+        # next document, in its own slot, like the others.
+        seen = self._seq
         # Tabs take turns, one per tick after the tick the document was built after, so
         # that no tick is followed by the whole feed's work (module docstring).
         slot = 1 + self._slots % max(1, self._period_ticks - 2)
         self._slots += 1
+        paced = self._after_ticks is not None and self._period_ticks > 1
         try:
             while True:
-                async with self._changed:
-                    await self._changed.wait_for(
-                        lambda: self._latest is not None and self._seq != seen[0]
-                    )
-                    seen[0] = self._seq
-                if self._after_ticks is not None and self._period_ticks > 1:
-                    await self._after_ticks(slot)
-                await ws.send_text(self._latest or "")
+                if self._latest is None or self._seq == seen:  # the first, or a late one
+                    await self._next_document(seen)
+                    if paced and self._after_ticks is not None:
+                        await self._after_ticks(slot)
+                seen, text = self._seq, self._latest or ""
+                await ws.send_text(text)
+                if paced and self._after_ticks is not None:
+                    # The feed is paced on the same ticks: one period on, this tab's slot
+                    # comes again with a new document, so the tab wakes once per document.
+                    await self._after_ticks(self._period_ticks)
         except (WebSocketDisconnect, RuntimeError):
             pass  # the tab closed; RuntimeError: sent after the close
         finally:
@@ -192,6 +226,8 @@ class Captured:
 
     snapshot: ControllerSnapshot
     tick: TickStats
+    tick_count: int
+    """The loop's tick count now (``tick``'s percentiles may be up to a second old)."""
     ports: Ports
     extras: dict[str, Any]
 
@@ -232,25 +268,27 @@ class PendantDocument:
         """Everything read from the controller, at one instant (between two ticks)."""
         snapshot = self._snapshot()
         ports = self._ports() if self._ports is not None else (None, None, None)
-        return Captured(snapshot, self._loop_stats(snapshot), ports, self._extras(snapshot))
+        stats, count = self._loop_stats(snapshot)
+        return Captured(snapshot, stats, count, ports, self._extras(snapshot))
 
-    def _loop_stats(self, snapshot: ControllerSnapshot) -> TickStats:
+    def _loop_stats(self, snapshot: ControllerSnapshot) -> tuple[TickStats, int]:
         """The loop's statistics, their percentiles at most :data:`TICK_STATS_REFRESH_TICKS`
-        old: computing them is the feed's largest cost (``Ticker.stats`` partitions the
-        whole lateness window, about 0.25 ms) and a 60 s window's p99 hardly moves in a
-        second. The tick count stays exact: it advances with the controller's ticks."""
+        old, and the exact tick count: computing the percentiles is costly
+        (``Ticker.stats`` partitions the whole lateness window, about 0.25 ms) and a 60 s
+        window's p99 hardly moves in a second; the count advances with the controller's
+        ticks."""
         cached, at = self._stats, self._stats_tick
         age = snapshot.tick_count - at
         if cached is None or not 0 <= age < TICK_STATS_REFRESH_TICKS:
             self._stats = cached = self._tick_stats()
             self._stats_tick = snapshot.tick_count
-            return cached
-        return replace(cached, count=cached.count + age)
+            return cached, cached.count
+        return cached, cached.count + age
 
     def render(self, captured: Captured) -> dict[str, Any]:
         """The document of a capture: reads nothing from the controller, so it may run
         later (after the next tick) and still describe the captured instant."""
-        doc = state_document(captured.snapshot, captured.tick, captured.ports)
+        doc = state_document(captured.snapshot, captured.tick, captured.ports, captured.tick_count)
         skeletons = self._skeletons
         for i, group in enumerate(doc["groups"]):
             skeleton = skeletons[i] if i < len(skeletons) else None
@@ -278,13 +316,11 @@ class PendantDocument:
         jobs = getattr(controller, "job_position", None)  # a property of VirtualController
         if jobs is not None:
             out["jobs"] = [{"job": job, "line": line} for job, line in jobs]
-        read_bit = getattr(controller, "read_io_bit", None)
-        if read_bit is not None:
+        read_group = getattr(controller, "read_io_group", None)
+        if read_group is not None:  # OT#889..896 are one IO group: one read, not eight
+            byte = read_group(OT889_ADDRESS // IO_GROUP_BITS).value
             out["outputs"] = [
-                {
-                    "name": f"OT#{MOTOROS_FIRST_OUTPUT + i}",
-                    "value": read_bit(OT889_ADDRESS + i).value,
-                }
+                {"name": f"OT#{MOTOROS_FIRST_OUTPUT + i}", "value": (byte >> i) & 1}
                 for i in range(MOTOROS_OUTPUTS)
             ]
         if self._clients is not None:

@@ -20,13 +20,14 @@ from collections.abc import Sequence
 from typing import Any, Final
 
 import numpy as np
+import orjson
 import pinocchio as pin
 
 from pymotoros.controller.api import ControllerSnapshot, PendantMode, TcpSnapshot
 from pymotoros.kinematics import Chain
 from pymotoros.runtime.ticker import TickStats
 
-__all__ = ["END_FRAMES", "Skeleton", "state_document"]
+__all__ = ["END_FRAMES", "Skeleton", "encode", "state_document"]
 
 END_FRAMES: Final = ("flange", "tool0", "tcp")
 """The frames drawn after the joints (the order of ``Chain.joint_frames``)."""
@@ -76,8 +77,12 @@ def _alarms(alarms: Sequence[Any]) -> list[dict[str, Any]]:
     return [{"code": a.code, "subcode": a.subcode, "text": a.text} for a in alarms]
 
 
-def state_document(snapshot: ControllerSnapshot, tick: TickStats, ports: Ports) -> dict[str, Any]:
-    """``GET /api/state``'s document (``state_model(...).model_dump()``), without pydantic."""
+def state_document(
+    snapshot: ControllerSnapshot, tick: TickStats, ports: Ports, tick_count: int | None = None
+) -> dict[str, Any]:
+    """``GET /api/state``'s document (``state_model(...).model_dump()``), without pydantic;
+    ``tick_count``, when given, replaces ``tick.count`` (the feed's percentiles are
+    refreshed less often than the count advances)."""
     late = tick.lateness_ms
     return {
         "mode": "play" if snapshot.mode is PendantMode.PLAY else "teach",
@@ -102,7 +107,7 @@ def state_document(snapshot: ControllerSnapshot, tick: TickStats, ports: Ports) 
         ],
         "tick": {
             "period_ms": tick.period_ms,
-            "count": tick.count,
+            "count": tick.count if tick_count is None else tick_count,
             "overruns": tick.overruns,
             "lateness_ms": {"p50": late.p50, "p99": late.p99, "max": late.max},
         },
@@ -123,6 +128,17 @@ def state_document(snapshot: ControllerSnapshot, tick: TickStats, ports: Ports) 
         "motoros": snapshot.motoros,
         "ports": {"motion": ports[0], "state": ports[1], "io": ports[2]},
     }
+
+
+def encode(doc: dict[str, Any]) -> str:
+    """The document as compact JSON text: the same keys in the same order and the same
+    floats (shortest round-trip form) as ``json.dumps(doc, separators=(",", ":"))``, a
+    test holds them equal once parsed; only an exponent is spelt shorter (``1e-6`` for
+    ``1e-06``). orjson's encoder is compiled: the stdlib's took ~0.13 ms per document on
+    the simulator's busy loop, the feed's second cost after the controller's snapshot.
+    A non-finite float would be written ``null`` instead of the stdlib's ``NaN`` (which a
+    browser's ``JSON.parse`` refuses); the document holds none."""
+    return orjson.dumps(doc).decode()
 
 
 def errors_document(snapshot: ControllerSnapshot) -> list[dict[str, Any]]:
