@@ -47,6 +47,13 @@ DEAD_PROXY = "127.0.0.1:9"
 """Every non-loopback request goes to this closed port (the discard port): blocked."""
 GOAL = (1.2, 0.5, 0.6, 0.8, -1.2, 1.0)
 LIGHT_ON_JS = 'return document.getElementById("estop-light").classList.contains("on")'
+ANSWERED_JS = "return window.pendant.answeredAt"
+STALE_FEED_JS = """
+const p = window.pendant, stale = JSON.parse(JSON.stringify(p.last));
+stale.estop = false;
+stale.tick.count = p.answeredAt;
+return p.fromFeed(stale);
+"""
 MIN_COLOURS = 20
 """A blank canvas has one colour; grid, links, joints and ghost give far more."""
 PLOT_SAMPLES = 60
@@ -213,6 +220,12 @@ def test_pendant_in_a_real_browser_offline(sim: Sim, browser: WebDriver) -> None
             "the E-stop light",
         )
         assert browser.find_element(By.ID, "st-estop").text == "PRESSED"
+        # a feed document captured before the press but sent after the button's answer
+        # must not switch the light off again
+        _wait(browser, lambda d: d.execute_script(ANSWERED_JS) >= 0, "the button's answer")
+        assert browser.execute_script(STALE_FEED_JS) is False
+        assert browser.find_element(By.ID, "st-estop").text == "PRESSED"
+        assert browser.execute_script(LIGHT_ON_JS)
         assert sim.api("/api/state")["estop"] is True
         with pytest.raises(NotReadyError) as info:
             move.result(WAIT_S)

@@ -8,7 +8,7 @@
   const PLOT_W = 560, PLOT_H = 160; // one command-vs-feedback plot per group, in pixels
   const COLORS = ["#4fc3f7", "#ffb74d", "#81c784", "#e57373", "#ba68c8", "#fff176", "#90a4ae", "#f06292"];
   const $ = (id) => document.getElementById(id);
-  const state = { last: null, updates: 0, history: [], view: { yaw: -0.7, pitch: 0.4, dist: 2.4, cx: 0, cy: 0, cz: 0.5 } };
+  const state = { last: null, updates: 0, history: [], answeredAt: -1, view: { yaw: -0.7, pitch: 0.4, dist: 2.4, cx: 0, cy: 0, cz: 0.5 } };
   window.pendant = state;           // for debugging and the browser test
 
   function say(text) { $("message").textContent = text; }
@@ -18,8 +18,18 @@
                                      body: JSON.stringify(body === undefined ? {} : body) });
     const answer = await resp.json();
     if (!resp.ok) { say(answer.error || ("HTTP " + resp.status)); return null; }
-    say(""); render(answer, false); return answer;
+    say(""); render(answer, false); state.answeredAt = answer.tick.count; return answer;
   }
+
+  // A feed document is captured at a tick and may be sent after a button's answer was
+  // rendered: one captured at or before the answer's tick may predate the press (the
+  // E-stop light would go out again for a moment), so it is dropped; the next one is newer.
+  function fromFeed(doc) {
+    if (doc.tick.count <= state.answeredAt) return false;
+    render(doc, true);
+    return true;
+  }
+  state.fromFeed = fromFeed;        // the browser test feeds it a stale document
 
   async function readIo(address, out) {
     const resp = await fetch("/api/io/" + address);
@@ -207,8 +217,10 @@
   // ------------------------------------------------------------------ feed
   function connect() {
     const ws = new WebSocket((location.protocol === "https:" ? "wss://" : "ws://") + location.host + "/ws/state");
-    ws.onopen = () => { $("link").textContent = "live"; $("link").className = "badge on"; };
-    ws.onmessage = (m) => render(JSON.parse(m.data), true);
+    ws.onopen = () => {             // a restarted simulator counts its ticks from zero again
+      state.answeredAt = -1; $("link").textContent = "live"; $("link").className = "badge on";
+    };
+    ws.onmessage = (m) => fromFeed(JSON.parse(m.data));
     ws.onclose = () => { $("link").textContent = "disconnected"; $("link").className = "badge off"; setTimeout(connect, RECONNECT_MS); };
   }
 
