@@ -33,10 +33,9 @@ from pymotoros.motion import (
 )
 from pymotoros.motion.axes import GroupAxes
 from pymotoros.motion.constants import QUEUE_SIZE
-from pymotoros.motion.numerics import LD
 from pymotoros.motion.points import GroupPoint
 
-from .helpers import axes_for
+from .helpers import axes_for, x87_positions
 from .strategies import trajectories
 from .test_batch import CELLS, fit
 
@@ -85,22 +84,11 @@ def x87_model(
     """The x87 targets computed in longdouble throughout (coefficients, positions) and
     truncated with the scalar pulse rule: no float64 shortcut anywhere."""
     x0, v0, x1, v1 = rows
-    n = len(x0)
     duration = f32(length_ms / 1000)
-    coef = numerics.coefficients_x87_exact(x0, v0, x1, v1, duration)
     out: list[list[float]] = []
     if steps:
         taus = [f32((lead_ms + PERIOD_MS * k) / 1000) for k in range(steps)]
-        lt = np.array(taus, dtype=np.float64).reshape(-1, 1).astype(LD)
-        pos = numerics.positions_x87(
-            np.array(x0, dtype=LD),
-            np.array(v0, dtype=LD),
-            np.array([c / 2 for c in coef[:n]], dtype=LD),
-            np.array(coef[n:], dtype=LD),
-            lt,
-            lt * lt,
-        )
-        out = pos.tolist()
+        out = [list(row) for row in x87_positions(x0, v0, x1, v1, duration, taus)]
     if with_end:
         out.append(list(x1))
     factors = axes.factors_ros_list

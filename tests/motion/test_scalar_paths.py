@@ -19,32 +19,13 @@ from hypothesis import strategies as st
 
 from pymotoros.models.rules import f32
 from pymotoros.motion import GroupInterpolator, TrajPoint, interpolate, numerics
-from pymotoros.motion.numerics import LD
 
-from .helpers import axes_for
+from .helpers import axes_for, x87_positions
 from .strategies import trajectories
 from .test_batch import fit
 from .test_tick_engine import queued_by_ticks
 
 F32 = st.floats(-3.0, 3.0, width=32)
-
-
-def x87_positions(
-    x0: list[float], v0: list[float], x1: list[float], v1: list[float], t: float, taus: list[float]
-) -> list[tuple[float, ...]]:
-    """The x87's float32 positions: coefficients and positions in longdouble."""
-    coef = numerics.coefficients_x87_exact(x0, v0, x1, v1, t)
-    n = len(x0)
-    lt = np.array(taus, dtype=np.float64).reshape(-1, 1).astype(LD)
-    pos = numerics.positions_x87(
-        np.array(x0, dtype=LD),
-        np.array(v0, dtype=LD),
-        np.array([c / 2 for c in coef[:n]], dtype=LD),
-        np.array(coef[n:], dtype=LD),
-        lt,
-        lt * lt,
-    )
-    return [tuple(row) for row in pos.tolist()]
 
 
 @settings(max_examples=300, deadline=None)

@@ -11,14 +11,16 @@ from __future__ import annotations
 
 from collections.abc import AsyncIterator
 
+import httpx
 import pytest
 
 from pymotoros.controller import VirtualController
 from pymotoros.runtime.app import SimulatorApp
 from pymotoros.runtime.clock import ManualClock
+from pymotoros.runtime.http_api import create_http_app
 
 from .fake_controller import FakeController
-from .support import LOCAL, virtual_time
+from .support import LOCAL, STATS, virtual_time
 
 
 @pytest.fixture
@@ -48,3 +50,12 @@ async def vapp(controller: VirtualController, clock: ManualClock) -> AsyncIterat
     """The virtual controller on virtual time (running as fast as the loop goes)."""
     async with SimulatorApp(controller, LOCAL, clock=clock) as sim, virtual_time(clock):
         yield sim
+
+
+@pytest.fixture
+async def api(controller: VirtualController) -> AsyncIterator[httpx.AsyncClient]:
+    """An HTTP client of the control API in process (ASGI, no socket, no loop)."""
+    app = create_http_app(controller, lambda: STATS)
+    transport = httpx.ASGITransport(app=app)
+    async with httpx.AsyncClient(transport=transport, base_url="http://sim") as client:
+        yield client

@@ -8,9 +8,13 @@ from collections.abc import AsyncIterator
 
 from pymotoros.runtime.app import SimulatorConfig
 from pymotoros.runtime.clock import ManualClock
+from pymotoros.runtime.ticker import LatenessStats, TickStats
 
 LOCAL = SimulatorConfig(host="127.0.0.1", motion_port=0, state_port=0, io_port=0, http_port=None)
 """Every listener on loopback port 0, no control API."""
+
+STATS = TickStats(4.0, 1000, 2, 0, 0, LatenessStats(0.05, 0.2, 1.5))
+"""Loop statistics for a control API built without a running loop."""
 
 
 @contextlib.asynccontextmanager

@@ -3,28 +3,15 @@
 from __future__ import annotations
 
 import re
-from collections.abc import AsyncIterator
 
 import httpx
 import pytest
 from fastapi import FastAPI
 
-from pymotoros.controller import VirtualController
 from pymotoros.runtime.docs_page import install_offline_docs
-from pymotoros.runtime.http_api import create_http_app
-from pymotoros.runtime.ticker import LatenessStats, TickStats
 
-STATS = TickStats(4.0, 1000, 2, 0, 0, LatenessStats(0.05, 0.2, 1.5))
 MIN_BUNDLE_BYTES = 100_000
 """swagger-ui's bundle is about a megabyte; a stub or an error page is far smaller."""
-
-
-@pytest.fixture
-async def api(controller: VirtualController) -> AsyncIterator[httpx.AsyncClient]:
-    app = create_http_app(controller, lambda: STATS)
-    transport = httpx.ASGITransport(app=app)
-    async with httpx.AsyncClient(transport=transport, base_url="http://sim") as client:
-        yield client
 
 
 async def test_docs_page_references_only_local_assets(api: httpx.AsyncClient) -> None:

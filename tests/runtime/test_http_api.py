@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import math
-from collections.abc import AsyncIterator
 from dataclasses import replace
 
 import httpx
@@ -14,19 +13,8 @@ from pymotoros.controller.cell import cell_from_dict
 from pymotoros.protocol.constants import MotionCommand
 from pymotoros.runtime.app import SimulatorApp
 from pymotoros.runtime.http_api import create_http_app
-from pymotoros.runtime.ticker import LatenessStats, TickStats
 
-from .support import LOCAL
-
-STATS = TickStats(4.0, 1000, 2, 0, 0, LatenessStats(0.05, 0.2, 1.5))
-
-
-@pytest.fixture
-async def api(controller: VirtualController) -> AsyncIterator[httpx.AsyncClient]:
-    app = create_http_app(controller, lambda: STATS)
-    transport = httpx.ASGITransport(app=app)
-    async with httpx.AsyncClient(transport=transport, base_url="http://sim") as client:
-        yield client
+from .support import LOCAL, STATS
 
 
 async def test_state_document_has_exactly_the_contract_keys(api: httpx.AsyncClient) -> None:

@@ -8,7 +8,6 @@ import itertools
 import json
 import math
 import re
-from collections.abc import AsyncIterator
 from dataclasses import replace
 from pathlib import Path
 from typing import Any
@@ -32,25 +31,16 @@ from pymotoros.runtime.pendant import (
     PendantFeed,
 )
 from pymotoros.runtime.pendant.document import Skeleton, encode, state_document
-from pymotoros.runtime.ticker import LatenessStats, TickStats
+from pymotoros.runtime.ticker import TickStats
 
-from .support import LOCAL
+from .support import LOCAL, STATS
 
-STATS = TickStats(4.0, 1000, 2, 0, 0, LatenessStats(0.05, 0.2, 1.5))
 MIN_FEED_HZ = 20.0
 """The issue's floor for live updates."""
 WS_TIMEOUT_S = 5.0
 """Generous bound on one WebSocket read (documents come every 40 ms)."""
 HTTP_FORBIDDEN = 403
 CELLS = Path(__file__).resolve().parents[2] / "examples" / "cells"
-
-
-@pytest.fixture
-async def api(controller: VirtualController) -> AsyncIterator[httpx.AsyncClient]:
-    app = create_http_app(controller, lambda: STATS)
-    transport = httpx.ASGITransport(app=app)
-    async with httpx.AsyncClient(transport=transport, base_url="http://sim") as client:
-        yield client
 
 
 def test_feed_period_is_at_least_20_hz() -> None:

@@ -4,27 +4,15 @@ silently accepted), and every other body is served as before."""
 from __future__ import annotations
 
 import json
-from collections.abc import AsyncIterator
 
 import httpx
 import pytest
 
 from pymotoros.controller import VirtualController
 from pymotoros.runtime.body_limit import MAX_BODY_BYTES, MAX_JSON_DEPTH
-from pymotoros.runtime.http_api import create_http_app
 from pymotoros.runtime.strict_json import DuplicateKeyError, loads_strict
-from pymotoros.runtime.ticker import LatenessStats, TickStats
 
-STATS = TickStats(4.0, 1000, 2, 0, 0, LatenessStats(0.05, 0.2, 1.5))
 JSON = {"content-type": "application/json"}
-
-
-@pytest.fixture
-async def api(controller: VirtualController) -> AsyncIterator[httpx.AsyncClient]:
-    app = create_http_app(controller, lambda: STATS)
-    transport = httpx.ASGITransport(app=app)
-    async with httpx.AsyncClient(transport=transport, base_url="http://sim") as client:
-        yield client
 
 
 # ------------------------------------------------------------------ the parser
