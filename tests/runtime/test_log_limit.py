@@ -11,6 +11,7 @@ import asyncio
 import logging
 import re
 import struct
+from collections.abc import Callable
 
 import httpx
 import pytest
@@ -157,6 +158,93 @@ def test_a_disabled_level_is_neither_logged_nor_counted(
     assert not caplog.records
 
 
+class FakeScheduler:
+    """Collects what a limiter schedules; the test runs the calls when it says so."""
+
+    def __init__(self) -> None:
+        self.calls: list[tuple[float, Callable[[], None], FakeTimer]] = []
+
+    def __call__(self, delay: float, callback: Callable[[], None]) -> FakeTimer:
+        timer = FakeTimer()
+        self.calls.append((delay, callback, timer))
+        return timer
+
+    def run_due(self) -> list[float]:
+        """Run every scheduled call not cancelled (oldest first); their delays."""
+        calls, self.calls = self.calls, []
+        delays = []
+        for delay, callback, timer in calls:
+            if not timer.cancelled:
+                delays.append(delay)
+                callback()
+        return delays
+
+
+class FakeTimer:
+    def __init__(self) -> None:
+        self.cancelled = False
+
+    def cancel(self) -> None:
+        self.cancelled = True
+
+
+def test_a_flood_that_stops_is_reported_one_interval_after_its_first_counted_line(
+    fake_clock: FakeClock, caplog: pytest.LogCaptureFixture
+) -> None:
+    caplog.set_level(logging.INFO, logger="test.log_limit")
+    later = FakeScheduler()
+    lim = LogLimiter("motion: client 1.2.3.4:5", fake_clock, burst=3, schedule=later)
+    for _ in range(3):  # logged in full: nothing to report, nothing scheduled
+        lim.allow("refused frames", log, logging.WARNING)
+    assert later.calls == []
+    for _ in range(40):  # counted: one report scheduled, however many are counted
+        fake_clock.t += 0.01
+        lim.allow("refused frames", log, logging.WARNING)
+    assert [delay for delay, _, _ in later.calls] == [5.0]
+    fake_clock.t += 5.0  # the flood has stopped: no further line will carry the count
+    assert later.run_due() == [5.0]
+    [summary] = [r for r in caplog.records]
+    assert summary.getMessage().startswith(
+        "motion: client 1.2.3.4:5: 40 more refused frames in the last 5.4 s"
+    )
+    assert summary.levelno == logging.WARNING
+    assert later.calls == []  # reported: nothing more is due
+    lim.close()  # the total is still written when the client goes
+    assert counted(caplog.records[-1].getMessage()) == 40
+
+
+def test_a_report_on_a_clock_slower_than_the_schedulers_waits_for_the_interval(
+    fake_clock: FakeClock, caplog: pytest.LogCaptureFixture
+) -> None:
+    """The limiter's clock may be a virtual one: the report waits for *its* interval."""
+    caplog.set_level(logging.INFO, logger="test.log_limit")
+    later = FakeScheduler()
+    lim = LogLimiter("io", fake_clock, burst=0, schedule=later)
+    lim.allow("connections", log, logging.INFO)
+    fake_clock.t += 2.0  # the scheduler's 5 s passed, the limiter's clock only 2 s
+    assert later.run_due() == [5.0]
+    assert not caplog.records
+    assert [delay for delay, _, _ in later.calls] == [3.0]  # the rest of its interval
+    fake_clock.t += 3.0
+    later.run_due()
+    assert [counted(r.getMessage()) for r in caplog.records] == [1]
+
+
+def test_close_cancels_the_scheduled_report(
+    fake_clock: FakeClock, caplog: pytest.LogCaptureFixture
+) -> None:
+    caplog.set_level(logging.INFO, logger="test.log_limit")
+    later = FakeScheduler()
+    lim = LogLimiter("io", fake_clock, burst=1, schedule=later)
+    for _ in range(5):
+        lim.allow("connections", log, logging.INFO)
+    lim.close()
+    assert [timer.cancelled for _, _, timer in later.calls] == [True]
+    assert later.run_due() == []
+    [total] = [r.getMessage() for r in caplog.records]
+    assert "4 connections in all were not logged" in total
+
+
 @pytest.mark.parametrize(("burst", "interval"), [(-1, 5.0), (3, 0.0), (3, float("nan"))])
 def test_nonsense_settings_are_refused(fake_clock: FakeClock, burst: int, interval: float) -> None:
     with pytest.raises(ValueError, match="must be"):
@@ -299,3 +387,57 @@ async def test_a_flood_of_bad_http_requests_logs_a_bounded_number_of_lines(
     [summary] = lines(caplog, r"^control API: [\d,]+ more refused requests in the last 5.0 s")
     assert len(refused) == LOG_BURST + 1  # a burst, then a fresh one after a quiet interval
     assert counted(summary) == requests - LOG_BURST
+
+
+async def test_each_ports_refusals_and_their_counts_are_logged_under_its_own_logger(
+    app: SimulatorApp, caplog: pytest.LogCaptureFixture
+) -> None:
+    """The motion port shares the IO and frame checks with the IO port, but a user
+    filtering logs by logger sees each port's lines (and their summaries) under its name."""
+    caplog.set_level(logging.INFO, logger="pymotoros.runtime")
+    for tcp_port, port, server in (
+        (app.ports.motion, Port.MOTION, app.motion),
+        (app.ports.io, Port.IO, app.io),
+    ):
+        caplog.clear()
+        peer = await Peer.connect(tcp_port, port)
+        assert isinstance(await peer.request(MotoReadIoBit(BAD_IO_ADDRESS)), MotoReadIoBitReply)
+        tasks = list(server._tasks.values())  # its handler has started
+        flood = LOG_BURST + 7
+        await peer.send_raw(unknown_frames(flood))
+        await served(peer, flood)
+        for _ in range(flood):
+            await peer.send(MotoReadIoBit(BAD_IO_ADDRESS))
+        await served(peer, flood)
+        await hang_up(tasks, peer)
+        name = f"pymotoros.runtime.{'motion_server' if port is Port.MOTION else 'io_server'}"
+        about = [
+            r
+            for r in caplog.records
+            if re.search(r"INVALID/3003|refused|were not logged", r.getMessage())
+        ]
+        # 20 frames + 20 IO refusals in full, then one total per kind at disconnect
+        assert len(about) == 2 * LOG_BURST + 2, [r.getMessage() for r in about]
+        assert {r.name for r in about} == {name}
+
+
+async def test_a_flood_that_stops_is_reported_while_the_client_stays_connected(
+    app: SimulatorApp, caplog: pytest.LogCaptureFixture
+) -> None:
+    caplog.set_level(logging.INFO, logger="pymotoros.runtime")
+    peer = await Peer.connect(app.ports.motion, Port.MOTION)
+    assert await peer.request(Ping()) == PingReply()
+    [conn] = app.motion._tasks  # its handler has started
+    conn.log.interval = 0.05  # a short interval: the test waits for it in real time
+    await peer.send_raw(unknown_frames(LOG_BURST + 30))
+    await served(peer, LOG_BURST + 30)
+    summaries: list[logging.LogRecord] = []
+    for _ in range(200):  # bounded: at most 2 s for a 50 ms report
+        summaries = [r for r in caplog.records if "more refused frames" in r.getMessage()]
+        if summaries:
+            break
+        await asyncio.sleep(0.01)
+    assert [counted(r.getMessage()) for r in summaries] == [30]
+    assert summaries[0].name == "pymotoros.runtime.motion_server"
+    assert await peer.request(Ping()) == PingReply()  # still connected and served
+    await peer.close()

@@ -53,12 +53,13 @@ def _log_io_refusal(
     target: int,
     code: IoResultCode,
     value: int,
-    conn: Connection | None = None,
+    conn: Connection | None,
+    log: logging.Logger,
 ) -> None:
     if code != IoResultCode.OK and (
-        conn is None or conn.log.allow("refused IO requests", logger, logging.INFO)
+        conn is None or conn.log.allow("refused IO requests", log, logging.INFO)
     ):
-        logger.info(
+        log.info(
             "%s: %s %d (value %d) refused: %s",
             port,
             what,
@@ -69,18 +70,25 @@ def _log_io_refusal(
 
 
 def log_rejection(
-    conn: Connection, frame: Frame, verdict: Reject, order: ByteOrder, port: Port
+    conn: Connection,
+    frame: Frame,
+    verdict: Reject,
+    order: ByteOrder,
+    port: Port,
+    log: logging.Logger = logger,
 ) -> None:
     """One warning per protocol error, with the sizes behind it (motion and IO ports);
-    past the client's allowance only counted (runtime/log_limit.py)."""
-    if not conn.log.allow("refused frames", logger, logging.WARNING):
+    past the client's allowance only counted (runtime/log_limit.py). ``log``: the
+    logger of the port's server, so that a user filtering by logger sees each port's
+    lines, and its summaries, under that port's name."""
+    if not conn.log.allow("refused frames", log, logging.WARNING):
         return
     expected = expected_size(frame.msg_type, port, frame.body, order)
     if expected is None:
         why = f"type {frame.msg_type} is not served on the {port.value} port"
     else:
         why = f"type {frame.msg_type} needs {expected} bytes, the frame has {frame.size}"
-    logger.warning(
+    log.warning(
         "%s: client %s: answered INVALID/%d (%s): %s",
         port.value,
         conn.peer,
@@ -91,36 +99,43 @@ def log_rejection(
 
 
 def handle_io_request(
-    controller: MotoRosController, msg: WireMessage, port: str, conn: Connection | None = None
+    controller: MotoRosController,
+    msg: WireMessage,
+    port: str,
+    conn: Connection | None = None,
+    log: logging.Logger = logger,
 ) -> Message | None:
     """The reply to an IO request, or None if ``msg`` is not an IO request of this port.
 
     M-register requests are only IO-port messages; the motion server never passes them.
-    Refusals are logged within ``conn``'s allowance (runtime/log_limit.py) when given.
+    Refusals are logged to ``log`` (the port's server's logger) within ``conn``'s
+    allowance (runtime/log_limit.py) when given.
     """
     if isinstance(msg, MotoReadIoBit):
         read = controller.read_io_bit(msg.io_address)
-        _log_io_refusal(port, "read bit", msg.io_address, read.result_code, 0, conn)
+        _log_io_refusal(port, "read bit", msg.io_address, read.result_code, 0, conn, log)
         return MotoReadIoBitReply(read.value, int(read.result_code))
     if isinstance(msg, MotoWriteIoBit):
         code = controller.write_io_bit(msg.io_address, msg.io_value)
-        _log_io_refusal(port, "write bit", msg.io_address, code, msg.io_value, conn)
+        _log_io_refusal(port, "write bit", msg.io_address, code, msg.io_value, conn, log)
         return MotoWriteIoBitReply(int(code))
     if isinstance(msg, MotoReadIoGroup):
         read = controller.read_io_group(msg.io_address)
-        _log_io_refusal(port, "read group", msg.io_address, read.result_code, 0, conn)
+        _log_io_refusal(port, "read group", msg.io_address, read.result_code, 0, conn, log)
         return MotoReadIoGroupReply(read.value, int(read.result_code))
     if isinstance(msg, MotoWriteIoGroup):
         code = controller.write_io_group(msg.io_address, msg.io_value)
-        _log_io_refusal(port, "write group", msg.io_address, code, msg.io_value, conn)
+        _log_io_refusal(port, "write group", msg.io_address, code, msg.io_value, conn, log)
         return MotoWriteIoGroupReply(int(code))
     if isinstance(msg, MotoReadMRegister):
         read = controller.read_mregister(msg.register_number)
-        _log_io_refusal(port, "read M-register", msg.register_number, read.result_code, 0, conn)
+        _log_io_refusal(
+            port, "read M-register", msg.register_number, read.result_code, 0, conn, log
+        )
         return MotoReadMRegisterReply(read.value, int(read.result_code))
     if isinstance(msg, MotoWriteMRegister):
         code = controller.write_mregister(msg.register_number, msg.value)
-        _log_io_refusal(port, "write M-register", msg.register_number, code, msg.value, conn)
+        _log_io_refusal(port, "write M-register", msg.register_number, code, msg.value, conn, log)
         return MotoWriteMRegisterReply(int(code))
     return None
 

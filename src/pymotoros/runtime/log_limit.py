@@ -11,8 +11,11 @@ connects) by *kind* ("refused frames", "connections" …). The first :data:`LOG_
 lines of a burst are logged as usual; after that they are only counted, and a single
 summary line with the count is written at most once per :data:`LOG_SUMMARY_INTERVAL_S`.
 A burst ends, and the full allowance comes back, once a whole interval passes without
-a line of that kind. :meth:`LogLimiter.close` writes the total that was counted
-instead of logged when the source goes away (a client disconnecting).
+a line of that kind. A flood that stops is still reported: given a ``schedule`` (the
+servers pass :func:`loop_later`), the limiter writes the count one interval after the
+first line it counted, even if no other line of that kind ever comes.
+:meth:`LogLimiter.close` writes the total that was counted instead of logged when the
+source goes away (a client disconnecting).
 
 Time comes from an injected ``now`` (the application's clock in the servers, a fake
 one in tests): the limiter never reads the wall clock itself.
@@ -23,13 +26,15 @@ from __future__ import annotations
 import asyncio
 import logging
 from collections.abc import Callable, Mapping
-from typing import Any, Final
+from typing import Any, Final, Protocol
 
 __all__ = [
     "LOG_BURST",
     "LOG_SUMMARY_INTERVAL_S",
     "LogLimiter",
+    "Schedule",
     "api_refusal_allowed",
+    "loop_later",
     "loop_time",
 ]
 
@@ -48,16 +53,30 @@ _API_LIMITER: Final = "pymotoros_refusal_log"
 """Attribute of a control API's ``app.state`` holding its limiter of refusal lines."""
 
 
+class _Cancellable(Protocol):
+    def cancel(self) -> None: ...
+
+
+Schedule = Callable[[float, Callable[[], None]], _Cancellable]
+"""Calls a function after a delay in seconds (``loop.call_later``'s shape): how a limiter
+reports a flood that has stopped, with no further line to carry the count."""
+
+
 def loop_time() -> float:
     """The running event loop's monotonic time: the servers' limiters' clock unless the
     application gives its own (``TcpService.log_clock``)."""
     return asyncio.get_running_loop().time()
 
 
+def loop_later(delay: float, callback: Callable[[], None]) -> asyncio.TimerHandle:
+    """``callback`` after ``delay`` seconds on the running loop: the servers' :data:`Schedule`."""
+    return asyncio.get_running_loop().call_later(delay, callback)
+
+
 class _Kind:
     """The counters of one kind of line from one source."""
 
-    __slots__ = ("last", "level", "logged", "logger", "pending", "since", "total")
+    __slots__ = ("last", "level", "logged", "logger", "pending", "since", "timer", "total")
 
     def __init__(self, logger: logging.Logger, now: float) -> None:
         self.logger = logger
@@ -73,16 +92,20 @@ class _Kind:
         """The highest level among the lines counted: the level of the summaries."""
         self.total = 0
         """Lines counted instead of logged over the source's life."""
+        self.timer: _Cancellable | None = None
+        """The scheduled report of the ``pending`` lines, if one is due."""
 
 
 class LogLimiter:
     """Decides, line by line, whether one source's line is logged or only counted.
 
     ``prefix`` starts every summary line (``"motion: client 127.0.0.1:5555"``); ``now``
-    is a monotonic clock in seconds.
+    is a monotonic clock in seconds. With ``schedule``, counted lines are reported one
+    interval after the first of them even when no later line comes to carry the count;
+    without it (a limiter on its own, in tests), only by the next line or :meth:`close`.
     """
 
-    __slots__ = ("_kinds", "_now", "burst", "interval", "prefix")
+    __slots__ = ("_kinds", "_now", "_schedule", "burst", "interval", "prefix")
 
     def __init__(
         self,
@@ -91,6 +114,7 @@ class LogLimiter:
         *,
         burst: int = LOG_BURST,
         interval: float = LOG_SUMMARY_INTERVAL_S,
+        schedule: Schedule | None = None,
     ) -> None:
         if burst < 0:
             raise ValueError(f"burst must be >= 0 lines, got {burst}")
@@ -98,6 +122,7 @@ class LogLimiter:
             raise ValueError(f"interval must be > 0 s, got {interval}")
         self.prefix = prefix
         self._now = now
+        self._schedule = schedule
         self.burst = burst
         self.interval = interval
         self._kinds: dict[str, _Kind] = {}
@@ -128,6 +153,8 @@ class LogLimiter:
             return True
         if not k.pending:
             k.since = now
+            if self._schedule is not None and k.timer is None:
+                k.timer = self._schedule(self.interval, lambda: self._due(kind))
         k.pending += 1
         k.total += 1
         k.level = max(k.level, level)
@@ -141,6 +168,9 @@ class LogLimiter:
     def close(self) -> None:
         """The source is gone: one line per kind with the total that was not logged."""
         for kind, k in self._kinds.items():
+            if k.timer is not None:
+                k.timer.cancel()
+                k.timer = None
             if not k.total:
                 continue
             k.logger.log(
@@ -153,6 +183,22 @@ class LogLimiter:
             )
             k.pending = 0
         self._kinds.clear()
+
+    def _due(self, kind: str) -> None:
+        """The scheduled report: the lines still pending, once an interval has passed
+        since the first of them (else it waits for the rest of the interval)."""
+        k = self._kinds.get(kind)
+        if k is None:  # closed meanwhile
+            return
+        k.timer = None
+        if not k.pending or self._schedule is None:
+            return
+        now = self._now()
+        wait = k.since + self.interval - now
+        if wait > 0:  # the limiter's clock is not the scheduler's (a virtual clock)
+            k.timer = self._schedule(wait, lambda: self._due(kind))
+            return
+        self._summarise(kind, k, now)
 
     def _summarise(self, kind: str, k: _Kind, now: float) -> None:
         k.logger.log(
@@ -185,6 +231,6 @@ def api_refusal_allowed(scope: Mapping[str, Any], logger: logging.Logger, level:
         return logger.isEnabledFor(level)
     limiter = getattr(state, _API_LIMITER, None)
     if not isinstance(limiter, LogLimiter):
-        limiter = LogLimiter("control API", loop_time)
+        limiter = LogLimiter("control API", loop_time, schedule=loop_later)
         setattr(state, _API_LIMITER, limiter)
     return limiter.allow("refused requests", logger, level)

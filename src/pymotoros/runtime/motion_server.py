@@ -159,7 +159,7 @@ class MotionServer(FramedService):
                 )
             raise _CloseConnectionError
         if isinstance(verdict, Reject):
-            log_rejection(conn, frame, verdict, self._order, Port.MOTION)
+            log_rejection(conn, frame, verdict, self._order, Port.MOTION, logger)
             reply: Message = verdict.reply
         else:
             if verdict.surplus:
@@ -235,7 +235,7 @@ class MotionServer(FramedService):
             return MotoGetDhParametersReply.for_groups(dh)
         if isinstance(msg, Ping):
             return PingReply()
-        reply = handle_io_request(c, msg, "motion", conn)
+        reply = handle_io_request(c, msg, "motion", conn, logger)
         if reply is None:  # pragma: no cover - check_request answers unknown types itself
             return MotoMotionReply(-1, -1, msg_type, ResultCode.INVALID, InvalidSubcode.MSGTYPE)
         return reply

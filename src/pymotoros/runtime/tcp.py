@@ -30,7 +30,7 @@ from pymotoros.runtime.connections import (
     configure_socket,
     peer_name,
 )
-from pymotoros.runtime.log_limit import LogLimiter, loop_time
+from pymotoros.runtime.log_limit import LogLimiter, loop_later, loop_time
 
 __all__ = ["Connection", "FramedService", "TcpService", "bind_socket", "is_loopback"]
 
@@ -104,7 +104,7 @@ class Connection:
         self.peer = peer_name(writer)
         self.flow: Flow | None = None
         """This connection in the session recording, if one is being made."""
-        self.log = LogLimiter(f"{service}: client {self.peer}", now)
+        self.log = LogLimiter(f"{service}: client {self.peer}", now, schedule=loop_later)
         """Bounds the lines this client makes the server log (runtime/log_limit.py)."""
         self.logged = True
         """Whether this connection's life cycle (connected, lost, disconnected) is
@@ -157,7 +157,7 @@ class TcpService(ABC):
         """Called first on every accept: brings a batching ticker up to date (issue 13)."""
         self.log_clock: Callable[[], float] = loop_time
         """The clock of the log limiters (the application's clock when it has one)."""
-        self.log = LogLimiter(self.name, lambda: self.log_clock())
+        self.log = LogLimiter(self.name, lambda: self.log_clock(), schedule=loop_later)
         """Bounds the connection lines a flood of connects makes this port log."""
 
     # ----------------------------------------------------------- life cycle
