@@ -124,8 +124,8 @@ async def test_the_body_limits_still_apply_first(api: httpx.AsyncClient) -> None
 async def test_a_body_is_parsed_once(
     api: httpx.AsyncClient, controller: VirtualController, monkeypatch: pytest.MonkeyPatch
 ) -> None:
-    """FastAPI takes the body as the duplicate check parsed it (Starlette's own parse,
-    ``Request.json()``, is never reached)."""
+    """FastAPI takes the body as the duplicate check parsed it (Starlette's own parse in
+    ``Request.json()`` is never reached), and an IO write with it still takes effect."""
 
     class NoSecondParse:
         @staticmethod

@@ -7,9 +7,11 @@ twin (a proxy, a test tool) may have read it as *on*. :class:`StrictJsonRoute` p
 every JSON request body once, with a hook that notices a repeated key in any object at
 any depth, and answers 422 ``{"error": "..."}`` (the shape of the API's other malformed
 body errors) naming the key and where it is. A body without repeated keys is handed to
-FastAPI already parsed (Starlette keeps the parsed body on the request), so it is still
-parsed only once; a body that is not valid JSON is left to FastAPI, whose error the API
-reports as before.
+FastAPI already parsed, so it is still parsed only once: the route passes FastAPI a
+:class:`Request` subclass whose ``json()`` returns that parse (the extension point
+FastAPI documents as a custom Request class; FastAPI reads JSON bodies through
+``Request.json()``). A body that is not valid JSON is left to FastAPI, whose error the
+API reports as before.
 
 It runs behind :class:`~pymotoros.runtime.body_limit.BodyLimit`, so a body reaching it
 is at most ``MAX_BODY_BYTES`` long and ``MAX_JSON_DEPTH`` deep.
@@ -106,6 +108,21 @@ def _is_json(content_type: str | None, strict_content_type: bool) -> bool:
     return subtype == "json" or subtype.endswith("+json")
 
 
+_UNPARSED: Final = object()
+
+
+class _CheckedRequest(Request):
+    """A request whose JSON body the duplicate-key check has parsed: ``json()`` returns
+    that parse instead of parsing the same bytes again."""
+
+    checked: Any = _UNPARSED
+
+    async def json(self) -> Any:
+        if self.checked is _UNPARSED:
+            return await super().json()
+        return self.checked
+
+
 class StrictJsonRoute(APIRoute):
     """An API route whose JSON body may not name a key twice in any object."""
 
@@ -118,18 +135,18 @@ class StrictJsonRoute(APIRoute):
             strict = strict.value
         strict_content_type = bool(strict)
 
-        async def handle(request: Request) -> Response:
+        async def handle(original: Request) -> Response:
+            # Nothing has read the body yet: this request takes the original's place.
+            request = _CheckedRequest(original.scope, original.receive)
             if _is_json(request.headers.get("content-type"), strict_content_type):
                 body = await request.body()
                 if body:
                     try:
-                        parsed = loads_strict(body)
+                        request.checked = loads_strict(body)
                     except DuplicateKeyError as exc:
                         return _refuse(request, exc)
                     except (ValueError, RecursionError):
                         pass  # not JSON: FastAPI parses it again and reports it as before
-                    else:
-                        request._json = parsed  # what Request.json() returns from now on
             return await handler(request)
 
         return handle
