@@ -10,12 +10,16 @@ For each fleet size in ``--twins`` it starts that many ``pymotoros sim`` process
 
 1. idle: CPU per twin (utime + stime from /proc/<pid>/stat, % of one core) and every
    twin's interpolation-loop lateness p99 (from its control API after
-   ``POST /api/tick/reset``);
+   ``POST /api/tick/reset``); then the memory per twin (RSS, PSS and private pages
+   from /proc/<pid>/smaps_rollup: PSS is what each twin costs the machine);
 2. streaming: the same while each twin has its own motion client streaming a
    trajectory (JOINT_TRAJ_PT_FULL every 100 ms of trajectory time, BUSY retries) and one
    state client; the clients run in this process, or with ``--client-procs K`` in K
    processes of their own (at ``--client-nice``, e.g. 19, so that they load the
    machine without competing with the twins at the same priority).
+
+``--slice-us 0 100`` runs each fleet once per EEVDF time slice asked for the twins'
+threads with ``sched_setattr`` (0: the kernel's default; unprivileged, Linux >= 6.12).
 
 ``--realtime on|off|both`` starts the twins with ``pymotoros sim --realtime``
 (SCHED_FIFO, low priority), without, or each fleet once each way, one after the other
@@ -39,6 +43,7 @@ from __future__ import annotations
 import argparse
 import asyncio
 import contextlib
+import ctypes
 import json
 import os
 import signal
@@ -94,6 +99,74 @@ CLOCK_ALONE = textwrap.dedent(
     asyncio.run(main(sys.argv[1], float(sys.argv[2])))
     """
 )
+
+
+class _SchedAttr(ctypes.Structure):
+    """struct sched_attr (linux/sched/types.h, SCHED_ATTR_SIZE_VER1: 56 bytes)."""
+
+    _fields_ = [
+        ("size", ctypes.c_uint32),
+        ("sched_policy", ctypes.c_uint32),
+        ("sched_flags", ctypes.c_uint64),
+        ("sched_nice", ctypes.c_int32),
+        ("sched_priority", ctypes.c_uint32),
+        ("sched_runtime", ctypes.c_uint64),
+        ("sched_deadline", ctypes.c_uint64),
+        ("sched_period", ctypes.c_uint64),
+        ("sched_util_min", ctypes.c_uint32),
+        ("sched_util_max", ctypes.c_uint32),
+    ]
+
+
+SYS_SCHED_SETATTR = 314  # x86-64 syscall numbers
+SYS_SCHED_GETATTR = 315
+
+
+def set_fair_slice(pid: int, slice_ns: int) -> None:
+    """Ask EEVDF (Linux >= 6.12) for a ``slice_ns`` time slice for every thread of
+    ``pid``, keeping its policy (SCHED_OTHER) and niceness: no privilege needed. A
+    shorter slice gives a waking task an earlier virtual deadline, so it should preempt
+    sooner (the kernel's default here is 1.4 ms on 2 CPUs)."""
+    libc = ctypes.CDLL(None, use_errno=True)
+    for tid in os.listdir(f"/proc/{pid}/task"):
+        attr = _SchedAttr()
+        size = ctypes.sizeof(attr)
+        if libc.syscall(SYS_SCHED_GETATTR, int(tid), ctypes.byref(attr), size, 0) != 0:
+            raise OSError(ctypes.get_errno(), "sched_getattr")
+        attr.size = size
+        attr.sched_flags = 0
+        attr.sched_runtime = slice_ns
+        if libc.syscall(SYS_SCHED_SETATTR, int(tid), ctypes.byref(attr), 0) != 0:
+            raise OSError(ctypes.get_errno(), "sched_setattr (needs Linux >= 6.12 for a slice)")
+
+
+def memory_kib(pid: int) -> dict[str, int]:
+    """Rss, Pss and Private_Dirty of a process (kB, /proc/<pid>/smaps_rollup).
+
+    Pss shares each page among the processes mapping it, so a fleet's memory is the sum
+    of its twins' Pss; Rss counts the shared libraries (numpy, Pinocchio, ...) in full
+    in every twin. Private_Dirty is what one more twin adds at least.
+    """
+    out: dict[str, int] = {}
+    with open(f"/proc/{pid}/smaps_rollup", encoding="ascii") as f:
+        for line in f:
+            key, _, rest = line.partition(":")
+            if key in ("Rss", "Pss", "Private_Dirty"):
+                out[key] = int(rest.split()[0])
+    return out
+
+
+def print_memory(sims: list[Sim]) -> None:
+    rows = [memory_kib(s.proc.pid) for s in sims]
+
+    def mean_mib(key: str) -> float:
+        return sum(r[key] for r in rows) / len(rows) / 1024
+
+    print(
+        f"  {len(sims):2d} twins memory: per twin RSS {mean_mib('Rss'):.1f} MiB, "
+        f"PSS {mean_mib('Pss'):.1f} MiB, private {mean_mib('Private_Dirty'):.1f} MiB; "
+        f"the fleet's PSS {sum(r['Pss'] for r in rows) / 1024:.0f} MiB"
+    )
 
 
 def cpu_seconds(pid: int) -> float:
@@ -337,29 +410,45 @@ def main() -> None:
         help="run the streaming clients in this many processes of their own (0: here)",
     )
     parser.add_argument("--client-nice", type=int, default=0, help="niceness of those processes")
+    parser.add_argument(
+        "--slice-us",
+        type=int,
+        nargs="+",
+        default=[0],
+        help="EEVDF time slice asked for the twins' threads, µs, one fleet each (0: the "
+        "kernel's default); e.g. --slice-us 0 100 compares them in one run",
+    )
     args = parser.parse_args()
     idle_duration = args.duration if args.idle_duration is None else args.idle_duration
     print(
         f"machine: {os.cpu_count()} cores, Python {sys.version.split()[0]}, "
         f"load average {os.getloadavg()[0]:.2f} at start"
     )
-    variants: list[tuple[str, list[str]]] = []
+    variants: list[tuple[str, list[str], int]] = []
     for rt in ("off", "on") if args.realtime == "both" else (args.realtime,):
         for batch in ("on", "off") if args.batching == "both" else (args.batching,):
-            extra = (["--realtime"] if rt == "on" else []) + (
-                ["--no-idle-batching"] if batch == "off" else []
-            )
-            label = (" realtime" if rt == "on" else "") + (" unbatched" if batch == "off" else "")
-            variants.append((label, extra))
+            for slice_us in args.slice_us:
+                extra = (["--realtime"] if rt == "on" else []) + (
+                    ["--no-idle-batching"] if batch == "off" else []
+                )
+                label = (
+                    (" realtime" if rt == "on" else "")
+                    + (" unbatched" if batch == "off" else "")
+                    + (f" slice {slice_us} us" if slice_us else "")
+                )
+                variants.append((label, extra, slice_us))
     table: list[tuple[int, str, str, dict[str, float]]] = []
     for n in args.twins:
-        for label, extra in variants:
+        for label, extra, slice_us in variants:
             t0 = time.monotonic()
             sims = start_twins(n, extra)
+            for sim in sims if slice_us else ():
+                set_fair_slice(sim.proc.pid, slice_us * 1000)
             print(f"  ({n} twins{label} started in {time.monotonic() - t0:.1f} s)", flush=True)
             try:
                 r = asyncio.run(measure(sims, idle_duration, args.warmup, False, label))
                 table.append((n, "idle", label, r))
+                print_memory(sims)
                 if not args.no_stream:
                     r = asyncio.run(
                         measure(
