@@ -82,7 +82,7 @@ def test_tcp_speed_while_moving_matches_the_pose_change() -> None:
 
 
 def test_increment_speed_for_an_fsu_limit() -> None:
-    from pymotoros.controller.tcp import TcpTracker
+    from pymotoros.controller.tool_point import TcpTracker
 
     vc = _cell()
     tracker = TcpTracker(vc.cell)

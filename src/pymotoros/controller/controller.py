@@ -60,7 +60,7 @@ from pymotoros.controller.safety.startup import MotoRosStartup, setup_validation
 from pymotoros.controller.scenario import FiredEvent, Scenario, ScenarioDriver, perform
 from pymotoros.controller.servo import IN_MOTION_PULSES, ServoGroup
 from pymotoros.controller.skillsnd import SkillListeners
-from pymotoros.controller.tcp import TcpTracker
+from pymotoros.controller.tool_point import TcpTracker
 from pymotoros.controller.trajectory import DhTable, TrajectoryPoints
 from pymotoros.controller.units import RosConverter
 from pymotoros.models import robot_model

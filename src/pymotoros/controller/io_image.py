@@ -97,9 +97,6 @@ class IoImage:
         """The IO range holding ``address``, or None if no readable range holds it."""
         return self._controller.io_range(address)
 
-    def is_writable(self, address: int) -> bool:
-        return not bit_address_result(self._controller, address, write=True)
-
     # ------------------------------------------------------------------ client access (§6.1)
 
     def read_bit(self, address: int) -> IoRead:

@@ -26,7 +26,7 @@ import numpy.typing as npt
 from pymotoros.controller.cell import CellConfig
 from pymotoros.controller.io_image import IoImage
 from pymotoros.controller.servo import ServoGroup
-from pymotoros.controller.tcp import TcpTracker
+from pymotoros.controller.tool_point import TcpTracker
 from pymotoros.kinematics import matrix_to_pose
 from pymotoros.models.s1cxg import Quantity, S1cxgTable, Source, unit_scale
 

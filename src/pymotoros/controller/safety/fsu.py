@@ -28,7 +28,7 @@ logger = logging.getLogger(__name__)
 IncrementLimiter = Callable[[float, int, Sequence[int], Sequence[int]], Sequence[int]]
 """TCP-speed hook: ``(tcp_speed_mm_s, group index, commanded pulses, intended increment)
 -> per-slot maximum |increment| (pulses) for this tick``. The controller fills it from its
-kinematics (``controller.tcp.TcpTracker``)."""
+kinematics (``controller.tool_point.TcpTracker``)."""
 
 TCP_NEEDS_KINEMATICS = (
     "the FSU TCP-speed limit (tcp_speed_mm_s) needs the robot's kinematics model, which "
