@@ -132,7 +132,7 @@ class MotionCommands:
         readiness = self._readiness
         # 1. status update; clear the PFL and inc-move-error latches
         readiness.status_update()
-        readiness.clear_latches()
+        readiness.flags.clear_latches()
         # 2. already ready
         if readiness.motion_ready:
             return SUCCESS
@@ -168,14 +168,14 @@ class MotionCommands:
         if reading.operating:
             logger.info("START_TRAJ_MODE: another job is running; MotoROS does not interrupt it")
             return False
-        if readiness.estopped or reading.hold or not reading.remote:
+        if reading.estopped or reading.hold or not reading.remote:
             return False
         if reading.error:
             self._machine.fire(Event.CANCEL_ERRORS, now)
         if any(reading.alarm_bits) or s.alarms:
             self._machine.fire(Event.RESET_ALARMS, now)
             readiness.status_update()
-            if readiness.in_error:
+            if readiness.reading.in_error:
                 return False
         return True
 

@@ -207,7 +207,7 @@ class IncMoveTask:
             and self._readiness.pfl_option
             and not (s.estop or s.hold or s.alarms or s.errors)
         ):
-            readiness.latch_pfl_event()
+            readiness.flags.latch_pfl_event()
         if result is IncMoveReturn.UNDER_ENERGY_SAVING:
             now = self._clock.time_ms
             self._machine.fire(Event.WAKE_FROM_ECO, now)
@@ -218,7 +218,7 @@ class IncMoveTask:
             "until the next START_TRAJ_MODE",
             result.value,
         )
-        readiness.latch_inc_move_error(f"an incremental move was refused: {result.value}")
+        readiness.flags.latch_inc_move_error(f"an incremental move was refused: {result.value}")
         stop_motion_now(readiness, self._queues)
         return False
 

@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import logging
 from array import array
+from collections.abc import Callable
 
 from pymotoros.controller.api import IoRead
 from pymotoros.controller.signals import MONITORED
@@ -101,61 +102,65 @@ class IoImage:
 
     def read_bit(self, address: int) -> IoRead:
         code = bit_address_result(self._controller, address, write=False)
-        if code:
-            return IoRead(0, code)
-        if self.fail_reads:
-            return IoRead(0, IoResultCode.READ_API_ERROR)
-        return IoRead(self.get(address), IoResultCode.OK)
+        return self._client_read(code, lambda: self.get(address))
 
     def write_bit(self, address: int, value: int) -> IoResultCode:
         code = bit_address_result(self._controller, address, write=True) or bit_value_result(value)
-        if code:
-            return code
-        if self.fail_writes:
-            return IoResultCode.WRITE_API_ERROR
-        self.set(address, value)
-        return IoResultCode.OK
+        return self._client_write(code, lambda: self.set(address, value))
 
     def read_group(self, number: int) -> IoRead:
         """Byte ``number``: bits number×10+0..7, bit 0 least significant (§6.1)."""
         code = group_address_result(self._controller, number, write=False)
-        if code:
-            return IoRead(0, code)
-        if self.fail_reads:
-            return IoRead(0, IoResultCode.READ_API_ERROR)
-        return IoRead(self._bytes[number], IoResultCode.OK)
+        return self._client_read(code, lambda: self._bytes[number])
 
     def write_group(self, number: int, value: int) -> IoResultCode:
         code = group_address_result(self._controller, number, write=True) or group_value_result(
             value
         )
-        if code:
-            return code
-        if self.fail_writes:
-            return IoResultCode.WRITE_API_ERROR
-        first = number * 10
-        for k in range(GROUP_BITS):
-            self.set(first + k, (value >> k) & 1)
-        return IoResultCode.OK
+        return self._client_write(code, lambda: self._set_group(number, value))
 
     def read_mregister(self, number: int) -> IoRead:
         code = mregister_address_result(number, write=False)
+        return self._client_read(code, lambda: self._mreg[m_register_index(number)])
+
+    def write_mregister(self, number: int, value: int) -> IoResultCode:
+        code = mregister_address_result(number, write=True) or mregister_value_result(value)
+        return self._client_write(code, lambda: self.set_mregister(m_register_index(number), value))
+
+    def set_api_failure(self, *, reads: bool, writes: bool) -> None:
+        """Fault injection: make client reads (1004) and/or writes (1005) fail."""
+        self.fail_reads = reads
+        self.fail_writes = writes
+
+    def _client_read(self, code: IoResultCode, value: Callable[[], int]) -> IoRead:
+        """A client read: the address's refusal, the injected API failure, or the value."""
         if code:
             return IoRead(0, code)
         if self.fail_reads:
             return IoRead(0, IoResultCode.READ_API_ERROR)
-        return IoRead(self._mreg[m_register_index(number)], IoResultCode.OK)
+        return IoRead(value(), IoResultCode.OK)
 
-    def write_mregister(self, number: int, value: int) -> IoResultCode:
-        code = mregister_address_result(number, write=True) or mregister_value_result(value)
+    def _client_write(self, code: IoResultCode, write: Callable[[], None]) -> IoResultCode:
+        """A client write: the refusal, the injected API failure, or done."""
         if code:
             return code
         if self.fail_writes:
             return IoResultCode.WRITE_API_ERROR
-        self._mreg[m_register_index(number)] = value
+        write()
         return IoResultCode.OK
 
-    # ------------------------------------------------------------------ operator forcing
+    def _set_group(self, number: int, value: int) -> None:
+        first = number * 10
+        for k in range(GROUP_BITS):
+            self.set(first + k, (value >> k) & 1)
+
+    # ------------------------------------------------------------------ operator access
+
+    def read_any(self, address: int) -> int:
+        """A bit's value, or M-register n's at ``1000000 + n`` (scenario conditions)."""
+        if address >= M_REGISTER_BASE:
+            return self.read_mregister(address - M_REGISTER_BASE).value
+        return self.get(address)
 
     def check_forcible(self, address: int, value: int) -> None:
         """Raise ``ValueError`` unless the operator may force ``address`` to ``value``.

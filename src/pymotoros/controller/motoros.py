@@ -52,47 +52,48 @@ class MotoRos:
     @property
     def motion_ready(self) -> bool:
         """MotoROS's flag, as its status monitor last saw the signals (§4.1)."""
-        return self._readiness.motion_ready
+        return self._readiness.flags.motion_ready
 
     @property
     def job_ready(self) -> bool:
-        return self._readiness.job_ready
+        return self._readiness.flags.job_ready
 
     @property
     def inc_move_error(self) -> bool:
-        return self._readiness.inc_move_error
+        return self._readiness.flags.inc_move_error
 
     @property
     def pfl_during_move(self) -> bool:
-        return self._readiness.pfl_during_move
+        return self._readiness.flags.pfl_during_move
 
     @property
     def skill_flags(self) -> tuple[bool, bool]:
-        return self._readiness.skill_flags
+        return self._readiness.flags.skill_flags
 
     @property
     def next_monitor_ms(self) -> int:
-        return self._readiness.next_monitor_ms
+        return self._readiness.monitor.next_monitor_ms
 
     def latch_inc_move_error(self, reason: str) -> None:
         """Set the 5012 latch as the IncMove task does (tests)."""
-        self._readiness.latch_inc_move_error(reason)
+        self._readiness.flags.latch_inc_move_error(reason)
 
     def clear_pfl_latch(self) -> None:
-        self._readiness.clear_pfl_latch()
+        self._readiness.flags.clear_pfl_latch()
 
     def not_ready_reason(self) -> tuple[int, str, str, str]:
         """(subcode, name, meaning, what clears it) that CHECK_MOTION_READY would give now,
         for the web pendant (subcode 0 UNSPECIFIED when ready)."""
-        sub = self._readiness.not_ready_subcode()
-        return int(sub), sub.name, sub.meaning, self._readiness.not_ready_why(sub)
+        reasons = self._readiness.reasons
+        sub = reasons.subcode()
+        return int(sub), sub.name, sub.meaning, reasons.why(sub)
 
     def clear_inc_move_error(self) -> None:
-        self._readiness.clear_inc_move_error()
+        self._readiness.flags.clear_inc_move_error()
 
     def forget_job_ready(self) -> None:
         """Lose job-ready without an OT#889 edge (tests of the 5010 subcode)."""
-        self._readiness.forget_job_ready()
+        self._readiness.flags.forget_job_ready()
 
     def status_update(self) -> None:
         self._readiness.status_update()

@@ -28,13 +28,13 @@ class SkillListeners:
             logger.debug('SKILLSND SL%d "%s": no MotoROS listener for it', slave, text)
             return
         if text == SKILL_START:
-            self._readiness.set_skill_flag(slave, True)
+            self._readiness.flags.set_skill_flag(slave, True)
         elif text == SKILL_STOP:
-            self._readiness.set_skill_flag(slave, False)
+            self._readiness.flags.set_skill_flag(slave, False)
         else:
             logger.info('SKILLSND SL%d "%s" (ignored by MotoROS)', slave, text)
 
     def on_job_stopped(self) -> None:
         """The job ended or was stopped: the skill commands end with it."""
-        if any(self._readiness.skill_flags):
-            self._readiness.clear_skill_flags()
+        if any(self._readiness.flags.skill_flags):
+            self._readiness.flags.clear_skill_flags()

@@ -16,16 +16,16 @@ STOP_WAIT_MS: Final = 20
 
 def stop_motion_now(readiness: Readiness, queues: MotionQueues) -> bool:
     """StopMotion from the IncMove task: no waiting (the task itself is the one stopping)."""
-    readiness.begin_stop()
+    readiness.flags.begin_stop()
     idle = not queues.any_pending()
     queues.clear()
-    readiness.end_stop()
+    readiness.flags.end_stop()
     return idle
 
 
 def stop_motion(readiness: Readiness, queues: MotionQueues, clock: ControllerClock) -> Process:
     """StopMotion (§3.6): stop flag, wait ≤ 20 ms for the interpolators, clear, unflag."""
-    readiness.begin_stop()
+    readiness.flags.begin_stop()
     start = clock.time_ms
     while queues.any_pending():
         if clock.time_ms - start >= STOP_WAIT_MS:
@@ -33,7 +33,7 @@ def stop_motion(readiness: Readiness, queues: MotionQueues, clock: ControllerClo
         yield 1
     idle = not queues.any_pending()
     queues.clear()
-    readiness.end_stop()
+    readiness.flags.end_stop()
     if idle:
         return SUCCESS
     return reply(

@@ -99,3 +99,18 @@ class TcpTracker:
             command_speed_mm_s=chain.tcp_speed(q_cmd - d_cmd, d_cmd, dt) * MM_PER_M,
             feedback_speed_mm_s=chain.tcp_speed(q_fb - d_fb, d_fb, dt) * MM_PER_M,
         )
+
+    def clip_increment(
+        self,
+        limit_mm_s: float,
+        group_index: int,
+        tool: int,
+        command_pulses: Sequence[int],
+        increment: Sequence[int],
+    ) -> tuple[int, ...]:
+        """The FSU's TCP-speed clip: the per-axis magnitudes of ``increment`` scaled so the
+        TCP of ``tool`` moves at most ``limit_mm_s`` (rounded down per axis, so never above
+        it); a group without a kinematic chain is not clipped."""
+        speed = self.increment_speed_mm_s(group_index, tool, command_pulses, increment)
+        scale = 1.0 if speed <= limit_mm_s else limit_mm_s / speed
+        return tuple(int(abs(p) * scale) for p in increment)

@@ -1,0 +1,112 @@
+"""One interpolation period of the virtual controller, in the order the real one runs it.
+
+:meth:`TickCycle.tick` advances the controller clock by exactly one period; in one
+tick, in this order:
+
+1. timed operator events (servo power coming on, leaving eco mode) and MotoROS's
+   start-up checks;
+2. a PFL stop or retreat under way (the safety unit moves the servos itself);
+3. the INFORM job (every task as far as it goes);
+4. the MotoROS status monitor on its 10 ms boundaries, and the eco-mode idle timer;
+5. the IncMove task (one increment per group to the servos), idle servos otherwise;
+6. the AddToIncQueue tasks (interpolation into the queues);
+7. the outputs that follow the servos (S1CxG registers), the scenario's events, the
+   simulated peripherals;
+8. commands that were waiting (START_TRAJ_MODE polls …), whose Pending completes here.
+"""
+
+from __future__ import annotations
+
+from pymotoros.controller.context import MotoRosContext
+from pymotoros.controller.drive_power import DrivePower
+from pymotoros.controller.incmove_task import IncMoveTask
+from pymotoros.controller.machine import Event
+from pymotoros.controller.peripherals import Peripherals
+from pymotoros.controller.processes import Scheduler
+from pymotoros.controller.readiness import Readiness
+from pymotoros.controller.registers import RegisterOutputs
+from pymotoros.controller.safety import SafetyUnit
+from pymotoros.controller.safety.startup import MotoRosStartup
+from pymotoros.controller.scenario_player import ScenarioPlayer
+
+
+class TickCycle:
+    """The fixed order of one tick over the parts of one controller."""
+
+    def __init__(
+        self,
+        ctx: MotoRosContext,
+        *,
+        startup: MotoRosStartup,
+        safety: SafetyUnit,
+        readiness: Readiness,
+        drive_power: DrivePower,
+        inc_move: IncMoveTask,
+        registers: RegisterOutputs,
+        scenarios: ScenarioPlayer,
+        peripherals: Peripherals,
+        scheduler: Scheduler,
+    ) -> None:
+        self._ctx = ctx
+        self._startup = startup
+        self._starting = not startup.settled
+        self._safety = safety
+        self._monitor = readiness.monitor
+        self._drive_power = drive_power
+        self._inc_move = inc_move
+        self._registers = registers
+        self._scenarios = scenarios
+        self._peripherals = peripherals
+        self._has_peripherals = peripherals.active
+        self._scheduler = scheduler
+
+    def tick(self) -> None:
+        """Advance controller time by exactly one interpolation period."""
+        ctx = self._ctx
+        clock = ctx.clock
+        clock.tick_count += 1
+        now = clock.time_ms = clock.time_ms + clock.period_ms
+        self._timed_events(now)
+        safety_moved = self._safety.pfl.phase != "idle" and self._safety.tick(now)
+        runner = ctx.runner
+        if (now >= runner.wake_ms or ctx.io.changes != runner.seen_changes) and runner.step(now):
+            ctx.machine.fire(Event.END_JOB, now)
+        monitor = self._monitor
+        if now >= monitor.next_monitor_ms:
+            monitor.monitor_tick(now)
+            if self._drive_power.eco_idle_ms is not None:
+                self._drive_power.check_eco_idle(now)
+        inc_move = self._inc_move
+        moved = inc_move.inc_move_tick()
+        if not moved and not safety_moved:
+            for servo in ctx.servos:
+                servo.idle()
+        inc_move.fill_tick()
+        self._outputs(now, moved)
+        scheduler = self._scheduler
+        if scheduler.busy:
+            scheduler.advance()
+
+    def _timed_events(self, now: int) -> None:
+        """Timed operator events, then MotoROS's start-up until it has settled."""
+        machine = self._ctx.machine
+        timer = machine.next_timer_ms
+        if timer is not None and now >= timer:
+            machine.advance(now)
+        if self._starting:
+            self._startup.tick(now)
+            self._starting = not self._startup.settled
+
+    def _outputs(self, now: int, moved: bool) -> None:
+        """What follows the servos: register outputs, scenario events, peripherals."""
+        if self._registers.active:  # S1CxG register outputs: only when configured
+            ctx = self._ctx
+            self._registers.refresh(
+                ctx.servos,
+                [i.tool for i in ctx.interpolators],
+                ctx.clock.tick_count,
+                ctx.machine.state.drives_powered,
+            )
+        self._scenarios.tick(now, moved)
+        if self._has_peripherals:
+            self._peripherals.tick(now)

@@ -1,0 +1,89 @@
+"""The operator's keys on the pendant: E-stop, HOLD, mode, REMOTE, servo, eco, alarms, RESET.
+
+:class:`OperatorKeys` turns each key into the operator-machine event it stands for, at
+the controller's time, and keeps the alarm history. It is the operator-panel part of
+:class:`~pymotoros.controller.controller.VirtualController`, which delegates to it.
+"""
+
+from __future__ import annotations
+
+import logging
+from typing import Final
+
+from pymotoros.controller.alarms import Alarm, AlarmHistory
+from pymotoros.controller.api import PendantMode
+from pymotoros.controller.machine import EstopSource, Event, OperatorMachine
+from pymotoros.controller.processes import ControllerClock
+
+logger = logging.getLogger(__name__)
+
+MAX_ALARM_CODE: Final = 9999
+
+
+class OperatorKeys:
+    """The pendant's keys, each one event of the :class:`OperatorMachine`."""
+
+    def __init__(self, machine: OperatorMachine, clock: ControllerClock) -> None:
+        self._machine = machine
+        self._clock = clock
+        self._history = AlarmHistory()
+        for alarm in machine.state.alarms:
+            self._history.record(alarm)
+
+    def fire(
+        self, event: Event, *, alarm: Alarm | None = None, source: EstopSource = EstopSource.PENDANT
+    ) -> str | None:
+        """``event`` now; the refusal's reason, or None when it was accepted."""
+        return self._machine.fire(event, self._clock.time_ms, alarm=alarm, source=source)
+
+    def alarm_history(self) -> tuple[Alarm, ...]:
+        return self._history.entries()
+
+    def press_estop(self, pressed: bool, source: EstopSource = EstopSource.PENDANT) -> None:
+        """E-stop: cuts servo power and stops the job; raises no alarm."""
+        self.fire(Event.PRESS_ESTOP if pressed else Event.RELEASE_ESTOP, source=source)
+
+    def set_hold(self, on: bool) -> None:
+        self.fire(Event.HOLD_ON if on else Event.HOLD_OFF)
+
+    def set_mode(self, mode: PendantMode) -> None:
+        if not isinstance(mode, PendantMode):
+            raise ValueError(f"mode must be a PendantMode, not {mode!r}")
+        self.fire(Event.SELECT_PLAY if mode is PendantMode.PLAY else Event.SELECT_TEACH)
+
+    def set_remote(self, on: bool) -> None:
+        self.fire(Event.REMOTE_ON if on else Event.REMOTE_OFF)
+
+    def set_servo(self, on: bool) -> None:
+        """Servo power request as from the pendant (refused silently while E-stopped or alarmed)."""
+        refused = self.fire(Event.REQUEST_SERVO_ON if on else Event.SERVO_OFF)
+        if refused:
+            logger.info("servo on refused: %s", refused)
+
+    def set_eco(self, on: bool) -> None:
+        """Enter eco mode (servo power saved; needs servo on) or leave it (servo power back)."""
+        if on:
+            refused = self.fire(Event.ENTER_ECO)
+            if refused:
+                logger.info("eco mode refused: %s", refused)
+        else:
+            self.fire(Event.WAKE_FROM_ECO)
+
+    def raise_alarm(self, code: int, subcode: int, text: str) -> None:
+        self._raise(Event.RAISE_ALARM, "alarm", code, subcode, text)
+
+    def raise_error(self, code: int, subcode: int = 0, text: str = "") -> None:
+        """An operator error (50014): refuses motion with 5002 until reset; not an alarm."""
+        self._raise(Event.RAISE_ERROR, "error", code, subcode, text)
+
+    def _raise(self, event: Event, kind: str, code: int, subcode: int, text: str) -> None:
+        if not 0 <= code <= MAX_ALARM_CODE:
+            raise ValueError(f"{kind} code {code} is outside 0..{MAX_ALARM_CODE}")
+        alarm = Alarm(code, subcode, text, self._clock.time_ms)
+        self._history.record(alarm)
+        self.fire(event, alarm=alarm)
+
+    def reset(self) -> None:
+        """The pendant's RESET key: clears alarms and errors (their causes are gone)."""
+        self.fire(Event.RESET_ALARMS)
+        self.fire(Event.CANCEL_ERRORS)
