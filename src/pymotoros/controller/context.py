@@ -29,11 +29,17 @@ class MotoRosContext:
     """What MotoPlus offers MotoROS on one controller (per-group tuples in group order)."""
 
     cell: CellConfig
+    """The cell file as read: controller model, groups, tools, start-up options."""
     clock: ControllerClock
+    """Controller time and tick count (MotoROS reads time, never advances it)."""
     io: IoImage
+    """Every signal and M-register; MotoROS's only view of the operator state."""
     machine: OperatorMachine
+    """The operator state, changed by the events MotoPlus offers (servo on, reset …)."""
     runner: JobRunner
+    """The INFORM job tasks (INIT_ROS and its sub-jobs)."""
     queues: MotionQueues
+    """Every group's increment queue, as MotoROS clears them."""
     axes: tuple[GroupAxes, ...]
     interpolators: tuple[GroupInterpolator, ...]
     servos: tuple[ServoGroup, ...]

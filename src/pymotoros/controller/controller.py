@@ -83,11 +83,8 @@ class VirtualController:
         parts = assemble(cell, seed=seed, on_skill=lambda slave, text: self._on_skill(slave, text))
         ctx = parts.ctx
         self._ctx = ctx
-        self._clock = ctx.clock
-        self._io = ctx.io
-        self._machine = ctx.machine
-        self._runner = ctx.runner
-        self._servos = ctx.servos
+        self._clock, self._machine, self._io = ctx.clock, ctx.machine, ctx.io
+        self._servos = ctx.servos  # the servo models, read by the S1CxG register tests
         self._safety = parts.safety
         self._tcp = TcpTracker(cell)
         interps = ctx.interpolators
@@ -321,7 +318,7 @@ class VirtualController:
     @property
     def job_position(self) -> tuple[tuple[str, int], ...]:
         """(job, line) of every running job task; empty when no job runs."""
-        return self._runner.position()
+        return self._ctx.runner.position()
 
     def alarm_history(self) -> tuple[Alarm, ...]:
         return self._keys.alarm_history()
@@ -440,9 +437,9 @@ class VirtualController:
         if old.drives_powered and not new.drives_powered:
             self._power.brakes_engage()
         if new.job_running and not old.job_running:
-            self._runner.start()
+            self._ctx.runner.start()
         elif old.job_running and not new.job_running:
-            self._runner.stop()
+            self._ctx.runner.stop()
             self._skills.on_job_stopped()
         if self._observers:
             snap = self.snapshot()

@@ -38,15 +38,21 @@ MAX_INSTRUCTIONS_PER_TICK: Final = 1000
 
 
 class Op(enum.Enum):
-    NOP = "NOP"
-    DOUT = "DOUT"
-    TIMER = "TIMER"
-    WAIT = "WAIT"
-    SKILLSND = "SKILLSND"
-    PSTART = "PSTART"
-    PWAIT = "PWAIT"
-    TSYNC = "TSYNC"
-    END = "END"
+    """The INFORM instructions this controller runs; each one's value is its keyword."""
+
+    @staticmethod
+    def _generate_next_value_(name: str, start: int, count: int, last_values: list[str]) -> str:
+        return name
+
+    NOP = enum.auto()
+    DOUT = enum.auto()
+    TIMER = enum.auto()
+    WAIT = enum.auto()
+    SKILLSND = enum.auto()
+    PSTART = enum.auto()
+    PWAIT = enum.auto()
+    TSYNC = enum.auto()
+    END = enum.auto()
 
 
 @dataclass(frozen=True, slots=True)

@@ -21,18 +21,8 @@ from collections.abc import Callable
 from pymotoros.controller.api import IoRead
 from pymotoros.controller.signals import MONITORED
 from pymotoros.models import ControllerModel, IoRange
+from pymotoros.models import io as rules
 from pymotoros.models.controllers import M_REGISTER_BASE, M_REGISTER_COUNT
-from pymotoros.models.io import (
-    GROUP_BITS,
-    M_REGISTER_MAX,
-    bit_address_result,
-    bit_value_result,
-    group_address_result,
-    group_value_result,
-    m_register_index,
-    mregister_address_result,
-    mregister_value_result,
-)
 from pymotoros.protocol.constants import IoResultCode
 
 logger = logging.getLogger(__name__)
@@ -101,31 +91,33 @@ class IoImage:
     # ------------------------------------------------------------------ client access (§6.1)
 
     def read_bit(self, address: int) -> IoRead:
-        code = bit_address_result(self._controller, address, write=False)
+        code = rules.bit_address_result(self._controller, address, write=False)
         return self._client_read(code, lambda: self.get(address))
 
     def write_bit(self, address: int, value: int) -> IoResultCode:
-        code = bit_address_result(self._controller, address, write=True) or bit_value_result(value)
+        code = rules.bit_address_result(self._controller, address, write=True)
+        code = code or rules.bit_value_result(value)
         return self._client_write(code, lambda: self.set(address, value))
 
     def read_group(self, number: int) -> IoRead:
         """Byte ``number``: bits number×10+0..7, bit 0 least significant (§6.1)."""
-        code = group_address_result(self._controller, number, write=False)
+        code = rules.group_address_result(self._controller, number, write=False)
         return self._client_read(code, lambda: self._bytes[number])
 
     def write_group(self, number: int, value: int) -> IoResultCode:
-        code = group_address_result(self._controller, number, write=True) or group_value_result(
-            value
-        )
+        code = rules.group_address_result(self._controller, number, write=True)
+        code = code or rules.group_value_result(value)
         return self._client_write(code, lambda: self._set_group(number, value))
 
     def read_mregister(self, number: int) -> IoRead:
-        code = mregister_address_result(number, write=False)
-        return self._client_read(code, lambda: self._mreg[m_register_index(number)])
+        code = rules.mregister_address_result(number, write=False)
+        return self._client_read(code, lambda: self._mreg[rules.m_register_index(number)])
 
     def write_mregister(self, number: int, value: int) -> IoResultCode:
-        code = mregister_address_result(number, write=True) or mregister_value_result(value)
-        return self._client_write(code, lambda: self.set_mregister(m_register_index(number), value))
+        code = rules.mregister_address_result(number, write=True)
+        code = code or rules.mregister_value_result(value)
+        index = rules.m_register_index(number)
+        return self._client_write(code, lambda: self.set_mregister(index, value))
 
     def set_api_failure(self, *, reads: bool, writes: bool) -> None:
         """Fault injection: make client reads (1004) and/or writes (1005) fail."""
@@ -151,7 +143,7 @@ class IoImage:
 
     def _set_group(self, number: int, value: int) -> None:
         first = number * 10
-        for k in range(GROUP_BITS):
+        for k in range(rules.GROUP_BITS):
             self.set(first + k, (value >> k) & 1)
 
     # ------------------------------------------------------------------ operator access
@@ -175,13 +167,13 @@ class IoImage:
                     f"M-register address {address}: only {M_REGISTER_BASE}.."
                     f"{M_REGISTER_BASE + M_REGISTER_COUNT - 1} (M000..M999) exist"
                 )
-            if mregister_value_result(value):
-                raise ValueError(f"M{index:03d} holds 0..{M_REGISTER_MAX}, not {value}")
+            if rules.mregister_value_result(value):
+                raise ValueError(f"M{index:03d} holds 0..{rules.M_REGISTER_MAX}, not {value}")
             return
         if self._controller.io_range(address) is None:
             raise ValueError(
                 f"address {address} is in no IO range of a {self._controller.type.value} "
                 "controller (or its last digit is 8 or 9)"
             )
-        if bit_value_result(value):
+        if rules.bit_value_result(value):
             raise ValueError(f"bit {address} takes 0 or 1, not {value}")

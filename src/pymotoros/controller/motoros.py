@@ -56,19 +56,19 @@ class MotoRos:
 
     @property
     def job_ready(self) -> bool:
-        return self._readiness.flags.job_ready
+        return self._readiness.flags.latches.job_ready
 
     @property
     def inc_move_error(self) -> bool:
-        return self._readiness.flags.inc_move_error
+        return self._readiness.flags.latches.inc_move_error
 
     @property
     def pfl_during_move(self) -> bool:
-        return self._readiness.flags.pfl_during_move
+        return self._readiness.flags.latches.pfl_during_move
 
     @property
     def skill_flags(self) -> tuple[bool, bool]:
-        return self._readiness.flags.skill_flags
+        return self._readiness.flags.latches.skill_flags
 
     @property
     def next_monitor_ms(self) -> int:

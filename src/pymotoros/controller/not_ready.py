@@ -35,7 +35,7 @@ class NotReadyReasons:
             NotReadySubcode.HOLD: lambda: "release HOLD, then START_TRAJ_MODE restarts INIT_ROS",
             NotReadySubcode.PFL_ACTIVE: self._pfl,
             NotReadySubcode.INC_MOVE_ERROR: lambda: (
-                f"{flags.inc_move_error_reason}; START_TRAJ_MODE clears it"
+                f"{flags.latches.inc_move_error_reason}; START_TRAJ_MODE clears it"
             ),
             NotReadySubcode.NOT_STARTED: lambda: (
                 "INIT_ROS is not running; START_TRAJ_MODE starts it"
@@ -57,7 +57,7 @@ class NotReadyReasons:
             (not r.servo or r.eco, NotReadySubcode.SERVO_OFF),
             (r.hold, NotReadySubcode.HOLD),
             (flags.pfl_active, NotReadySubcode.PFL_ACTIVE),
-            (flags.inc_move_error, NotReadySubcode.INC_MOVE_ERROR),
+            (flags.latches.inc_move_error, NotReadySubcode.INC_MOVE_ERROR),
             (not r.operating, NotReadySubcode.NOT_STARTED),
             (not r.ros_ready, NotReadySubcode.WAITING_ROS),
             (not flags.motion_ready, NotReadySubcode.SKILLSEND),
@@ -113,8 +113,8 @@ class NotReadyReasons:
             f'SKILLSND "ROS-START" not received for slave {slave}'
             for slave in flags.missing_skills()
         ]
-        if not flags.job_ready:
+        if not flags.latches.job_ready:
             reasons.append("OT#889 is on but its rising edge was not seen")
-        if flags.stopping:
+        if flags.latches.stopping:
             reasons.append("a stop is in progress")
         return "; ".join(reasons)

@@ -23,3 +23,8 @@ def reply(
 
 SUCCESS: Final = Outcome(ResultCode.SUCCESS)
 FAILURE: Final = Outcome(ResultCode.FAILURE)
+
+
+def invalid(subcode: int, detail: str, group_no: int | None = None) -> Outcome:
+    """3000 INVALID with ``subcode``: the request itself is wrong (§3.1 subcodes)."""
+    return Outcome(ResultCode.INVALID, subcode, group_no=group_no, detail=detail)

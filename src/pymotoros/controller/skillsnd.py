@@ -36,5 +36,5 @@ class SkillListeners:
 
     def on_job_stopped(self) -> None:
         """The job ended or was stopped: the skill commands end with it."""
-        if any(self._readiness.flags.skill_flags):
+        if any(self._readiness.flags.latches.skill_flags):
             self._readiness.flags.clear_skill_flags()

@@ -90,7 +90,7 @@ class StatusMonitor:
         """
         flags = self._flags
         last = flags.reading
-        job_ready = flags.job_ready
+        job_ready = flags.latches.job_ready
         if reading.ros_ready != last.ros_ready:
             job_ready = bool(reading.ros_ready)
         pfl_event = (
@@ -111,7 +111,7 @@ class StatusMonitor:
             return flags.motion_ready
         r = self.read()
         job_ready, pfl_event = self.edges(r)
-        latched = flags.pfl_during_move or pfl_event
+        latched = flags.latches.pfl_during_move or pfl_event
         return flags.ready_for(job_ready, r.operating, r.remote, latched, r.pfl)
 
     def status_update(self) -> None:

@@ -17,7 +17,7 @@ from pymotoros.controller.commands import MotionCommands
 from pymotoros.controller.context import MotoRosContext
 from pymotoros.controller.processes import Process
 from pymotoros.controller.readiness import Readiness
-from pymotoros.controller.replies import SUCCESS, reply
+from pymotoros.controller.replies import SUCCESS, invalid, reply
 from pymotoros.models.rules import MAX_POINT_TIME_S, f32
 from pymotoros.motion import (
     Refusal,
@@ -85,12 +85,7 @@ class TrajectoryPoints:
         return TrajPoint(point.time, tuple(point.pos[:SLOTS]), tuple(point.vel[:SLOTS]))
 
     def _refused(self, refusal: Refusal, point_desc: str, group_no: int | None = None) -> Outcome:
-        return reply(
-            ResultCode.INVALID,
-            int(refusal.subcode),
-            f"{point_desc}: {refusal.message}",
-            group_no=group_no,
-        )
+        return invalid(int(refusal.subcode), f"{point_desc}: {refusal.message}", group_no)
 
     def trajectory_point(self, sequence: int, point: PointData) -> Process:
         """JOINT_TRAJ_PT_FULL (14): §3.4, in its order."""
@@ -150,12 +145,11 @@ class TrajectoryPoints:
     def trajectory_point_ex(self, sequence: int, points: Sequence[PointData]) -> Process:
         """MOTO_JOINT_TRAJ_PT_FULL_EX (2016): §3.5, in its order."""
         if not points:
-            return reply(
-                ResultCode.INVALID,
+            return invalid(
                 InvalidSubcode.DATA,
                 "JOINT_TRAJ_PT_FULL_EX with no group; MotoROS 1.9.12 would resend its "
                 "previous reply, we answer 3010 INVALID_DATA",
-                group_no=-1,
+                -1,
             )
         if not self._readiness.motion_ready:
             return self._readiness.not_ready(group_no=points[-1].group_no)
@@ -184,29 +178,21 @@ class TrajectoryPoints:
         return reply(ResultCode.SUCCESS, group_no=last)
 
     def _bad_group(self, g: int, group_no: int | None = None) -> Outcome:
-        return reply(
-            ResultCode.INVALID,
-            InvalidSubcode.GROUPNO,
-            f"group {g} does not exist ({self._num_groups} group(s): 0..{self._num_groups - 1})",
-            group_no=group_no,
-        )
+        n = self._num_groups
+        detail = f"group {g} does not exist ({n} group(s): 0..{n - 1})"
+        return invalid(InvalidSubcode.GROUPNO, detail, group_no)
 
     def _insufficient(self, point: PointData, group_no: int | None = None) -> Outcome:
-        return reply(
-            ResultCode.INVALID,
+        return invalid(
             InvalidSubcode.DATA_INSUFFICIENT,
             f"group {point.group_no}: valid_fields {point.valid_fields} lacks "
             "time (1), position (2) or velocity (4); MotoROS needs all three",
-            group_no=group_no,
+            group_no,
         )
 
     def _bad_sequence(self, sequence: int, group_no: int | None = None) -> Outcome:
-        return reply(
-            ResultCode.INVALID,
-            InvalidSubcode.SEQUENCE,
-            f"sequence {sequence} is negative; a trajectory starts at 0",
-            group_no=group_no,
-        )
+        detail = f"sequence {sequence} is negative; a trajectory starts at 0"
+        return invalid(InvalidSubcode.SEQUENCE, detail, group_no)
 
     def _busy(self, g: int, sequence: int, group_no: int | None = None) -> Outcome:
         if group_no is None:
@@ -254,11 +240,8 @@ class TrajectoryPoints:
         if not 0 <= group_no < self._num_groups:
             return self._bad_group(group_no)
         if not 0 <= tool <= MAX_TOOL_NUMBER:
-            return reply(
-                ResultCode.INVALID,
-                InvalidSubcode.DATA_TOOLNO,
-                f"tool {tool} is outside 0..{MAX_TOOL_NUMBER}",
-            )
+            detail = f"tool {tool} is outside 0..{MAX_TOOL_NUMBER}"
+            return invalid(InvalidSubcode.DATA_TOOLNO, detail)
         self._interpolators[group_no].tool = tool
         if self._sets_jog_tool:
             self.jog_tool[group_no] = tool
