@@ -119,6 +119,9 @@ class VirtualController:
             peripherals=Peripherals(ctx.io, cell.peripherals),
             scheduler=self._scheduler,
         )
+        # The tick runs every 4 ms for every twin: callers reach the cycle's tick
+        # directly, without the facade's call in between (tick() below documents it).
+        self.tick = self._cycle.tick  # type: ignore[method-assign]
         self.drop_motion_hook: Callable[[], None] | None = None
         """Closes the motion connection (set by the runtime; a scenario's drop_motion)."""
 

@@ -43,6 +43,7 @@ class IncMoveTask:
         self._machine = ctx.machine
         self._runner = ctx.runner
         self._readiness = readiness
+        self._flags = readiness.flags  # motion_ready, read every tick / every point
         self._queues = ctx.queues
         self.axes = ctx.axes
         self.interpolators = ctx.interpolators
@@ -67,7 +68,7 @@ class IncMoveTask:
 
     def fill_tick(self) -> None:
         """Every AddToIncQueue task's turn."""
-        ready = self._readiness.motion_ready
+        ready = self._flags.motion_ready
         for interp in self.interpolators:
             interp.fill(ready)
 
@@ -76,7 +77,7 @@ class IncMoveTask:
         if self._eco_retry is not None:
             return self._retry_eco()
         # motion-ready is false while the stop flag is up (Readiness computes it so)
-        if not self._readiness.motion_ready:
+        if not self._flags.motion_ready:
             if self._fsu_missing:
                 self._fsu_reset()
             return False

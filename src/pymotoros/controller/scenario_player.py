@@ -21,6 +21,8 @@ class ScenarioPlayer:
     def __init__(self, read_io: Callable[[int], int]) -> None:
         self._read_io = read_io
         self._driver: ScenarioDriver | None = None
+        self.loaded = False
+        """A scenario was loaded (the tick skips the player until then)."""
         self._fired: list[FiredEvent] = []
 
     def load(
@@ -30,6 +32,7 @@ class ScenarioPlayer:
         driver = ScenarioDriver(scenario, perform=perform, read_io=self._read_io, now_ms=now_ms)
         driver.fired = self._fired
         self._driver = driver
+        self.loaded = True
         logger.info("scenario %s: %d events", scenario.source, len(scenario.events))
 
     def tick(self, now_ms: int, moved: bool) -> None:

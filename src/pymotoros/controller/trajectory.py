@@ -58,6 +58,7 @@ class TrajectoryPoints:
         self._cell = cell
         self._machine = ctx.machine
         self._readiness = readiness
+        self._flags = readiness.flags  # motion_ready, read every tick / every point
         self._commands = commands
         self._axes = ctx.axes
         self._interpolators = ctx.interpolators
@@ -89,7 +90,7 @@ class TrajectoryPoints:
 
     def trajectory_point(self, sequence: int, point: PointData) -> Process:
         """JOINT_TRAJ_PT_FULL (14): §3.4, in its order."""
-        if not self._readiness.motion_ready:
+        if not self._flags.motion_ready:
             return self._readiness.not_ready()
         g = point.group_no
         if not 0 <= g < self._num_groups:
@@ -120,7 +121,7 @@ class TrajectoryPoints:
         may be refused or logged) returns None before any state changes, and the full
         path answers it.
         """
-        if sequence <= 0 or not self.fast or not self._readiness.motion_ready:
+        if sequence <= 0 or not self.fast or not self._flags.motion_ready:
             return None
         g = point.group_no
         if not 0 <= g < self._num_groups or point.valid_fields & REQUIRED_FIELDS != REQUIRED_FIELDS:
@@ -151,7 +152,7 @@ class TrajectoryPoints:
                 "previous reply, we answer 3010 INVALID_DATA",
                 -1,
             )
-        if not self._readiness.motion_ready:
+        if not self._flags.motion_ready:
             return self._readiness.not_ready(group_no=points[-1].group_no)
         for p in points:
             g = p.group_no
