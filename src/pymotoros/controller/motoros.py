@@ -2,8 +2,10 @@
 
 What the MotoPlus application does is split as the real MotoROS splits it:
 
-- :mod:`~pymotoros.controller.readiness`: the 10 ms status monitor and its
-  queue-clearing edges, the motion-ready flag, the NOT_READY subcode order;
+- :mod:`~pymotoros.controller.readiness`: whether motion is possible, composed of the
+  flags of ``Controller.h`` (:mod:`~pymotoros.controller.ready_flags`), the 10 ms
+  status monitor and its queue-clearing edges (:mod:`~pymotoros.controller.status_monitor`)
+  and the NOT_READY subcode order (:mod:`~pymotoros.controller.not_ready`);
 - :mod:`~pymotoros.controller.commands`: every MOTO_MOTION_CTRL command, as a process
   (with :mod:`~pymotoros.controller.stop_motion` and :mod:`~pymotoros.controller.polling`);
 - :mod:`~pymotoros.controller.trajectory`: the validation and acceptance of trajectory
