@@ -126,3 +126,16 @@ async def test_the_client_and_the_twin_never_share_a_kinematics_workspace() -> N
         assert mine is not theirs
         assert mine._data is not theirs._data
         assert mine.model is theirs.model  # the read-only model is built once
+
+
+def test_the_blocking_tcp_pose_waits_for_the_first_state() -> None:
+    """README: ``tcp_pose()`` right after connecting answered "no joint feedback for
+    group 0 yet" (the state port had sent nothing yet)."""
+    from client_sim import running_sim
+
+    from pymotoros.client import SyncRobotClient
+
+    with running_sim() as sim, SyncRobotClient(robot="hc10", **sim.client_options()) as robot:
+        assert not robot.state.joints  # nothing received yet
+        pose = robot.tcp_pose()
+        assert pose[1] == pytest.approx(0.162, abs=1e-3)  # the boot pose, tool0

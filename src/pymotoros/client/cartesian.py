@@ -121,7 +121,9 @@ def _singularity(chain: Chain, q: FloatArray) -> _Singularity:
 
 def _ready_hint(q: FloatArray) -> str:
     return "a joint move to a ready pose first" + (
-        f", e.g. move_joints({READY_HINT})" if len(q) == len(READY_POSE) else ""
+        f", e.g. move_joints({READY_HINT}) or `pymotoros move 0 0 60 0 -60 0 --deg`"
+        if len(q) == len(READY_POSE)
+        else ""
     )
 
 
