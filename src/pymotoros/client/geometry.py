@@ -10,7 +10,7 @@ TCP line (:meth:`Geometry.move_linear`, :mod:`pymotoros.client.cartesian`).
 from __future__ import annotations
 
 from collections.abc import Callable, Sequence
-from typing import Literal
+from typing import Any, Literal
 
 from pymotoros.client.errors import ClientError
 from pymotoros.client.motion import Motion
@@ -140,15 +140,9 @@ class Geometry:
         delta = (dx, dy, dz, drx, dry, drz)
         target = matrix_to_pose(relative_target(chain.fk(start), delta, frame))
         return await self.move_cartesian(
-            target,
-            group=group,
-            linear=linear,
-            tcp_speed_mm_s=tcp_speed_mm_s,
-            speed_scale=speed_scale,
-            accel_scale=accel_scale,
-            on_progress=on_progress,
-            tool=tool,
-        )
+            target, group=group, linear=linear, tcp_speed_mm_s=tcp_speed_mm_s,
+            speed_scale=speed_scale, accel_scale=accel_scale, on_progress=on_progress, tool=tool,
+        )  # fmt: skip
 
     async def move_cartesian(
         self,
@@ -164,21 +158,10 @@ class Geometry:
     ) -> MoveResult:
         """The TCP to ``pose``: a straight line with ``linear`` (:meth:`move_linear`), else
         a joint move (:meth:`move_pose`). The one place that chooses between the two."""
+        options: dict[str, Any] = {
+            "group": group, "speed_scale": speed_scale, "accel_scale": accel_scale,
+            "on_progress": on_progress, "tool": tool,
+        }  # fmt: skip
         if linear:
-            return await self.move_linear(
-                pose,
-                group=group,
-                tcp_speed_mm_s=tcp_speed_mm_s,
-                speed_scale=speed_scale,
-                accel_scale=accel_scale,
-                on_progress=on_progress,
-                tool=tool,
-            )
-        return await self.move_pose(
-            pose,
-            group=group,
-            speed_scale=speed_scale,
-            accel_scale=accel_scale,
-            on_progress=on_progress,
-            tool=tool,
-        )
+            return await self.move_linear(pose, tcp_speed_mm_s=tcp_speed_mm_s, **options)
+        return await self.move_pose(pose, **options)
