@@ -139,3 +139,33 @@ def test_the_blocking_tcp_pose_waits_for_the_first_state() -> None:
         assert not robot.state.joints  # nothing received yet
         pose = robot.tcp_pose()
         assert pose[1] == pytest.approx(0.162, abs=1e-3)  # the boot pose, tool0
+
+
+def test_the_readme_example_runs_as_written() -> None:
+    """README "Where the tool is": the Python block and the shell block, as written, against
+    a sim (only the ports are pointed at it)."""
+    import re
+
+    from click.testing import CliRunner
+    from client_sim import running_sim
+
+    from pymotoros.cli.main import cli
+
+    readme = (Path(__file__).resolve().parents[2] / "README.md").read_text(encoding="utf-8")
+    section = readme[readme.index("### Where the tool is") :]
+    python = re.search(r"```python\n(.*?)```", section, re.S)
+    shell = re.search(r"```sh\n(.*?)```", section, re.S)
+    assert python is not None
+    assert shell is not None
+    with running_sim() as sim:
+        ports = ", ".join(f"{k}={v}" for k, v in sim.client_options().items())
+        connect = 'SyncRobotClient("127.0.0.1", '
+        code = python.group(1).replace(connect, f"SyncRobotClient({ports}, ")
+        assert ports in code
+        exec(compile(code, "README.md", "exec"), {})  # noqa: S102 - our own README
+        for line in shell.group(1).splitlines():
+            args = line.partition("#")[0].split()
+            if not args or args[1] not in ("move", "status"):
+                continue
+            result = CliRunner().invoke(cli, [*args[1:], *sim.cli_args()])
+            assert result.exit_code == 0, f"{line}: {result.output}"
