@@ -145,3 +145,10 @@ def test_a_linear_move_with_the_gripper(gripper_sim: Sim) -> None:
     result = in_cell(gripper_sim, "move", "--relative", "dz=0.05", "--tool", "1")
     assert result.exit_code == 0, result.output
     assert _twin_tcp(gripper_sim)[2] == pytest.approx(0.35, abs=MM)
+
+
+def test_the_settings_file_names_the_tool(gripper_sim: Sim, tmp_path: Path) -> None:
+    settings = tmp_path / "pymotoros.toml"
+    settings.write_text("[status]\ntool = 1\n", encoding="utf-8")
+    table = in_cell(gripper_sim, "status", env={"PYMOTOROS_SETTINGS": str(settings)}).output
+    assert "tool 1 (gripper, TCP x 0.0 y 0.0 z 150.0 mm on tool0)" in table

@@ -2,8 +2,8 @@
 
 Every Cartesian line names the tool whose TCP it is about (number, name, offset):
 MotoROS cannot report the selected tool, so ``--tool N`` (``PYMOTOROS_TOOL``, or
-``tool = N`` in the settings file) says it; a ``pymotoros tool N`` run earlier is not
-known to a later process. See :mod:`pymotoros.client.tools`.
+``tool = N`` in the settings file's ``[move]``/``[status]``) says it; a ``pymotoros
+tool N`` run earlier is not known to a later process. See :mod:`pymotoros.client.tools`.
 """
 
 from __future__ import annotations
@@ -113,8 +113,8 @@ def tool_option(func: _F) -> _F:
         metavar="N",
         help="The tool in force (0..63): its TCP (from the cell file's tool data) is what "
         "--pose/--relative place and what status reports. MotoROS cannot report the "
-        "selected tool: with tools in the cell file, Cartesian moves need this. `move` "
-        "selects it first (SELECT_TOOL).",
+        "selected tool: with tools in the cell file, Cartesian moves need this. `move "
+        "--pose/--relative` selects it first (SELECT_TOOL); joint moves ignore it.",
     )(func)
 
 
