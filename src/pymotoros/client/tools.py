@@ -111,8 +111,13 @@ class ToolTable:
         )
 
     def describe(self, group: int = 0, number: int | None = None) -> str:
-        """``tool 1 (gripper, TCP x 0.0 y 0.0 z 150.0 mm on tool0)``: the tool a line is about."""
-        return describe(self.tool(group, number))
+        """``tool 1 (gripper, TCP x 0.0 y 0.0 z 150.0 mm on tool0)``: the tool a line is
+        about; without any tool data for the group, says so (a real robot's tool files are
+        unknown until a cell file describes them)."""
+        text = describe(self.tool(group, number))
+        if not self.defined(group):
+            text += "; no tool data known: describe the tools in the cell file (--config)"
+        return text
 
     def chain(self, group: int = 0, tool: int | None = None) -> Chain:
         """The group's chain with ``tool`` (default: the one in force) on tool0. The chain
