@@ -169,3 +169,25 @@ def test_the_readme_example_runs_as_written() -> None:
                 continue
             result = CliRunner().invoke(cli, [*args[1:], *sim.cli_args()])
             assert result.exit_code == 0, f"{line}: {result.output}"
+
+
+def test_cell_tools_per_group_with_the_same_rules_as_the_sim() -> None:
+    from pymotoros.errors import ConfigError
+    from pymotoros.models.cell import cell_models_from_dict
+
+    cell = cell_models_from_dict(
+        {
+            "controller": {"model": "fs100"},
+            "groups": [{"robot": "sda10f", "tools": [{"number": 2, "tcp_m": [0, 0, 0.1]}]}],
+            "tools": [{"number": 2, "name": "cell-wide"}, {"number": 3, "name": "probe"}],
+        }
+    )
+    numbers = [[(t.number, t.name, t.tcp.xyz[2]) for t in group] for group in cell.tools]
+    arm = [(2, "", 0.1), (3, "probe", 0.0)]  # the entry's own tool 2 wins over the cell's
+    assert numbers == [arm, arm, [], []]  # R1, R2 take tools; the bases B1, B2 do not
+    with pytest.raises(ConfigError, match=r"tools\[0\]\.tcp_m: must be three numbers"):
+        cell_models_from_dict({"tools": [{"number": 2, "tcp_m": [0, 0]}]})
+    with pytest.raises(ConfigError, match=r"tools\[0\]\.number: must lie in 0\.\.63"):
+        cell_models_from_dict({"tools": [{"number": 64}]})
+    with pytest.raises(ConfigError, match="tool 1 appears twice"):
+        cell_models_from_dict({"tools": [{"number": 1}, {"number": 1}]})
