@@ -75,3 +75,80 @@ def test_cartesian_usage_errors(sim: Sim) -> None:
     result = invoke(sim, "move", "--linear", "0", "0", "0", "0", "0", "0")
     assert result.exit_code == EXIT_USAGE
     assert "--linear goes with --pose" in result.stderr
+
+
+# --------------------------------------------------------------------------- the tool is the TCP
+
+CELL = Path(__file__).resolve().parents[2] / "examples" / "cells" / "hc10_register_outputs.toml"
+"""Tool 1 of this cell is a 150 mm gripper (issue 20)."""
+REQUEST = ("0.6", "0.1", "0.3", "180", "0", "0")
+
+
+@pytest.fixture(scope="module")
+def gripper_sim() -> Iterator[Sim]:
+    with running_sim("--config", str(CELL)) as s:
+        yield s
+
+
+def in_cell(sim: Sim, *args: str, env: dict[str, str] | None = None) -> Result:
+    return CliRunner(env=env).invoke(
+        cli, [*args, *sim.cli_args(), "--config", str(CELL)], catch_exceptions=False
+    )
+
+
+def _twin_tcp(sim: Sim) -> list[float]:
+    """The TCP as the sim computes it with the tool its controller has selected."""
+    return [float(v) for v in sim.api("/api/state")["groups"][0]["tcp"]["feedback"]]
+
+
+def test_a_pose_move_places_the_selected_tools_tcp(gripper_sim: Sim) -> None:
+    request = [0.6, 0.1, 0.3, math.pi, 0.0, 0.0]
+    assert in_cell(gripper_sim, "enable").exit_code == 0
+    assert in_cell(gripper_sim, "tool", "1").exit_code == 0
+    before = _twin_tcp(gripper_sim)
+
+    # Another process selected tool 1: this one cannot know it, and refuses to guess.
+    refused = in_cell(gripper_sim, "move", "--pose", *REQUEST, "--deg")
+    assert refused.exit_code == EXIT_USAGE, refused.output
+    assert "--tool N" in refused.stderr
+    assert "tool 1 (gripper, TCP x 0.0 y 0.0 z 150.0 mm on tool0)" in refused.stderr
+    assert len(refused.stderr.strip().splitlines()) == 1
+    assert _twin_tcp(gripper_sim) == pytest.approx(before, abs=1e-6)
+
+    done = in_cell(gripper_sim, "move", "--pose", *REQUEST, "--deg", "--tool", "1")
+    assert done.exit_code == 0, done.output
+    assert "moving the TCP of tool 1 (gripper" in done.stderr
+    assert _twin_tcp(gripper_sim) == pytest.approx(request, abs=MM)  # within 1 mm
+
+    data = json.loads(in_cell(gripper_sim, "status", "--json", "--tool", "1").stdout)
+    group = data["groups"][0]
+    assert group["tcp"] == pytest.approx(request, abs=MM)
+    assert group["tool"]["number"] == 1
+    assert group["tool"]["tcp_m"] == [0.0, 0.0, 0.15]
+    table = in_cell(gripper_sim, "status", env={"PYMOTOROS_TOOL": "1"}).output
+    assert "tool 1 (gripper, TCP x 0.0 y 0.0 z 150.0 mm on tool0)" in table
+    assert "z 300.0 mm" in table
+
+    unknown = in_cell(gripper_sim, "status").output
+    assert "tool0 (base)" in unknown
+    assert "z 450.0 mm" in unknown  # tool0, 150 mm above the gripper's TCP
+    assert "TCP unknown: name the tool in force with --tool N" in unknown
+
+
+def test_a_linear_move_with_the_gripper(gripper_sim: Sim) -> None:
+    assert in_cell(gripper_sim, "enable").exit_code == 0
+    start = ("0.55", "0.1", "0.35", "180", "0", "0")
+    assert in_cell(gripper_sim, "move", "--pose", *start, "--deg", "--tool", "1").exit_code == 0
+    result = in_cell(gripper_sim, "move", "--pose", *REQUEST, "--deg", "--linear", "--tool", "1")
+    assert result.exit_code == 0, result.output
+    assert _twin_tcp(gripper_sim) == pytest.approx([0.6, 0.1, 0.3, math.pi, 0, 0], abs=MM)
+    result = in_cell(gripper_sim, "move", "--relative", "dz=0.05", "--tool", "1")
+    assert result.exit_code == 0, result.output
+    assert _twin_tcp(gripper_sim)[2] == pytest.approx(0.35, abs=MM)
+
+
+def test_the_settings_file_names_the_tool(gripper_sim: Sim, tmp_path: Path) -> None:
+    settings = tmp_path / "pymotoros.toml"
+    settings.write_text("[status]\ntool = 1\n", encoding="utf-8")
+    table = in_cell(gripper_sim, "status", env={"PYMOTOROS_SETTINGS": str(settings)}).output
+    assert "tool 1 (gripper, TCP x 0.0 y 0.0 z 150.0 mm on tool0)" in table

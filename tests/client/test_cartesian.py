@@ -122,8 +122,38 @@ def test_unreachable_line_is_refused_with_where() -> None:
     chain = chain_for("hc10")
     start_pose = chain.pose(START)
     goal = (start_pose[0] + 2.0, *start_pose[1:])
-    with pytest.raises(PlanningError, match=r"leaves the robot's reach at \d+% of the way"):
+    with pytest.raises(PlanningError, match=r"leaves the robot's reach at \d+% of the way") as info:
         plan_linear_move(chain, START, goal, _limits())
+    message = str(info.value)
+    assert "joint_3_u at" in message  # the stretched elbow, with its value
+    assert "move_pose" in message  # and what to do
+
+
+@pytest.mark.parametrize("delta", [(0.0, 0.0, -0.05), (0.45, -0.06, 0.13)])
+def test_a_line_from_the_boot_pose_names_the_singularity_and_the_remedy(
+    delta: tuple[float, float, float],
+) -> None:
+    """Issue 20: from the HC10's all-zero boot pose the README's lines were refused with
+    "leaves the robot's reach at 2% of the way", naming no joint and no remedy."""
+    chain = chain_for("hc10")
+    zero = (0.0,) * 6
+    pose = chain.pose(zero)
+    goal = (pose[0] + delta[0], pose[1] + delta[1], pose[2] + delta[2], *pose[3:])
+    with pytest.raises(PlanningError) as info:
+        plan_linear_move(chain, zero, goal, _limits())
+    message = str(info.value)
+    assert "singularity" in message
+    assert "joint_5_b" in message
+    assert "joint_4_r" in message
+    assert "move_joints([0, 0, 1.047, 0, -1.047, 0])" in message
+    assert "--pose without --linear" in message
+    ready = chain.pose((0.0, 0.0, 1.047, 0.0, -1.047, 0.0))
+    plan_linear_move(
+        chain,
+        (0.0, 0.0, 1.047, 0.0, -1.047, 0.0),
+        (*ready[:2], ready[2] - 0.05, *ready[3:]),
+        _limits(),
+    )
 
 
 def test_joint_limit_is_refused_with_joint_and_amount() -> None:

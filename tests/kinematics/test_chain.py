@@ -203,3 +203,21 @@ def test_urdf_loads_in_a_urdf_library_and_agrees(robot: str) -> None:
         if group.base_height:
             base = data.oMf[model.getFrameId("base")]
             assert base.translation[2] == pytest.approx(group.base_height)
+
+
+def test_each_chain_owns_its_workspace() -> None:
+    """Issue 19: one ``lru_cache``d chain (and its mutable Pinocchio data) was shared by
+    the controller and the client. Now each call gives a chain of its own; only the
+    read-only model behind is built once."""
+    a, b = chain_for("hc10"), chain_for("hc10")
+    assert a is not b
+    assert a._data is not b._data
+    assert a.model is b.model
+    q1, q2 = [0.1, 0.5, 1.9, 0.0, 0.9, 0.0], [-0.4, 0.2, 1.2, 0.3, -0.8, 0.5]
+    expected = (a.pose(q1), b.pose(q2))
+    a.fk(q1)
+    b.fk(q2)  # b's work leaves a's workspace alone
+    x, y, z = expected[0][:3]
+    tcp = a._data.oMf[a.model.getFrameId("tcp")].translation.tolist()
+    assert tcp == pytest.approx([x, y, z + a.base_height])
+    assert not hasattr(a, "singular_value")

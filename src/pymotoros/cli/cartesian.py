@@ -1,15 +1,27 @@
-"""The Cartesian part of ``pymotoros move``: ``--pose`` and ``--relative`` targets."""
+"""The Cartesian part of the CLI: ``move --pose/--relative`` and the tool they refer to.
+
+Every Cartesian line names the tool whose TCP it is about (number, name, offset):
+MotoROS cannot report the selected tool, so ``--tool N`` (``PYMOTOROS_TOOL``, or
+``tool = N`` in the settings file's ``[move]``/``[status]``) says it; a ``pymotoros
+tool N`` run earlier is not known to a later process. See :mod:`pymotoros.client.tools`.
+"""
 
 from __future__ import annotations
 
 import math
 from collections.abc import Callable, Sequence
-from typing import Final, Literal
+from typing import Any, Final, Literal, TypeVar
 
 import click
 
+from pymotoros.cli.settings import envvar
 from pymotoros.client import RobotClient
 from pymotoros.client.streaming import FollowingSample, MoveResult
+from pymotoros.client.tools import ToolUnknownError
+from pymotoros.errors import PymotorosError
+from pymotoros.protocol.constants import MAX_TOOL_NUMBER
+
+_F = TypeVar("_F", bound=Callable[..., Any])
 
 RELATIVE_KEYS: Final = ("dx", "dy", "dz", "drx", "dry", "drz")
 """Names accepted by ``--relative``: metres for dx, dy, dz; radians (degrees with --deg)
@@ -61,34 +73,93 @@ async def cartesian_move(
     speed_scale: float,
     accel_scale: float,
     on_progress: Callable[[FollowingSample], None],
+    tool: int | None = None,
 ) -> MoveResult:
-    """A move to ``pose`` (base coordinates) or by ``relative``; straight with ``linear``
-    (always for --relative unless the caller says otherwise)."""
+    """A move to ``pose`` (base coordinates) or by ``relative``; straight with ``linear``.
+
+    With ``tool`` the controller is told first (SELECT_TOOL), so the TCP the plan places
+    is the one the controller moves with; without it, the tool must be known otherwise
+    (:mod:`pymotoros.client.tools`), else the move is refused before anything moves.
+    """
+    if tool is not None:
+        await client.select_tool(tool, group)
+    click.echo(f"moving the TCP of {client.tools.describe(group)}", err=True)
+    options: dict[str, Any] = {
+        "group": group,
+        "linear": linear,
+        "tcp_speed_mm_s": tcp_speed_mm_s,
+        "speed_scale": speed_scale,
+        "accel_scale": accel_scale,
+        "on_progress": on_progress,
+    }
     if relative is not None:
-        return await client.move_relative(
-            *relative,
-            frame=frame,
-            group=group,
-            linear=linear,
-            tcp_speed_mm_s=tcp_speed_mm_s,
-            speed_scale=speed_scale,
-            accel_scale=accel_scale,
-            on_progress=on_progress,
-        )
-    assert pose is not None  # noqa: S101 - the caller gives one of the two
-    if linear:
-        return await client.move_linear(
-            pose,
-            group=group,
-            tcp_speed_mm_s=tcp_speed_mm_s,
-            speed_scale=speed_scale,
-            accel_scale=accel_scale,
-            on_progress=on_progress,
-        )
-    return await client.move_pose(
-        pose,
-        group=group,
-        speed_scale=speed_scale,
-        accel_scale=accel_scale,
-        on_progress=on_progress,
-    )
+        return await client.move_relative(*relative, frame=frame, **options)
+    if pose is None:
+        raise click.UsageError("give --pose X Y Z RX RY RZ or --relative KEY=VALUE")
+    return await client.move_cartesian(pose, **options)
+
+
+# --------------------------------------------------------------------------- the tool
+
+
+def tool_option(func: _F) -> _F:
+    """``--tool N`` (``PYMOTOROS_TOOL``): the tool whose TCP Cartesian lines refer to."""
+    return click.option(
+        "--tool",
+        "tool",
+        type=click.IntRange(0, MAX_TOOL_NUMBER),
+        default=None,
+        envvar=envvar("tool"),
+        metavar="N",
+        help="The tool in force (0..63): its TCP (from the cell file's tool data) is what "
+        "--pose/--relative place and what status reports. MotoROS cannot report the "
+        "selected tool: with tools in the cell file, Cartesian moves need this. `move "
+        "--pose/--relative` selects it first (SELECT_TOOL); joint moves ignore it.",
+    )(func)
+
+
+def use_tool(client: RobotClient, tool: int | None) -> None:
+    """Declare ``tool`` in force on every group (for commands that only read the state)."""
+    if tool is not None:
+        for index in range(len(client.robot.groups)):
+            client.tools.use(tool, group=index)
+
+
+def tcp_data(client: RobotClient, group: int) -> dict[str, Any]:
+    """``{"tcp": pose or None, "tool": {...} or None}`` for ``status --json``."""
+    try:
+        tool = client.tools.tool(group)
+        pose: list[float] | None = list(client.tcp_pose(group))
+    except PymotorosError:
+        return {"tcp": None, "tool": None}
+    return {
+        "tcp": pose,
+        "tool": {
+            "number": tool.number,
+            "name": tool.name,
+            "tcp_m": list(tool.tcp.xyz),
+            "rpy_rad": list(tool.tcp.rpy),
+        },
+    }
+
+
+def tcp_lines(client: RobotClient, group: int, width: int) -> list[str]:
+    """``status``'s TCP line with the tool it refers to; tool0 and what to do when the
+    tool in force is unknown; nothing without feedback or kinematics."""
+    label = "TCP (base)"
+    try:
+        try:
+            pose = client.tcp_pose(group)
+            tool = client.tools.describe(group)
+        except ToolUnknownError:
+            pose = client.tcp_pose(group, frame="tool0")
+            label = "tool0 (base)"
+            tool = "TCP unknown: name the tool in force with --tool N"
+    except PymotorosError:
+        return []
+    x, y, z, rx, ry, rz = pose
+    return [
+        f"    {label:<{width}}x {x * 1000:.1f} y {y * 1000:.1f} z {z * 1000:.1f} mm"
+        f"  Rx {math.degrees(rx):.2f} Ry {math.degrees(ry):.2f} Rz {math.degrees(rz):.2f} deg",
+        f"    {'':<{width}}{tool}",
+    ]

@@ -21,7 +21,15 @@ from typing import Any, Final, NoReturn, TypeVar
 
 import click
 
-from pymotoros.cli.cartesian import cartesian_move, parse_relative, pose_from_args
+from pymotoros.cli.cartesian import (
+    cartesian_move,
+    parse_relative,
+    pose_from_args,
+    tcp_data,
+    tcp_lines,
+    tool_option,
+    use_tool,
+)
 from pymotoros.cli.live import FrameWriter, alarm_line, not_ready_reason, twin_alarm_texts
 from pymotoros.cli.settings import envvar
 from pymotoros.cli.sim_view import fetch_state_async, safety_data, safety_lines
@@ -390,21 +398,13 @@ def _status_data(
                 "joints": list(group.joint_names),
                 "positions": list(fb.positions) if fb else None,
                 "velocities": list(fb.velocities) if fb and fb.velocities else None,
-                "tcp": _tcp_or_none(client, index),
             }
+            | tcp_data(client, index)
         )
     status = state.status.as_dict() if state.status else None
     if status is not None and state.status is not None and not state.status.motion_possible:
         status["not_ready_reason"] = not_ready_reason(state.status)
     return {"status": status, "groups": groups}
-
-
-def _tcp_or_none(client: RobotClient, group: int) -> list[float] | None:
-    """The TCP pose in base coordinates (m, rad), or None without feedback or chain."""
-    try:
-        return list(client.tcp_pose(group))
-    except PymotorosError:
-        return None
 
 
 def _yes(value: bool | None, yes: str = "yes", no: str = "no") -> str:
@@ -444,14 +444,7 @@ def _status_table(
             pos = fb.positions[j]
             vel = fb.velocities[j] if fb.velocities else math.nan
             lines.append(f"    {name:<{width}}{pos:>10.4f}{math.degrees(pos):>10.2f}{vel:>10.4f}")
-        tcp = _tcp_or_none(client, index)
-        if tcp is not None:
-            x, y, z, rx, ry, rz = tcp
-            lines.append(
-                f"    {'TCP (base)':<{width}}x {x * 1000:.1f} y {y * 1000:.1f} z {z * 1000:.1f} mm"
-                f"  Rx {math.degrees(rx):.2f} Ry {math.degrees(ry):.2f} Rz {math.degrees(rz):.2f}"
-                " deg"
-            )
+        lines += tcp_lines(client, index, width)
     return "\n".join(lines)
 
 
@@ -495,6 +488,7 @@ def _status_table(
     metavar="URL",
     help="pymotoros sim's control API (e.g. http://127.0.0.1:8080): adds PFL, FSU, alarm texts.",
 )
+@tool_option
 def status(
     as_json: bool,
     watch: bool,
@@ -504,6 +498,7 @@ def status(
     group: tuple[str, ...],
     check_model: bool,
     api: str | None,
+    tool: int | None = None,
     **kwargs: Any,
 ) -> None:
     """Show the robot's state (state port only: safe next to another client)."""
@@ -511,6 +506,7 @@ def status(
 
     async def work() -> None:
         async with connected(target, motion=check_model, state=True, io=False) as client:
+            use_tool(client, tool)
             only = tuple(client.group_index(g) for g in group)
             state = await client.wait_for_state(target.timeout_s)
             if check_model:
@@ -750,6 +746,7 @@ def _move_data(result: MoveResult) -> dict[str, Any]:
     show_default=True,
     help="Maximum TCP speed of a straight-line move, mm/s.",
 )
+@tool_option
 def move(
     joints: tuple[float, ...],
     name: str | None,
@@ -765,6 +762,7 @@ def move(
     relative: tuple[str, ...] = (),
     frame: str = "base",
     tcp_speed_mm_s: float = 250.0,
+    tool: int | None = None,
     **kwargs: Any,
 ) -> None:
     """Move to joint positions J1 ... Jn (rad, or deg with --deg) or to a named pose.
@@ -829,6 +827,7 @@ def move(
                             speed_scale=speed_scale,
                             accel_scale=accel_scale,
                             on_progress=progress,
+                            tool=tool,
                         )
                     else:
                         start = await client.current_positions(groups)

@@ -15,8 +15,10 @@ much, where on the line).
 
 from __future__ import annotations
 
+import contextlib
 import math
 from collections.abc import Sequence
+from dataclasses import dataclass
 from typing import Final, Literal
 
 import numpy as np
@@ -59,6 +61,19 @@ TCP_SPEED_MARGIN: Final = 0.9
 and the whole-pulse increments of each 4 ms tick add up to about 7 % on top of the plan
 (measured by the property test in tests/client/test_cartesian.py: 202.5 mm/s per tick
 for a 190 mm/s plan), so the requested speed stays a limit."""
+NEAR_SINGULAR_SIGMA: Final = 0.05
+"""Smallest singular value of the 6×n Jacobian (m and rad mixed, as Pinocchio gives it)
+below which a failed line is explained as a singularity: regular poses of these arms
+stay above 0.1; the wrist of an HC10 at joint_5_b = 6° is at 0.03."""
+SINGULAR_PROBE_RAD: Final = 0.1
+"""Joint step (5.7°) used to find which joint moves the arm out of a singularity."""
+SINGULAR_GAIN: Final = 0.005
+"""Rise of the smallest singular value over that step below which no single joint is
+named (several lost directions at once, as at the HC10's all-zero pose)."""
+READY_POSE: Final = (0.0, 0.0, 1.047, 0.0, -1.047, 0.0)
+READY_HINT: Final = "[0, 0, 1.047, 0, -1.047, 0]"
+"""A ready pose of the six-axis arms we model (joint_3 at 60°, joint_5 at -60°: the tool
+points down, elbow and wrist bent, far from every singularity), named in the refusal."""
 _MM_PER_M: Final = 1000.0
 
 
@@ -66,24 +81,94 @@ def _percent(s: float) -> str:
     return f"{s * 100:.0f}% of the way"
 
 
+def _smallest_singular_value(chain: Chain, q: FloatArray) -> float:
+    return float(np.linalg.svd(chain.jacobian(q), compute_uv=False)[-1])
+
+
+@dataclass(frozen=True, slots=True)
+class _Singularity:
+    """How singular the arm is at some joint values, and which joints make it so."""
+
+    lost: int
+    """Directions the TCP cannot move in (singular values below NEAR_SINGULAR_SIGMA)."""
+    sigma: float
+    turning: str
+    """The joints that turn without moving the TCP, as words."""
+    key: str | None
+    """The joint (with its value) whose move raises the smallest singular value most;
+    None when no single joint gets the arm out."""
+
+
+def _singularity(chain: Chain, q: FloatArray) -> _Singularity:
+    _, sigma, vt = np.linalg.svd(chain.jacobian(q))
+    lost = int(np.sum(sigma < NEAR_SINGULAR_SIGMA))
+    names = chain.joint_names
+    weights = np.abs(vt[len(sigma) - max(lost, 1) :]).max(axis=0)
+    free = [names[i] for i in np.argsort(-weights) if weights[i] > 0.3] or list(names)
+    turning = f"{', '.join(free[:-1])} and {free[-1]}" if len(free) > 1 else free[0]
+    gains = []
+    for i in range(len(q)):
+        step = np.zeros(len(q))
+        step[i] = SINGULAR_PROBE_RAD
+        best = max(_smallest_singular_value(chain, q + s) for s in (step, -step))
+        gains.append(best - sigma[-1])
+    k = int(np.argmax(gains))
+    key = None
+    if gains[k] >= 0.5 * sigma[-1] + SINGULAR_GAIN:
+        key = f"{names[k]} at {q[k]:.3f} rad ({math.degrees(q[k]):.1f}°)"
+    return _Singularity(lost, float(sigma[-1]), turning, key)
+
+
+def _ready_hint(q: FloatArray) -> str:
+    return "a joint move to a ready pose first" + (
+        f", e.g. move_joints({READY_HINT}) or `pymotoros move 0 0 60 0 -60 0 --deg`"
+        if len(q) == len(READY_POSE)
+        else ""
+    )
+
+
 def _explain_failure(chain: Chain, target: FloatArray, seed: FloatArray, s: float) -> str:
-    """Why no joint values reach ``target``: a joint limit (which, by how much) or reach."""
-    try:
-        free = chain.ik(target, seed, "tcp", "base_link", limits=False)
-    except KinematicsError:
-        return f"the line leaves the robot's reach at {_percent(s)}"
-    for name, q, lo, hi in zip(chain.joint_names, free.q, chain.lower, chain.upper, strict=True):
-        if q > hi:
-            return (
-                f"{name} would reach {q:.4f} rad, {q - hi:.4f} rad ({math.degrees(q - hi):.2f}°) "
-                f"beyond its upper limit {hi:.4f} at {_percent(s)}"
-            )
-        if q < lo:
-            return (
-                f"{name} would reach {q:.4f} rad, {lo - q:.4f} rad ({math.degrees(lo - q):.2f}°) "
-                f"beyond its lower limit {lo:.4f} at {_percent(s)}"
-            )
-    return f"no joint values within the limits reach the line at {_percent(s)}"
+    """Why no joint values on the seed's branch reach ``target`` (``seed``: the last point
+    solved): a singularity (which joints, what to do), a joint limit (which, by how much)
+    or the edge of the robot's reach; each with what to do."""
+    p = target[:3, 3]
+    where = f"x {p[0]:.3f}, y {p[1]:.3f}, z {p[2] - chain.base_height:.3f} m"
+    at = f"{_percent(s)} ({where})"
+    joint_move = "make this a joint move (move_pose; --pose without --linear)"
+    with contextlib.suppress(KinematicsError):  # on the seed's branch, limits ignored
+        free = chain.ik(target, seed, "tcp", "base_link", limits=False).q
+        for name, q, lo, hi in zip(chain.joint_names, free, chain.lower, chain.upper, strict=True):
+            if q > hi or q < lo:
+                side, limit, by = ("upper", hi, q - hi) if q > hi else ("lower", lo, lo - q)
+                return (
+                    f"{name} would reach {q:.4f} rad, {by:.4f} rad ({math.degrees(by):.2f}°) "
+                    f"beyond its {side} limit {limit:.4f} at {_percent(s)}; choose another "
+                    f"line or {joint_move}"
+                )
+    sing = _singularity(chain, seed)
+    with_key = f", with {sing.key}" if sing.key is not None else ""
+    try:  # from anywhere, within the limits: is the point reachable at all?
+        chain.ik(target, seed, "tcp", "base_link")
+    except KinematicsError as exc:
+        gap = str(exc).rpartition("the best attempt stayed ")[2].partition(";")[0]
+        head = f"the line leaves the robot's reach at {at}: the nearest the TCP gets stays {gap}"
+        if sing.lost == 0:
+            return f"{head}{with_key}; choose a target nearer the robot, or {joint_move}"
+        return (
+            f"{head}: the arm stands at a singularity ({sing.turning} turn without moving "
+            f"the TCP{with_key}). Make {_ready_hint(seed)}, or {joint_move}"
+        )
+    if sing.lost == 0:
+        return f"the arm would have to change its configuration at {at}; {joint_move}"
+    head = (
+        f"the arm is at a singularity at {at}: it cannot move the TCP in {sing.lost} of "
+        f"6 directions there ({sing.turning} turn without moving it; smallest singular "
+        f"value of the Jacobian {sing.sigma:.4f})"
+    )
+    if sing.key is None:  # no single joint gets it out
+        return f"{head}. Make {_ready_hint(seed)}, or {joint_move}"
+    name = sing.key.split(" ")[0]
+    return f"{head}{with_key}. Move {name} away ({_ready_hint(seed)}), or {joint_move}"
 
 
 def plan_linear_move(

@@ -65,6 +65,22 @@ def _forward_plain(
     return plain
 
 
+def _after_first_state(
+    method: Callable[Concatenate[RobotClient, _P], _R],
+) -> Callable[Concatenate[SyncRobotClient, _P], _R]:
+    """A plain method that reads the latest state, called once the first state is in:
+    a script calls it right after connecting, before any state message has arrived."""
+
+    @functools.wraps(method)
+    def after(self: SyncRobotClient, /, *args: _P.args, **kwargs: _P.kwargs) -> _R:
+        if not self.client.state.joints:
+            self._run(self.client.wait_for_state())
+        return method(self.client, *args, **kwargs)
+
+    after.__qualname__ = f"SyncRobotClient.{method.__name__}"
+    return after
+
+
 class SyncRobotClient:
     """Blocking :class:`RobotClient`: same constructor arguments, same methods."""
 
@@ -219,7 +235,8 @@ class SyncRobotClient:
     move_relative = _forward(RobotClient.move_relative)
     move_pose = _forward(RobotClient.move_pose)
     read_register_outputs = _forward(RobotClient.read_register_outputs)
-    tcp_pose = _forward_plain(RobotClient.tcp_pose)
+    move_cartesian = _forward(RobotClient.move_cartesian)
+    tcp_pose = _after_first_state(RobotClient.tcp_pose)
 
 
 async def _next(iterator: AsyncIterator[RobotState]) -> RobotState:

@@ -114,10 +114,63 @@ class IkResult:
     rotation_error_rad: float
 
 
+@dataclass(frozen=True, slots=True)
+class _Built:
+    """A group's Pinocchio model with one tool, and the ids of its named frames: read-only
+    once built, so one copy serves every chain of that group and tool."""
+
+    model: Any
+    frame_ids: dict[str, int]
+
+
+@lru_cache(maxsize=64)
+def _built(group: GroupModel, tool: Frame) -> _Built:
+    """Build the Pinocchio model of ``group`` with ``tool`` on tool0 (once per pair)."""
+    model = pin.Model()
+    model.name = group.name
+    parent = 0
+    mount = _se3(group.mount)
+    for i, axis in enumerate(group.axes):
+        geo = joint_geometry(axis)
+        placement = _se3(geo.origin)
+        if i == 0:
+            placement = mount * placement
+        direction = np.array(geo.axis, dtype=float)
+        joint: Any = (
+            pin.JointModelPrismaticUnaligned(direction)
+            if axis.linear
+            else pin.JointModelRevoluteUnaligned(direction)
+        )
+        parent = model.addJoint(
+            parent,
+            joint,
+            placement,
+            axis.name,
+            np.array([1e3]),
+            np.array([axis.max_velocity]),
+            np.array([axis.lower]),
+            np.array([axis.upper]),
+        )
+    last = parent
+    tool0 = _se3(group.tool0) if group.tool0 is not None else pin.SE3.Identity()
+    frames = {
+        "flange": pin.SE3.Identity(),
+        "tool0": tool0,
+        "tcp": tool0 * _se3(tool),
+    }
+    ids = {
+        name: model.addFrame(pin.Frame(name, last, 0, placement, pin.FrameType.OP_FRAME))
+        for name, placement in frames.items()
+    }
+    return _Built(model, ids)
+
+
 class Chain:
     """The kinematic chain of one control group with one tool mounted on ``tool0``.
 
-    Build with :func:`chain_for` (cached per group) and :meth:`with_tool`.
+    Each chain owns its workspace (Pinocchio data, the IK's random restarts): a user
+    of kinematics (the controller, a client, the pendant) builds its own chains and
+    never shares one. The model behind is built once per group and tool (read-only).
     """
 
     def __init__(self, group: GroupModel, tool: Frame = NO_TOOL) -> None:
@@ -132,47 +185,10 @@ class Chain:
         self.upper = np.array([a.upper for a in group.axes], dtype=float)
         self.max_velocity = np.array([a.max_velocity for a in group.axes], dtype=float)
         self.base_height = group.base_height
-        model = pin.Model()
-        model.name = group.name
-        parent = 0
-        mount = _se3(group.mount)
-        for i, axis in enumerate(group.axes):
-            geo = joint_geometry(axis)
-            placement = _se3(geo.origin)
-            if i == 0:
-                placement = mount * placement
-            direction = np.array(geo.axis, dtype=float)
-            joint: Any = (
-                pin.JointModelPrismaticUnaligned(direction)
-                if axis.linear
-                else pin.JointModelRevoluteUnaligned(direction)
-            )
-            parent = model.addJoint(
-                parent,
-                joint,
-                placement,
-                axis.name,
-                np.array([1e3]),
-                np.array([axis.max_velocity]),
-                np.array([axis.lower]),
-                np.array([axis.upper]),
-            )
-        last = parent
-        self._flange_id = model.addFrame(
-            pin.Frame("flange", last, 0, pin.SE3.Identity(), pin.FrameType.OP_FRAME)
-        )
-        tool0 = _se3(group.tool0) if group.tool0 is not None else pin.SE3.Identity()
-        self._tool0_id = model.addFrame(pin.Frame("tool0", last, 0, tool0, pin.FrameType.OP_FRAME))
-        self._tcp_id = model.addFrame(
-            pin.Frame("tcp", last, 0, tool0 * _se3(tool), pin.FrameType.OP_FRAME)
-        )
-        self.model = model
-        self._data = model.createData()
-        self._frame_ids: dict[str, int] = {
-            "flange": self._flange_id,
-            "tool0": self._tool0_id,
-            "tcp": self._tcp_id,
-        }
+        built = _built(group, tool)
+        self.model = built.model
+        self._frame_ids = built.frame_ids
+        self._data = self.model.createData()
         self._rng = np.random.default_rng(_RNG_SEED)
 
     # --- conveniences ------------------------------------------------------------------
@@ -270,10 +286,6 @@ class Chain:
         """Linear speed (m/s) of ``frame`` at joint values ``q`` and joint velocities ``qd``."""
         j = self.jacobian(q, frame)
         return float(np.linalg.norm(j[:3] @ np.asarray(qd, dtype=float)))
-
-    def singular_value(self, q: Sequence[float] | FloatArray, frame: FrameName = "tcp") -> float:
-        """Smallest singular value of the Jacobian (0 at a singularity)."""
-        return float(np.linalg.svd(self.jacobian(q, frame), compute_uv=False)[-1])
 
     # --- inverse kinematics -------------------------------------------------------------
 
@@ -401,15 +413,11 @@ def _frame_json(name: str, m: Any, axis: FloatArray | None) -> dict[str, Any]:
     return out
 
 
-@lru_cache(maxsize=64)
-def _cached(group: GroupModel, tool: Frame) -> Chain:
-    return Chain(group, tool)
-
-
 def chain_for(group: GroupModel | str, tool: Frame = NO_TOOL, *, group_index: int = 0) -> Chain:
-    """The chain of a group (or of a robot model's ``group_index``-th group, by name), with
-    ``tool`` on ``tool0``. Cached: do not mutate the returned chain."""
+    """A new chain of a group (or of a robot model's ``group_index``-th group, by name),
+    with ``tool`` on ``tool0``, and its own workspace: keep it rather than calling this
+    per pose (the model behind is built once per group and tool)."""
     if isinstance(group, str):
         robot = robot_model(group)
         group = robot.groups[group_index]
-    return _cached(group, tool)
+    return Chain(group, tool)

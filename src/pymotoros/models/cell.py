@@ -2,10 +2,10 @@
 
 A cell TOML file (``docs/cell.md``) describes the simulator's whole cell: controller,
 robots, tools, the state at boot. The client only needs the controller model (byte
-order, IO map) and the control groups (names, axes, limits). Those rules live here, in
-the models layer, so that :mod:`pymotoros.controller.cell` (the simulator) and the
-client (``pymotoros move --config CELL.toml``) read a file the same way; the rest of the
-file (tools, initial state, servo) stays the simulator's business and is ignored here.
+order, IO map), the control groups (names, axes, limits) and the tools' TCPs. Those
+rules live here, in the models layer, so that :mod:`pymotoros.controller.cell` (the
+simulator) and the client (``pymotoros move --config CELL.toml``) read a file the same
+way; the rest (tool masses, initial state, servo) stays the simulator's business.
 """
 
 from __future__ import annotations
@@ -17,6 +17,7 @@ from pathlib import Path
 from typing import Final
 
 from pymotoros.errors import ConfigError
+from pymotoros.models.cell_tools import CellTool, cell_tools
 from pymotoros.models.controllers import DEFAULT_CONTROLLER, ControllerModel, controller_model
 from pymotoros.models.robots import DEFAULT_ROBOT, GroupKind, GroupModel, RobotModel, robot_model
 
@@ -36,6 +37,9 @@ class CellModels:
     """``controller.fsu_speed_limit_pct``: the FSU joint-speed limit at boot (each axis
     executes at most this share of its maximum increment per tick); None: no FSU.
     The offline check (``pymotoros check --config``) predicts its effect."""
+    tools: tuple[tuple[CellTool, ...], ...] = ()
+    """Per group, its tool files (``[[tools]]``, ``[[groups.tools]]``): the TCPs the
+    client's Cartesian operations use (:mod:`pymotoros.models.cell_tools`)."""
 
 
 def rename_groups(groups: Sequence[GroupModel]) -> tuple[GroupModel, ...]:
@@ -183,7 +187,13 @@ def cell_models_from_dict(data: Mapping[str, object], *, source: str = "<cell>")
         pfl=any(robot_model(r).pfl for r in robots),
     )
     return CellModels(
-        str(name), ctrl, robot, robots, tuple(warnings), fsu_speed_limit_pct(data, source)
+        str(name),
+        ctrl,
+        robot,
+        robots,
+        tuple(warnings),
+        fsu_speed_limit_pct(data, source),
+        cell_tools(data, source, groups),
     )
 
 

@@ -1,0 +1,239 @@
+"""Joint-space motion: plan within the model's limits, stream, wait until settled, stop.
+
+The motion part of :class:`~pymotoros.client.RobotClient`. A move starts where the
+robot rests (from the state feedback), is planned jerk-limited within the robot
+model's limits (:mod:`pymotoros.client.planning`) and streamed by the
+:class:`~pymotoros.client.streaming.TrajectoryStreamer`; :meth:`Motion.stop` ends it
+from another task (STOP_MOTION).
+"""
+
+from __future__ import annotations
+
+import asyncio
+from collections.abc import Callable, Mapping, Sequence
+from pathlib import Path
+
+from pymotoros.client.connection import DEFAULT_REQUEST_TIMEOUT_S
+from pymotoros.client.errors import ClientError, MoveStoppedError
+from pymotoros.client.link import Link
+from pymotoros.client.motion_commands import MotionCommands
+from pymotoros.client.planning import (
+    DEFAULT_SAMPLE_PERIOD_S,
+    JointLimits,
+    JointTrajectory,
+    plan_joint_move,
+)
+from pymotoros.client.srdf import NamedPose, find_pose, parse_srdf
+from pymotoros.client.state_view import StateView
+from pymotoros.client.streaming import (
+    DEFAULT_BUSY_TIMEOUT_S,
+    DEFAULT_GOAL_TOLERANCE,
+    FollowingSample,
+    MoveResult,
+    TrajectoryStreamer,
+)
+from pymotoros.models import ControllerModel, RobotModel
+from pymotoros.protocol.constants import Port
+
+JointGoal = Sequence[float] | Mapping[int, Sequence[float]] | Mapping[str, Sequence[float]]
+"""A joint goal: positions for one group, or ``{group: positions}`` for several."""
+
+
+class Motion:
+    """Joint moves of one client: planning, streaming, and stopping a running move."""
+
+    def __init__(
+        self,
+        link: Link,
+        view: StateView,
+        commands: MotionCommands,
+        streamer: TrajectoryStreamer,
+        robot: RobotModel,
+        controller: ControllerModel,
+    ) -> None:
+        self._link = link
+        self._view = view
+        self._commands = commands
+        self._streamer = streamer
+        self._robot = robot
+        self._controller = controller
+        self._moving: asyncio.Task[object] | None = None
+        self._stop_requested = False
+
+    def limits(self, group: int | str = 0) -> JointLimits:
+        """Planning limits of ``group`` from the robot model."""
+        return JointLimits.from_group(
+            self._robot.groups[self._view.group_index(group)],
+            self._controller.interpolation_period_ms,
+            self._controller.float_mode,
+        )
+
+    async def current_positions(
+        self, group: int | Sequence[int] = 0, *, at_rest: bool = True, timeout_s: float = 10.0
+    ) -> tuple[float, ...]:
+        """Joint positions from feedback; with ``at_rest``, once the robot is settled."""
+        groups = (group,) if isinstance(group, int) else tuple(group)
+        await self._view.wait_for_state()
+        if at_rest:
+            return await self._streamer.wait_until_at_rest(groups, timeout_s=timeout_s)
+        state = self._view.state
+        return tuple(v for g in groups for v in (state.positions(g) or ()))
+
+    def plan(
+        self,
+        start: Sequence[float],
+        goal: Sequence[float],
+        *,
+        groups: Sequence[int] = (0,),
+        speed_scale: float = 1.0,
+        accel_scale: float = 1.0,
+        sample_period: float = DEFAULT_SAMPLE_PERIOD_S,
+    ) -> JointTrajectory:
+        """A synchronised point-to-point move (see :func:`planning.plan_joint_move`)."""
+        limits = JointLimits.concat([self.limits(g) for g in groups])
+        return plan_joint_move(
+            start,
+            goal,
+            limits,
+            velocity_scaling=speed_scale,
+            acceleration_scaling=accel_scale,
+            sample_period=sample_period,
+        )
+
+    async def execute(
+        self,
+        trajectory: JointTrajectory,
+        *,
+        groups: Sequence[int] = (0,),
+        busy_timeout_s: float = DEFAULT_BUSY_TIMEOUT_S,
+        goal_tolerance: float = DEFAULT_GOAL_TOLERANCE,
+        timeout_s: float | None = None,
+        check_speed: bool = True,
+        on_progress: Callable[[FollowingSample], None] | None = None,
+    ) -> MoveResult:
+        """Stream ``trajectory`` and wait until the robot has settled at its last point.
+
+        The trajectory's joints are those of ``groups`` one after the other; one group
+        goes as JOINT_TRAJ_PT_FULL, several as JOINT_TRAJ_PT_FULL_EX.
+        """
+        self._link.need(Port.STATE)  # completion is judged from the state stream
+        groups = tuple(self._view.group_index(g) for g in groups)
+        task = asyncio.current_task()
+        self._moving = task
+        self._stop_requested = False
+        try:
+            return await self._streamer.execute(
+                trajectory,
+                groups,
+                busy_timeout_s=busy_timeout_s,
+                goal_tolerance=goal_tolerance,
+                timeout_s=timeout_s,
+                check_speed=check_speed,
+                on_progress=on_progress,
+            )
+        except asyncio.CancelledError:
+            if not self._stop_requested or task is None:
+                raise
+            task.uncancel()
+            here = tuple(v for g in groups for v in (self._view.state.positions(g) or ()))
+            where = ", ".join(f"{v:.4f}" for v in here)
+            raise MoveStoppedError(
+                f"move stopped on request (STOP_MOTION) at [{where}]", positions=here
+            ) from None
+        finally:
+            self._moving = None
+
+    async def stop(self) -> None:
+        """Stop the robot now (STOP_MOTION) and end a move running in another task.
+
+        Safe from another task of the client's loop while :meth:`execute` /
+        :meth:`move_joints` runs: that call raises :class:`MoveStoppedError`. From
+        another thread use :meth:`stop_threadsafe`.
+        """
+        moving = self._moving
+        if moving is not None and moving is not asyncio.current_task():
+            self._stop_requested = True
+            moving.cancel()
+        await self._commands.stop_motion()
+
+    def stop_threadsafe(self, timeout_s: float = DEFAULT_REQUEST_TIMEOUT_S) -> None:
+        """:meth:`stop` from another thread (not the client's loop); waits for the reply."""
+        loop = self._link.loop
+        if loop is None or loop.is_closed():
+            raise ClientError("the client is not connected: nothing to stop")
+        if _in_loop(loop):
+            raise ClientError("stop_threadsafe() called on the client's own loop: await stop()")
+        asyncio.run_coroutine_threadsafe(self.stop(), loop).result(timeout_s)
+
+    async def move_joints(
+        self,
+        goal: JointGoal,
+        *,
+        group: int | str = 0,
+        speed_scale: float = 1.0,
+        accel_scale: float = 1.0,
+        on_progress: Callable[[FollowingSample], None] | None = None,
+        goal_tolerance: float = DEFAULT_GOAL_TOLERANCE,
+        busy_timeout_s: float = DEFAULT_BUSY_TIMEOUT_S,
+        timeout_s: float | None = None,
+    ) -> MoveResult:
+        """Move to joint positions (rad/m, ROS order) from wherever the robot rests now.
+
+        ``goal`` is a list for ``group``, or ``{group: positions}`` to move several
+        groups together. Waits for the robot to be at rest, plans with the model's
+        limits, streams, and waits until it has settled at the goal.
+        """
+        if isinstance(goal, Mapping):
+            groups = tuple(sorted(self._view.group_index(g) for g in goal))
+            by_index = {self._view.group_index(g): v for g, v in goal.items()}
+            target = tuple(v for g in groups for v in by_index[g])
+        else:
+            groups = (self._view.group_index(group),)
+            target = tuple(goal)
+        start = await self.current_positions(groups)
+        trajectory = self.plan(
+            start, target, groups=groups, speed_scale=speed_scale, accel_scale=accel_scale
+        )
+        return await self.execute(
+            trajectory,
+            groups=groups,
+            on_progress=on_progress,
+            goal_tolerance=goal_tolerance,
+            busy_timeout_s=busy_timeout_s,
+            timeout_s=timeout_s,
+        )
+
+    def named_pose(
+        self, name: str, *, srdf: str | Path | None = None, group: int | str = 0
+    ) -> tuple[float, ...]:
+        """Joint values of a named pose: an SRDF ``group_state`` or the built-in ``home``."""
+        poses: tuple[NamedPose, ...] = parse_srdf(srdf) if srdf is not None else ()
+        model = self._robot.groups[self._view.group_index(group)]
+        return find_pose(name, model, poses).positions_for(model)
+
+    async def move_named(
+        self,
+        name: str,
+        *,
+        srdf: str | Path | None = None,
+        group: int = 0,
+        speed_scale: float = 1.0,
+        accel_scale: float = 1.0,
+        on_progress: Callable[[FollowingSample], None] | None = None,
+    ) -> MoveResult:
+        """Move to a named pose (``home``, or a ``group_state`` of ``srdf``)."""
+        goal = self.named_pose(name, srdf=srdf, group=group)
+        return await self.move_joints(
+            goal,
+            group=group,
+            speed_scale=speed_scale,
+            accel_scale=accel_scale,
+            on_progress=on_progress,
+        )
+
+
+def _in_loop(loop: asyncio.AbstractEventLoop) -> bool:
+    try:
+        return asyncio.get_running_loop() is loop
+    except RuntimeError:
+        return False
