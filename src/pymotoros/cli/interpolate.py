@@ -27,16 +27,16 @@ from typing import IO, Any, Final
 import click
 import numpy as np
 
-from pymotoros.errors import ConfigError, TrajectoryRejectedError
-from pymotoros.models import (
-    DEFAULT_CONTROLLER,
-    DEFAULT_ROBOT,
-    ROBOTS,
-    ControllerType,
-    GroupModel,
-    controller_model,
-    robot_model,
+from pymotoros.cli.options import (
+    BadInput,
+    InputFile,
+    controller_option,
+    deg_option,
+    output_option,
+    robot_option,
 )
+from pymotoros.errors import ConfigError, TrajectoryRejectedError
+from pymotoros.models import GroupModel, controller_model, robot_model
 from pymotoros.motion import GroupAxes, interpolate_arrays
 
 logger = logging.getLogger(__name__)
@@ -59,12 +59,6 @@ EXIT_REJECTED: Final = 1
 
 class _Rejected(click.ClickException):
     exit_code = EXIT_REJECTED
-
-
-class _BadInput(click.ClickException):
-    """A malformed file or option, told in one line (no usage banner): exit code 2."""
-
-    exit_code = 2
 
 
 def _parse_ratios(value: str | None, n: int) -> list[float] | None:
@@ -346,32 +340,10 @@ def write_increments(stream: IO[str], time_ms: np.ndarray, increments: np.ndarra
     stream.writelines(",".join(map(str, row)) + "\n" for row in table.tolist())
 
 
-_ROBOT_HELP: Final = ", ".join(
-    name + ("" if len(r.groups) == 1 else " (multi-group: not supported here)")
-    for name, r in ROBOTS.items()
-)
-
-
 @click.command(context_settings={"help_option_names": ["-h", "--help"]})
-@click.argument(
-    "traj", metavar="TRAJ.csv", type=click.Path(exists=True, dir_okay=False, path_type=Path)
-)
-@click.option(
-    "--controller",
-    "controller_name",
-    type=click.Choice([t.value for t in ControllerType], case_sensitive=False),
-    default=DEFAULT_CONTROLLER.value,
-    show_default=True,
-    help="Controller family: decides the interpolation period and the float arithmetic "
-    "(x87 extended precision, or strict single precision on FS100).",
-)
-@click.option(
-    "--robot",
-    "robot_name",
-    default=DEFAULT_ROBOT,
-    show_default=True,
-    help=f"Robot model, single control group only: {_ROBOT_HELP}.",
-)
+@click.argument("traj", metavar="TRAJ.csv", type=InputFile("trajectory CSV"))
+@controller_option("controller_name")
+@robot_option("robot_name", note="Robots of a single control group only (not sda10f).")
 @click.option(
     "--pulses-per-rad",
     "ratios",
@@ -379,17 +351,8 @@ _ROBOT_HELP: Final = ", ".join(
     help="Override the model's pulses per rad, one per axis in ROS order. The speed limits "
     "in rad/s stay the model's.",
 )
-@click.option(
-    "-o",
-    "--output",
-    type=click.Path(dir_okay=False, writable=True, path_type=Path),
-    help="Write the increments here instead of to stdout (says where on stderr).",
-)
-@click.option(
-    "--deg",
-    is_flag=True,
-    help="Positions and velocities of TRAJ.csv are in deg and deg/s (default rad, rad/s).",
-)
+@output_option("Write the increments here instead of to stdout (says where on stderr)")
+@deg_option("Positions and velocities of TRAJ.csv (deg/s)")
 def interpolate(
     traj: Path,
     controller_name: str,
@@ -414,7 +377,7 @@ def interpolate(
     try:
         _interpolate(traj, controller_name, robot_name, ratios, output, deg, marks)
     except click.BadParameter as exc:
-        raise _BadInput(exc.format_message()) from None
+        raise BadInput(exc.format_message()) from None
     if marks:
         text = " ".join(f"{name}={value:.6f}" for name, value in marks)
         click.echo(f"interpolate timings monotonic: {text}", err=True)
@@ -463,8 +426,13 @@ def _interpolate(
     large = traj.stat().st_size >= FAST_CSV_BYTES
     parsed = read_trajectory_fast(traj, n) if large else None
     if parsed is None:
-        with traj.open(newline="", encoding="utf-8") as stream:
-            parsed = read_trajectory(stream, n, traj.name)
+        try:
+            with traj.open(newline="", encoding="utf-8") as stream:
+                parsed = read_trajectory(stream, n, traj.name)
+        except UnicodeDecodeError as exc:
+            raise BadInput(
+                f"TRAJ.csv: {traj.name} is not UTF-8 text (byte {exc.start}: {exc.reason})"
+            ) from None
     times, pos, vel = parsed
     _mark(marks, "read")
     if deg:

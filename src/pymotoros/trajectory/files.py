@@ -135,7 +135,15 @@ def read_trajectory_file(
     A CSV file names no joints, so it needs ``robot`` (single group).
     """
     fmt = fmt or format_of(path)
-    text = path.read_text(encoding="utf-8")
+    try:
+        text = path.read_text(encoding="utf-8")
+    except OSError as exc:
+        raise TrajectoryFileError(f"{path.name}: cannot read it ({exc.strerror})") from None
+    except UnicodeDecodeError as exc:
+        raise TrajectoryFileError(
+            f"{path.name}: not UTF-8 text (byte {exc.start}: {exc.reason}); a trajectory "
+            "file is CSV, JSON or YAML text"
+        ) from None
     if fmt == "csv":
         if robot is None:
             raise TrajectoryFileError(f"{path.name}: a CSV trajectory needs --robot")

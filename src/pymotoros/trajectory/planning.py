@@ -134,10 +134,22 @@ def plan_waypoints(
     groups = robot.groups
     names = tuple(n for g in groups for n in g.joint_names)
     lower, upper, vmax, amax = _limits(groups, controller)
+    lengths = {len(w) for w in waypoints}
+    if lengths - {len(names)}:
+        raise WaypointPlanningError(
+            f"{robot.name} needs waypoints of {len(names)} joints, got rows of "
+            f"{', '.join(str(n) for n in sorted(lengths))} values"
+        )
     way = np.asarray(waypoints, dtype=np.float64)
     if way.ndim != 2 or way.shape[1] != len(names) or way.shape[0] < 2:
         raise WaypointPlanningError(
             f"{robot.name} needs at least 2 waypoints of {len(names)} joints, got shape {way.shape}"
+        )
+    if not np.all(np.isfinite(way)):
+        w, j = (int(x) for x in np.argwhere(~np.isfinite(way))[0])
+        raise WaypointPlanningError(
+            f"waypoint {w}: {names[j]} = {way[w, j]} is not a finite number; give every "
+            "joint in rad"
         )
     outside = (way < lower) | (way > upper)
     if outside.any():
