@@ -36,7 +36,7 @@ from pymotoros.cli.options import (
     robot_option,
 )
 from pymotoros.errors import ConfigError, TrajectoryRejectedError
-from pymotoros.models import GroupModel, controller_model, robot_model
+from pymotoros.models import ControllerModel, GroupModel, controller_model, robot_model
 from pymotoros.motion import GroupAxes, interpolate_arrays
 
 logger = logging.getLogger(__name__)
@@ -388,16 +388,8 @@ def _mark(marks: list[tuple[str, float]] | None, name: str) -> None:
         marks.append((name, time.monotonic()))
 
 
-def _interpolate(
-    traj: Path,
-    controller_name: str,
-    robot_name: str,
-    ratios: str | None,
-    output: Path | None,
-    deg: bool,
-    marks: list[tuple[str, float]] | None = None,
-) -> None:
-    _mark(marks, "start")
+def _single_group(robot_name: str, controller_name: str) -> tuple[GroupModel, ControllerModel]:
+    """The robot's only group and the controller; a robot of several groups is refused."""
     try:
         robot = robot_model(robot_name)
         controller = controller_model(controller_name)
@@ -417,42 +409,44 @@ def _interpolate(
             controller.type.value,
             ", ".join(sorted(robot.controllers)),
         )
-    group = robot.groups[0]
-    n = group.num_axes
-    try:
-        axes = GroupAxes.from_model(group, controller, _parse_ratios(ratios, n))
-    except ConfigError as exc:
-        raise click.BadParameter(str(exc), param_hint="--pulses-per-rad") from None
-    large = traj.stat().st_size >= FAST_CSV_BYTES
+    return robot.groups[0], controller
+
+
+def _read(traj: Path, n: int, large: bool) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(times, positions, velocities): pyarrow for a large well-formed file, else the
+    Python reader (which gives the precise error)."""
     parsed = read_trajectory_fast(traj, n) if large else None
-    if parsed is None:
-        try:
-            with traj.open(newline="", encoding="utf-8") as stream:
-                parsed = read_trajectory(stream, n, traj.name)
-        except UnicodeDecodeError as exc:
-            raise BadInput(
-                f"TRAJ.csv: {traj.name} is not UTF-8 text (byte {exc.start}: {exc.reason})"
-            ) from None
-    times, pos, vel = parsed
-    _mark(marks, "read")
-    if deg:
-        angular = np.array([not a.linear for a in group.axes])
-        pos = np.where(angular, np.radians(pos), pos)
-        vel = np.where(angular, np.radians(vel), vel)
+    if parsed is not None:
+        return parsed
+    try:
+        with traj.open(newline="", encoding="utf-8") as stream:
+            return read_trajectory(stream, n, traj.name)
+    except UnicodeDecodeError as exc:
+        raise BadInput(
+            f"TRAJ.csv: {traj.name} is not UTF-8 text (byte {exc.start}: {exc.reason})"
+        ) from None
+
+
+def _warn_impossible(times: np.ndarray, pos: np.ndarray, group: GroupModel, deg: bool) -> None:
     warnings = impossible_points(times, pos, group, deg)
     for line in warnings[:MAX_WARNINGS]:
         click.echo(f"warning: {line}; check the file", err=True)
     if len(warnings) > MAX_WARNINGS:
         click.echo(f"warning: {len(warnings) - MAX_WARNINGS} more such points", err=True)
-    _mark(marks, "check")
-    if output is None:
-        sys.stdout.flush()
-    writer = (
-        BlockWriter.create(sys.stdout.buffer if output is None else output, n) if large else None
-    )
+
+
+def _run_engine(
+    parsed: tuple[np.ndarray, np.ndarray, np.ndarray],
+    axes: GroupAxes,
+    output: Path | None,
+    writer: BlockWriter | None,
+    marks: list[tuple[str, float]] | None,
+) -> int:
+    """Interpolate and write the increments (block by block with ``writer``); returns
+    how many were written. A refused point: exit 1, nothing written."""
     try:
         time_ms, increments = interpolate_arrays(
-            times, pos, vel, axes, on_block=None if writer is None else writer.block
+            *parsed, axes, on_block=None if writer is None else writer.block
         )
         _mark(marks, "engine")
         if writer is not None:
@@ -468,9 +462,43 @@ def _interpolate(
     elif writer is None and output is not None:
         with output.open("w", encoding="utf-8", newline="") as out:
             write_increments(out, time_ms, increments)
+    return len(time_ms)
+
+
+def _interpolate(
+    traj: Path,
+    controller_name: str,
+    robot_name: str,
+    ratios: str | None,
+    output: Path | None,
+    deg: bool,
+    marks: list[tuple[str, float]] | None = None,
+) -> None:
+    _mark(marks, "start")
+    group, controller = _single_group(robot_name, controller_name)
+    n = group.num_axes
+    try:
+        axes = GroupAxes.from_model(group, controller, _parse_ratios(ratios, n))
+    except ConfigError as exc:
+        raise click.BadParameter(str(exc), param_hint="--pulses-per-rad") from None
+    large = traj.stat().st_size >= FAST_CSV_BYTES
+    times, pos, vel = _read(traj, n, large)
+    _mark(marks, "read")
+    if deg:
+        angular = np.array([not a.linear for a in group.axes])
+        pos = np.where(angular, np.radians(pos), pos)
+        vel = np.where(angular, np.radians(vel), vel)
+    _warn_impossible(times, pos, group, deg)
+    _mark(marks, "check")
+    if output is None:
+        sys.stdout.flush()
+    writer = (
+        BlockWriter.create(sys.stdout.buffer if output is None else output, n) if large else None
+    )
+    written = _run_engine((times, pos, vel), axes, output, writer, marks)
     _mark(marks, "written")
     if output is not None:
         click.echo(
-            f"wrote {len(time_ms)} increments ({n} axes, {len(times)} points) to {output}",
+            f"wrote {written} increments ({n} axes, {len(times)} points) to {output}",
             err=True,
         )

@@ -19,7 +19,7 @@ import os
 import re
 from collections.abc import Callable
 from pathlib import Path
-from typing import Any, Final, TypeVar
+from typing import TYPE_CHECKING, Any, Final, TypeAlias, TypeVar
 
 import click
 from click.shell_completion import CompletionItem
@@ -45,7 +45,13 @@ class BadInput(click.ClickException):
 # --------------------------------------------------------------------------- file types
 
 
-class InputFile(click.ParamType):
+if TYPE_CHECKING:
+    _PathParam: TypeAlias = click.ParamType[Path]  # generic from click 8.2 on
+else:
+    _PathParam = click.ParamType  # click 8.1's is not subscriptable
+
+
+class InputFile(_PathParam):
     """A file the command reads: it must exist and be a readable file (one-line error)."""
 
     name = "file"
@@ -72,7 +78,7 @@ class InputFile(click.ParamType):
         return [CompletionItem(incomplete, type="file")]
 
 
-class OutputFile(click.ParamType):
+class OutputFile(_PathParam):
     """A file the command writes: its directory must exist (one-line error, checked before
     any work, so a long computation does not end in a traceback)."""
 
@@ -190,24 +196,18 @@ def model_options(
     return decorate
 
 
-def speed_scale_option(func: _F) -> _F:
+def _scale_option(flag: str, what: str) -> Callable[[_F], _F]:
     return click.option(
-        "--speed-scale",
+        flag,
         type=click.FloatRange(0.0, 1.0, min_open=True),
         default=1.0,
         show_default=True,
-        help="Fraction of each joint's maximum velocity (like MoveIt's velocity scaling).",
-    )(func)
+        help=f"Fraction of each joint's maximum {what}.",
+    )
 
 
-def accel_scale_option(func: _F) -> _F:
-    return click.option(
-        "--accel-scale",
-        type=click.FloatRange(0.0, 1.0, min_open=True),
-        default=1.0,
-        show_default=True,
-        help="Fraction of each joint's maximum acceleration (and jerk).",
-    )(func)
+speed_scale_option = _scale_option("--speed-scale", "velocity (like MoveIt's velocity scaling)")
+accel_scale_option = _scale_option("--accel-scale", "acceleration (and jerk)")
 
 
 def scale_options(func: _F) -> _F:
@@ -355,9 +355,10 @@ class NumbersCommand(click.Command):
     the arguments, so ``--speed`` was reported as "not a valid float".
     """
 
-    def __init__(self, *args: Any, **kwargs: Any) -> None:
-        settings = dict(kwargs.pop("context_settings", None) or {})
-        settings["ignore_unknown_options"] = True
+    def __init__(
+        self, *args: Any, context_settings: dict[str, Any] | None = None, **kwargs: Any
+    ) -> None:
+        settings = {**(context_settings or {}), "ignore_unknown_options": True}
         super().__init__(*args, context_settings=settings, **kwargs)
 
     def parse_args(self, ctx: click.Context, args: list[str]) -> list[str]:

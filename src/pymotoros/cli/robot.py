@@ -700,7 +700,8 @@ def _named_groups(
     every group of the robot the pose sets (the built-in home sets them all)."""
     if given:
         return given, tuple(v for g in given for v in client.named_pose(name, srdf=srdf, group=g))
-    groups, goal = [], []
+    groups: list[int] = []
+    goal: list[float] = []
     first_error: NamedPoseError | None = None
     for index in range(len(client.robot.groups)):
         try:
@@ -969,6 +970,27 @@ def io() -> None:
     """
 
 
+def _on_io_port(
+    kwargs: dict[str, Any], call: Callable[[RobotClient], Coroutine[Any, Any, _T]]
+) -> _T:
+    """Run one request that needs only the IO port (MotoROS allows one IO client)."""
+    target = _target(kwargs)
+
+    async def work() -> _T:
+        async with connected(target, motion=False, state=False, io=True) as client:
+            return await call(client)
+
+    return run(target, work)
+
+
+def _say_value(as_json: bool, key: str, number: int, value: int, text: str) -> None:
+    """``{key: number, "value": value}`` with --json, else ``text``."""
+    if as_json:
+        _echo_json({key: number, "value": value})
+    else:
+        click.echo(text)
+
+
 @io.command("read", epilog=EXIT_CODES_HELP)
 @robot_options
 @click.argument("address", type=click.IntRange(0))
@@ -976,19 +998,9 @@ def io() -> None:
 @click.option("--json", "as_json", is_flag=True, help='Print {"address": A, "value": V}.')
 def io_read(address: int, as_group: bool, as_json: bool, **kwargs: Any) -> None:
     """Read the IO bit (or group) at ADDRESS."""
-    target = _target(kwargs)
-
-    async def work() -> int:
-        async with connected(target, motion=False, state=False, io=True) as client:
-            if as_group:
-                return await client.read_io_group(address)
-            return await client.read_io_bit(address)
-
-    value = run(target, work)
-    if as_json:
-        _echo_json({"address": address, "value": value})
-    else:
-        click.echo(str(value))
+    read = RobotClient.read_io_group if as_group else RobotClient.read_io_bit
+    value = _on_io_port(kwargs, lambda client: read(client, address))
+    _say_value(as_json, "address", address, value, str(value))
 
 
 @io.command("write", epilog=EXIT_CODES_HELP)
@@ -999,20 +1011,9 @@ def io_read(address: int, as_group: bool, as_json: bool, **kwargs: Any) -> None:
 @click.option("--json", "as_json", is_flag=True, help='Print {"address": A, "value": V}.')
 def io_write(address: int, value: int, as_group: bool, as_json: bool, **kwargs: Any) -> None:
     """Write VALUE (0/1, or 0..255 with --group) to the IO bit (or group) at ADDRESS."""
-    target = _target(kwargs)
-
-    async def work() -> None:
-        async with connected(target, motion=False, state=False, io=True) as client:
-            if as_group:
-                await client.write_io_group(address, value)
-            else:
-                await client.write_io_bit(address, value)
-
-    run(target, work)
-    if as_json:
-        _echo_json({"address": address, "value": value})
-    else:
-        click.echo(f"{address} = {value}")
+    write = RobotClient.write_io_group if as_group else RobotClient.write_io_bit
+    _on_io_port(kwargs, lambda client: write(client, address, value))
+    _say_value(as_json, "address", address, value, f"{address} = {value}")
 
 
 @click.group(epilog=EXIT_CODES_HELP)
@@ -1029,17 +1030,8 @@ def mreg() -> None:
 @click.option("--json", "as_json", is_flag=True, help='Print {"number": N, "value": V}.')
 def mreg_read(number: int, as_json: bool, **kwargs: Any) -> None:
     """Read M-register NUMBER."""
-    target = _target(kwargs)
-
-    async def work() -> int:
-        async with connected(target, motion=False, state=False, io=True) as client:
-            return await client.read_mregister(number)
-
-    value = run(target, work)
-    if as_json:
-        _echo_json({"number": number, "value": value})
-    else:
-        click.echo(str(value))
+    value = _on_io_port(kwargs, lambda client: client.read_mregister(number))
+    _say_value(as_json, "number", number, value, str(value))
 
 
 @mreg.command("write", epilog=EXIT_CODES_HELP)
@@ -1049,17 +1041,8 @@ def mreg_read(number: int, as_json: bool, **kwargs: Any) -> None:
 @click.option("--json", "as_json", is_flag=True, help='Print {"number": N, "value": V}.')
 def mreg_write(number: int, value: int, as_json: bool, **kwargs: Any) -> None:
     """Write VALUE (0..65535) to M-register NUMBER."""
-    target = _target(kwargs)
-
-    async def work() -> None:
-        async with connected(target, motion=False, state=False, io=True) as client:
-            await client.write_mregister(number, value)
-
-    run(target, work)
-    if as_json:
-        _echo_json({"number": number, "value": value})
-    else:
-        click.echo(f"M{number:03d} = {value}")
+    _on_io_port(kwargs, lambda client: client.write_mregister(number, value))
+    _say_value(as_json, "number", number, value, f"M{number:03d} = {value}")
 
 
 __all__ = ["disable", "enable", "io", "move", "mreg", "status", "stop", "tool"]

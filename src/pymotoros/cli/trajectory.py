@@ -36,6 +36,7 @@ from pymotoros.cli.options import (
     robot_options,
     scale_options,
 )
+from pymotoros.cli.recorded_run import recorded_run
 from pymotoros.errors import ConfigError, PymotorosError
 from pymotoros.models import (
     DEFAULT_CONTROLLER,
@@ -493,116 +494,6 @@ def run(traj: Path, force: bool, enable_first: bool, as_json: bool, **kwargs: An
 
 
 # --------------------------------------------------------------------------- plot
-
-
-def recorded_run(path: Path, traj: Trajectory, robot: RobotModel) -> RecordedRun:
-    """The run of ``traj`` in a session recording (``--record``, ``sim --record``, or a
-    Wireshark capture): the points the controller accepted and the feedback it sent.
-
-    The points are paired with their MOTO_MOTION_REPLY (MotoROS answers in order);
-    BUSY answers make the client resend, so only the SUCCESS one counts. Time 0 is
-    that reply to the start point (sequence 0). A recording may hold several
-    trajectories: the one with the file's number of points is used (the last such),
-    else the last one, with a warning. Errors are usage errors (exit 2).
-    """
-    import numpy as np
-
-    from pymotoros.client.recording import Direction, RecordingError, read_recording
-    from pymotoros.protocol.constants import MsgType, Port, ResultCode
-    from pymotoros.protocol.messages import (
-        JointFeedback,
-        JointTrajPtFull,
-        MotoJointFeedbackEx,
-        MotoJointTrajPtFullEx,
-        MotoMotionReply,
-    )
-    from pymotoros.trajectory.plot import RecordedRun, Series
-
-    try:
-        rec = read_recording(path)
-    except (RecordingError, OSError) as exc:
-        raise BadInput(f"--recording: {exc}") from None
-    point_types = {int(MsgType.JOINT_TRAJ_PT_FULL), int(MsgType.MOTO_JOINT_TRAJ_PT_FULL_EX)}
-    # accepted points, in order: (reply time, sequence, [(group, time, pos, vel)])
-    accepted: list[tuple[float, int, list[tuple[int, float, tuple[float, ...], tuple[float, ...]]]]]
-    accepted = []
-    for conn in rec.on(Port.MOTION):
-        pending: list[Any] = []
-        for m in conn.messages:
-            msg = m.message
-            if m.direction is Direction.TO_SERVER and msg is not None:
-                pending.append(msg)
-            elif isinstance(msg, MotoMotionReply) and pending:
-                request = pending.pop(0)
-                if msg.command not in point_types or msg.result != ResultCode.SUCCESS:
-                    continue
-                if isinstance(request, JointTrajPtFull):
-                    records = [(request.group_no, request.time, request.pos, request.vel)]
-                    accepted.append((m.offset, request.sequence, records))
-                elif isinstance(request, MotoJointTrajPtFullEx):
-                    records = [(g.group_no, g.time, g.pos, g.vel) for g in request.groups]
-                    accepted.append((m.offset, request.sequence, records))
-    runs: list[list[Any]] = []
-    for item in accepted:
-        if item[1] == 0 or not runs:
-            runs.append([])
-        runs[-1].append(item)
-    if not runs:
-        raise BadInput(
-            f"--recording: {path} holds no trajectory point the controller accepted "
-            "(record a `pymotoros run` with --record)"
-        )
-    matching = [r for r in runs if len(r) == len(traj.times)]
-    chosen = matching[-1] if matching else runs[-1]
-    if not matching:
-        click.echo(
-            f"warning: {path.name}: no trajectory of {len(traj.times)} points (the file's); "
-            f"plotting the last one recorded ({len(chosen)} points)",
-            err=True,
-        )
-    t0 = chosen[0][0]
-    columns = dict(traj.group_columns(robot))
-    commanded: list[Series] = []
-    for gi, cols in columns.items():
-        n = len(cols)
-        rows = [(t, p[:n], v[:n]) for _, _, recs in chosen for g, t, p, v in recs if g == gi]
-        if not rows:
-            continue
-        times = np.array([r[0] for r in rows], dtype=np.float64)
-        commanded.append(
-            Series(
-                times - times[0],
-                np.array([r[1] for r in rows], dtype=np.float64),
-                tuple(cols),
-                np.array([r[2] for r in rows], dtype=np.float64),
-            )
-        )
-    single: dict[int, list[tuple[float, tuple[float, ...]]]] = {}
-    multi: dict[int, list[tuple[float, tuple[float, ...]]]] = {}
-    for conn in rec.on(Port.STATE):
-        for m in conn.messages:
-            msg = m.message
-            if isinstance(msg, JointFeedback):
-                single.setdefault(msg.group_no, []).append((m.offset - t0, msg.pos))
-            elif isinstance(msg, MotoJointFeedbackEx):
-                for g in msg.groups:
-                    multi.setdefault(g.group_no, []).append((m.offset - t0, g.pos))
-    feedback: list[Series] = []
-    for gi, cols in columns.items():
-        samples = single.get(gi) or multi.get(gi)  # MotoROS sends both for ≥ 2 groups
-        if not samples:
-            continue
-        n = len(cols)
-        feedback.append(
-            Series(
-                np.array([s[0] for s in samples], dtype=np.float64),
-                np.array([s[1][:n] for s in samples], dtype=np.float64),
-                tuple(cols),
-            )
-        )
-    if not feedback:
-        click.echo(f"warning: {path.name}: no feedback of the file's groups recorded", err=True)
-    return RecordedRun(tuple(commanded), tuple(feedback), f"recording {path.name}")
 
 
 @click.command(context_settings={"help_option_names": ["-h", "--help"]})

@@ -17,7 +17,7 @@ from typing import Any, Final
 import numpy as np
 import numpy.typing as npt
 
-from pymotoros.models import ControllerModel, RobotModel
+from pymotoros.models import AxisModel, ControllerModel, RobotModel
 from pymotoros.models.rules import to_pulses
 from pymotoros.motion import GroupAxes
 from pymotoros.trajectory.check import CheckReport
@@ -245,31 +245,12 @@ def plot_trajectory(
     )
     lags: list[float] = []
     for j, name in enumerate(names):
-        axis = axes_models[name]
-        unit = "m" if axis.linear else "rad"
-        ax_p, ax_v = grid[j][0], grid[j][1]
-        ax_p.plot(traj.times, traj.positions[:, j], "o", ms=3, label="planned points")
-        ax_p.plot(t_i, p_i[:, j], "-", lw=1.2, label="MotoROS interpolation")
-        for rec in reported:
-            ax_p.plot(rec.times, rec.positions[:, j], "-", lw=1.0, label=rec.label)
-        lo = min(float(traj.positions[:, j].min()), float(p_i[:, j].min()))
-        hi = max(float(traj.positions[:, j].max()), float(p_i[:, j].max()))
+        row = grid[j]
+        lo, hi = _draw_position(row[0], traj, j, t_i, p_i, reported)
         if run is not None:
-            lo, hi = _draw_recorded(run, j, unit, ax_p, grid[j][2], lo, hi, lags)
-        # keep the limits visible only when the motion comes near them
-        pad = max(0.1 * (hi - lo), 0.02)
-        ax_p.set_ylim(max(lo - pad, axis.lower - pad), min(hi + pad, axis.upper + pad))
-        limit_lines(ax_p, (axis.lower, axis.upper), JOINT_LIMITS_LABEL, unit)
-        if run is not None:  # every row: the feedback's legend gives its lag and error
-            ax_p.legend(loc="best", fontsize=6)
-        ax_p.set_ylabel(f"{name}\n[{unit}]")
-        ax_v.plot(traj.times, traj.velocities[:, j], "o", ms=3, label="planned points")
-        ax_v.plot(t_i, v_i[:, j], "-", lw=1.0, label="MotoROS, per tick")
-        vmax = axis.max_velocity
-        vpeak = max(float(np.abs(v_i[:, j]).max()), float(np.abs(traj.velocities[:, j]).max()))
-        ax_v.set_ylim(-min(vmax * 1.1, vpeak * 1.2 + 0.05), min(vmax * 1.1, vpeak * 1.2 + 0.05))
-        limit_lines(ax_v, (-vmax, vmax), VELOCITY_LIMIT_LABEL, f"{unit}/s")
-        ax_v.set_ylabel(f"[{unit}/s]")
+            lo, hi = _draw_recorded(run, j, _unit(axes_models[name]), row[0], row[2], lo, hi, lags)
+        _finish_position(row[0], name, axes_models[name], lo, hi, legend=run is not None)
+        _draw_velocity(row[1], traj, j, t_i, v_i, axes_models[name])
     grid[0][0].set_title("position")
     grid[0][1].set_title("velocity")
     for c in range(cols):
@@ -294,6 +275,55 @@ def plot_trajectory(
     fig.savefig(output, dpi=90)
     plt.close(fig)
     return fig
+
+
+def _unit(axis: AxisModel) -> str:
+    return "m" if axis.linear else "rad"
+
+
+def _draw_position(
+    ax: Any,
+    traj: Trajectory,
+    j: int,
+    t_i: F64Array,
+    p_i: F64Array,
+    reported: Sequence[Reported],
+) -> tuple[float, float]:
+    """Planned points and MotoROS's interpolation of joint ``j``; returns their range."""
+    ax.plot(traj.times, traj.positions[:, j], "o", ms=3, label="planned points")
+    ax.plot(t_i, p_i[:, j], "-", lw=1.2, label="MotoROS interpolation")
+    for rec in reported:
+        ax.plot(rec.times, rec.positions[:, j], "-", lw=1.0, label=rec.label)
+    lo = min(float(traj.positions[:, j].min()), float(p_i[:, j].min()))
+    hi = max(float(traj.positions[:, j].max()), float(p_i[:, j].max()))
+    return lo, hi
+
+
+def _finish_position(
+    ax: Any, name: str, axis: AxisModel, lo: float, hi: float, *, legend: bool
+) -> None:
+    """The y range (the limits come into view only when the motion comes near them),
+    the limit lines within it, the label; with ``legend``, the row's own legend."""
+    pad = max(0.1 * (hi - lo), 0.02)
+    ax.set_ylim(max(lo - pad, axis.lower - pad), min(hi + pad, axis.upper + pad))
+    limit_lines(ax, (axis.lower, axis.upper), JOINT_LIMITS_LABEL, _unit(axis))
+    if legend:  # every row: the feedback's legend gives its lag and error
+        ax.legend(loc="best", fontsize=6)
+    ax.set_ylabel(f"{name}\n[{_unit(axis)}]")
+
+
+def _draw_velocity(
+    ax: Any, traj: Trajectory, j: int, t_i: F64Array, v_i: F64Array, axis: AxisModel
+) -> None:
+    """Planned and per-tick velocities of joint ``j``, and the velocity limit if in view."""
+    ax.plot(traj.times, traj.velocities[:, j], "o", ms=3, label="planned points")
+    ax.plot(t_i, v_i[:, j], "-", lw=1.0, label="MotoROS, per tick")
+    vmax = axis.max_velocity
+    vpeak = max(float(np.abs(v_i[:, j]).max()), float(np.abs(traj.velocities[:, j]).max()))
+    span = min(vmax * 1.1, vpeak * 1.2 + 0.05)
+    ax.set_ylim(-span, span)
+    limit_lines(ax, (-vmax, vmax), VELOCITY_LIMIT_LABEL, f"{_unit(axis)}/s")
+    ax.set_ylabel(f"[{_unit(axis)}/s]")
 
 
 def _draw_recorded(
