@@ -356,10 +356,10 @@ class NumbersCommand(click.Command):
     """
 
     def __init__(
-        self, *args: Any, context_settings: dict[str, Any] | None = None, **kwargs: Any
+        self, name: str | None, context_settings: dict[str, Any] | None = None, **kwargs: Any
     ) -> None:
         settings = {**(context_settings or {}), "ignore_unknown_options": True}
-        super().__init__(*args, context_settings=settings, **kwargs)
+        super().__init__(name, context_settings=settings, **kwargs)
 
     def parse_args(self, ctx: click.Context, args: list[str]) -> list[str]:
         refuse_unknown_options(self, ctx, args)
