@@ -32,6 +32,7 @@ from pymotoros.cli.options import (
     InputFile,
     controller_option,
     deg_option,
+    number_list,
     output_option,
     robot_option,
 )
@@ -59,31 +60,6 @@ EXIT_REJECTED: Final = 1
 
 class _Rejected(click.ClickException):
     exit_code = EXIT_REJECTED
-
-
-def _parse_ratios(value: str | None, n: int) -> list[float] | None:
-    if value is None:
-        return None
-    parts = [p.strip() for p in value.split(",")]
-    if len(parts) != n:
-        raise click.BadParameter(
-            f"needs {n} comma-separated values (one per axis, ROS order), got {len(parts)}",
-            param_hint="--pulses-per-rad",
-        )
-    ratios = []
-    for i, part in enumerate(parts, start=1):
-        try:
-            ratio = float(part)
-        except ValueError:
-            raise click.BadParameter(
-                f"value {i} ({part!r}) is not a number", param_hint="--pulses-per-rad"
-            ) from None
-        if not (math.isfinite(ratio) and ratio > 0):
-            raise click.BadParameter(
-                f"value {i} ({part!r}) must be a positive number", param_hint="--pulses-per-rad"
-            )
-        ratios.append(ratio)
-    return ratios
 
 
 def read_trajectory(
@@ -353,14 +329,7 @@ def write_increments(stream: IO[str], time_ms: np.ndarray, increments: np.ndarra
 )
 @output_option("Write the increments here instead of to stdout (says where on stderr)")
 @deg_option("Positions and velocities of TRAJ.csv (deg/s)")
-def interpolate(
-    traj: Path,
-    controller_name: str,
-    robot_name: str,
-    ratios: str | None,
-    output: Path | None,
-    deg: bool,
-) -> None:
+def interpolate(**options: Any) -> None:
     """Turn a trajectory CSV into the pulse increments MotoROS 1.9.12 would queue.
 
     TRAJ.csv has a header row, then one row per point: time,p1..pn,v1..vn (s, rad,
@@ -375,7 +344,7 @@ def interpolate(
     """
     marks: list[tuple[str, float]] | None = [] if os.environ.get(TIMINGS_ENV) else None
     try:
-        _interpolate(traj, controller_name, robot_name, ratios, output, deg, marks)
+        _interpolate(**options, marks=marks)
     except click.BadParameter as exc:
         raise BadInput(exc.format_message()) from None
     if marks:
@@ -477,8 +446,11 @@ def _interpolate(
     _mark(marks, "start")
     group, controller = _single_group(robot_name, controller_name)
     n = group.num_axes
+    pulses = number_list(
+        ratios, n, hint="--pulses-per-rad", what="one per axis, ROS order", positive=True
+    )
     try:
-        axes = GroupAxes.from_model(group, controller, _parse_ratios(ratios, n))
+        axes = GroupAxes.from_model(group, controller, pulses)
     except ConfigError as exc:
         raise click.BadParameter(str(exc), param_hint="--pulses-per-rad") from None
     large = traj.stat().st_size >= FAST_CSV_BYTES

@@ -15,6 +15,7 @@ before the command runs.
 from __future__ import annotations
 
 import difflib
+import math
 import os
 import re
 from collections.abc import Callable
@@ -51,10 +52,19 @@ else:
     _PathParam = click.ParamType  # click 8.1's is not subscriptable
 
 
-class InputFile(_PathParam):
-    """A file the command reads: it must exist and be a readable file (one-line error)."""
+class _FileParam(_PathParam):
+    """A path a shell completes as a file name."""
 
     name = "file"
+
+    def shell_complete(
+        self, ctx: click.Context, param: click.Parameter, incomplete: str
+    ) -> list[CompletionItem]:
+        return [CompletionItem(incomplete, type="file")]
+
+
+class InputFile(_FileParam):
+    """A file the command reads: it must exist and be a readable file (one-line error)."""
 
     def __init__(self, what: str = "file") -> None:
         self.what = what
@@ -72,17 +82,10 @@ class InputFile(_PathParam):
             raise BadInput(f"{hint}: {path}: permission denied; make it readable (chmod u+r)")
         return path
 
-    def shell_complete(
-        self, ctx: click.Context, param: click.Parameter, incomplete: str
-    ) -> list[CompletionItem]:
-        return [CompletionItem(incomplete, type="file")]
 
-
-class OutputFile(_PathParam):
+class OutputFile(_FileParam):
     """A file the command writes: its directory must exist (one-line error, checked before
     any work, so a long computation does not end in a traceback)."""
-
-    name = "file"
 
     def convert(self, value: Any, param: click.Parameter | None, ctx: click.Context | None) -> Path:
         path = Path(value)
@@ -99,11 +102,6 @@ class OutputFile(_PathParam):
             raise BadInput(f"{hint}: cannot write {path}: the directory {parent} is not writable")
         return path
 
-    def shell_complete(
-        self, ctx: click.Context, param: click.Parameter, incomplete: str
-    ) -> list[CompletionItem]:
-        return [CompletionItem(incomplete, type="file")]
-
 
 def _param_hint(param: click.Parameter | None) -> str:
     if param is None:
@@ -111,6 +109,33 @@ def _param_hint(param: click.Parameter | None) -> str:
     if isinstance(param, click.Option):
         return max(param.opts, key=len)
     return param.human_readable_name
+
+
+def number_list(
+    value: str | None, count: int, *, hint: str, what: str, positive: bool = False
+) -> list[float] | None:
+    """``"1.5,-2,0"`` → floats: exactly ``count`` finite numbers (each > 0 with
+    ``positive``); ``what`` says what they are in the error (``the file's joints, rad``)."""
+    if value is None:
+        return None
+    parts = [p.strip() for p in value.split(",")]
+    if len(parts) != count:
+        raise click.BadParameter(
+            f"needs {count} comma-separated values ({what}), got {len(parts)}", param_hint=hint
+        )
+    out = []
+    for i, part in enumerate(parts, start=1):
+        try:
+            number = float(part)
+        except ValueError:
+            raise click.BadParameter(
+                f"value {i} ({part!r}) is not a number", param_hint=hint
+            ) from None
+        if not math.isfinite(number) or (positive and number <= 0):
+            kind = "a positive number" if positive else "finite"
+            raise click.BadParameter(f"value {i} ({part!r}) must be {kind}", param_hint=hint)
+        out.append(number)
+    return out
 
 
 # --------------------------------------------------------------------------- options
@@ -412,6 +437,7 @@ __all__ = [
     "group_option",
     "json_option",
     "model_options",
+    "number_list",
     "output_option",
     "port_options",
     "refuse_unknown_options",

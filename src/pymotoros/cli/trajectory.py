@@ -31,6 +31,7 @@ from pymotoros.cli.options import (
     controller_option,
     json_option,
     model_options,
+    number_list,
     output_option,
     robot_option,
     robot_options,
@@ -174,24 +175,6 @@ def load_models(
     return Loaded(traj, cell.robot, cell.controller, cell)
 
 
-def _parse_from(value: str | None, count: int) -> list[float] | None:
-    if value is None:
-        return None
-    parts = [p.strip() for p in value.split(",")]
-    if len(parts) != count:
-        raise click.BadParameter(
-            f"needs {count} comma-separated values (the file's joints, rad), got {len(parts)}",
-            param_hint="--from",
-        )
-    try:
-        out = [float(p) for p in parts]
-    except ValueError:
-        raise click.BadParameter(f"not all numbers: {value!r}", param_hint="--from") from None
-    if not all(math.isfinite(v) for v in out):
-        raise click.BadParameter("values must be finite", param_hint="--from")
-    return out
-
-
 def render(
     report: CheckReport,
     traj: Trajectory,
@@ -257,7 +240,9 @@ def check(
     """
     reject_models_with_config(cell_path, "robot_name", "controller_name")
     loaded = load_models(traj, robot_name, controller_name, cell_path)
-    current = _parse_from(from_, len(loaded.trajectory.joint_names))
+    current = number_list(
+        from_, len(loaded.trajectory.joint_names), hint="--from", what="the file's joints, rad"
+    )
     report = loaded.check(current)
     if as_json:
         click.echo(json.dumps(report.to_json()))
