@@ -25,6 +25,7 @@ from typing import Final
 import click
 
 from pymotoros.cli.options import (
+    EXIT_USAGE,
     BadInput,
     InputFile,
     config_option,
@@ -51,7 +52,6 @@ from pymotoros.protocol.constants import (
 
 EXIT_MATCH: Final = 0
 EXIT_DIFFERS: Final = 1
-EXIT_USAGE: Final = 2
 EXIT_CONNECTION: Final = 3
 
 STARTUP_TIMEOUT_S: Final = 30.0
@@ -252,3 +252,6 @@ def replay(
     else:
         click.echo(_human(result, target))
     sys.exit(EXIT_MATCH if result.matches else EXIT_DIFFERS)
+
+
+__all__ = ["EXIT_CONNECTION", "EXIT_DIFFERS", "EXIT_MATCH", "EXIT_USAGE", "replay"]

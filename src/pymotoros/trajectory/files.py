@@ -210,6 +210,20 @@ def _floats(value: Any, count: int, where: str) -> list[float]:
         raise TrajectoryFileError(f"{where}: not all numbers: {value!r}") from None
 
 
+def _names_and_points(doc: dict[str, Any], name: str, *, quote: str) -> tuple[list[str], list[Any]]:
+    """The ``joint_names`` (non-empty strings) and ``points`` (a non-empty list) of a
+    JSON or YAML trajectory; ``quote`` the keys as the format writes them."""
+    names = doc.get("joint_names")
+    if not isinstance(names, list) or not names or not all(isinstance(n, str) for n in names):
+        raise TrajectoryFileError(
+            f"{name}: {quote}joint_names{quote} must be a non-empty list of strings"
+        )
+    points = doc.get("points")
+    if not isinstance(points, list) or not points:
+        raise TrajectoryFileError(f"{name}: {quote}points{quote} must be a non-empty list")
+    return names, points
+
+
 def parse_json(text: str, name: str = "JSON") -> Trajectory:
     try:
         doc = json.loads(text)
@@ -221,12 +235,7 @@ def parse_json(text: str, name: str = "JSON") -> Trajectory:
         raise TrajectoryFileError(
             f"{name}: version {doc.get('version')!r}; this pymotoros reads {JSON_VERSION}"
         )
-    names = doc.get("joint_names")
-    if not isinstance(names, list) or not all(isinstance(n, str) for n in names) or not names:
-        raise TrajectoryFileError(f'{name}: "joint_names" must be a non-empty list of strings')
-    points = doc.get("points")
-    if not isinstance(points, list) or not points:
-        raise TrajectoryFileError(f'{name}: "points" must be a non-empty list')
+    names, points = _names_and_points(doc, name, quote='"')
     j = len(names)
     times, pos, vel = [], [], []
     for i, p in enumerate(points):
@@ -282,12 +291,7 @@ def parse_yaml(text: str, name: str = "YAML") -> Trajectory:
         raise TrajectoryFileError(
             f"{name}: not a trajectory_msgs/JointTrajectory (needs joint_names and points)"
         )
-    names = doc["joint_names"]
-    if not isinstance(names, list) or not names or not all(isinstance(n, str) for n in names):
-        raise TrajectoryFileError(f"{name}: joint_names must be a non-empty list of strings")
-    points = doc["points"]
-    if not isinstance(points, list) or not points:
-        raise TrajectoryFileError(f"{name}: points must be a non-empty list")
+    names, points = _names_and_points(doc, name, quote="")
     j = len(names)
     times, pos, vel = [], [], []
     for i, p in enumerate(points):
