@@ -9,8 +9,10 @@ click's CliRunner."""
 
 from __future__ import annotations
 
+import json
 import tempfile
 from pathlib import Path
+from typing import Any
 
 import pytest
 from click.testing import CliRunner, Result
@@ -66,6 +68,41 @@ def corrupted(draw: st.DrawFn, good: str) -> bytes:
     return ("\n".join(",".join(x) for x in rows) + "\n").encode()
 
 
+BAD_VALUES: list[Any] = [
+    float("nan"),
+    float("inf"),
+    -float("inf"),
+    10**400,
+    "x",
+    None,
+    [],
+    True,
+    {"secs": 10**400},
+]
+
+
+@st.composite
+def corrupted_json(draw: st.DrawFn) -> bytes:
+    """A good pymotoros JSON trajectory with one value made unusable, or a list cut."""
+    names = ["joint_1_s", "joint_2_l", "joint_3_u", "joint_4_r", "joint_5_b", "joint_6_t"]
+    points = [
+        {"time": t, "positions": [0.01 * t] + [0.0] * 5, "velocities": [0.0] * 6}
+        for t in (0.0, 0.5, 1.0)
+    ]
+    doc = {"format": "pymotoros-trajectory", "version": 1, "joint_names": names}
+    point = draw(st.sampled_from(points))
+    key = draw(st.sampled_from(["time", "positions", "velocities", "cut"]))
+    bad = draw(st.sampled_from(BAD_VALUES))
+    if key == "time":
+        point["time"] = bad if not isinstance(bad, bool) else "true"
+    elif key == "cut":
+        point["positions"] = point["positions"][: draw(st.integers(0, 5))]
+    else:
+        point[key][draw(st.integers(0, 5))] = bad
+    doc["points"] = points
+    return json.dumps(doc).encode()
+
+
 def _not_utf8(data: bytes) -> bool:
     try:
         data.decode("utf-8")
@@ -113,6 +150,16 @@ def test_trajectory_commands_refuse_bad_files_in_one_line(
 ) -> None:
     with tempfile.TemporaryDirectory() as tmp:
         _short_error(_invoke(Path(tmp), "traj.csv", content, command))
+
+
+@FAST
+@given(
+    content=corrupted_json(),
+    command=st.sampled_from([["check", "{file}"], ["run", "{file}", *NOWHERE]]),
+)
+def test_a_bad_json_trajectory_is_one_line(content: bytes, command: list[str]) -> None:
+    with tempfile.TemporaryDirectory() as tmp:
+        _short_error(_invoke(Path(tmp), "traj.json", content, command))
 
 
 @FAST
