@@ -45,7 +45,7 @@ from pymotoros.client import (
     RequestTimeoutError,
     RobotClient,
 )
-from pymotoros.client.planning import PlanningError
+from pymotoros.client.planning import JointTrajectory, PlanningError
 from pymotoros.client.srdf import NamedPoseError
 from pymotoros.client.state import RobotState
 from pymotoros.client.streaming import FollowingSample, MoveResult
@@ -738,34 +738,37 @@ def resolve_goal(target: Target, req: MoveRequest) -> MoveGoal:
     return MoveGoal(groups, [client.robot.groups[g] for g in groups], goal)
 
 
-async def _plan_and_move(
+async def _cartesian(
     client: RobotClient,
     req: MoveRequest,
     goal: MoveGoal,
     progress: Callable[[FollowingSample], None],
 ) -> MoveResult:
-    if req.cartesian:
-        return await cartesian_move(
-            client,
-            pose=goal.pose,
-            relative=goal.relative,
-            linear=req.linear or goal.relative is not None,
-            frame="tool" if req.frame == "tool" else "base",
-            tcp_speed_mm_s=req.tcp_speed_mm_s,
-            group=goal.groups[0],
-            speed_scale=req.speed_scale,
-            accel_scale=req.accel_scale,
-            on_progress=progress,
-        )
+    return await cartesian_move(
+        client,
+        pose=goal.pose,
+        relative=goal.relative,
+        linear=req.linear or goal.relative is not None,
+        frame="tool" if req.frame == "tool" else "base",
+        tcp_speed_mm_s=req.tcp_speed_mm_s,
+        group=goal.groups[0],
+        speed_scale=req.speed_scale,
+        accel_scale=req.accel_scale,
+        on_progress=progress,
+    )
+
+
+async def _joint_plan(client: RobotClient, req: MoveRequest, goal: MoveGoal) -> JointTrajectory:
+    """The joint move from where the robot rests (planned before the progress line
+    starts, so that it can tell the time left from the plan)."""
     start = await client.current_positions(goal.groups)
-    trajectory = client.plan(
+    return client.plan(
         start,
         goal.goal,
         groups=goal.groups,
         speed_scale=req.speed_scale,
         accel_scale=req.accel_scale,
     )
-    return await client.execute(trajectory, groups=goal.groups, on_progress=progress)
 
 
 async def _settled_where(
@@ -783,22 +786,26 @@ async def _move_watched(
 ) -> MoveResult:
     """The move with its progress line; on Ctrl-C/SIGTERM STOP_MOTION, and a refusal
     mid-move says where the robot came to rest."""
-    with progress_bar("moving", client, goal.groups, deg=req.deg) as progress:
-        try:
-            return await _plan_and_move(client, req, goal, progress)
-        except asyncio.CancelledError:
-            with contextlib.suppress(PymotorosError):
-                await asyncio.shield(client.stop_motion())
-            where = await asyncio.shield(
-                _settled_where(client, goal, req.deg, "stopped (STOP_MOTION)", timeout_s)
-            )
-            click.echo("\n" + where, err=True)
-            raise
-        except ReplyError as exc:
-            if exc.point is not None:  # refused mid-move: say where the robot is
-                where = await _settled_where(client, goal, req.deg, "the robot stands", timeout_s)
-                exc.args = (f"{exc}; {where}", *exc.args[1:])
-            raise
+    try:
+        planned = None if req.cartesian else await _joint_plan(client, req, goal)
+        duration = None if planned is None else planned.duration
+        with progress_bar("moving", client, goal.groups, duration_s=duration, deg=req.deg) as bar:
+            if planned is None:
+                return await _cartesian(client, req, goal, bar)
+            return await client.execute(planned, groups=goal.groups, on_progress=bar)
+    except asyncio.CancelledError:
+        with contextlib.suppress(PymotorosError):
+            await asyncio.shield(client.stop_motion())
+        where = await asyncio.shield(
+            _settled_where(client, goal, req.deg, "stopped (STOP_MOTION)", timeout_s)
+        )
+        click.echo("\n" + where, err=True)
+        raise
+    except ReplyError as exc:
+        if exc.point is not None:  # refused mid-move: say where the robot is
+            where = await _settled_where(client, goal, req.deg, "the robot stands", timeout_s)
+            exc.args = (f"{exc}; {where}", *exc.args[1:])
+        raise
 
 
 def _say_groups(client: RobotClient, req: MoveRequest, goal: MoveGoal) -> None:
