@@ -27,16 +27,17 @@ from typing import IO, Any, Final
 import click
 import numpy as np
 
-from pymotoros.errors import ConfigError, TrajectoryRejectedError
-from pymotoros.models import (
-    DEFAULT_CONTROLLER,
-    DEFAULT_ROBOT,
-    ROBOTS,
-    ControllerType,
-    GroupModel,
-    controller_model,
-    robot_model,
+from pymotoros.cli.options import (
+    BadInput,
+    InputFile,
+    controller_option,
+    deg_option,
+    number_list,
+    output_option,
+    robot_option,
 )
+from pymotoros.errors import ConfigError, TrajectoryRejectedError
+from pymotoros.models import ControllerModel, GroupModel, controller_model, robot_model
 from pymotoros.motion import GroupAxes, interpolate_arrays
 
 logger = logging.getLogger(__name__)
@@ -59,37 +60,6 @@ EXIT_REJECTED: Final = 1
 
 class _Rejected(click.ClickException):
     exit_code = EXIT_REJECTED
-
-
-class _BadInput(click.ClickException):
-    """A malformed file or option, told in one line (no usage banner): exit code 2."""
-
-    exit_code = 2
-
-
-def _parse_ratios(value: str | None, n: int) -> list[float] | None:
-    if value is None:
-        return None
-    parts = [p.strip() for p in value.split(",")]
-    if len(parts) != n:
-        raise click.BadParameter(
-            f"needs {n} comma-separated values (one per axis, ROS order), got {len(parts)}",
-            param_hint="--pulses-per-rad",
-        )
-    ratios = []
-    for i, part in enumerate(parts, start=1):
-        try:
-            ratio = float(part)
-        except ValueError:
-            raise click.BadParameter(
-                f"value {i} ({part!r}) is not a number", param_hint="--pulses-per-rad"
-            ) from None
-        if not (math.isfinite(ratio) and ratio > 0):
-            raise click.BadParameter(
-                f"value {i} ({part!r}) must be a positive number", param_hint="--pulses-per-rad"
-            )
-        ratios.append(ratio)
-    return ratios
 
 
 def read_trajectory(
@@ -346,32 +316,10 @@ def write_increments(stream: IO[str], time_ms: np.ndarray, increments: np.ndarra
     stream.writelines(",".join(map(str, row)) + "\n" for row in table.tolist())
 
 
-_ROBOT_HELP: Final = ", ".join(
-    name + ("" if len(r.groups) == 1 else " (multi-group: not supported here)")
-    for name, r in ROBOTS.items()
-)
-
-
 @click.command(context_settings={"help_option_names": ["-h", "--help"]})
-@click.argument(
-    "traj", metavar="TRAJ.csv", type=click.Path(exists=True, dir_okay=False, path_type=Path)
-)
-@click.option(
-    "--controller",
-    "controller_name",
-    type=click.Choice([t.value for t in ControllerType], case_sensitive=False),
-    default=DEFAULT_CONTROLLER.value,
-    show_default=True,
-    help="Controller family: decides the interpolation period and the float arithmetic "
-    "(x87 extended precision, or strict single precision on FS100).",
-)
-@click.option(
-    "--robot",
-    "robot_name",
-    default=DEFAULT_ROBOT,
-    show_default=True,
-    help=f"Robot model, single control group only: {_ROBOT_HELP}.",
-)
+@click.argument("traj", metavar="TRAJ.csv", type=InputFile("trajectory CSV"))
+@controller_option("controller_name")
+@robot_option("robot_name", note="Robots of a single control group only (not sda10f).")
 @click.option(
     "--pulses-per-rad",
     "ratios",
@@ -379,25 +327,9 @@ _ROBOT_HELP: Final = ", ".join(
     help="Override the model's pulses per rad, one per axis in ROS order. The speed limits "
     "in rad/s stay the model's.",
 )
-@click.option(
-    "-o",
-    "--output",
-    type=click.Path(dir_okay=False, writable=True, path_type=Path),
-    help="Write the increments here instead of to stdout (says where on stderr).",
-)
-@click.option(
-    "--deg",
-    is_flag=True,
-    help="Positions and velocities of TRAJ.csv are in deg and deg/s (default rad, rad/s).",
-)
-def interpolate(
-    traj: Path,
-    controller_name: str,
-    robot_name: str,
-    ratios: str | None,
-    output: Path | None,
-    deg: bool,
-) -> None:
+@output_option("Write the increments here instead of to stdout (says where on stderr)")
+@deg_option("Positions and velocities of TRAJ.csv (deg/s)")
+def interpolate(**options: Any) -> None:
     """Turn a trajectory CSV into the pulse increments MotoROS 1.9.12 would queue.
 
     TRAJ.csv has a header row, then one row per point: time,p1..pn,v1..vn (s, rad,
@@ -412,9 +344,9 @@ def interpolate(
     """
     marks: list[tuple[str, float]] | None = [] if os.environ.get(TIMINGS_ENV) else None
     try:
-        _interpolate(traj, controller_name, robot_name, ratios, output, deg, marks)
+        _interpolate(**options, marks=marks)
     except click.BadParameter as exc:
-        raise _BadInput(exc.format_message()) from None
+        raise BadInput(exc.format_message()) from None
     if marks:
         text = " ".join(f"{name}={value:.6f}" for name, value in marks)
         click.echo(f"interpolate timings monotonic: {text}", err=True)
@@ -425,16 +357,8 @@ def _mark(marks: list[tuple[str, float]] | None, name: str) -> None:
         marks.append((name, time.monotonic()))
 
 
-def _interpolate(
-    traj: Path,
-    controller_name: str,
-    robot_name: str,
-    ratios: str | None,
-    output: Path | None,
-    deg: bool,
-    marks: list[tuple[str, float]] | None = None,
-) -> None:
-    _mark(marks, "start")
+def _single_group(robot_name: str, controller_name: str) -> tuple[GroupModel, ControllerModel]:
+    """The robot's only group and the controller; a robot of several groups is refused."""
     try:
         robot = robot_model(robot_name)
         controller = controller_model(controller_name)
@@ -454,37 +378,44 @@ def _interpolate(
             controller.type.value,
             ", ".join(sorted(robot.controllers)),
         )
-    group = robot.groups[0]
-    n = group.num_axes
-    try:
-        axes = GroupAxes.from_model(group, controller, _parse_ratios(ratios, n))
-    except ConfigError as exc:
-        raise click.BadParameter(str(exc), param_hint="--pulses-per-rad") from None
-    large = traj.stat().st_size >= FAST_CSV_BYTES
+    return robot.groups[0], controller
+
+
+def _read(traj: Path, n: int, large: bool) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(times, positions, velocities): pyarrow for a large well-formed file, else the
+    Python reader (which gives the precise error)."""
     parsed = read_trajectory_fast(traj, n) if large else None
-    if parsed is None:
+    if parsed is not None:
+        return parsed
+    try:
         with traj.open(newline="", encoding="utf-8") as stream:
-            parsed = read_trajectory(stream, n, traj.name)
-    times, pos, vel = parsed
-    _mark(marks, "read")
-    if deg:
-        angular = np.array([not a.linear for a in group.axes])
-        pos = np.where(angular, np.radians(pos), pos)
-        vel = np.where(angular, np.radians(vel), vel)
+            return read_trajectory(stream, n, traj.name)
+    except UnicodeDecodeError as exc:
+        raise BadInput(
+            f"TRAJ.csv: {traj.name} is not UTF-8 text (byte {exc.start}: {exc.reason})"
+        ) from None
+
+
+def _warn_impossible(times: np.ndarray, pos: np.ndarray, group: GroupModel, deg: bool) -> None:
     warnings = impossible_points(times, pos, group, deg)
     for line in warnings[:MAX_WARNINGS]:
         click.echo(f"warning: {line}; check the file", err=True)
     if len(warnings) > MAX_WARNINGS:
         click.echo(f"warning: {len(warnings) - MAX_WARNINGS} more such points", err=True)
-    _mark(marks, "check")
-    if output is None:
-        sys.stdout.flush()
-    writer = (
-        BlockWriter.create(sys.stdout.buffer if output is None else output, n) if large else None
-    )
+
+
+def _run_engine(
+    parsed: tuple[np.ndarray, np.ndarray, np.ndarray],
+    axes: GroupAxes,
+    output: Path | None,
+    writer: BlockWriter | None,
+    marks: list[tuple[str, float]] | None,
+) -> int:
+    """Interpolate and write the increments (block by block with ``writer``); returns
+    how many were written. A refused point: exit 1, nothing written."""
     try:
         time_ms, increments = interpolate_arrays(
-            times, pos, vel, axes, on_block=None if writer is None else writer.block
+            *parsed, axes, on_block=None if writer is None else writer.block
         )
         _mark(marks, "engine")
         if writer is not None:
@@ -500,9 +431,46 @@ def _interpolate(
     elif writer is None and output is not None:
         with output.open("w", encoding="utf-8", newline="") as out:
             write_increments(out, time_ms, increments)
+    return len(time_ms)
+
+
+def _interpolate(
+    traj: Path,
+    controller_name: str,
+    robot_name: str,
+    ratios: str | None,
+    output: Path | None,
+    deg: bool,
+    marks: list[tuple[str, float]] | None = None,
+) -> None:
+    _mark(marks, "start")
+    group, controller = _single_group(robot_name, controller_name)
+    n = group.num_axes
+    pulses = number_list(
+        ratios, n, hint="--pulses-per-rad", what="one per axis, ROS order", positive=True
+    )
+    try:
+        axes = GroupAxes.from_model(group, controller, pulses)
+    except ConfigError as exc:
+        raise click.BadParameter(str(exc), param_hint="--pulses-per-rad") from None
+    large = traj.stat().st_size >= FAST_CSV_BYTES
+    times, pos, vel = _read(traj, n, large)
+    _mark(marks, "read")
+    if deg:
+        angular = np.array([not a.linear for a in group.axes])
+        pos = np.where(angular, np.radians(pos), pos)
+        vel = np.where(angular, np.radians(vel), vel)
+    _warn_impossible(times, pos, group, deg)
+    _mark(marks, "check")
+    if output is None:
+        sys.stdout.flush()
+    writer = (
+        BlockWriter.create(sys.stdout.buffer if output is None else output, n) if large else None
+    )
+    written = _run_engine((times, pos, vel), axes, output, writer, marks)
     _mark(marks, "written")
     if output is not None:
         click.echo(
-            f"wrote {len(time_ms)} increments ({n} axes, {len(times)} points) to {output}",
+            f"wrote {written} increments ({n} axes, {len(times)} points) to {output}",
             err=True,
         )

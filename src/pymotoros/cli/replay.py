@@ -24,6 +24,16 @@ from typing import Final
 
 import click
 
+from pymotoros.cli.options import (
+    EXIT_USAGE,
+    BadInput,
+    InputFile,
+    config_option,
+    controller_option,
+    json_option,
+    port_options,
+    robot_option,
+)
 from pymotoros.client.recording import Recording, RecordingError, read_recording
 from pymotoros.client.replay import (
     DEFAULT_TIMING_TOLERANCE_S,
@@ -34,18 +44,14 @@ from pymotoros.client.replay import (
 )
 from pymotoros.controller.cell import CellConfig, default_cell, load_cell
 from pymotoros.errors import ConfigError
-from pymotoros.models import ROBOTS, ControllerType
+from pymotoros.models import ControllerType
 from pymotoros.protocol.constants import (
-    TCP_PORT_IO,
-    TCP_PORT_MOTION,
-    TCP_PORT_STATE,
     ByteOrder,
     Port,
 )
 
 EXIT_MATCH: Final = 0
 EXIT_DIFFERS: Final = 1
-EXIT_USAGE: Final = 2
 EXIT_CONNECTION: Final = 3
 
 STARTUP_TIMEOUT_S: Final = 30.0
@@ -53,7 +59,6 @@ STARTUP_TIMEOUT_S: Final = 30.0
 STARTUP_POLL_TICKS: Final = 5
 """How often (interpolation ticks) the replay looks whether the twin's MotoROS listens."""
 
-_PORT = click.IntRange(1, 65535)
 _ORDER_NAME: Final = {ByteOrder.LITTLE: "little-endian", ByteOrder.BIG: "big-endian (FS100)"}
 
 
@@ -170,7 +175,7 @@ def _human(result: ReplayResult, target: str) -> str:
 
 
 @click.command()
-@click.argument("recording_path", type=click.Path(dir_okay=False, path_type=Path))
+@click.argument("recording_path", type=InputFile("session recording (pcapng)"))
 @click.option(
     "--against",
     "host",
@@ -179,30 +184,10 @@ def _human(result: ReplayResult, target: str) -> str:
     help="Replay against this controller (or a running `pymotoros sim`) instead of a "
     "fresh twin started for the replay.",
 )
-@click.option("--motion-port", type=_PORT, default=TCP_PORT_MOTION, show_default=True)
-@click.option("--state-port", type=_PORT, default=TCP_PORT_STATE, show_default=True)
-@click.option("--io-port", type=_PORT, default=TCP_PORT_IO, show_default=True)
-@click.option(
-    "--controller",
-    "controller_name",
-    default=None,
-    help=f"Controller model of the recorded cell: {', '.join(t.value for t in ControllerType)} "
-    "(default yrc1000).",
-)
-@click.option(
-    "--robot",
-    "robot_name",
-    default=None,
-    help=f"Robot model of the recorded cell: {', '.join(sorted(ROBOTS))} (default hc10).",
-)
-@click.option(
-    "--config",
-    "config_path",
-    type=click.Path(exists=True, dir_okay=False, path_type=Path),
-    default=None,
-    metavar="CELL.toml",
-    help="Cell file of the recorded cell; replaces --controller/--robot.",
-)
+@port_options(env=False, defaults=True)
+@controller_option("controller_name", unset="yrc1000, or the cell file's")
+@robot_option("robot_name", unset="hc10, or the cell file's")
+@config_option("config_path")
 @click.option(
     "--timing-tolerance",
     type=click.FloatRange(0.0, min_open=True),
@@ -210,7 +195,7 @@ def _human(result: ReplayResult, target: str) -> str:
     show_default=True,
     help="Reply delays (s) further apart than this are listed; they do not make the replay differ.",
 )
-@click.option("--json", "as_json", is_flag=True, help="Print the diff as JSON.")
+@json_option("the diff")
 def replay(
     recording_path: Path,
     host: str | None,
@@ -234,7 +219,7 @@ def replay(
         recording = read_recording(recording_path)
         cell = _cell(controller_name, robot_name, config_path)
     except (RecordingError, ConfigError) as exc:
-        raise click.UsageError(str(exc)) from exc
+        raise BadInput(str(exc)) from exc
     order = recording.order
     if order is not None and order is not cell.controller.byte_order:
         raise click.UsageError(
@@ -267,3 +252,6 @@ def replay(
     else:
         click.echo(_human(result, target))
     sys.exit(EXIT_MATCH if result.matches else EXIT_DIFFERS)
+
+
+__all__ = ["EXIT_CONNECTION", "EXIT_DIFFERS", "EXIT_MATCH", "EXIT_USAGE", "replay"]

@@ -11,13 +11,14 @@ import asyncio
 import contextlib
 import json
 import math
+import shutil
 import signal
 import sys
 import traceback
-from collections.abc import AsyncIterator, Callable, Coroutine, Iterator
+from collections.abc import AsyncIterator, Callable, Coroutine, Iterator, Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, Final, NoReturn, TypeVar
+from typing import IO, Any, Final, NoReturn, TypeVar
 
 import click
 
@@ -31,7 +32,15 @@ from pymotoros.cli.cartesian import (
     use_tool,
 )
 from pymotoros.cli.live import FrameWriter, alarm_line, not_ready_reason, twin_alarm_texts
-from pymotoros.cli.settings import envvar
+from pymotoros.cli.options import (
+    InputFile,
+    NumbersCommand,
+    deg_option,
+    group_option,
+    json_option,
+    robot_options,
+    scale_options,
+)
 from pymotoros.cli.sim_view import fetch_state_async, safety_data, safety_lines
 from pymotoros.client import (
     ClientError,
@@ -44,12 +53,12 @@ from pymotoros.client import (
     RequestTimeoutError,
     RobotClient,
 )
-from pymotoros.client.planning import PlanningError
+from pymotoros.client.planning import JointTrajectory, PlanningError
 from pymotoros.client.srdf import NamedPoseError
 from pymotoros.client.state import RobotState
 from pymotoros.client.streaming import FollowingSample, MoveResult
 from pymotoros.errors import ConfigError, PymotorosError
-from pymotoros.models import DEFAULT_CONTROLLER, DEFAULT_ROBOT, ControllerType, GroupModel
+from pymotoros.models import GroupModel
 from pymotoros.protocol.constants import (
     MAX_TOOL_NUMBER,
     TCP_PORT_IO,
@@ -80,9 +89,7 @@ EXIT_CODES_HELP: Final = (
 )
 
 _T = TypeVar("_T")
-_F = TypeVar("_F", bound=Callable[..., Any])
 
-_PORT = click.IntRange(1, 65535)
 _DEFAULT_PORTS: Final = {"motion": TCP_PORT_MOTION, "state": TCP_PORT_STATE, "io": TCP_PORT_IO}
 
 
@@ -131,116 +138,6 @@ async def connected(
         yield client
     finally:
         await client.close()
-
-
-def robot_options(func: _F) -> _F:
-    """The options every robot command takes (each also from ``PYMOTOROS_<NAME>``).
-
-    Ports left unset come from ``--ports-file`` (written by ``pymotoros sim
-    --ports-file``), else MotoROS's fixed ports.
-    """
-    options = [
-        click.option(
-            "--host",
-            default="127.0.0.1",
-            show_default=True,
-            envvar=envvar("host"),
-            help="Controller address.",
-        ),
-        click.option(
-            "--motion-port",
-            type=_PORT,
-            default=None,
-            envvar=envvar("motion_port"),
-            help=f"[default: {TCP_PORT_MOTION}]",
-        ),
-        click.option(
-            "--state-port",
-            type=_PORT,
-            default=None,
-            envvar=envvar("state_port"),
-            help=f"[default: {TCP_PORT_STATE}]",
-        ),
-        click.option(
-            "--io-port",
-            type=_PORT,
-            default=None,
-            envvar=envvar("io_port"),
-            help=f"[default: {TCP_PORT_IO}]",
-        ),
-        click.option(
-            "--ports-file",
-            type=click.Path(dir_okay=False, path_type=Path),
-            default=None,
-            envvar=envvar("ports_file"),
-            help="JSON file written by `pymotoros sim --ports-file`: the ports of a port-0 twin.",
-        ),
-        click.option(
-            "--controller",
-            type=click.Choice([t.value for t in ControllerType], case_sensitive=False),
-            default=DEFAULT_CONTROLLER.value,
-            show_default=True,
-            envvar=envvar("controller"),
-            help="Controller model: byte order (FS100 is big-endian) and IO map.",
-        ),
-        click.option(
-            "--robot",
-            default=DEFAULT_ROBOT,
-            show_default=True,
-            envvar=envvar("robot"),
-            help="Robot model: joint names and limits.",
-        ),
-        click.option(
-            "--config",
-            "cell_path",
-            type=click.Path(exists=True, dir_okay=False, path_type=Path),
-            default=None,
-            envvar=envvar("config"),
-            metavar="CELL.toml",
-            help="Cell file (the sim's format) naming controller and groups; replaces "
-            "--controller/--robot.",
-        ),
-        click.option(
-            "--timeout",
-            "timeout_s",
-            type=click.FloatRange(0.1, 600),
-            default=5.0,
-            show_default=True,
-            envvar=envvar("timeout"),
-            help="Seconds to wait for a connection or a reply.",
-        ),
-        click.option(
-            "--debug", is_flag=True, envvar=envvar("debug"), help="Show a traceback on errors."
-        ),
-        click.option(
-            "--record",
-            type=click.Path(dir_okay=False, writable=True, path_type=Path),
-            default=None,
-            envvar=envvar("record"),
-            help="Record every frame sent and received to this pcapng file (Wireshark).",
-        ),
-    ]
-    for option in reversed(options):
-        func = option(func)
-    return func
-
-
-def group_option(*, multiple: bool = False, default: str | None = "0") -> Callable[[_F], _F]:
-    """``--group`` by name (R1, R2, B1 … as the pendant names them) or number (0, 1 …)."""
-    help_text = "Control group: name (R1, R2, B1 …) or number (0, 1 …)" + (
-        "; repeat to move several groups in one trajectory (values in group order)."
-        if multiple
-        else "."
-    )
-    return click.option(
-        "--group",
-        "group",
-        multiple=multiple,
-        default=() if multiple else default,
-        show_default=not multiple,
-        metavar="NAME|N",
-        help=help_text,
-    )
 
 
 def unit_of(deg: bool, linear: bool = False) -> str:
@@ -466,7 +363,8 @@ def _status_table(
     "--count",
     type=click.IntRange(1),
     default=None,
-    help="With --watch: stop after this many updates.",
+    help="With --watch: stop after this many updates (at --rate; an update that changes "
+    "nothing is not printed again off a terminal, but counts).",
 )
 @click.option(
     "--rate",
@@ -531,9 +429,9 @@ def status(
                         sim_state = await fetch_state_async(api) if api is not None else None
                         if as_json:
                             _echo_json(_status_data(client, state, only) | safety_data(sim_state))
-                            shown += 1
-                        elif frames.show(_status_table(client, state, only, texts, sim_state)):
-                            shown += 1
+                        else:  # an unchanged frame is not printed again, but counts
+                            frames.show(_status_table(client, state, only, texts, sim_state))
+                        shown += 1
                         if not watch or (count is not None and shown >= count):
                             return
                     state = await client.tracker.next_state(target.timeout_s)
@@ -653,25 +551,79 @@ def tool(number: int, group: str, **kwargs: Any) -> None:
 
 # --------------------------------------------------------------------------- move
 
+PROGRESS_REDRAW_S: Final = 0.1
+"""Shortest time between two redraws of a terminal's progress line."""
+SETTLE_TIMEOUT_S: Final = 3.0
+"""How long a refused or stopped move waits for the robot to come to rest before it says
+where the robot stands (an E-stop's braking takes well under a second)."""
+
+
+def progress_line(
+    label: str,
+    sample: FollowingSample,
+    positions: Sequence[float],
+    *,
+    duration_s: float | None,
+    deg: bool,
+) -> str:
+    """``moving  42%  1.3 s left  [0.1234, …] rad``: done, time left and the joints.
+
+    Time left: from the plan when its duration is known (plan time still ahead, plus
+    the lag the robot has built up), else extrapolated from the progress so far.
+    """
+    done = min(max(sample.progress, 0.0), 1.0)
+    if duration_s is not None:
+        left: float | None = max(0.0, duration_s - (sample.elapsed_s - sample.lag_s))
+    elif done > 0.0:
+        left = sample.elapsed_s * (1.0 - done) / done
+    else:
+        left = None
+    width = 20
+    bar = "#" * round(done * width)
+    parts = [f"{label} [{bar:<{width}}] {done * 100:3.0f}%"]
+    parts.append("time left ?" if left is None else f"{left:.1f} s left")
+    if positions:
+        unit = "deg" if deg else "rad"
+        parts.append("[" + ", ".join(f"{to_user(p, deg):.3f}" for p in positions) + f"] {unit}")
+    return "  ".join(parts)
+
 
 @contextlib.contextmanager
-def progress_bar(label: str) -> Iterator[Callable[[FollowingSample], None]]:
-    """A progress bar on a terminal's stderr, fed by the following monitor's samples;
-    nothing when stderr is not a terminal. Completed only if the block succeeds."""
-    if not sys.stderr.isatty():
+def progress_bar(
+    label: str,
+    client: RobotClient | None = None,
+    groups: Sequence[int] = (),
+    *,
+    duration_s: float | None = None,
+    deg: bool = False,
+    stream: IO[str] | None = None,
+) -> Iterator[Callable[[FollowingSample], None]]:
+    """A progress line on a terminal's stderr (done, time left, the joints from the
+    feedback), fed by the following monitor's samples; nothing when stderr is not a
+    terminal. Redrawn in place at most every :data:`PROGRESS_REDRAW_S`."""
+    out = sys.stderr if stream is None else stream
+    if not out.isatty():
         yield lambda _sample: None
         return
-    with click.progressbar(length=1000, label=label, file=sys.stderr, show_eta=False) as bar:
-        done = [0]
+    columns = shutil.get_terminal_size().columns - 1
+    last = [-math.inf]
 
-        def progress(sample: FollowingSample) -> None:
-            now = int(sample.progress * 1000)
-            if now > done[0]:
-                bar.update(now - done[0])
-                done[0] = now
+    def progress(sample: FollowingSample) -> None:
+        if sample.elapsed_s - last[0] < PROGRESS_REDRAW_S and sample.progress < 1.0:
+            return
+        last[0] = sample.elapsed_s
+        here = (
+            [] if client is None else [v for g in groups for v in client.state.positions(g) or ()]
+        )
+        line = progress_line(label, sample, here, duration_s=duration_s, deg=deg)
+        out.write("\r\x1b[K" + line[:columns])
+        out.flush()
 
+    try:
         yield progress
-        bar.update(1000 - done[0])
+    finally:
+        out.write("\n")
+        out.flush()
 
 
 def _move_data(result: MoveResult) -> dict[str, Any]:
@@ -686,36 +638,215 @@ def _move_data(result: MoveResult) -> dict[str, Any]:
     }
 
 
-@click.command(epilog=EXIT_CODES_HELP, context_settings={"ignore_unknown_options": True})
+@dataclass(frozen=True, slots=True)
+class MoveRequest:
+    """What the user asked ``move`` for, as typed (checked by :meth:`check_usage`)."""
+
+    joints: tuple[float, ...]
+    name: str | None
+    srdf: Path | None
+    deg: bool
+    speed_scale: float
+    accel_scale: float
+    group: tuple[str, ...]
+    enable_first: bool
+    as_json: bool
+    as_pose: bool = False
+    linear: bool = False
+    relative: tuple[str, ...] = ()
+    frame: str = "base"
+    tcp_speed_mm_s: float = 250.0
+    tool: int | None = None
+
+    @property
+    def cartesian(self) -> bool:
+        return self.as_pose or bool(self.relative)
+
+    def check_usage(self) -> None:
+        """One target, given in a way that fits it (usage errors, exit 2)."""
+        if self.linear and not self.as_pose:
+            raise click.UsageError(
+                "--linear goes with --pose (--relative moves are always straight)"
+            )
+        if self.as_pose and (self.relative or self.name is not None):
+            raise click.UsageError("give one target: --pose, --relative or --named")
+        if self.relative and self.joints:
+            raise click.UsageError("--relative takes no positional values")
+        if not self.cartesian and (self.name is None) == (not self.joints):
+            raise click.UsageError("give either joint values J1 ... Jn or --named NAME")
+        if self.srdf is not None and self.name is None:
+            raise click.UsageError("--srdf goes with --named")
+
+
+@dataclass(frozen=True, slots=True)
+class MoveGoal:
+    """The checked target of a move: its groups, their models, and the joint goal (a
+    Cartesian move's goal is planned by the client: ``goal`` is empty)."""
+
+    groups: tuple[int, ...]
+    models: list[GroupModel]
+    goal: tuple[float, ...]
+    pose: tuple[float, ...] | None = None
+    relative: tuple[float, ...] | None = None
+
+
+def _named_groups(
+    client: RobotClient, name: str, srdf: Path | None, given: tuple[int, ...]
+) -> tuple[tuple[int, ...], tuple[float, ...]]:
+    """The groups a named pose moves and its goal: the groups given with --group, else
+    every group of the robot the pose sets (the built-in home sets them all)."""
+    if given:
+        return given, tuple(v for g in given for v in client.named_pose(name, srdf=srdf, group=g))
+    groups: list[int] = []
+    goal: list[float] = []
+    first_error: NamedPoseError | None = None
+    for index in range(len(client.robot.groups)):
+        try:
+            values = client.named_pose(name, srdf=srdf, group=index)
+        except NamedPoseError as exc:
+            first_error = first_error or exc
+            continue
+        groups.append(index)
+        goal.extend(values)
+    if not groups:
+        assert first_error is not None  # noqa: S101 - a robot has at least one group
+        raise first_error
+    return tuple(groups), tuple(goal)
+
+
+def resolve_goal(target: Target, req: MoveRequest) -> MoveGoal:
+    """The goal checked against the robot model before anything is sent."""
+    client = target.client()
+    given = tuple(client.group_index(g) for g in req.group)
+    if len(set(given)) != len(given):
+        raise InputError("a --group is given twice: give each group once")
+    if req.cartesian:
+        if len(given) > 1:
+            raise InputError("a Cartesian move (--pose, --relative) takes one --group")
+        groups = given or (0,)
+        rel = parse_relative(req.relative, req.deg) if req.relative else None
+        pose = pose_from_args(req.joints, req.deg) if req.as_pose else None
+        return MoveGoal(groups, [client.robot.groups[groups[0]]], (), pose, rel)
+    if req.name is not None:
+        groups, goal = _named_groups(client, req.name, req.srdf, given)
+    else:
+        groups = given or (0,)
+        goal = _goal_from_values(req.joints, [client.robot.groups[g] for g in groups], req.deg)
+    return MoveGoal(groups, [client.robot.groups[g] for g in groups], goal)
+
+
+async def _cartesian(
+    client: RobotClient,
+    req: MoveRequest,
+    goal: MoveGoal,
+    progress: Callable[[FollowingSample], None],
+) -> MoveResult:
+    return await cartesian_move(
+        client,
+        pose=goal.pose,
+        relative=goal.relative,
+        linear=req.linear or goal.relative is not None,
+        frame="tool" if req.frame == "tool" else "base",
+        tcp_speed_mm_s=req.tcp_speed_mm_s,
+        group=goal.groups[0],
+        speed_scale=req.speed_scale,
+        accel_scale=req.accel_scale,
+        on_progress=progress,
+        tool=req.tool,
+    )
+
+
+async def _joint_plan(client: RobotClient, req: MoveRequest, goal: MoveGoal) -> JointTrajectory:
+    """The joint move from where the robot rests (planned before the progress line
+    starts, so that it can tell the time left from the plan)."""
+    start = await client.current_positions(goal.groups)
+    return client.plan(
+        start,
+        goal.goal,
+        groups=goal.groups,
+        speed_scale=req.speed_scale,
+        accel_scale=req.accel_scale,
+    )
+
+
+async def _settled_where(
+    client: RobotClient, goal: MoveGoal, deg: bool, what: str, timeout_s: float
+) -> str:
+    """:func:`_where` once the robot has come to rest (an E-stop brakes for a moment:
+    read at once, the position would be several mrad short of where it stops)."""
+    with contextlib.suppress(PymotorosError, TimeoutError):
+        await client.current_positions(goal.groups, timeout_s=min(timeout_s, SETTLE_TIMEOUT_S))
+    return _where(client, goal.groups, goal.models, goal.goal, deg, what)
+
+
+async def _move_watched(
+    client: RobotClient, req: MoveRequest, goal: MoveGoal, timeout_s: float
+) -> MoveResult:
+    """The move with its progress line; on Ctrl-C/SIGTERM STOP_MOTION, and a refusal
+    mid-move says where the robot came to rest."""
+    try:
+        planned = None if req.cartesian else await _joint_plan(client, req, goal)
+        duration = None if planned is None else planned.duration
+        with progress_bar("moving", client, goal.groups, duration_s=duration, deg=req.deg) as bar:
+            if planned is None:
+                return await _cartesian(client, req, goal, bar)
+            return await client.execute(planned, groups=goal.groups, on_progress=bar)
+    except asyncio.CancelledError:
+        with contextlib.suppress(PymotorosError):
+            await asyncio.shield(client.stop_motion())
+        where = await asyncio.shield(
+            _settled_where(client, goal, req.deg, "stopped (STOP_MOTION)", timeout_s)
+        )
+        click.echo("\n" + where, err=True)
+        raise
+    except ReplyError as exc:
+        if exc.point is not None:  # refused mid-move: say where the robot is
+            where = await _settled_where(client, goal, req.deg, "the robot stands", timeout_s)
+            exc.args = (f"{exc}; {where}", *exc.args[1:])
+        raise
+
+
+def _say_groups(client: RobotClient, req: MoveRequest, goal: MoveGoal) -> None:
+    """A named pose on a robot of several groups: say which groups move (stderr)."""
+    if req.name is None or len(client.robot.groups) < 2:
+        return
+    names = ", ".join(client.robot.groups[g].name for g in goal.groups)
+    chosen = "as given with --group" if req.group else "every group the pose sets; --group chooses"
+    click.echo(f"{req.name}: moving {names} ({chosen})", err=True)
+
+
+def _report_move(result: MoveResult, req: MoveRequest, goal: MoveGoal, robot: Any) -> None:
+    if req.as_json:
+        names = [robot.groups[g].name for g in goal.groups]
+        _echo_json(_move_data(result) | {"groups": names})
+        return
+    pos = ", ".join(f"{to_user(p, req.deg):.4f}" for p in result.final_positions)
+    click.echo(
+        f"reached [{pos}] {'deg' if req.deg else 'rad'} in {result.elapsed_s:.2f} s "
+        f"(planned {result.trajectory.duration:.2f} s, {result.stream.points} points)"
+    )
+    if result.following.slowed:
+        click.echo(
+            f"note: the robot ran up to {result.following.max_lag_s:.2f} s behind the plan "
+            "(a safety speed limit or override slowed it)"
+        )
+
+
+@click.command(epilog=EXIT_CODES_HELP, cls=NumbersCommand)
 @robot_options
 @click.argument("joints", nargs=-1, type=float, metavar="[J1 ... Jn]")
 @click.option("--named", "name", default=None, help="Move to a named pose instead (e.g. home).")
 @click.option(
     "--srdf",
-    type=click.Path(exists=True, dir_okay=False, path_type=Path),
+    type=InputFile("SRDF file"),
     default=None,
     help="SRDF file whose group_state entries are the named poses.",
 )
-@click.option(
-    "--deg", is_flag=True, help="J1 ... Jn, results and limit errors in degrees (default radians)."
-)
-@click.option(
-    "--speed-scale",
-    type=click.FloatRange(0.0, 1.0, min_open=True),
-    default=1.0,
-    show_default=True,
-    help="Fraction of each joint's maximum velocity (like MoveIt's scaling factor).",
-)
-@click.option(
-    "--accel-scale",
-    type=click.FloatRange(0.0, 1.0, min_open=True),
-    default=1.0,
-    show_default=True,
-    help="Fraction of each joint's maximum acceleration and jerk.",
-)
+@deg_option("J1 ... Jn, results and limit errors")
+@scale_options
 @group_option(multiple=True)
 @click.option("--enable", "enable_first", is_flag=True, help="Enter trajectory mode first.")
-@click.option("--json", "as_json", is_flag=True, help="Print the result as JSON.")
+@json_option()
 @click.option(
     "--pose",
     "as_pose",
@@ -747,129 +878,34 @@ def _move_data(result: MoveResult) -> dict[str, Any]:
     help="Maximum TCP speed of a straight-line move, mm/s.",
 )
 @tool_option
-def move(
-    joints: tuple[float, ...],
-    name: str | None,
-    srdf: Path | None,
-    deg: bool,
-    speed_scale: float,
-    accel_scale: float,
-    group: tuple[str, ...],
-    enable_first: bool,
-    as_json: bool,
-    as_pose: bool = False,
-    linear: bool = False,
-    relative: tuple[str, ...] = (),
-    frame: str = "base",
-    tcp_speed_mm_s: float = 250.0,
-    tool: int | None = None,
-    **kwargs: Any,
-) -> None:
+def move(**kwargs: Any) -> None:
     """Move to joint positions J1 ... Jn (rad, or deg with --deg) or to a named pose.
 
     Starts from where the robot rests, plans a synchronised, jerk-limited move within
     the robot model's limits and waits until the robot has settled at the goal. With
     several --group options the values are the groups' joints one group after the
-    other, sent as one JOINT_TRAJ_PT_FULL_EX trajectory. Ctrl-C or SIGTERM stops the
-    robot (STOP_MOTION) and exits with 130 or 143.
+    other, sent as one JOINT_TRAJ_PT_FULL_EX trajectory. --named moves every group the
+    pose sets (all groups for home) unless --group names some, and says which.
+    Ctrl-C or SIGTERM stops the robot (STOP_MOTION) and exits with 130 or 143.
     """
     target = _target(kwargs)
-    cartesian = as_pose or bool(relative)
-    if linear and not as_pose:
-        raise click.UsageError("--linear goes with --pose (--relative moves are always straight)")
-    if as_pose and (relative or name is not None):
-        raise click.UsageError("give one target: --pose, --relative or --named")
-    if relative and joints:
-        raise click.UsageError("--relative takes no positional values")
-    if not cartesian and (name is None) == (not joints):
-        raise click.UsageError("give either joint values J1 ... Jn or --named NAME")
-    if srdf is not None and name is None:
-        raise click.UsageError("--srdf goes with --named")
-    unit = "deg" if deg else "rad"
-    rel = parse_relative(relative, deg) if relative else None
-    pose = pose_from_args(joints, deg) if as_pose else None
-
-    try:  # the goal is checked against the model before anything is sent
-        model_client = target.client()
-        groups = tuple(model_client.group_index(g) for g in group) or (0,)
-        if len(set(groups)) != len(groups):
-            raise InputError("a --group is given twice: give each group once")
-        models = [model_client.robot.groups[g] for g in groups]
-        if cartesian:
-            if len(groups) != 1:
-                raise InputError("a Cartesian move (--pose, --relative) takes one --group")
-            goal: tuple[float, ...] = ()
-        elif name is not None:
-            goal = tuple(
-                v for g in groups for v in model_client.named_pose(name, srdf=srdf, group=g)
-            )
-        else:
-            goal = _goal_from_values(joints, models, deg)
+    req = MoveRequest(**kwargs)
+    req.check_usage()
+    try:
+        goal = resolve_goal(target, req)
     except PymotorosError as exc:
         fail(exc, debug=target.debug)
 
     async def work() -> MoveResult:
         async with connected(target, motion=True, state=True, io=False) as client:
             await client.wait_for_state(target.timeout_s)
-            if enable_first:
+            if req.enable_first:
                 await client.start_trajectory_mode()
-            with progress_bar("moving") as progress:
-                try:
-                    if cartesian:
-                        result = await cartesian_move(
-                            client,
-                            pose=pose,
-                            relative=rel,
-                            linear=linear or rel is not None,
-                            frame="tool" if frame == "tool" else "base",
-                            tcp_speed_mm_s=tcp_speed_mm_s,
-                            group=groups[0],
-                            speed_scale=speed_scale,
-                            accel_scale=accel_scale,
-                            on_progress=progress,
-                            tool=tool,
-                        )
-                    else:
-                        start = await client.current_positions(groups)
-                        trajectory = client.plan(
-                            start,
-                            goal,
-                            groups=groups,
-                            speed_scale=speed_scale,
-                            accel_scale=accel_scale,
-                        )
-                        result = await client.execute(
-                            trajectory, groups=groups, on_progress=progress
-                        )
-                except asyncio.CancelledError:
-                    with contextlib.suppress(PymotorosError):
-                        await asyncio.shield(client.stop_motion())
-                    click.echo(
-                        "\n" + _where(client, groups, models, goal, deg, "stopped (STOP_MOTION)"),
-                        err=True,
-                    )
-                    raise
-                except ReplyError as exc:
-                    if exc.point is not None:  # refused mid-move: say where the robot is
-                        where = _where(client, groups, models, goal, deg, "the robot stands")
-                        exc.args = (f"{exc}; {where}", *exc.args[1:])
-                    raise
-            return result
+            _say_groups(client, req, goal)
+            return await _move_watched(client, req, goal, target.timeout_s)
 
     result = run(target, work, stoppable=True)
-    if as_json:
-        _echo_json(_move_data(result))
-    else:
-        pos = ", ".join(f"{to_user(p, deg):.4f}" for p in result.final_positions)
-        click.echo(
-            f"reached [{pos}] {unit} in {result.elapsed_s:.2f} s "
-            f"(planned {result.trajectory.duration:.2f} s, {result.stream.points} points)"
-        )
-        if result.following.slowed:
-            click.echo(
-                f"note: the robot ran up to {result.following.max_lag_s:.2f} s behind the plan "
-                "(a safety speed limit or override slowed it)"
-            )
+    _report_move(result, req, goal, target.client().robot)
 
 
 def _goal_from_values(
@@ -940,6 +976,27 @@ def io() -> None:
     """
 
 
+def _on_io_port(
+    kwargs: dict[str, Any], call: Callable[[RobotClient], Coroutine[Any, Any, _T]]
+) -> _T:
+    """Run one request that needs only the IO port (MotoROS allows one IO client)."""
+    target = _target(kwargs)
+
+    async def work() -> _T:
+        async with connected(target, motion=False, state=False, io=True) as client:
+            return await call(client)
+
+    return run(target, work)
+
+
+def _say_value(as_json: bool, key: str, number: int, value: int, text: str) -> None:
+    """``{key: number, "value": value}`` with --json, else ``text``."""
+    if as_json:
+        _echo_json({key: number, "value": value})
+    else:
+        click.echo(text)
+
+
 @io.command("read", epilog=EXIT_CODES_HELP)
 @robot_options
 @click.argument("address", type=click.IntRange(0))
@@ -947,19 +1004,9 @@ def io() -> None:
 @click.option("--json", "as_json", is_flag=True, help='Print {"address": A, "value": V}.')
 def io_read(address: int, as_group: bool, as_json: bool, **kwargs: Any) -> None:
     """Read the IO bit (or group) at ADDRESS."""
-    target = _target(kwargs)
-
-    async def work() -> int:
-        async with connected(target, motion=False, state=False, io=True) as client:
-            if as_group:
-                return await client.read_io_group(address)
-            return await client.read_io_bit(address)
-
-    value = run(target, work)
-    if as_json:
-        _echo_json({"address": address, "value": value})
-    else:
-        click.echo(str(value))
+    read = RobotClient.read_io_group if as_group else RobotClient.read_io_bit
+    value = _on_io_port(kwargs, lambda client: read(client, address))
+    _say_value(as_json, "address", address, value, str(value))
 
 
 @io.command("write", epilog=EXIT_CODES_HELP)
@@ -970,20 +1017,9 @@ def io_read(address: int, as_group: bool, as_json: bool, **kwargs: Any) -> None:
 @click.option("--json", "as_json", is_flag=True, help='Print {"address": A, "value": V}.')
 def io_write(address: int, value: int, as_group: bool, as_json: bool, **kwargs: Any) -> None:
     """Write VALUE (0/1, or 0..255 with --group) to the IO bit (or group) at ADDRESS."""
-    target = _target(kwargs)
-
-    async def work() -> None:
-        async with connected(target, motion=False, state=False, io=True) as client:
-            if as_group:
-                await client.write_io_group(address, value)
-            else:
-                await client.write_io_bit(address, value)
-
-    run(target, work)
-    if as_json:
-        _echo_json({"address": address, "value": value})
-    else:
-        click.echo(f"{address} = {value}")
+    write = RobotClient.write_io_group if as_group else RobotClient.write_io_bit
+    _on_io_port(kwargs, lambda client: write(client, address, value))
+    _say_value(as_json, "address", address, value, f"{address} = {value}")
 
 
 @click.group(epilog=EXIT_CODES_HELP)
@@ -1000,17 +1036,8 @@ def mreg() -> None:
 @click.option("--json", "as_json", is_flag=True, help='Print {"number": N, "value": V}.')
 def mreg_read(number: int, as_json: bool, **kwargs: Any) -> None:
     """Read M-register NUMBER."""
-    target = _target(kwargs)
-
-    async def work() -> int:
-        async with connected(target, motion=False, state=False, io=True) as client:
-            return await client.read_mregister(number)
-
-    value = run(target, work)
-    if as_json:
-        _echo_json({"number": number, "value": value})
-    else:
-        click.echo(str(value))
+    value = _on_io_port(kwargs, lambda client: client.read_mregister(number))
+    _say_value(as_json, "number", number, value, str(value))
 
 
 @mreg.command("write", epilog=EXIT_CODES_HELP)
@@ -1020,17 +1047,8 @@ def mreg_read(number: int, as_json: bool, **kwargs: Any) -> None:
 @click.option("--json", "as_json", is_flag=True, help='Print {"number": N, "value": V}.')
 def mreg_write(number: int, value: int, as_json: bool, **kwargs: Any) -> None:
     """Write VALUE (0..65535) to M-register NUMBER."""
-    target = _target(kwargs)
-
-    async def work() -> None:
-        async with connected(target, motion=False, state=False, io=True) as client:
-            await client.write_mregister(number, value)
-
-    run(target, work)
-    if as_json:
-        _echo_json({"number": number, "value": value})
-    else:
-        click.echo(f"M{number:03d} = {value}")
+    _on_io_port(kwargs, lambda client: client.write_mregister(number, value))
+    _say_value(as_json, "number", number, value, f"M{number:03d} = {value}")
 
 
 __all__ = ["disable", "enable", "io", "move", "mreg", "status", "stop", "tool"]

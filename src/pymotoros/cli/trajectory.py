@@ -13,6 +13,8 @@ their sequence numbers (the start point is 0).
 
 from __future__ import annotations
 
+import asyncio
+import contextlib
 import json
 import math
 import sys
@@ -22,12 +24,25 @@ from typing import TYPE_CHECKING, Any, Final
 
 import click
 
-from pymotoros.errors import ConfigError
+from pymotoros.cli.options import (
+    BadInput,
+    InputFile,
+    config_option,
+    controller_option,
+    json_option,
+    model_options,
+    number_list,
+    output_option,
+    robot_option,
+    robot_options,
+    scale_options,
+)
+from pymotoros.cli.recorded_run import recorded_run
+from pymotoros.errors import ConfigError, PymotorosError
 from pymotoros.models import (
     DEFAULT_CONTROLLER,
     DEFAULT_ROBOT,
     ControllerModel,
-    ControllerType,
     RobotModel,
     controller_model,
     robot_model,
@@ -48,6 +63,9 @@ from pymotoros.trajectory.files import (
 )
 
 if TYPE_CHECKING:
+    from pymotoros.client import RobotClient
+    from pymotoros.client.planning import JointTrajectory
+    from pymotoros.client.streaming import MoveResult
     from pymotoros.trajectory.plot import RecordedRun
 
 EXIT_USAGE: Final = 2
@@ -60,39 +78,8 @@ CHECK_EXIT_HELP: Final = (
     f"  {EXIT_WARNINGS}  MotoROS accepts it, but the robot should not do it (warnings)"
 )
 
-_TRAJ = click.Path(exists=True, dir_okay=False, path_type=Path)
-
-
-CONFIG_HELP: Final = (
-    "Cell file (the sim's format): check against its controller, groups and FSU "
-    "joint-speed limit, instead of --controller/--robot."
-)
-
-
-def model_options(func: Any) -> Any:
-    """--controller and --robot (the file's own robot/controller, if it names them,
-    is used when the option is not given), or --config CELL.toml instead of both."""
-    func = click.option(
-        "--config",
-        "cell_path",
-        type=click.Path(exists=True, dir_okay=False, path_type=Path),
-        default=None,
-        metavar="CELL.toml",
-        help=CONFIG_HELP,
-    )(func)
-    func = click.option(
-        "--robot",
-        "robot_name",
-        default=None,
-        help=f"Robot model [default: the file's, else {DEFAULT_ROBOT}].",
-    )(func)
-    return click.option(
-        "--controller",
-        "controller_name",
-        type=click.Choice([t.value for t in ControllerType], case_sensitive=False),
-        default=None,
-        help=f"Controller family [default: the file's, else {DEFAULT_CONTROLLER.value}].",
-    )(func)
+_TRAJ = InputFile("trajectory file (.csv, .json, .yaml)")
+_MODELS = model_options(controller="controller_name", robot="robot_name")
 
 
 def reject_models_with_config(cell_path: Path | None, *params: str) -> None:
@@ -160,17 +147,17 @@ def load_models(
             controller = controller_model(controller_name or traj.controller or DEFAULT_CONTROLLER)
             traj.group_columns(robot)  # names every joint of whole groups of this robot
         except ConfigError as exc:
-            raise click.BadParameter(str(exc), param_hint="TRAJ") from None
+            raise BadInput(f"TRAJ: {exc}") from None
         return Loaded(traj, robot, controller)
     try:
         cell = load_cell_models(cell_path)
     except ConfigError as exc:
-        raise click.BadParameter(str(exc), param_hint="--config") from None
+        raise BadInput(f"--config: {exc}") from None
     try:
         traj = read_trajectory_file(path, cell.robot)
         traj.group_columns(cell.robot)
     except ConfigError as exc:
-        raise click.BadParameter(str(exc), param_hint="TRAJ") from None
+        raise BadInput(f"TRAJ: {exc}") from None
     for warning in cell.warnings:
         click.echo(f"warning: {warning}", err=True)
     if traj.robot is not None and traj.robot.lower() not in cell.robots:
@@ -186,24 +173,6 @@ def load_models(
             err=True,
         )
     return Loaded(traj, cell.robot, cell.controller, cell)
-
-
-def _parse_from(value: str | None, count: int) -> list[float] | None:
-    if value is None:
-        return None
-    parts = [p.strip() for p in value.split(",")]
-    if len(parts) != count:
-        raise click.BadParameter(
-            f"needs {count} comma-separated values (the file's joints, rad), got {len(parts)}",
-            param_hint="--from",
-        )
-    try:
-        out = [float(p) for p in parts]
-    except ValueError:
-        raise click.BadParameter(f"not all numbers: {value!r}", param_hint="--from") from None
-    if not all(math.isfinite(v) for v in out):
-        raise click.BadParameter("values must be finite", param_hint="--from")
-    return out
 
 
 def render(
@@ -246,14 +215,14 @@ def render(
 
 @click.command(epilog=CHECK_EXIT_HELP, context_settings={"help_option_names": ["-h", "--help"]})
 @click.argument("traj", metavar="TRAJ", type=_TRAJ)
-@model_options
+@_MODELS
 @click.option(
     "--from",
     "from_",
     metavar="J1,...,Jn",
     help="The robot's current position (rad, the file's joints): checks the start margin.",
 )
-@click.option("--json", "as_json", is_flag=True, help="Print the report as JSON.")
+@json_option("the report")
 def check(
     traj: Path,
     robot_name: str | None,
@@ -271,7 +240,9 @@ def check(
     """
     reject_models_with_config(cell_path, "robot_name", "controller_name")
     loaded = load_models(traj, robot_name, controller_name, cell_path)
-    current = _parse_from(from_, len(loaded.trajectory.joint_names))
+    current = number_list(
+        from_, len(loaded.trajectory.joint_names), hint="--from", what="the file's joints, rad"
+    )
     report = loaded.check(current)
     if as_json:
         click.echo(json.dumps(report.to_json()))
@@ -280,39 +251,63 @@ def check(
     sys.exit(report.exit_code)
 
 
+def read_waypoints(path: Path, count: int) -> list[list[float]]:
+    """The rows of a waypoints CSV (an optional header row), each of ``count`` finite
+    numbers; errors name the line and say what it needs (exit 2, one line)."""
+    try:
+        text = path.read_text(encoding="utf-8")
+    except (OSError, UnicodeDecodeError) as exc:
+        raise ConfigError(f"{path.name}: cannot read it as UTF-8 text ({exc})") from None
+    rows = []
+    for number, line in enumerate(text.splitlines(), 1):
+        if not line.strip():
+            continue
+        try:
+            row = [float(c) for c in line.split(",")]
+        except ValueError:
+            if number == 1:
+                continue  # header
+            raise ConfigError(f"{path.name} line {number}: not all numbers") from None
+        if len(row) != count:
+            raise ConfigError(
+                f"{path.name} line {number}: {len(row)} values, the robot has {count} joints; "
+                "give one value per joint (rad)"
+            )
+        if not all(math.isfinite(v) for v in row):
+            raise ConfigError(
+                f"{path.name} line {number}: {line.strip()!r} holds a value that is not a "
+                "finite number; give every joint in rad"
+            )
+        rows.append(row)
+    return rows
+
+
+def _plan_models(
+    robot_name: str, controller_name: str, cell_path: Path | None, speed_scale: float
+) -> tuple[RobotModel, ControllerModel]:
+    """The models to plan for; with a cell, a warning when its FSU limit is below the
+    speed scaling (the robot would run behind the plan)."""
+    if cell_path is None:
+        return robot_model(robot_name), controller_model(controller_name)
+    cell = load_cell_models(cell_path)
+    pct = cell.fsu_speed_limit_pct
+    if pct is not None and speed_scale * 100 > pct:
+        click.echo(
+            f"warning: the cell's FSU limits joint speeds to {pct} %: at "
+            f"--speed-scale {speed_scale:g} the robot will run behind the plan "
+            f"(`pymotoros check --config` says by how much); plan with "
+            f"--speed-scale {pct / 100:g} or less",
+            err=True,
+        )
+    return cell.robot, cell.controller
+
+
 @click.command(context_settings={"help_option_names": ["-h", "--help"]})
-@click.argument("waypoints", metavar="WAYPOINTS.csv", type=_TRAJ)
-@click.option("--robot", "robot_name", default=DEFAULT_ROBOT, show_default=True)
-@click.option(
-    "--controller",
-    "controller_name",
-    type=click.Choice([t.value for t in ControllerType], case_sensitive=False),
-    default=DEFAULT_CONTROLLER.value,
-    show_default=True,
-)
-@click.option(
-    "--config",
-    "cell_path",
-    type=click.Path(exists=True, dir_okay=False, path_type=Path),
-    default=None,
-    metavar="CELL.toml",
-    help="Cell file (the sim's format): plan for its groups and controller, instead of "
-    "--controller/--robot.",
-)
-@click.option(
-    "--speed-scale",
-    type=click.FloatRange(0, 1, min_open=True),
-    default=1.0,
-    show_default=True,
-    help="Velocity scaling of the model's limits (as MoveIt's).",
-)
-@click.option(
-    "--accel-scale",
-    type=click.FloatRange(0, 1, min_open=True),
-    default=1.0,
-    show_default=True,
-    help="Acceleration scaling of the model's limits.",
-)
+@click.argument("waypoints", metavar="WAYPOINTS.csv", type=InputFile("waypoints CSV"))
+@robot_option("robot_name")
+@controller_option("controller_name")
+@config_option()
+@scale_options
 @click.option(
     "--sample",
     "sample_s",
@@ -321,13 +316,7 @@ def check(
     show_default=True,
     help="Approximate seconds between points.",
 )
-@click.option(
-    "-o",
-    "--output",
-    type=click.Path(dir_okay=False, path_type=Path),
-    required=True,
-    help="Trajectory file to write (.csv, .json, .yaml).",
-)
+@output_option("Trajectory file to write (.csv, .json, .yaml)", required=True)
 def plan(
     waypoints: Path,
     robot_name: str,
@@ -344,31 +333,8 @@ def plan(
 
     reject_models_with_config(cell_path, "robot_name", "controller_name")
     try:
-        if cell_path is None:
-            robot = robot_model(robot_name)
-            controller = controller_model(controller_name)
-        else:
-            cell = load_cell_models(cell_path)
-            robot, controller = cell.robot, cell.controller
-            pct = cell.fsu_speed_limit_pct
-            if pct is not None and speed_scale * 100 > pct:
-                click.echo(
-                    f"warning: the cell's FSU limits joint speeds to {pct} %: at "
-                    f"--speed-scale {speed_scale:g} the robot will run behind the plan "
-                    f"(`pymotoros check --config` says by how much); plan with "
-                    f"--speed-scale {pct / 100:g} or less",
-                    err=True,
-                )
-        rows = []
-        for number, line in enumerate(waypoints.read_text(encoding="utf-8").splitlines(), 1):
-            if not line.strip():
-                continue
-            try:
-                rows.append([float(c) for c in line.split(",")])
-            except ValueError:
-                if number == 1:
-                    continue  # header
-                raise ConfigError(f"{waypoints.name} line {number}: not all numbers") from None
+        robot, controller = _plan_models(robot_name, controller_name, cell_path, speed_scale)
+        rows = read_waypoints(waypoints, sum(g.num_axes for g in robot.groups))
         result = plan_waypoints(
             rows,
             robot,
@@ -379,7 +345,9 @@ def plan(
         )
         write_trajectory_file(result, output)
     except ConfigError as exc:
-        raise click.BadParameter(str(exc)) from None
+        raise BadInput(str(exc)) from None
+    except OSError as exc:
+        raise BadInput(f"cannot write {output}: {exc.strerror}") from None
     click.echo(
         f"wrote {output}: {len(result.times)} points, {result.duration:.3f} s "
         f"(formats: {', '.join(FORMATS)})"
@@ -389,7 +357,9 @@ def plan(
 # --------------------------------------------------------------------------- run
 
 
-def client_trajectory(traj: Trajectory, robot: RobotModel) -> tuple[Any, tuple[int, ...]]:
+def client_trajectory(
+    traj: Trajectory, robot: RobotModel
+) -> tuple[JointTrajectory, tuple[int, ...]]:
     """(the client's JointTrajectory, its groups): exactly the file's points, its joints
     reordered group by group as the client sends them (no re-timing)."""
     from pymotoros.client.planning import JointTrajectory, TrajectoryPoint
@@ -406,32 +376,76 @@ def client_trajectory(traj: Trajectory, robot: RobotModel) -> tuple[Any, tuple[i
     return JointTrajectory(points, float(traj.times[-1])), groups
 
 
-def _robot_options(func: Any) -> Any:
-    from pymotoros.cli.robot import robot_options
+async def check_start(client: RobotClient, joint: JointTrajectory, groups: tuple[int, ...]) -> None:
+    """Point 0 against where the robot rests, before anything is sent: MotoROS would
+    refuse it with 3011 beyond 30 pulses; this says so with the numbers of every joint
+    beyond it, in the words of the refusal itself (as ``move`` reports a 3011)."""
+    from pymotoros.client.errors import reply_error
+    from pymotoros.client.preflight import start_deviations
+    from pymotoros.client.streaming import deviation_text
+    from pymotoros.protocol.constants import InvalidSubcode, MsgType, ResultCode
 
-    return robot_options(func)
+    models = [client.robot.groups[g] for g in groups]
+    here = await client.current_positions(groups)  # settled: what MotoROS compares with
+    devs = start_deviations(joint.points[0], models, here, client.controller)
+    if devs:
+        kind = (
+            MsgType.JOINT_TRAJ_PT_FULL if len(groups) == 1 else MsgType.MOTO_JOINT_TRAJ_PT_FULL_EX
+        )
+        raise reply_error(
+            ResultCode.INVALID,
+            InvalidSubcode.DATA_START_POS,
+            int(kind),
+            point=0,
+            detail=deviation_text(devs, "start") + "; checked before sending",
+            deviations=devs,
+        )
+
+
+async def _stream_file(
+    client: RobotClient,
+    joint: JointTrajectory,
+    groups: tuple[int, ...],
+    *,
+    enable_first: bool,
+    force: bool,
+) -> MoveResult:
+    """Enable if asked, check the start, stream the points with a progress line; on
+    Ctrl-C or SIGTERM STOP_MOTION first."""
+    from pymotoros.cli.robot import progress_bar
+
+    await client.wait_for_state()
+    if enable_first:
+        await client.start_trajectory_mode()
+    await check_start(client, joint, groups)
+    with progress_bar("running", client, groups, duration_s=joint.duration) as progress:
+        try:
+            return await client.execute(
+                joint, groups=groups, on_progress=progress, check_speed=not force
+            )
+        except asyncio.CancelledError:
+            with contextlib.suppress(PymotorosError):
+                await asyncio.shield(client.stop_motion())
+            raise
 
 
 @click.command(context_settings={"help_option_names": ["-h", "--help"]})
 @click.argument("traj", metavar="TRAJ", type=_TRAJ)
-@_robot_options
+@robot_options
 @click.option("--force", is_flag=True, help="Send even if `pymotoros check` finds a problem.")
 @click.option("--enable", "enable_first", is_flag=True, help="Enter trajectory mode first.")
-@click.option("--json", "as_json", is_flag=True, help="Print the result as JSON.")
+@json_option()
 def run(traj: Path, force: bool, enable_first: bool, as_json: bool, **kwargs: Any) -> None:
     """Stream exactly the points of a trajectory file to the robot (no re-timing).
 
     The robot must be enabled as for `move` (or give --enable) and stand at the first
-    point. The file is checked first (as `pymotoros check`); a refusal or a warning
-    stops the command before anything moves, unless --force.
+    point: the first point is compared with the robot's settled feedback before
+    anything is sent (MotoROS's 30-pulse start tolerance, the numbers per joint). The
+    file is checked first (as `pymotoros check`); a refusal or a warning stops the
+    command before anything moves, unless --force.
     """
-    import asyncio
-    import contextlib
-
-    from pymotoros.cli.robot import _move_data, _target, connected, progress_bar
+    from pymotoros.cli.robot import _move_data, _target, connected
     from pymotoros.cli.robot import run as run_client
-    from pymotoros.client.streaming import MoveResult
-    from pymotoros.errors import PymotorosError
 
     reject_models_with_config(kwargs.get("cell_path"), "robot", "controller")
     target = _target(kwargs)
@@ -441,28 +455,16 @@ def run(traj: Path, force: bool, enable_first: bool, as_json: bool, **kwargs: An
         None if target.cell is not None else target.controller,
         target.cell,
     )
-    trajectory, robot = loaded.trajectory, loaded.robot
     report = loaded.check()
     if report.exit_code != EXIT_OK and not force:
         click.echo(loaded.render(report), err=True)
         click.echo("not started: fix the trajectory or give --force", err=True)
         sys.exit(report.exit_code)
-    joint, groups = client_trajectory(trajectory, robot)
+    joint, groups = client_trajectory(loaded.trajectory, loaded.robot)
 
     async def work() -> MoveResult:
         async with connected(target, motion=True, state=True, io=False) as client:
-            if enable_first:
-                await client.start_trajectory_mode()
-            with progress_bar("running") as progress:
-                try:
-                    result = await client.execute(
-                        joint, groups=groups, on_progress=progress, check_speed=not force
-                    )
-                except asyncio.CancelledError:
-                    with contextlib.suppress(PymotorosError):
-                        await asyncio.shield(client.stop_motion())
-                    raise
-            return result
+            return await _stream_file(client, joint, groups, enable_first=enable_first, force=force)
 
     result = run_client(target, work, stoppable=True)  # Ctrl-C / SIGTERM: STOP_MOTION
     if as_json:
@@ -470,138 +472,22 @@ def run(traj: Path, force: bool, enable_first: bool, as_json: bool, **kwargs: An
     else:
         pos = ", ".join(f"{p:.4f}" for p in result.final_positions)
         click.echo(
-            f"reached [{pos}] in {result.elapsed_s:.2f} s (file {trajectory.duration:.2f} s, "
-            f"MotoROS {report.duration_s:.3f} s predicted, {result.stream.points} points)"
+            f"reached [{pos}] in {result.elapsed_s:.2f} s (file "
+            f"{loaded.trajectory.duration:.2f} s, MotoROS {report.duration_s:.3f} s "
+            f"predicted, {result.stream.points} points)"
         )
 
 
 # --------------------------------------------------------------------------- plot
 
 
-def recorded_run(path: Path, traj: Trajectory, robot: RobotModel) -> RecordedRun:
-    """The run of ``traj`` in a session recording (``--record``, ``sim --record``, or a
-    Wireshark capture): the points the controller accepted and the feedback it sent.
-
-    The points are paired with their MOTO_MOTION_REPLY (MotoROS answers in order);
-    BUSY answers make the client resend, so only the SUCCESS one counts. Time 0 is
-    that reply to the start point (sequence 0). A recording may hold several
-    trajectories: the one with the file's number of points is used (the last such),
-    else the last one, with a warning. Errors are usage errors (exit 2).
-    """
-    import numpy as np
-
-    from pymotoros.client.recording import Direction, RecordingError, read_recording
-    from pymotoros.protocol.constants import MsgType, Port, ResultCode
-    from pymotoros.protocol.messages import (
-        JointFeedback,
-        JointTrajPtFull,
-        MotoJointFeedbackEx,
-        MotoJointTrajPtFullEx,
-        MotoMotionReply,
-    )
-    from pymotoros.trajectory.plot import RecordedRun, Series
-
-    try:
-        rec = read_recording(path)
-    except (RecordingError, OSError) as exc:
-        raise click.BadParameter(str(exc), param_hint="--recording") from None
-    point_types = {int(MsgType.JOINT_TRAJ_PT_FULL), int(MsgType.MOTO_JOINT_TRAJ_PT_FULL_EX)}
-    # accepted points, in order: (reply time, sequence, [(group, time, pos, vel)])
-    accepted: list[tuple[float, int, list[tuple[int, float, tuple[float, ...], tuple[float, ...]]]]]
-    accepted = []
-    for conn in rec.on(Port.MOTION):
-        pending: list[Any] = []
-        for m in conn.messages:
-            msg = m.message
-            if m.direction is Direction.TO_SERVER and msg is not None:
-                pending.append(msg)
-            elif isinstance(msg, MotoMotionReply) and pending:
-                request = pending.pop(0)
-                if msg.command not in point_types or msg.result != ResultCode.SUCCESS:
-                    continue
-                if isinstance(request, JointTrajPtFull):
-                    records = [(request.group_no, request.time, request.pos, request.vel)]
-                    accepted.append((m.offset, request.sequence, records))
-                elif isinstance(request, MotoJointTrajPtFullEx):
-                    records = [(g.group_no, g.time, g.pos, g.vel) for g in request.groups]
-                    accepted.append((m.offset, request.sequence, records))
-    runs: list[list[Any]] = []
-    for item in accepted:
-        if item[1] == 0 or not runs:
-            runs.append([])
-        runs[-1].append(item)
-    if not runs:
-        raise click.BadParameter(
-            f"{path} holds no trajectory point the controller accepted "
-            "(record a `pymotoros run` with --record)",
-            param_hint="--recording",
-        )
-    matching = [r for r in runs if len(r) == len(traj.times)]
-    chosen = matching[-1] if matching else runs[-1]
-    if not matching:
-        click.echo(
-            f"warning: {path.name}: no trajectory of {len(traj.times)} points (the file's); "
-            f"plotting the last one recorded ({len(chosen)} points)",
-            err=True,
-        )
-    t0 = chosen[0][0]
-    columns = dict(traj.group_columns(robot))
-    commanded: list[Series] = []
-    for gi, cols in columns.items():
-        n = len(cols)
-        rows = [(t, p[:n], v[:n]) for _, _, recs in chosen for g, t, p, v in recs if g == gi]
-        if not rows:
-            continue
-        times = np.array([r[0] for r in rows], dtype=np.float64)
-        commanded.append(
-            Series(
-                times - times[0],
-                np.array([r[1] for r in rows], dtype=np.float64),
-                tuple(cols),
-                np.array([r[2] for r in rows], dtype=np.float64),
-            )
-        )
-    single: dict[int, list[tuple[float, tuple[float, ...]]]] = {}
-    multi: dict[int, list[tuple[float, tuple[float, ...]]]] = {}
-    for conn in rec.on(Port.STATE):
-        for m in conn.messages:
-            msg = m.message
-            if isinstance(msg, JointFeedback):
-                single.setdefault(msg.group_no, []).append((m.offset - t0, msg.pos))
-            elif isinstance(msg, MotoJointFeedbackEx):
-                for g in msg.groups:
-                    multi.setdefault(g.group_no, []).append((m.offset - t0, g.pos))
-    feedback: list[Series] = []
-    for gi, cols in columns.items():
-        samples = single.get(gi) or multi.get(gi)  # MotoROS sends both for ≥ 2 groups
-        if not samples:
-            continue
-        n = len(cols)
-        feedback.append(
-            Series(
-                np.array([s[0] for s in samples], dtype=np.float64),
-                np.array([s[1][:n] for s in samples], dtype=np.float64),
-                tuple(cols),
-            )
-        )
-    if not feedback:
-        click.echo(f"warning: {path.name}: no feedback of the file's groups recorded", err=True)
-    return RecordedRun(tuple(commanded), tuple(feedback), f"recording {path.name}")
-
-
 @click.command(context_settings={"help_option_names": ["-h", "--help"]})
 @click.argument("traj", metavar="TRAJ", type=_TRAJ)
-@model_options
-@click.option(
-    "-o",
-    "--output",
-    type=click.Path(dir_okay=False, path_type=Path),
-    required=True,
-    help="PNG file to write.",
-)
+@_MODELS
+@output_option("PNG file to write", required=True)
 @click.option(
     "--recording",
-    type=click.Path(exists=True, dir_okay=False, path_type=Path),
+    type=InputFile("session recording (pcapng)"),
     default=None,
     metavar="REC.pcapng",
     help="A session recording of a run of this trajectory (--record): adds the commanded "
@@ -619,23 +505,49 @@ def plot(
     velocities, with the limits; with --recording, also what the robot was sent and
     reported, its lag and its tracking error. A trajectory MotoROS would refuse is not
     plotted (exit 1, as `pymotoros check`)."""
-    from pymotoros.trajectory.plot import plot_trajectory, tracking
+    from pymotoros.trajectory.plot import plot_trajectory
 
     reject_models_with_config(cell_path, "robot_name", "controller_name")
+    _check_image_suffix(output)
     loaded = load_models(traj, robot_name, controller_name, cell_path)
     report = loaded.check()
     if not report.accepted:
         click.echo(loaded.render(report), err=True)
         sys.exit(EXIT_REFUSED)
     run = None if recording is None else recorded_run(recording, loaded.trajectory, loaded.robot)
-    plot_trajectory(loaded.trajectory, loaded.robot, loaded.controller, report, output, run=run)
+    try:
+        plot_trajectory(loaded.trajectory, loaded.robot, loaded.controller, report, output, run=run)
+    except OSError as exc:
+        raise BadInput(f"cannot write {output}: {exc.strerror}") from None
     click.echo(f"wrote {output}")
     if run is not None:
-        for j, name in enumerate(loaded.trajectory.joint_names):
-            track = tracking(run, j)
-            if track is None or track.lag_ms is None:
-                continue
-            click.echo(
-                f"  {name}: feedback lag {track.lag_ms:.0f} ms, tracking error mean "
-                f"{track.mean_error:.3g}, max {track.max_error:.3g}"
-            )
+        _print_tracking(run, loaded.trajectory, loaded.robot)
+
+
+def _check_image_suffix(output: Path) -> None:
+    """An image format matplotlib writes (.png, .svg, .pdf …), told before the work."""
+    from matplotlib.backend_bases import FigureCanvasBase
+
+    formats = FigureCanvasBase.get_supported_filetypes()
+    if output.suffix.lower().lstrip(".") not in formats:
+        raise BadInput(
+            f"-o {output}: cannot tell an image format from {output.suffix or 'no suffix'!r}; "
+            f"end the name in .{', .'.join(sorted(formats))}"
+        )
+
+
+def _print_tracking(run: RecordedRun, traj: Trajectory, robot: RobotModel) -> None:
+    """Per joint: the feedback lag and the tracking error, in the joint's unit (rad, or
+    m for a linear axis)."""
+    from pymotoros.trajectory.plot import tracking
+
+    linear = {a.name: a.linear for g in robot.groups for a in g.axes}
+    for j, name in enumerate(traj.joint_names):
+        track = tracking(run, j)
+        if track is None or track.lag_ms is None:
+            continue
+        unit = "m" if linear.get(name) else "rad"
+        click.echo(
+            f"  {name}: feedback lag {track.lag_ms:.0f} ms, tracking error mean "
+            f"{track.mean_error:.3g} {unit}, max {track.max_error:.3g} {unit}"
+        )

@@ -6,26 +6,15 @@ from pathlib import Path
 
 import click
 
+from pymotoros.cli.options import BadInput, output_option, robot_option
 from pymotoros.errors import ConfigError
 from pymotoros.kinematics import urdf_for
-from pymotoros.models.robots import DEFAULT_ROBOT, ROBOTS, robot_model
+from pymotoros.models.robots import robot_model
 
 
 @click.command()
-@click.option(
-    "--robot",
-    "robot_name",
-    default=DEFAULT_ROBOT,
-    show_default=True,
-    help=f"Robot model: {', '.join(sorted(ROBOTS))}.",
-)
-@click.option(
-    "-o",
-    "--output",
-    type=click.Path(dir_okay=False, path_type=Path),
-    default=None,
-    help="Write the URDF to this file (default: stdout).",
-)
+@robot_option("robot_name")
+@output_option("Write the URDF to this file (default: stdout)")
 def urdf(robot_name: str, output: Path | None) -> None:
     """Write the URDF of a robot model, for RViz, MoveIt or the web pendant."""
     try:
@@ -34,5 +23,8 @@ def urdf(robot_name: str, output: Path | None) -> None:
         raise click.BadParameter(str(exc), param_hint="--robot") from None
     if output is None:
         click.echo(text, nl=False)
-    else:
+        return
+    try:
         output.write_text(text, encoding="utf-8")
+    except OSError as exc:
+        raise BadInput(f"-o: cannot write {output}: {exc.strerror}") from None

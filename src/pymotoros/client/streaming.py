@@ -212,6 +212,11 @@ def _deviation_text(devs: Sequence[AxisDeviation], kind: str) -> str:
     return "; ".join(f"{d.name} {d.value:+.4f} > limit {d.reference:.4f}" for d in devs)
 
 
+deviation_text: Final = _deviation_text
+"""The per-joint numbers of a 3011 ("start") or 3013 ("speed") refusal, public so that a
+check made before sending (``pymotoros run``) words them as the refusal does."""
+
+
 @dataclass(slots=True)
 class _Pacing:
     """How much accepted motion is still ahead of the robot, estimated from the clock.

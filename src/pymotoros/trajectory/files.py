@@ -22,6 +22,7 @@ from __future__ import annotations
 import csv
 import io
 import json
+from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Final
@@ -135,7 +136,15 @@ def read_trajectory_file(
     A CSV file names no joints, so it needs ``robot`` (single group).
     """
     fmt = fmt or format_of(path)
-    text = path.read_text(encoding="utf-8")
+    try:
+        text = path.read_text(encoding="utf-8")
+    except OSError as exc:
+        raise TrajectoryFileError(f"{path.name}: cannot read it ({exc.strerror})") from None
+    except UnicodeDecodeError as exc:
+        raise TrajectoryFileError(
+            f"{path.name}: not UTF-8 text (byte {exc.start}: {exc.reason}); a trajectory "
+            "file is CSV, JSON or YAML text"
+        ) from None
     if fmt == "csv":
         if robot is None:
             raise TrajectoryFileError(f"{path.name}: a CSV trajectory needs --robot")
@@ -198,8 +207,53 @@ def _floats(value: Any, count: int, where: str) -> list[float]:
         raise TrajectoryFileError(f"{where}: needs a list of {count} numbers, got {value!r}")
     try:
         return [float(v) for v in value]
-    except (TypeError, ValueError):
-        raise TrajectoryFileError(f"{where}: not all numbers: {value!r}") from None
+    except (TypeError, ValueError, OverflowError):  # OverflowError: an int beyond a double
+        raise TrajectoryFileError(f"{where}: not all numbers: {value!r:.200}") from None
+
+
+def _names_and_points(doc: dict[str, Any], name: str, *, quote: str) -> tuple[list[str], list[Any]]:
+    """The ``joint_names`` (non-empty strings) and ``points`` (a non-empty list) of a
+    JSON or YAML trajectory; ``quote`` the keys as the format writes them."""
+    names = doc.get("joint_names")
+    if not isinstance(names, list) or not names or not all(isinstance(n, str) for n in names):
+        raise TrajectoryFileError(
+            f"{name}: {quote}joint_names{quote} must be a non-empty list of strings"
+        )
+    points = doc.get("points")
+    if not isinstance(points, list) or not points:
+        raise TrajectoryFileError(f"{name}: {quote}points{quote} must be a non-empty list")
+    return names, points
+
+
+def _json_time(point: dict[str, Any], where: str) -> float:
+    extra = set(point) - {"time", "positions", "velocities"}
+    if extra:
+        raise TrajectoryFileError(f"{where}: unknown key(s) {sorted(extra)}")
+    return _floats([point.get("time")], 1, f"{where} time")[0]
+
+
+def _ros_time(point: dict[str, Any], where: str) -> float:
+    return _duration(point.get("time_from_start"), where)
+
+
+def _point_rows(
+    points: list[Any],
+    joints: int,
+    name: str,
+    kind: str,
+    time_of: Callable[[dict[str, Any], str], float],
+) -> tuple[F64Array, F64Array, F64Array]:
+    """(times, positions, velocities) of the points of a JSON or YAML trajectory; each
+    point is ``kind`` (a JSON object, a YAML mapping), its time read by ``time_of``."""
+    times, pos, vel = [], [], []
+    for i, p in enumerate(points):
+        where = f"{name} point {i}"
+        if not isinstance(p, dict):
+            raise TrajectoryFileError(f"{where}: must be {kind}")
+        times.append(time_of(p, where))
+        pos.append(_floats(p.get("positions"), joints, f"{where} positions"))
+        vel.append(_floats(p.get("velocities"), joints, f"{where} velocities"))
+    return np.array(times), np.array(pos), np.array(vel)
 
 
 def parse_json(text: str, name: str = "JSON") -> Trajectory:
@@ -213,31 +267,15 @@ def parse_json(text: str, name: str = "JSON") -> Trajectory:
         raise TrajectoryFileError(
             f"{name}: version {doc.get('version')!r}; this pymotoros reads {JSON_VERSION}"
         )
-    names = doc.get("joint_names")
-    if not isinstance(names, list) or not all(isinstance(n, str) for n in names) or not names:
-        raise TrajectoryFileError(f'{name}: "joint_names" must be a non-empty list of strings')
-    points = doc.get("points")
-    if not isinstance(points, list) or not points:
-        raise TrajectoryFileError(f'{name}: "points" must be a non-empty list')
-    j = len(names)
-    times, pos, vel = [], [], []
-    for i, p in enumerate(points):
-        where = f"{name} point {i}"
-        if not isinstance(p, dict):
-            raise TrajectoryFileError(f"{where}: must be an object")
-        extra = set(p) - {"time", "positions", "velocities"}
-        if extra:
-            raise TrajectoryFileError(f"{where}: unknown key(s) {sorted(extra)}")
-        times.append(_floats([p.get("time")], 1, f"{where} time")[0])
-        pos.append(_floats(p.get("positions"), j, f"{where} positions"))
-        vel.append(_floats(p.get("velocities"), j, f"{where} velocities"))
+    names, points = _names_and_points(doc, name, quote='"')
+    times, pos, vel = _point_rows(points, len(names), name, "an object", _json_time)
     robot = doc.get("robot")
     controller = doc.get("controller")
     return Trajectory(
         tuple(names),
-        np.array(times),
-        np.array(pos),
-        np.array(vel),
+        times,
+        pos,
+        vel,
         robot=robot if isinstance(robot, str) else None,
         controller=controller if isinstance(controller, str) else None,
     )
@@ -256,7 +294,12 @@ def _duration(value: Any, where: str) -> float:
             f"{where}: time_from_start needs integer secs/nsecs (ROS 1) or sec/nanosec "
             f"(ROS 2), got {value!r}"
         )
-    return s + ns / _NS_PER_S
+    try:
+        return s + ns / _NS_PER_S
+    except OverflowError:
+        raise TrajectoryFileError(
+            f"{where}: time_from_start is out of range: {value!r:.200}"
+        ) from None
 
 
 def parse_yaml(text: str, name: str = "YAML") -> Trajectory:
@@ -274,22 +317,9 @@ def parse_yaml(text: str, name: str = "YAML") -> Trajectory:
         raise TrajectoryFileError(
             f"{name}: not a trajectory_msgs/JointTrajectory (needs joint_names and points)"
         )
-    names = doc["joint_names"]
-    if not isinstance(names, list) or not names or not all(isinstance(n, str) for n in names):
-        raise TrajectoryFileError(f"{name}: joint_names must be a non-empty list of strings")
-    points = doc["points"]
-    if not isinstance(points, list) or not points:
-        raise TrajectoryFileError(f"{name}: points must be a non-empty list")
-    j = len(names)
-    times, pos, vel = [], [], []
-    for i, p in enumerate(points):
-        where = f"{name} point {i}"
-        if not isinstance(p, dict):
-            raise TrajectoryFileError(f"{where}: must be a mapping")
-        pos.append(_floats(p.get("positions"), j, f"{where} positions"))
-        vel.append(_floats(p.get("velocities"), j, f"{where} velocities"))
-        times.append(_duration(p.get("time_from_start"), where))
-    return Trajectory(tuple(names), np.array(times), np.array(pos), np.array(vel))
+    names, points = _names_and_points(doc, name, quote="")
+    times, pos, vel = _point_rows(points, len(names), name, "a mapping", _ros_time)
+    return Trajectory(tuple(names), times, pos, vel)
 
 
 # --------------------------------------------------------------------------- writing

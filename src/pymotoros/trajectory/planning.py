@@ -104,40 +104,30 @@ def _limits(
     return np.array(lower), np.array(upper), np.array(vmax), np.array(amax)
 
 
-def plan_waypoints(
+def _checked_waypoints(
     waypoints: Sequence[Sequence[float]],
-    robot: RobotModel,
-    controller: ControllerModel,
-    *,
-    velocity_scaling: float = 1.0,
-    acceleration_scaling: float = 1.0,
-    sample_s: float = DEFAULT_SAMPLE_S,
-) -> Trajectory:
-    """A trajectory through ``waypoints`` (rad, every joint of the robot, ROS order per
-    group, groups in model order), starting and ending at rest.
-
-    ``velocity_scaling`` and ``acceleration_scaling`` (0 < s ≤ 1) scale the model's
-    limits as MoveIt's do. Raises :class:`WaypointPlanningError` for a
-    waypoint outside the joint limits or scalings out of range.
-    """
-    import toppra
-    import toppra.algorithm
-    import toppra.constraint
-
-    for label, s in (("velocity", velocity_scaling), ("acceleration", acceleration_scaling)):
-        if not (0.0 < s <= 1.0):
-            raise WaypointPlanningError(f"{label} scaling must be in (0, 1], got {s}")
-    if not (math.isfinite(sample_s) and sample_s > 0):
+    names: tuple[str, ...],
+    robot_name: str,
+    lower: F64Array,
+    upper: F64Array,
+) -> F64Array:
+    """The waypoints as an array, each row every joint, finite and within the limits."""
+    lengths = {len(w) for w in waypoints}
+    if lengths - {len(names)}:
         raise WaypointPlanningError(
-            f"the sample interval must be a positive number, got {sample_s}"
+            f"{robot_name} needs waypoints of {len(names)} joints, got rows of "
+            f"{', '.join(str(n) for n in sorted(lengths))} values"
         )
-    groups = robot.groups
-    names = tuple(n for g in groups for n in g.joint_names)
-    lower, upper, vmax, amax = _limits(groups, controller)
     way = np.asarray(waypoints, dtype=np.float64)
     if way.ndim != 2 or way.shape[1] != len(names) or way.shape[0] < 2:
         raise WaypointPlanningError(
-            f"{robot.name} needs at least 2 waypoints of {len(names)} joints, got shape {way.shape}"
+            f"{robot_name} needs at least 2 waypoints of {len(names)} joints, got shape {way.shape}"
+        )
+    if not np.all(np.isfinite(way)):
+        w, j = (int(x) for x in np.argwhere(~np.isfinite(way))[0])
+        raise WaypointPlanningError(
+            f"waypoint {w}: {names[j]} = {way[w, j]} is not a finite number; give every "
+            "joint in rad"
         )
     outside = (way < lower) | (way > upper)
     if outside.any():
@@ -146,7 +136,11 @@ def plan_waypoints(
             f"waypoint {w}: {names[j]} = {way[w, j]:.6g} rad is outside its limits "
             f"[{lower[j]:.6g}, {upper[j]:.6g}]"
         )
-    # merge waypoints closer than MIN_WAYPOINT_STEP: the path parameter must increase
+    return way
+
+
+def _merged(way: F64Array) -> F64Array:
+    """Waypoints closer than MIN_WAYPOINT_STEP merged: the path parameter must increase."""
     kept = [way[0]]
     for w in way[1:]:
         # per joint: a step below MIN_WAYPOINT_STEP is no step (it would give the path
@@ -154,14 +148,21 @@ def plan_waypoints(
         w = np.where(np.abs(w - kept[-1]) <= MIN_WAYPOINT_STEP, kept[-1], w)
         if np.any(w != kept[-1]):
             kept.append(w)
-    way = np.array(kept)
-    if len(way) < 2:
+    if len(kept) < 2:
         raise WaypointPlanningError("all waypoints are the same position: nothing to plan")
+    return np.array(kept)
+
+
+def _time_optimal(way: F64Array, v: F64Array, a: F64Array) -> Any:
+    """toppra's time-optimal parameterisation of the monotone path through ``way``
+    under the velocity and acceleration limits ``v``, ``a`` (at rest at both ends)."""
+    import toppra
+    import toppra.algorithm
+    import toppra.constraint
+
     # path parameter: cumulative joint-space distance (well-conditioned spline)
     ss = np.concatenate(([0.0], np.cumsum(np.linalg.norm(np.diff(way, axis=0), axis=1))))
     path = _monotone_path(ss, way)
-    v = vmax * velocity_scaling * PLANNING_MARGIN
-    a = amax * acceleration_scaling * PLANNING_MARGIN
     constraints = [
         toppra.constraint.JointVelocityConstraint(np.column_stack((-v, v))),
         toppra.constraint.JointAccelerationConstraint(np.column_stack((-a, a))),
@@ -177,12 +178,21 @@ def plan_waypoints(
     timed = algo.compute_trajectory(0.0, 0.0)
     if timed is None:
         raise WaypointPlanningError("toppra found no feasible parameterisation (limits too tight?)")
+    return timed
+
+
+def _sampled(
+    timed: Any, way: F64Array, a_limit: F64Array, period: int, sample_s: float
+) -> tuple[F64Array, F64Array, F64Array]:
+    """(times, positions, velocities) of whole-tick samples of ``timed``, stretched in
+    time until MotoROS's cubics between them stay within ``a_limit``.
+
+    Whole ticks per point: MotoROS executes one queue entry per tick, so a segment that
+    is not a whole number of ticks leaves a short step the robot runs in a full tick (a
+    velocity dip, and a slower motion than planned). Stretching time uniformly to whole
+    ticks only lowers velocities and accelerations.
+    """
     duration = float(timed.duration)
-    # Whole ticks per point: MotoROS executes one queue entry per tick, so a segment
-    # that is not a whole number of ticks leaves a short step the robot runs in a full
-    # tick (a velocity dip, and a slower motion than planned). Stretching time
-    # uniformly to whole ticks only lowers velocities and accelerations.
-    period = controller.interpolation_period_ms
     count = max(1, math.ceil(duration / sample_s))
     seg_ms = max(period, math.ceil(duration * 1000.0 / count / period) * period)
     k = np.arange(count + 1, dtype=np.float64)
@@ -193,7 +203,6 @@ def plan_waypoints(
     # MotoROS joins the samples with cubics, whose acceleration can exceed toppra's
     # where toppra's switches: stretch time (acceleration falls with its square) until
     # every cubic is within the scaled limits.
-    a_limit = amax * acceleration_scaling
     for _ in range(_MAX_STRETCHES):
         vel = path_vel * ((duration / count) / (seg_ms / 1000.0))
         ratio = float(np.max(_cubic_accel(pos, vel, seg_ms / 1000.0) / a_limit))
@@ -205,11 +214,49 @@ def plan_waypoints(
     # + half a ms: MotoROS truncates time × 1000 of the float32 time, which for a
     # decimal like 0.048 can land just below the intended whole ms.
     times = np.where(k == 0, 0.0, (k * seg_ms + _HALF_MS) / 1000.0)
+    return times, pos, vel
+
+
+def plan_waypoints(
+    waypoints: Sequence[Sequence[float]],
+    robot: RobotModel,
+    controller: ControllerModel,
+    *,
+    velocity_scaling: float = 1.0,
+    acceleration_scaling: float = 1.0,
+    sample_s: float = DEFAULT_SAMPLE_S,
+) -> Trajectory:
+    """A trajectory through ``waypoints`` (rad, every joint of the robot, ROS order per
+    group, groups in model order), starting and ending at rest.
+
+    ``velocity_scaling`` and ``acceleration_scaling`` (0 < s ≤ 1) scale the model's
+    limits as MoveIt's do. Raises :class:`WaypointPlanningError` for a waypoint that
+    is not a finite number or is outside the joint limits, or scalings out of range.
+    """
+    for label, s in (("velocity", velocity_scaling), ("acceleration", acceleration_scaling)):
+        if not (0.0 < s <= 1.0):
+            raise WaypointPlanningError(f"{label} scaling must be in (0, 1], got {s}")
+    if not (math.isfinite(sample_s) and sample_s > 0):
+        raise WaypointPlanningError(
+            f"the sample interval must be a positive number, got {sample_s}"
+        )
+    groups = robot.groups
+    names = tuple(n for g in groups for n in g.joint_names)
+    lower, upper, vmax, amax = _limits(groups, controller)
+    way = _merged(_checked_waypoints(waypoints, names, robot.name, lower, upper))
+    timed = _time_optimal(
+        way,
+        vmax * velocity_scaling * PLANNING_MARGIN,
+        amax * acceleration_scaling * PLANNING_MARGIN,
+    )
+    times, pos, vel = _sampled(
+        timed, way, amax * acceleration_scaling, controller.interpolation_period_ms, sample_s
+    )
     pos = np.clip(pos, lower, upper)
     logger.info(
         "planned %d waypoints into %d points over %.3f s",
         len(way),
-        count + 1,
-        count * seg_ms / 1000.0,
+        len(times),
+        float(times[-1]),
     )
     return Trajectory(names, times, pos, vel, robot=robot.name, controller=controller.type.value)

@@ -17,7 +17,7 @@ from typing import Any, Final
 import numpy as np
 import numpy.typing as npt
 
-from pymotoros.models import ControllerModel, RobotModel
+from pymotoros.models import AxisModel, ControllerModel, RobotModel
 from pymotoros.models.rules import to_pulses
 from pymotoros.motion import GroupAxes
 from pymotoros.trajectory.check import CheckReport
@@ -182,6 +182,33 @@ def interpolated(
     return t, pos, vel
 
 
+JOINT_LIMITS_LABEL: Final = "joint limits"
+VELOCITY_LIMIT_LABEL: Final = "velocity limit"
+
+
+def limit_lines(ax: Any, limits: Sequence[float], label: str, unit: str) -> None:
+    """Dashed lines at the limits that lie within the panel's y range (set before), the
+    first of them in the legend; limits off the scale are named in a corner note
+    instead, so that the legend never lists a line the panel does not show."""
+    lo, hi = ax.get_ylim()
+    shown = [v for v in limits if lo <= v <= hi]
+    for k, value in enumerate(shown):
+        ax.axhline(value, color="red", ls="--", lw=0.8, label=label if k == 0 else None)
+    off = [v for v in limits if v not in shown]
+    if off:
+        values = ", ".join(f"{v:.3g}" for v in off)
+        ax.text(
+            0.99,
+            0.02,
+            f"{label} {values} {unit}: off the scale",
+            transform=ax.transAxes,
+            ha="right",
+            va="bottom",
+            fontsize=6,
+            color="red",
+        )
+
+
 COMMANDED_LABEL: Final = "commanded (points sent)"
 FEEDBACK_LABEL: Final = "feedback"
 ERROR_LABEL: Final = "feedback − command"
@@ -218,32 +245,12 @@ def plot_trajectory(
     )
     lags: list[float] = []
     for j, name in enumerate(names):
-        axis = axes_models[name]
-        unit = "m" if axis.linear else "rad"
-        ax_p, ax_v = grid[j][0], grid[j][1]
-        ax_p.plot(traj.times, traj.positions[:, j], "o", ms=3, label="planned points")
-        ax_p.plot(t_i, p_i[:, j], "-", lw=1.2, label="MotoROS interpolation")
-        for limit in (axis.lower, axis.upper):
-            ax_p.axhline(limit, color="red", ls="--", lw=0.8)
-        ax_p.lines[-1].set_label("joint limits")
-        for rec in reported:
-            ax_p.plot(rec.times, rec.positions[:, j], "-", lw=1.0, label=rec.label)
-        lo = min(float(traj.positions[:, j].min()), float(p_i[:, j].min()))
-        hi = max(float(traj.positions[:, j].max()), float(p_i[:, j].max()))
+        row = grid[j]
+        lo, hi = _draw_position(row[0], traj, j, t_i, p_i, reported)
         if run is not None:
-            lo, hi = _draw_recorded(run, j, unit, ax_p, grid[j][2], lo, hi, lags)
-        # keep the limits visible only when the motion comes near them
-        pad = max(0.1 * (hi - lo), 0.02)
-        ax_p.set_ylim(max(lo - pad, axis.lower - pad), min(hi + pad, axis.upper + pad))
-        ax_p.set_ylabel(f"{name}\n[{unit}]")
-        ax_v.plot(traj.times, traj.velocities[:, j], "o", ms=3, label="planned points")
-        ax_v.plot(t_i, v_i[:, j], "-", lw=1.0, label="MotoROS, per tick")
-        vmax = axis.max_velocity
-        ax_v.axhline(vmax, color="red", ls="--", lw=0.8, label="velocity limit")
-        ax_v.axhline(-vmax, color="red", ls="--", lw=0.8)
-        vpeak = max(float(np.abs(v_i[:, j]).max()), float(np.abs(traj.velocities[:, j]).max()))
-        ax_v.set_ylim(-min(vmax * 1.1, vpeak * 1.2 + 0.05), min(vmax * 1.1, vpeak * 1.2 + 0.05))
-        ax_v.set_ylabel(f"[{unit}/s]")
+            lo, hi = _draw_recorded(run, j, _unit(axes_models[name]), row[0], row[2], lo, hi, lags)
+        _finish_position(row[0], name, axes_models[name], lo, hi, legend=run is not None)
+        _draw_velocity(row[1], traj, j, t_i, v_i, axes_models[name])
     grid[0][0].set_title("position")
     grid[0][1].set_title("velocity")
     for c in range(cols):
@@ -268,6 +275,55 @@ def plot_trajectory(
     fig.savefig(output, dpi=90)
     plt.close(fig)
     return fig
+
+
+def _unit(axis: AxisModel) -> str:
+    return "m" if axis.linear else "rad"
+
+
+def _draw_position(
+    ax: Any,
+    traj: Trajectory,
+    j: int,
+    t_i: F64Array,
+    p_i: F64Array,
+    reported: Sequence[Reported],
+) -> tuple[float, float]:
+    """Planned points and MotoROS's interpolation of joint ``j``; returns their range."""
+    ax.plot(traj.times, traj.positions[:, j], "o", ms=3, label="planned points")
+    ax.plot(t_i, p_i[:, j], "-", lw=1.2, label="MotoROS interpolation")
+    for rec in reported:
+        ax.plot(rec.times, rec.positions[:, j], "-", lw=1.0, label=rec.label)
+    lo = min(float(traj.positions[:, j].min()), float(p_i[:, j].min()))
+    hi = max(float(traj.positions[:, j].max()), float(p_i[:, j].max()))
+    return lo, hi
+
+
+def _finish_position(
+    ax: Any, name: str, axis: AxisModel, lo: float, hi: float, *, legend: bool
+) -> None:
+    """The y range (the limits come into view only when the motion comes near them),
+    the limit lines within it, the label; with ``legend``, the row's own legend."""
+    pad = max(0.1 * (hi - lo), 0.02)
+    ax.set_ylim(max(lo - pad, axis.lower - pad), min(hi + pad, axis.upper + pad))
+    limit_lines(ax, (axis.lower, axis.upper), JOINT_LIMITS_LABEL, _unit(axis))
+    if legend:  # every row: the feedback's legend gives its lag and error
+        ax.legend(loc="best", fontsize=6)
+    ax.set_ylabel(f"{name}\n[{_unit(axis)}]")
+
+
+def _draw_velocity(
+    ax: Any, traj: Trajectory, j: int, t_i: F64Array, v_i: F64Array, axis: AxisModel
+) -> None:
+    """Planned and per-tick velocities of joint ``j``, and the velocity limit if in view."""
+    ax.plot(traj.times, traj.velocities[:, j], "o", ms=3, label="planned points")
+    ax.plot(t_i, v_i[:, j], "-", lw=1.0, label="MotoROS, per tick")
+    vmax = axis.max_velocity
+    vpeak = max(float(np.abs(v_i[:, j]).max()), float(np.abs(traj.velocities[:, j]).max()))
+    span = min(vmax * 1.1, vpeak * 1.2 + 0.05)
+    ax.set_ylim(-span, span)
+    limit_lines(ax, (-vmax, vmax), VELOCITY_LIMIT_LABEL, f"{_unit(axis)}/s")
+    ax.set_ylabel(f"[{_unit(axis)}/s]")
 
 
 def _draw_recorded(
@@ -309,12 +365,11 @@ def _draw_recorded(
             "-",
             lw=1.0,
             color="tab:green",
-            label=f"{ERROR_LABEL}: mean |e| {track.mean_error:.3g}, "
+            label=f"{ERROR_LABEL}: mean |e| {track.mean_error:.3g} {unit}, "
             f"max {track.max_error:.3g} {unit}",
         )
         ax_e.axhline(0.0, color="grey", lw=0.6)
     ax_e.set_ylabel(f"[{unit}]")
-    ax_p.legend(loc="best", fontsize=6)
     if ax_e.lines:
         ax_e.legend(loc="best", fontsize=6)
     return lo, hi
