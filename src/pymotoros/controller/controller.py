@@ -29,6 +29,8 @@ from pymotoros.controller.api import (
     FiredEventInfo,
     GroupSnapshot,
     IoRead,
+    JobPosition,
+    NotReadyInfo,
     Outcome,
     PendantMode,
     Pending,
@@ -476,7 +478,19 @@ class VirtualController:
                 FiredEventInfo(f.t, f.action, tuple(f.params.items()), f.error)
                 for f in self._fired
             ),
+            # what only a pendant shows
+            period_ms=self._clock.period_ms,
+            eco=s.eco,
+            not_ready=NotReadyInfo(*self._motoros.not_ready_reason()),
+            jobs=tuple(JobPosition(job, line) for job, line in self._runner.position()),
+            motoros_outputs=self._motoros_outputs(),
+            cell=self.cell,
         )
+
+    def _motoros_outputs(self) -> tuple[int, ...]:
+        """OT#889..896, one IO group (addresses n×10+0..7): one read, not eight."""
+        byte = self._io.read_group(signals.ROS_READY // 10).value
+        return tuple((byte >> i) & 1 for i in range(8))
 
     @property
     def operator_state(self) -> OperatorState:
