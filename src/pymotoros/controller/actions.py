@@ -21,8 +21,10 @@ surface; the surfaces only add where the value came from. What the controller re
 when the action runs (a PFL contact while standing still) becomes an
 :class:`ActionRefusedError`.
 
-Adding an action is one more :class:`ActionSpec` in :data:`CONTROL_ACTIONS` (and the
-controller method it calls).
+Adding an action is one more :class:`ActionSpec` in :data:`CONTROL_ACTIONS`; when it
+calls a controller method that no action called before, that method is declared on
+:class:`ActionTarget` here and implemented by the controller. Nothing else changes: the
+endpoint, its schema, the scenario key and the pendant's list follow.
 """
 
 from __future__ import annotations
@@ -78,7 +80,9 @@ class ActionRefusedError(PymotorosError, ValueError):
 
 class ActionTarget(OperatorPanel, FaultInjection, SafetyPanel, Protocol):
     """What the actions act on: the operator's panel, fault injection, the safety
-    functions. ``VirtualController`` implements it."""
+    functions. ``VirtualController`` implements it; the runtime's
+    ``SimulatedController`` includes it, so a method a new action needs is declared here,
+    once."""
 
 
 Params = Mapping[str, Any]
