@@ -119,6 +119,53 @@ def test_a_new_action_declared_once_is_on_every_surface(
     assert r.json()["error"].endswith(f"b.toml: events[0] (beacon).{words}")
 
 
+def _not_flat(box: list[float]) -> str | None:
+    return "a box needs a thickness: its z must be at least 1 mm" if box[2] < 0.001 else None
+
+
+PLACE = ActionSpec(
+    "place",
+    "/api/place",
+    "Put a box in the cell (issue 21's obstacles are declared like this).",
+    lambda target, p: target.raise_alarm(8100, 0, f"{p['name']} at {p['xyz']}"),
+    (
+        Param("name", "str", "the obstacle's name", max_length=32),
+        Param("box", "numbers", "full sizes x, y, z", unit="m", length=3, gt=0, check=_not_flat),
+        Param("xyz", "numbers", "centre in base_link", unit="m", length=3, ge=-5, le=5),
+    ),
+)
+"""An action with structured parameters (arrays of numbers with a length and bounds)."""
+
+
+@pytest.mark.parametrize(
+    ("body", "words"),
+    [
+        ({"box": [1, 1], "xyz": [0, 0, 0]}, "box: must hold 3 numbers, not 2"),
+        ({"box": [1, 0, 1], "xyz": [0, 0, 0]}, "box: [1] must be > 0 m, not 0"),
+        ({"box": [1, 1, 0.0001], "xyz": [0, 0, 0]}, "box: a box needs a thickness"),
+        ({"box": [1, 1, 1], "xyz": [0, 9, 0]}, "xyz: [1] must lie in -5..5 m, not 9"),
+        ({"box": [1, 1, 1], "xyz": [0, True, 0]}, "xyz: must be an array of numbers"),
+    ],
+)
+def test_a_structured_parameter_is_checked_alike_everywhere(
+    body: dict[str, object], words: str
+) -> None:
+    app = create_http_app(VirtualController(), lambda: STATS, actions=(*CONTROL_ACTIONS, PLACE))
+    event = {"at": 0, "action": "place", "name": "table", **body}
+    with BlockingClient(app) as client:
+        r = client.post("/api/place", json={"name": "table", **body})
+        assert r.status_code == 422
+        assert r.json()["error"].startswith(f"POST /api/place: {words}")
+        ok = client.post("/api/place", json={"name": "table", "box": [1, 1, 1], "xyz": [0, 0, 0]})
+        assert ok.json()["alarms"][0]["text"] == "table at [0.0, 0.0, 0.0]"
+        schema = client.get("/openapi.json").json()["components"]["schemas"]["PlaceBody"]
+        assert schema["properties"]["xyz"]["minItems"] == 3
+        assert schema["properties"]["xyz"]["items"]["maximum"] == 5
+    with pytest.raises(ConfigError) as info:
+        parse_scenario({"events": [event]}, actions=(*CONTROL_ACTIONS, PLACE))
+    assert f"events[0] (place).{words}" in str(info.value)
+
+
 def test_tcp_speed_zero_is_refused_by_every_surface(
     beacon_api: tuple[BlockingClient, VirtualController],
 ) -> None:

@@ -50,14 +50,17 @@ __all__ = [
     "actions_by_name",
 ]
 
-ParamKind = Literal["bool", "int", "number", "str", "tables"]
-"""``number`` takes integers too; ``tables`` is an array of tables (JSON objects)."""
+ParamKind = Literal["bool", "int", "number", "str", "numbers", "tables"]
+"""``number`` takes integers too; ``numbers`` is an array of numbers (a position, a
+size: ``length`` of them, each within the bounds); ``tables`` an array of tables (JSON
+objects)."""
 
 _KIND_TEXT: Final[Mapping[str, str]] = {
     "bool": "true or false",
     "int": "an integer",
     "number": "a number",
     "str": "a string",
+    "numbers": "an array of numbers",
     "tables": "an array of tables",
 }
 
@@ -105,6 +108,12 @@ class Param:
     gt: float | None = None
     le: float | None = None
     max_length: int | None = None
+    """A string's longest length."""
+    length: int | None = None
+    """How many numbers a ``numbers`` parameter holds (None: any)."""
+    check: Callable[[Any], str | None] | None = None
+    """A check beyond kind and bounds (e.g. an obstacle's shape): why the value is wrong,
+    or None. Runs on every surface like the others."""
 
     @property
     def description(self) -> str:
@@ -134,17 +143,33 @@ class Param:
         elif kind == "int":
             ok = isinstance(value, int) and not isinstance(value, bool)
         elif kind == "number":
-            ok = isinstance(value, int | float) and not isinstance(value, bool)
+            ok = _is_number(value)
         elif kind == "str":
             ok = isinstance(value, str)
+        elif kind == "numbers":
+            ok = isinstance(value, list) and all(_is_number(v) for v in value)
         else:
             ok = isinstance(value, list) and all(isinstance(v, Mapping) for v in value)
         if not ok:
             return f"must be {_KIND_TEXT[kind]}, not {value!r}"
+        problem = self._value_problem(value)
+        if problem is None and self.check is not None:
+            problem = self.check(value)
+        return problem
+
+    def _value_problem(self, value: Any) -> str | None:
+        """Choices, bounds and lengths of a value of the right kind."""
         if self.choices and value not in self.choices:
             return f"must be one of {', '.join(self.choices)}, not {value!r}"
-        if kind in ("int", "number"):
+        if self.kind in ("int", "number"):
             return self._range_problem(value)
+        if self.kind == "numbers":
+            if self.length is not None and len(value) != self.length:
+                return f"must hold {self.length} numbers, not {len(value)}"
+            for i, v in enumerate(value):
+                problem = self._range_problem(v)
+                if problem is not None:
+                    return f"[{i}] {problem}"
         if self.max_length is not None and isinstance(value, str) and len(value) > self.max_length:
             return f"must be at most {self.max_length} characters, not {len(value)}"
         return None
@@ -161,6 +186,10 @@ class Param:
             verb = "must lie in" if ".." in self.bounds_text() else "must be"
             return f"{verb} {self.bounds_text()}, not {value!r}"
         return None
+
+
+def _is_number(value: object) -> bool:
+    return isinstance(value, int | float) and not isinstance(value, bool)
 
 
 def _num(value: float) -> str:

@@ -22,7 +22,7 @@ from __future__ import annotations
 import inspect
 import logging
 from collections.abc import Awaitable, Callable, Sequence
-from typing import Any, ClassVar, Literal
+from typing import Annotated, Any, ClassVar, Literal
 
 from fastapi import FastAPI, Request
 from fastapi.exceptions import RequestValidationError
@@ -90,27 +90,30 @@ _PYTHON_TYPES: dict[str, Any] = {
     "int": int,
     "number": float,
     "str": str,
+    "numbers": list[float],
     "tables": list[dict[str, Any]],
 }
 
 
 def _field(param: Param) -> tuple[Any, Any]:
     """A pydantic field for a declared parameter: its type, bounds and description."""
-    kind: Any = Literal[param.choices] if param.choices else _PYTHON_TYPES[param.kind]
+    bounds: dict[str, Any] = {"ge": param.ge, "gt": param.gt, "le": param.le}
+    kind: Any
+    if param.choices:
+        kind = Literal[param.choices]
+    elif param.kind == "numbers":  # the bounds hold for each number, the length for all
+        kind = list[Annotated[float, Field(**bounds)]]
+        bounds = {"min_length": param.length, "max_length": param.length}
+    else:
+        kind = _PYTHON_TYPES[param.kind]
+    if param.kind == "str":
+        bounds["max_length"] = param.max_length
     default: Any = ...
     if not param.required:
         if param.default is None:
             kind = kind | None
         default = param.default
-    info = Field(
-        default,
-        description=param.description,
-        ge=param.ge,
-        gt=param.gt,
-        le=param.le,
-        max_length=param.max_length,
-    )
-    return kind, info
+    return kind, Field(default, description=param.description, **bounds)
 
 
 def action_body_model(spec: ActionSpec) -> type[ActionBody] | None:
