@@ -396,7 +396,6 @@ def _install_action(
         summary=spec.doc.split(":")[0].rstrip("."),
         description=spec.doc,
         name=spec.name,
-        operation_id=f"action_{spec.name}",
     )
 
 
