@@ -174,17 +174,17 @@ class Param:
             return f"must be at most {self.max_length} characters, not {len(value)}"
         return None
 
-    def _range_problem(self, value: Any) -> str | None:
-        number = float(value)
-        if not math.isfinite(number):
-            return f"must be a finite number, not {value!r}"
+    def _range_problem(self, number: int | float) -> str | None:
+        # compared as given: an integer of any size never goes through float()
+        if isinstance(number, float) and not math.isfinite(number):
+            return f"must be a finite number, not {number!r}"
         if (
             (self.ge is not None and number < self.ge)
             or (self.gt is not None and number <= self.gt)
             or (self.le is not None and number > self.le)
         ):
             verb = "must lie in" if ".." in self.bounds_text() else "must be"
-            return f"{verb} {self.bounds_text()}, not {value!r}"
+            return f"{verb} {self.bounds_text()}, not {number!r}"
         return None
 
 

@@ -342,6 +342,8 @@ def action_list(actions: Sequence[ActionSpec]) -> list[dict[str, Any]]:
                     "ge": p.ge,
                     "gt": p.gt,
                     "le": p.le,
+                    "length": p.length,
+                    "max_length": p.max_length,
                 }
                 for p in spec.params
             ],
