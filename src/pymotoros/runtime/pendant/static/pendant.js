@@ -234,7 +234,21 @@
       const resp = await fetch("/api/pendant/actions");
       for (const a of await resp.json()) actions[a.name] = a;
     } catch (err) { say("cannot read the list of actions: " + err); return; }
+    boundInputs();
     fillActionPicker();
+  }
+  // The number inputs take their limits from the declarations, not from copies here.
+  function boundInputs() {
+    const inputs = [["alarm-code", "alarm", "code"], ["fsu-pct", "fsu", "joint_speed_pct"],
+                    ["io-value", "io", "value"], ["m-value", "io", "value"]];
+    for (const [id, name, key] of inputs) {
+      const p = actions[name] && actions[name].params.find((q) => q.name === key);
+      if (!p) continue;
+      const low = p.ge !== null ? p.ge : p.gt;
+      if (low !== null) $(id).min = low;
+      if (p.le !== null) $(id).max = p.le;
+      $(id).title = p.doc + (p.bounds ? " (" + p.bounds + ")" : "");
+    }
   }
   function act(name, body) {
     const a = actions[name];
