@@ -64,7 +64,10 @@ class BlockingClient:
         return self._loop.run_until_complete(self._client.get(path))
 
     def post(self, path: str, **kwargs: Any) -> httpx.Response:
-        return self._loop.run_until_complete(self._client.post(path, **kwargs))
+        return self.request("POST", path, **kwargs)
+
+    def request(self, method: str, path: str, **kwargs: Any) -> httpx.Response:
+        return self._loop.run_until_complete(self._client.request(method, path, **kwargs))
 
 
 @pytest.fixture
@@ -164,6 +167,39 @@ def test_a_structured_parameter_is_checked_alike_everywhere(
     with pytest.raises(ConfigError) as info:
         parse_scenario({"events": [event]}, actions=(*CONTROL_ACTIONS, PLACE))
     assert f"events[0] (place).{words}" in str(info.value)
+
+
+REMOVE = ActionSpec(
+    "remove",
+    "/api/things/{name}",
+    "Take a thing out of the cell by name (issue 21's DELETE /api/workspace/NAME).",
+    lambda target, p: target.raise_alarm(8200 + p["slot"], 0, f"removed {p['name']}"),
+    (
+        Param("name", "str", "the thing's name", max_length=8),
+        Param("slot", "int", "where it stood", required=False, default=0, ge=0, le=9),
+    ),
+    method="DELETE",
+)
+"""An action whose key parameter is in the path, with the DELETE method."""
+
+
+def test_a_parameter_in_the_path_is_checked_like_any_other() -> None:
+    actions = (*CONTROL_ACTIONS, REMOVE)
+    app = create_http_app(VirtualController(), lambda: STATS, actions=actions)
+    with BlockingClient(app) as client:
+        r = client.request("DELETE", "/api/things/table", json={"slot": 3})
+        assert r.status_code == 200, r.text
+        assert r.json()["alarms"] == [{"code": 8203, "subcode": 0, "text": "removed table"}]
+        r = client.request("DELETE", "/api/things/longtable")
+        words = "name: must be at most 8 characters, not 9"
+        assert (r.status_code, r.json()["error"]) == (422, f"DELETE /api/things/longtable: {words}")
+        op = client.get("/openapi.json").json()["paths"]["/api/things/{name}"]["delete"]
+        assert [p["name"] for p in op["parameters"]] == ["name"]
+        listed = {a["name"]: a for a in client.get("/api/pendant/actions").json()}
+        assert (listed["remove"]["method"], listed["remove"]["path"]) == ("DELETE", REMOVE.path)
+    event = {"at": 0, "action": "remove", "name": "longtable"}
+    with pytest.raises(ConfigError, match=f"{words}$"):
+        parse_scenario({"events": [event]}, actions=actions)
 
 
 def test_tcp_speed_zero_is_refused_by_every_surface(

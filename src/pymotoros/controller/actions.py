@@ -211,7 +211,8 @@ class ActionSpec:
     name: str
     """The scenario file's ``action`` and the pendant's name for it."""
     path: str
-    """The control API's ``POST`` path."""
+    """The control API's path; a parameter named in braces (``/api/workspace/{name}``)
+    is given in the path, the others in the JSON body."""
     doc: str
     """What the action does (the endpoint's description, the pendant's tooltip)."""
     call: Call
@@ -221,6 +222,13 @@ class ActionSpec:
     """The OpenAPI tag: operator, io, safety."""
     in_scenarios: bool = True
     """Whether a scenario event may carry it (loading a scenario may not)."""
+    method: Literal["POST", "PUT", "DELETE"] = "POST"
+    """The control API's method (DELETE for removing something by name)."""
+
+    @property
+    def path_keys(self) -> tuple[str, ...]:
+        """The parameters given in the path."""
+        return tuple(p.name for p in self.params if "{" + p.name + "}" in self.path)
 
     def param(self, key: str) -> Param | None:
         for p in self.params:

@@ -118,10 +118,11 @@ def _field(param: Param) -> tuple[Any, Any]:
 
 def action_body_model(spec: ActionSpec) -> type[ActionBody] | None:
     """The JSON body of an action's endpoint (None: it takes no body)."""
-    if not spec.params:
+    in_body = [p for p in spec.params if p.name not in spec.path_keys]
+    if not in_body:
         return None
     name = "".join(part.capitalize() for part in spec.name.split("_")) + "Body"
-    fields = {p.name: _field(p) for p in spec.params}
+    fields = {p.name: _field(p) for p in in_body}
     model: type[ActionBody] = create_model(name, __base__=ActionBody, **fields)  # type: ignore[call-overload]
     model.spec = spec
     return model
@@ -371,25 +372,41 @@ def _install_state_routes(
 def _install_action(
     app: FastAPI, spec: ActionSpec, controller: SimulatedController, state: StateFn
 ) -> None:
-    """``POST spec.path``: the body checked by the declaration, then the action."""
+    """``spec.method spec.path``: the body (and the path's parameters) checked by the
+    declaration, then the action."""
     model = action_body_model(spec)
+    path_keys = spec.path_keys
 
-    async def endpoint(body: BaseModel | None = None) -> dict[str, Any]:
+    async def endpoint(body: BaseModel | None = None, **in_path: object) -> dict[str, Any]:
         given = {} if body is None else body.model_dump(exclude_unset=True)
+        for key in path_keys:
+            try:
+                spec.check_value(key, in_path[key])
+            except ActionParamError as exc:
+                error = {"type": ACTION_PARAM_ERROR, "loc": ("path", key), "msg": str(exc)}
+                raise RequestValidationError([error]) from exc
+            given[key] = in_path[key]
         logger.info("operator: %s %s", spec.name, given)
         spec.perform(controller, given)
         return state()
 
-    parameters = []
+    keyword = inspect.Parameter.KEYWORD_ONLY
+    parameters = [
+        inspect.Parameter(key, keyword, annotation=_PATH_TYPES[_param(spec, key).kind])
+        for key in path_keys
+    ]
     if model is not None:
-        parameters.append(
-            inspect.Parameter("body", inspect.Parameter.POSITIONAL_OR_KEYWORD, annotation=model)
+        # with its key in the path, an action whose body is all optional may omit it
+        optional = bool(path_keys) and not any(
+            p.required for p in spec.params if p.name not in path_keys
         )
+        default = None if optional else inspect.Parameter.empty
+        parameters.append(inspect.Parameter("body", keyword, annotation=model, default=default))
     endpoint.__signature__ = inspect.Signature(parameters)  # type: ignore[attr-defined]
     app.add_api_route(
         spec.path,
         endpoint,
-        methods=["POST"],
+        methods=[spec.method],
         response_model=StateModel,
         responses=_ERRORS,
         tags=[spec.tag],
@@ -397,6 +414,17 @@ def _install_action(
         description=spec.doc,
         name=spec.name,
     )
+
+
+_PATH_TYPES: dict[str, type] = {"str": str, "int": int, "number": float}
+"""What a path can carry (an action's other kinds go in the body)."""
+
+
+def _param(spec: ActionSpec, key: str) -> Param:
+    param = spec.param(key)
+    if param is None or param.kind not in _PATH_TYPES:
+        raise ValueError(f"action {spec.name!r}: {key!r} in {spec.path} is not a str or number")
+    return param
 
 
 def _install_read_io(app: FastAPI, controller: SimulatedController) -> None:

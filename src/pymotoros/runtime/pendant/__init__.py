@@ -326,6 +326,7 @@ def action_list(actions: Sequence[ActionSpec]) -> list[dict[str, Any]]:
     return [
         {
             "name": spec.name,
+            "method": spec.method,
             "path": spec.path,
             "doc": spec.doc,
             "tag": spec.tag,

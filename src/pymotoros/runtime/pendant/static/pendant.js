@@ -13,8 +13,8 @@
 
   function say(text) { $("message").textContent = text; }
 
-  async function post(path, body) {
-    const resp = await fetch(path, { method: "POST", headers: { "Content-Type": "application/json" },
+  async function post(path, body, method) {
+    const resp = await fetch(path, { method: method || "POST", headers: { "Content-Type": "application/json" },
                                      body: JSON.stringify(body === undefined ? {} : body) });
     const answer = await resp.json();
     if (!resp.ok) { say(answer.error || ("HTTP " + resp.status)); return null; }
@@ -253,7 +253,11 @@
   function act(name, body) {
     const a = actions[name];
     if (!a) { say("the simulator has no action " + name); return null; }
-    return post(a.path, body);
+    const rest = Object.assign({}, body || {});
+    const path = a.path.replace(/\{(\w+)\}/g, (_, key) => {   // a parameter given in the path
+      const value = rest[key]; delete rest[key]; return encodeURIComponent(value);
+    });
+    return post(path, rest, a.method);
   }
 
   function paramHint(a) {
