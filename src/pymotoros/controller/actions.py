@@ -24,7 +24,10 @@ when the action runs (a PFL contact while standing still) becomes an
 Adding an action is one more :class:`ActionSpec` in :data:`CONTROL_ACTIONS`; when it
 calls a controller method that no action called before, that method is declared on
 :class:`ActionTarget` here and implemented by the controller. Nothing else changes: the
-endpoint, its schema, the scenario key and the pendant's list follow.
+endpoint, its schema, the scenario key and the pendant's list follow. A parameter may
+be an array of numbers with a length and bounds (a position, a size) or carry its own
+check (a shape), and may be given in the path with another method
+(``DELETE /api/workspace/{name}``), so issue 21's obstacles are declarations too.
 """
 
 from __future__ import annotations

@@ -131,18 +131,27 @@ def action_body_model(spec: ActionSpec) -> type[ActionBody] | None:
 # --------------------------------------------------------------------------- answers
 
 
-class AlarmModel(BaseModel):
+class _Answer(BaseModel):
+    """The schema of a part of the state document. The document itself is built by
+    :func:`~pymotoros.runtime.pendant.document.state_document`; FastAPI checks each
+    answer against these models, and a key they do not declare fails loudly instead of
+    vanishing from ``GET /api/state`` while the pendant shows it."""
+
+    model_config = ConfigDict(extra="forbid")
+
+
+class AlarmModel(_Answer):
     code: int
     subcode: int
     text: str
 
 
-class TcpSpeedModel(BaseModel):
+class TcpSpeedModel(_Answer):
     command: float
     feedback: float
 
 
-class TcpModel(BaseModel):
+class TcpModel(_Answer):
     command: list[float] = Field(
         description="TCP of the active tool in base coordinates: x, y, z (m), rx, ry, rz "
         "(rad, R = Rz·Ry·Rx), from the command"
@@ -151,7 +160,7 @@ class TcpModel(BaseModel):
     speed_mm_s: TcpSpeedModel
 
 
-class GroupModel(BaseModel):
+class GroupModel(_Answer):
     name: str
     joint_names: list[str]
     command_rad: list[float]
@@ -162,31 +171,31 @@ class GroupModel(BaseModel):
     tcp: TcpModel | None = Field(default=None, description="null: no kinematic chain")
 
 
-class LatenessModel(BaseModel):
+class LatenessModel(_Answer):
     p50: float
     p99: float
     max: float
 
 
-class TickModel(BaseModel):
+class TickModel(_Answer):
     period_ms: float
     count: int
     overruns: int
     lateness_ms: LatenessModel
 
 
-class FsuModel(BaseModel):
+class FsuModel(_Answer):
     joint_speed_pct: int | None
     tcp_speed_mm_s: float | None
 
 
-class PortsModel(BaseModel):
+class PortsModel(_Answer):
     motion: int | None
     state: int | None
     io: int | None
 
 
-class StateModel(BaseModel):
+class StateModel(_Answer):
     mode: Literal["play", "teach"]
     remote: bool
     servo: bool
