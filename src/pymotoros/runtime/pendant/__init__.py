@@ -372,7 +372,6 @@ def install_pendant(
     period in small pieces instead of colliding with the next tick's deadline.
     """
     period_ms = controller.period_ms
-    listed = action_list(actions)
     feed = PendantFeed(
         PendantDocument(controller, tick_stats, ports, clients),
         after_ticks=after_ticks,
@@ -396,9 +395,22 @@ def install_pendant(
         tool0 and tcp) for the 3D view."""
         return feed.document()
 
+    @app.websocket("/ws/state")
+    async def state_ws(ws: WebSocket) -> None:
+        await feed.serve(ws)
+
+    _install_actions_routes(app, controller, feed, actions)
+
+
+def _install_actions_routes(
+    app: FastAPI, controller: SimulatedController, feed: PendantFeed, actions: Sequence[ActionSpec]
+) -> None:
+    """The pendant's buttons: the list of actions, and the scenario file it loads."""
+    listed = action_list(actions)
+
     @app.get("/api/pendant/actions", tags=["state"])
     async def pendant_actions() -> list[dict[str, Any]]:
-        """The actions the pendant's buttons call (one ``POST`` path each), with their
+        """The actions the pendant's buttons call (method and path each), with their
         parameters, units and bounds: the control API's declarations."""
         return listed
 
@@ -415,7 +427,3 @@ def install_pendant(
         logger.info("operator: scenario file %s with %d events", body.name, len(scenario.events))
         controller.load_scenario(scenario)
         return feed.document()
-
-    @app.websocket("/ws/state")
-    async def state_ws(ws: WebSocket) -> None:
-        await feed.serve(ws)
