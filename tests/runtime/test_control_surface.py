@@ -108,6 +108,11 @@ def test_a_new_action_declared_once_is_on_every_surface(
     assert [a.code for a in controller.snapshot().alarms] == [8003, 8005]
     with pytest.raises(ConfigError, match="must be one of"):  # not declared there
         parse_scenario(tomllib.loads(toml))
+    r = client.post("/api/scenario", json={"events": [{"at": 0.0, "action": "beacon",
+                                                       "level": 1}]})  # fmt: skip
+    assert r.status_code == 200, r.text
+    controller.tick()
+    assert [a.code for a in controller.snapshot().alarms] == [8003, 8005, 8001]
     # the same range check everywhere, with the same words
     words = "level: must lie in 1..5, not 6"
     r = client.post("/api/beacon", json={"level": 6})

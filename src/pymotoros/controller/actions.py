@@ -34,7 +34,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable, Mapping, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Any, Final, Literal, Protocol
 
 from pymotoros.controller.api import FaultInjection, OperatorPanel, PendantMode, SafetyPanel
@@ -51,6 +51,8 @@ __all__ = [
     "ParamKind",
     "Rule",
     "actions_by_name",
+    "scenario_loader",
+    "with_scenario_of",
 ]
 
 ParamKind = Literal["bool", "int", "number", "str", "numbers", "tables"]
@@ -328,10 +330,25 @@ def _fsu(target: ActionTarget, p: Params) -> None:
     )
 
 
-def _load_scenario(target: ActionTarget, p: Params) -> None:
-    from pymotoros.controller.scenario import parse_scenario  # it imports this module
+def scenario_loader(actions: Sequence[ActionSpec] | None = None) -> Call:
+    """Loading a scenario, whose events may carry ``actions`` (None: the declared ones)."""
 
-    target.load_scenario(parse_scenario({"events": p["events"]}, source="POST /api/scenario"))
+    def load(target: ActionTarget, p: Params) -> None:
+        from pymotoros.controller.scenario import parse_scenario  # it imports this module
+
+        events = {"events": p["events"]}
+        target.load_scenario(parse_scenario(events, source="POST /api/scenario", actions=actions))
+
+    return load
+
+
+def with_scenario_of(actions: Sequence[ActionSpec]) -> tuple[ActionSpec, ...]:
+    """``actions`` with the scenario loader's events taking every one of them (a surface
+    serving more actions than :data:`CONTROL_ACTIONS` accepts them in scenarios too)."""
+    return tuple(
+        replace(spec, call=scenario_loader(actions)) if spec.name == "scenario" else spec
+        for spec in actions
+    )
 
 
 def _on(doc: str) -> tuple[Param, ...]:
@@ -506,7 +523,7 @@ CONTROL_ACTIONS: Final[tuple[ActionSpec, ...]] = (
         "scenario",
         "/api/scenario",
         "Run timed events (same keys as a scenario file); replaces events not fired yet.",
-        _load_scenario,
+        scenario_loader(),
         (
             Param(
                 "events", "tables", "timed events, the keys of a scenario file's [[events]] tables"

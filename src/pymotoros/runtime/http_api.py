@@ -39,6 +39,7 @@ from pymotoros.controller.actions import (
     ActionSpec,
     Param,
     actions_by_name,
+    with_scenario_of,
 )
 from pymotoros.controller.api import ControllerSnapshot
 from pymotoros.errors import PymotorosError
@@ -323,7 +324,8 @@ def create_http_app(
     actions: Sequence[ActionSpec] = CONTROL_ACTIONS,
 ) -> FastAPI:
     """The control API of one simulated controller; ``actions``: the declared actions
-    it serves (one ``POST`` each)."""
+    it serves (one endpoint each; a scenario's events may carry any of them)."""
+    actions = with_scenario_of(actions)
     app = _new_app(observers)
 
     def state() -> dict[str, Any]:
