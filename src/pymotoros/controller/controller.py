@@ -24,6 +24,7 @@ from typing import Final
 from pymotoros.controller import signals
 from pymotoros.controller.alarms import Alarm, AlarmClass, AlarmHistory
 from pymotoros.controller.api import (
+    MOTOROS_OUTPUT_COUNT,
     ControllerSnapshot,
     FeedbackData,
     FiredEventInfo,
@@ -490,7 +491,7 @@ class VirtualController:
     def _motoros_outputs(self) -> tuple[int, ...]:
         """OT#889..896, one IO group (addresses n×10+0..7): one read, not eight."""
         byte = self._io.read_group(signals.ROS_READY // 10).value
-        return tuple((byte >> i) & 1 for i in range(8))
+        return tuple((byte >> i) & 1 for i in range(MOTOROS_OUTPUT_COUNT))
 
     @property
     def operator_state(self) -> OperatorState:
