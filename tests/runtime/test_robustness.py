@@ -472,7 +472,7 @@ MALFORMED: list[tuple[str, bytes, str]] = [
 ]  # fmt: skip
 """Bodies no endpoint accepts: (what, body, content type)."""
 
-NO_BODY_ENDPOINTS = frozenset({"/api/reset", "/api/tick/reset"})
+NO_BODY_ENDPOINTS = frozenset({"/api/reset", "/api/tick/reset", "/api/drop_motion"})
 """POSTs that take no body (and so ignore one)."""
 
 

@@ -17,11 +17,12 @@ from __future__ import annotations
 import enum
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Protocol
+from typing import TYPE_CHECKING, Final, Protocol
 
 from pymotoros.protocol.constants import IoResultCode, ResultCode
 
 if TYPE_CHECKING:
+    from pymotoros.controller.cell import CellConfig
     from pymotoros.controller.scenario import Scenario
 
 
@@ -165,6 +166,30 @@ class FiredEventInfo:
 
 
 @dataclass(frozen=True, slots=True)
+class NotReadyInfo:
+    """Why MotoROS would refuse motion now: what CHECK_MOTION_READY would answer
+    (subcode 0 UNSPECIFIED when ready), the subcode's meaning and what clears it."""
+
+    subcode: int
+    name: str
+    meaning: str
+    why: str
+
+
+@dataclass(frozen=True, slots=True)
+class JobPosition:
+    """The line a running INFORM job task is at."""
+
+    job: str
+    line: int
+
+
+MOTOROS_FIRST_OUTPUT: Final = 889
+"""OT#889..896: the outputs INIT_ROS and MotoROS use (motoros-1.9.12.md)."""
+MOTOROS_OUTPUT_COUNT: Final = 8
+
+
+@dataclass(frozen=True, slots=True)
 class GroupSnapshot:
     name: str
     joint_names: tuple[str, ...]
@@ -206,6 +231,20 @@ class ControllerSnapshot:
     """Scenario events fired so far."""
     motoros: str = "running"
     """MotoROS's start-up: "running", what it waits for, or why it halted (§2.1, §8)."""
+    # What a pendant shows beyond the control API's document; None where a controller
+    # (a test double) does not model it.
+    period_ms: int | None = None
+    """The interpolation period (ms)."""
+    eco: bool | None = None
+    """Eco mode: servo power saved while idle."""
+    not_ready: NotReadyInfo | None = None
+    """Why motion is not ready now (subcode 0 when it is)."""
+    jobs: tuple[JobPosition, ...] | None = None
+    """The line of every running job task (empty when no job runs)."""
+    motoros_outputs: tuple[int, ...] | None = None
+    """OT#889..896 (:data:`MOTOROS_FIRST_OUTPUT` on), 0 or 1 each."""
+    cell: CellConfig | None = None
+    """The cell the controller was built from (models, tools, groups): fixed at boot."""
 
 
 class MotoRosController(Protocol):
@@ -296,6 +335,10 @@ class OperatorPanel(Protocol):
         """Servo power request as from the pendant (refused silently while E-stopped)."""
         ...
 
+    def set_eco(self, on: bool) -> None:
+        """Enter eco mode (needs servo on) or leave it."""
+        ...
+
     def raise_alarm(self, code: int, subcode: int, text: str) -> None: ...
 
     def reset(self) -> None:
@@ -313,7 +356,7 @@ class OperatorPanel(Protocol):
 
 class FaultInjection(Protocol):
     """Faults the operator can inject beyond the pendant's keys (HTTP ``/api/error``,
-    ``/api/io/failure``). ``VirtualController`` implements it."""
+    ``/api/io/failure``, ``/api/drop_motion``). ``VirtualController`` implements it."""
 
     def raise_error(self, code: int, subcode: int = 0, text: str = "") -> None:
         """An operator error (50014): refuses motion with 5002 until reset; not an alarm."""
@@ -323,12 +366,9 @@ class FaultInjection(Protocol):
         """Make client IO reads (1004) and/or writes (1005) fail."""
         ...
 
-
-class StartupView(Protocol):
-    """Whether MotoROS passed its start-up checks (the runtime starts its servers then)."""
-
-    @property
-    def motoros_started(self) -> bool: ...
+    def drop_motion(self) -> None:
+        """Close the motion connection as a pulled cable (ValueError when none is attached)."""
+        ...
 
 
 class SafetyPanel(Protocol):

@@ -31,10 +31,13 @@ from collections.abc import Callable, Sequence
 from pymotoros.controller import signals
 from pymotoros.controller.alarms import Alarm
 from pymotoros.controller.api import (
+    MOTOROS_OUTPUT_COUNT,
     ControllerSnapshot,
     FeedbackData,
     FiredEventInfo,
     IoRead,
+    JobPosition,
+    NotReadyInfo,
     Outcome,
     PendantMode,
     Pending,
@@ -302,7 +305,19 @@ class VirtualController:
                 FiredEventInfo(f.t, f.action, tuple(f.params.items()), f.error)
                 for f in self._scenarios.fired
             ),
+            # what only a pendant shows
+            period_ms=self._clock.period_ms,
+            eco=s.eco,
+            not_ready=NotReadyInfo(*self._motoros.not_ready_reason()),
+            jobs=tuple(JobPosition(job, line) for job, line in self._runner.position()),
+            motoros_outputs=self._motoros_outputs(),
+            cell=self.cell,
         )
+
+    def _motoros_outputs(self) -> tuple[int, ...]:
+        """OT#889..896, one IO group (addresses n×10+0..7): one read, not eight."""
+        byte = self._io.read_group(signals.ROS_READY // 10).value
+        return tuple((byte >> i) & 1 for i in range(MOTOROS_OUTPUT_COUNT))
 
     @property
     def operator_state(self) -> OperatorState:

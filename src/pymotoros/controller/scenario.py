@@ -7,78 +7,49 @@ A scenario is a list of events (TOML ``[[events]]`` tables, or the JSON body of
   executed increment of the next trajectory: the first to start after the scenario is
   loaded; every ``after_motion`` event counts from that instant), ``when_io``
   (``{address, value}``: as soon as the bit or M-register reads that value);
-* actions, whose parameters are the keys of the matching control-API body: ``estop``
-  (``pressed``), ``hold``/``remote``/``servo``/``eco`` (``on``), ``mode`` (``mode``),
-  ``alarm`` (``code``, ``subcode``, ``text``), ``reset``, ``pfl`` (``event``,
-  ``retreat_ms``, ``stop_ms``), ``fsu`` (``joint_speed_pct``/``tcp_speed_mm_s``/``off``),
-  ``io`` (``address``, ``value``), ``drop_motion``.
+* actions: every action of :data:`pymotoros.controller.actions.CONTROL_ACTIONS` that a
+  scenario may carry (``estop``, ``hold``, ``mode``, ``remote``, ``servo``, ``eco``,
+  ``alarm``, ``error``, ``reset``, ``io``, ``io_failure``, ``pfl``, ``fsu``,
+  ``drop_motion``), whose parameters are the keys of the matching control-API body,
+  checked by the same declaration, so a value the control API refuses is refused here
+  with the same words.
 
-:func:`parse_scenario` is pure and refuses a bad scenario naming the event and the key.
-:class:`ScenarioDriver` fires the events from the controller's tick, so a run in virtual
-time is deterministic.
+:func:`parse_scenario` is pure and refuses a bad scenario naming the event and the key
+(a misspelt key is named with the nearest valid one). :class:`ScenarioDriver` fires the
+events from the controller's tick, so a run in virtual time is deterministic.
 """
 
 from __future__ import annotations
 
+import difflib
 import logging
 import math
 import tomllib
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Final, Protocol
+from typing import Final, TypeGuard
 
-from pymotoros.controller.api import PendantMode
+from pymotoros.controller.actions import (
+    CONTROL_ACTIONS,
+    ActionParamError,
+    ActionSpec,
+    ActionTarget,
+    actions_by_name,
+)
 from pymotoros.errors import ConfigError
 
 logger = logging.getLogger(__name__)
 
 TRIGGERS: Final = ("at", "after_motion", "when_io")
 
-
-@dataclass(frozen=True, slots=True)
-class _Param:
-    kind: type | tuple[type, ...]
-    required: bool = True
-    choices: tuple[object, ...] = ()
-    lo: float | None = None
-    hi: float | None = None
-
-
-_KIND_NAMES: Final[Mapping[type | tuple[type, ...], str]] = {
-    bool: "true or false",
-    int: "an integer",
-    str: "a string",
-    (int, float): "a number",
+ACTIONS: Final[Mapping[str, ActionSpec]] = {
+    name: spec for name, spec in actions_by_name(CONTROL_ACTIONS).items() if spec.in_scenarios
 }
-_BOOL = _Param(bool)
-ACTIONS: Final[Mapping[str, Mapping[str, _Param]]] = {
-    "estop": {"pressed": _BOOL},
-    "hold": {"on": _BOOL},
-    "remote": {"on": _BOOL},
-    "servo": {"on": _BOOL},
-    "eco": {"on": _BOOL},
-    "mode": {"mode": _Param(str, choices=("teach", "play"))},
-    "alarm": {
-        "code": _Param(int, lo=0, hi=9999),
-        "subcode": _Param(int, required=False, lo=0),
-        "text": _Param(str, required=False),
-    },
-    "reset": {},
-    "pfl": {
-        "event": _Param(str, choices=("contact", "clamping")),
-        "retreat_ms": _Param(int, required=False, lo=1),
-        "stop_ms": _Param(int, required=False, lo=0, hi=60_000),
-    },
-    "fsu": {
-        "joint_speed_pct": _Param(int, required=False, lo=1, hi=100),
-        "tcp_speed_mm_s": _Param((int, float), required=False, lo=0),
-        "off": _Param(bool, required=False),
-    },
-    "io": {"address": _Param(int, lo=0), "value": _Param(int, lo=0, hi=0xFFFF)},
-    "drop_motion": {},
-}
-"""Every action and its parameters (the keys of the matching control-API body)."""
+"""Every action a scenario may carry, by name (the declarations of ``actions.py``)."""
+
+ScenarioTarget = ActionTarget
+"""What a scenario's actions act on (kept for its old name)."""
 
 
 @dataclass(frozen=True, slots=True)
@@ -94,6 +65,9 @@ class ScenarioEvent:
     """(address, value) for "when_io"."""
     action: str = ""
     params: Mapping[str, object] = field(default_factory=dict)
+    """The parameters as given (the optional ones left out keep their default)."""
+    spec: ActionSpec | None = None
+    """The action's declaration (None: looked up by name among :data:`ACTIONS`)."""
 
 
 @dataclass(frozen=True, slots=True)
@@ -114,12 +88,26 @@ def load_scenario(path: str | Path) -> Scenario:
     return parse_scenario(data, source=str(p))
 
 
-def _number(value: object) -> bool:
-    return isinstance(value, int | float) and not isinstance(value, bool)
+def _seconds(value: object) -> TypeGuard[float]:
+    """A finite number >= 0 (TOML's integer or float, not a boolean)."""
+    return (
+        isinstance(value, int | float)
+        and not isinstance(value, bool)
+        and math.isfinite(value)
+        and value >= 0
+    )
 
 
-def parse_scenario(data: Mapping[str, object], *, source: str = "<scenario>") -> Scenario:
-    """Validate a parsed scenario ({"events": [...]}); refuse anything unknown or wrong."""
+def parse_scenario(
+    data: Mapping[str, object],
+    *,
+    source: str = "<scenario>",
+    actions: Sequence[ActionSpec] | None = None,
+) -> Scenario:
+    """Validate a parsed scenario ({"events": [...]}); refuse anything unknown or wrong.
+
+    ``actions``: the declared actions (default :data:`ACTIONS`; those with
+    ``in_scenarios`` false are left out)."""
     if not isinstance(data, Mapping):
         raise ConfigError(f"{source}: a scenario must be a table with an 'events' array")
     unknown = sorted(set(data) - {"events"})
@@ -128,70 +116,93 @@ def parse_scenario(data: Mapping[str, object], *, source: str = "<scenario>") ->
     raw = data.get("events")
     if not isinstance(raw, list) or not raw:
         raise ConfigError(f"{source}: events: needs at least one [[events]] table")
-    return Scenario(tuple(_event(i, e, source) for i, e in enumerate(raw)), source)
+    known = (
+        ACTIONS
+        if actions is None
+        else {n: a for n, a in actions_by_name(actions).items() if a.in_scenarios}
+    )
+    return Scenario(tuple(_event(i, e, source, known) for i, e in enumerate(raw)), source)
 
 
-def _event(i: int, raw: object, source: str) -> ScenarioEvent:
+def _nearest(key: str, valid: Sequence[str]) -> str:
+    """The hint " (did you mean 'x'?)" for a misspelt key; "" when nothing is close."""
+    close = difflib.get_close_matches(key, valid, n=1)
+    return f" (did you mean {close[0]!r}?)" if close else ""
+
+
+def _event(i: int, raw: object, source: str, actions: Mapping[str, ActionSpec]) -> ScenarioEvent:
     where = f"{source}: events[{i}]"
     if not isinstance(raw, Mapping):
         raise ConfigError(f"{where}: must be a table")
-    triggers = [t for t in TRIGGERS if t in raw]
-    if len(triggers) != 1:
-        found = ", ".join(triggers) or "none"
-        raise ConfigError(
-            f"{where}: needs exactly one trigger of {', '.join(TRIGGERS)} (found: {found})"
-        )
-    trigger = triggers[0]
+    spec = actions.get(raw["action"]) if isinstance(raw.get("action"), str) else None
+    trigger = _trigger(raw, where, spec)
     action = raw.get("action")
-    if not isinstance(action, str) or action not in ACTIONS:
-        raise ConfigError(f"{where}.action: must be one of {', '.join(ACTIONS)}, not {action!r}")
-    where = f"{where} ({action})"
-    seconds = 0.0
-    io = (0, 0)
-    value = raw[trigger]
+    if spec is None:
+        choices = ", ".join(actions)
+        hint = _nearest(action, list(actions)) if isinstance(action, str) else ""
+        raise ConfigError(f"{where}.action: must be one of {choices}, not {action!r}{hint}")
+    where = f"{where} ({spec.name})"
+    seconds, io = _trigger_value(raw[trigger], trigger, where)
+    params = _params(raw, trigger, spec, where)
+    return ScenarioEvent(i, trigger, seconds, io, spec.name, params, spec)
+
+
+def _trigger(raw: Mapping[str, object], where: str, spec: ActionSpec | None) -> str:
+    """The event's one trigger; a misspelt one is named with the nearest trigger."""
+    triggers = [t for t in TRIGGERS if t in raw]
+    if len(triggers) == 1:
+        return triggers[0]
+    needs = f"needs exactly one trigger of {', '.join(TRIGGERS)}"
+    if triggers:
+        raise ConfigError(f"{where}: {needs} (found: {', '.join(triggers)})")
+    declared = spec.keys if spec is not None else ()
+    for key in raw:
+        if key != "action" and key not in declared:
+            hint = _nearest(str(key), [*TRIGGERS, *declared])
+            raise ConfigError(f"{where}.{key}: unknown key{hint}; the event {needs}")
+    raise ConfigError(f"{where}: {needs} (found: none)")
+
+
+def _trigger_value(value: object, trigger: str, where: str) -> tuple[float, tuple[int, int]]:
+    """(seconds, (address, value)) of the trigger's value."""
     if trigger in ("at", "after_motion"):
-        if not _number(value) or not math.isfinite(float(value)) or float(value) < 0:
+        if not _seconds(value):
             raise ConfigError(f"{where}.{trigger}: must be a number of seconds >= 0, not {value!r}")
-        seconds = float(value)
-    else:
-        if not isinstance(value, Mapping) or set(value) != {"address", "value"}:
-            raise ConfigError(f"{where}.when_io: must be {{address = A, value = V}}, not {value!r}")
-        address, v = value["address"], value["value"]
-        if not isinstance(address, int) or isinstance(address, bool) or address < 0:
-            raise ConfigError(f"{where}.when_io.address: must be an IO address, not {address!r}")
-        if not isinstance(v, int) or isinstance(v, bool) or not 0 <= v <= 0xFFFF:
-            raise ConfigError(f"{where}.when_io.value: must be 0..65535, not {v!r}")
-        io = (address, v)
-    spec = ACTIONS[action]
+        return float(value), (0, 0)
+    if not isinstance(value, Mapping) or set(value) != {"address", "value"}:
+        raise ConfigError(f"{where}.when_io: must be {{address = A, value = V}}, not {value!r}")
+    address, v = value["address"], value["value"]
+    if not isinstance(address, int) or isinstance(address, bool) or address < 0:
+        raise ConfigError(f"{where}.when_io.address: must be an IO address, not {address!r}")
+    if not isinstance(v, int) or isinstance(v, bool) or not 0 <= v <= 0xFFFF:
+        raise ConfigError(f"{where}.when_io.value: must be 0..65535, not {v!r}")
+    return 0.0, (address, v)
+
+
+def _params(
+    raw: Mapping[str, object], trigger: str, spec: ActionSpec, where: str
+) -> dict[str, object]:
+    """The action's parameters, checked by its declaration (the control API's words)."""
     params: dict[str, object] = {}
     for key, val in raw.items():
         if key in (trigger, "action"):
             continue
-        p = spec.get(key)
-        if p is None:
-            known = ", ".join(spec) or "none"
+        if spec.param(key) is None:
+            known = ", ".join(spec.keys) or "none"
+            hint = _nearest(key, spec.keys)
             raise ConfigError(
-                f"{where}.{key}: unknown key for action {action!r} (its keys: {known})"
+                f"{where}.{key}: unknown key for action {spec.name!r} (its keys: {known}){hint}"
             )
-        ok = isinstance(val, p.kind) and not (isinstance(val, bool) and p.kind is not bool)
-        if not ok:
-            raise ConfigError(f"{where}.{key}: must be {_KIND_NAMES[p.kind]}, not {val!r}")
-        if p.choices and val not in p.choices:
-            choices = ", ".join(map(str, p.choices))
-            raise ConfigError(f"{where}.{key}: must be one of {choices}, not {val!r}")
-        if _number(val) and (
-            (p.lo is not None and val < p.lo) or (p.hi is not None and val > p.hi)
-        ):
-            raise ConfigError(f"{where}.{key}: must lie in {p.lo}..{p.hi}, not {val!r}")
         params[key] = val
-    for key, p in spec.items():
-        if p.required and key not in params:
-            raise ConfigError(f"{where}.{key}: is required for action {action!r}")
-    if action == "fsu" and not params:
-        raise ConfigError(f"{where}: needs joint_speed_pct, tcp_speed_mm_s or off = true")
-    if action == "pfl" and "retreat_ms" in params and params["event"] != "clamping":
-        raise ConfigError(f"{where}.retreat_ms: applies to a clamping only")
-    return ScenarioEvent(i, trigger, seconds, io, action, params)
+    try:
+        spec.check_values(params)
+        for p in spec.params:
+            if p.required and p.name not in params:
+                raise ConfigError(f"{where}.{p.name}: is required for action {spec.name!r}")
+        spec.check_rules(spec.complete(params))
+    except ActionParamError as exc:
+        raise ConfigError(f"{where}.{exc}" if exc.key else f"{where}: {exc}") from exc
+    return params
 
 
 @dataclass(frozen=True, slots=True)
@@ -207,72 +218,13 @@ class FiredEvent:
 Action = Callable[[ScenarioEvent], None]
 
 
-class ScenarioTarget(Protocol):
-    """What a scenario's actions act on: the operator panel and the safety functions."""
-
-    def press_estop(self, pressed: bool) -> None: ...
-    def set_hold(self, on: bool) -> None: ...
-    def set_remote(self, on: bool) -> None: ...
-    def set_servo(self, on: bool) -> None: ...
-    def set_eco(self, on: bool) -> None: ...
-    def set_mode(self, mode: PendantMode) -> None: ...
-    def raise_alarm(self, code: int, subcode: int, text: str) -> None: ...
-    def reset(self) -> None: ...
-    def force_io(self, address: int, value: int) -> None: ...
-    def drop_motion(self) -> None: ...
-    def pfl_event(self, event: str, *, retreat_ms: int = ..., stop_ms: int = ...) -> None: ...
-    def set_fsu(
-        self,
-        *,
-        joint_speed_pct: int | None = None,
-        tcp_speed_mm_s: float | None = None,
-        off: bool = False,
-    ) -> None: ...
-
-
-def _int(value: object) -> int:
-    if not isinstance(value, int):  # parse_scenario checked it; a bug otherwise
-        raise TypeError(f"expected an integer, not {value!r}")
-    return value
-
-
-def perform(target: ScenarioTarget, event: ScenarioEvent) -> None:
-    """Carry out one event's action (ValueError when the target refuses it now)."""
-    p = event.params
-    action = event.action
-    if action == "estop":
-        target.press_estop(bool(p["pressed"]))
-    elif action in ("hold", "remote", "servo", "eco"):
-        setter = {
-            "hold": target.set_hold,
-            "remote": target.set_remote,
-            "servo": target.set_servo,
-            "eco": target.set_eco,
-        }[action]
-        setter(bool(p["on"]))
-    elif action == "mode":
-        target.set_mode(PendantMode(str(p["mode"])))
-    elif action == "alarm":
-        target.raise_alarm(_int(p["code"]), _int(p.get("subcode", 0)), str(p.get("text", "")))
-    elif action == "reset":
-        target.reset()
-    elif action == "pfl":
-        kwargs = {k: _int(v) for k, v in p.items() if k in ("retreat_ms", "stop_ms")}
-        target.pfl_event(str(p["event"]), **kwargs)
-    elif action == "fsu":
-        pct = p.get("joint_speed_pct")
-        tcp = p.get("tcp_speed_mm_s")
-        target.set_fsu(
-            joint_speed_pct=_int(pct) if pct is not None else None,
-            tcp_speed_mm_s=float(tcp) if isinstance(tcp, int | float) else None,
-            off=bool(p.get("off", False)),
-        )
-    elif action == "io":
-        target.force_io(_int(p["address"]), _int(p["value"]))
-    elif action == "drop_motion":
-        target.drop_motion()
-    else:  # parse_scenario refuses unknown actions; a new one must be added here
-        raise ValueError(f"unknown scenario action {action!r}")
+def perform(target: ActionTarget, event: ScenarioEvent) -> None:
+    """Carry out one event's action (a ValueError, ActionRefusedError, when the target
+    refuses it now)."""
+    spec = event.spec if event.spec is not None else ACTIONS.get(event.action)
+    if spec is None:  # parse_scenario refuses unknown actions
+        raise ValueError(f"unknown scenario action {event.action!r}")
+    spec.perform(target, event.params)
 
 
 class ScenarioDriver:
@@ -336,14 +288,3 @@ class ScenarioDriver:
                 dict(event.params),
             )
         self.fired.append(FiredEvent(now_ms / 1000, event.action, dict(event.params), error))
-
-
-def fired_as_dicts(fired: Sequence[FiredEvent]) -> list[dict[str, object]]:
-    """The ``events`` list of ``GET /api/state``."""
-    out: list[dict[str, object]] = []
-    for f in fired:
-        d: dict[str, object] = {"t": f.t, "action": f.action, **f.params}
-        if f.error:
-            d["error"] = f.error
-        out.append(d)
-    return out

@@ -3,8 +3,12 @@
 :func:`create_http_app` builds a FastAPI application (OpenAPI schema at
 ``/openapi.json``, interactive docs at ``/docs``) around a
 :class:`~pymotoros.runtime.target.SimulatedController` (its
-:class:`~pymotoros.controller.api.OperatorPanel` and
-:class:`~pymotoros.controller.api.FaultInjection` sides). Every endpoint is an ``async def``
+:class:`~pymotoros.controller.actions.ActionTarget` side). Its ``POST`` endpoints are
+derived from the declared actions (:data:`~pymotoros.controller.actions.CONTROL_ACTIONS`):
+one per action, its body a pydantic model built from the action's parameters (so the
+OpenAPI schema shows their bounds, units and meaning), checked by the same declaration
+as a scenario file's events: a bad value is a 422 with the same words. A rule between
+parameters, or a refusal by the controller, is a 400. Every endpoint is an ``async def``
 so it runs on the simulator's event loop, between two interpolation ticks, never in
 a worker thread: the controller is not thread-safe and does not need to be.
 
@@ -15,115 +19,140 @@ the action, in the same shape as ``GET /api/state``.
 
 from __future__ import annotations
 
+import inspect
 import logging
-from collections.abc import Awaitable, Callable
-from typing import Any, Literal
+from collections.abc import Awaitable, Callable, Sequence
+from typing import Annotated, Any, ClassVar, Literal
 
 from fastapi import FastAPI, Request
 from fastapi.exceptions import RequestValidationError
 from fastapi.responses import JSONResponse
-from pydantic import BaseModel, ConfigDict, Field
+from pydantic import BaseModel, ConfigDict, Field, create_model, model_validator
+from pydantic_core import PydanticCustomError
 from starlette.exceptions import HTTPException as StarletteHTTPException
 
 from pymotoros import __version__
-from pymotoros.controller.api import ControllerSnapshot, PendantMode, TcpSnapshot
-from pymotoros.controller.scenario import parse_scenario
+from pymotoros.controller.actions import (
+    CONTROL_ACTIONS,
+    ActionParamError,
+    ActionRefusedError,
+    ActionSpec,
+    Param,
+    actions_by_name,
+    with_scenario_of,
+)
+from pymotoros.controller.api import ControllerSnapshot
+from pymotoros.errors import PymotorosError
 from pymotoros.runtime.body_limit import BodyLimit
 from pymotoros.runtime.csrf import CsrfGuard
 from pymotoros.runtime.docs_page import install_offline_docs
 from pymotoros.runtime.log_limit import api_refusal_allowed
 from pymotoros.runtime.observers import CatchUpMiddleware, Observers
 from pymotoros.runtime.pendant import install_pendant
+from pymotoros.runtime.pendant.document import Ports, state_document
 from pymotoros.runtime.strict_json import StrictJsonRoute
 from pymotoros.runtime.target import SimulatedController
 from pymotoros.runtime.ticker import TickStats
 
-__all__ = ["StateModel", "create_http_app", "state_model"]
+__all__ = ["StateModel", "action_body_model", "create_http_app", "state_model"]
 
 logger = logging.getLogger(__name__)
 
 _STRICT = ConfigDict(extra="forbid", strict=True, frozen=True)
 
+ACTION_PARAM_ERROR: str = "action_param"
+"""The pydantic error type of a value the action's declaration refuses."""
+
 
 # --------------------------------------------------------------------------- bodies
 
 
-class EstopBody(BaseModel):
+class ActionBody(BaseModel):
+    """Base of every action's body: the declaration checks each value first, so the
+    words of a refusal are the declaration's (the scenario file's), not pydantic's."""
+
     model_config = _STRICT
-    pressed: bool = Field(description="true presses the pendant E-stop, false releases it")
+    spec: ClassVar[ActionSpec]
+
+    @model_validator(mode="before")
+    @classmethod
+    def _declared_values(cls, data: Any) -> Any:
+        if isinstance(data, dict):
+            try:
+                cls.spec.check_values({k: v for k, v in data.items() if cls.spec.param(k)})
+            except ActionParamError as exc:
+                message = {"message": str(exc)}
+                raise PydanticCustomError(ACTION_PARAM_ERROR, "{message}", message) from exc
+        return data
 
 
-class OnOffBody(BaseModel):
-    model_config = _STRICT
-    on: bool
+_PYTHON_TYPES: dict[str, Any] = {
+    "bool": bool,
+    "int": int,
+    "number": float,
+    "str": str,
+    "numbers": list[float],
+    "tables": list[dict[str, Any]],
+}
 
 
-class ModeBody(BaseModel):
-    model_config = _STRICT
-    mode: Literal["teach", "play"]
+def _field(param: Param) -> tuple[Any, Any]:
+    """A pydantic field for a declared parameter: its type, bounds and description."""
+    bounds: dict[str, Any] = {"ge": param.ge, "gt": param.gt, "le": param.le}
+    kind: Any
+    if param.choices:
+        kind = Literal[param.choices]
+    elif param.kind == "numbers":  # the bounds hold for each number, the length for all
+        kind = list[Annotated[float, Field(**bounds)]]
+        bounds = {"min_length": param.length, "max_length": param.length}
+    else:
+        kind = _PYTHON_TYPES[param.kind]
+    if param.kind == "str":
+        bounds["max_length"] = param.max_length
+    default: Any = ...
+    if not param.required:
+        if param.default is None:
+            kind = kind | None
+        default = param.default
+    return kind, Field(default, description=param.description, **bounds)
 
 
-class AlarmBody(BaseModel):
-    model_config = _STRICT
-    code: int = Field(ge=0, le=9999, description="alarm number, e.g. 4107")
-    subcode: int = Field(default=0, ge=0, description="alarm subcode")
-    text: str = Field(default="", max_length=128, description="alarm text shown on the pendant")
-
-
-class IoFailureBody(BaseModel):
-    model_config = _STRICT
-    reads: bool = Field(default=False, description="client IO reads fail with 1004")
-    writes: bool = Field(default=False, description="client IO writes fail with 1005")
-
-
-class IoBody(BaseModel):
-    model_config = _STRICT
-    address: int = Field(
-        ge=0,
-        description="bit address (e.g. 20010), or 1000000 + n for M-register n",
-    )
-    value: int = Field(ge=0, le=0xFFFF, description="0/1 for a bit, 0..65535 for an M-register")
-
-
-class PflBody(BaseModel):
-    model_config = _STRICT
-    event: Literal["contact", "clamping"] = Field(
-        description="contact: PFL stop; clamping: PFL stop, then retreat with PFL escape"
-    )
-    retreat_ms: int | None = Field(
-        default=None, ge=1, description="clamping only: how much of the last motion to retreat"
-    )
-    stop_ms: int | None = Field(
-        default=None, ge=0, le=60_000, description="how long PFL stop stays on (default 500)"
-    )
-
-
-class FsuBody(BaseModel):
-    model_config = _STRICT
-    joint_speed_pct: int | None = Field(
-        default=None, ge=1, le=100, description="share of each axis's maximum speed"
-    )
-    tcp_speed_mm_s: float | None = Field(
-        default=None, gt=0, description="TCP speed limit (needs the kinematics model)"
-    )
-    off: bool = Field(default=False, description="switch every FSU speed limit off")
+def action_body_model(spec: ActionSpec) -> type[ActionBody] | None:
+    """The JSON body of an action's endpoint (None: it takes no body)."""
+    in_body = [p for p in spec.params if p.name not in spec.path_keys]
+    if not in_body:
+        return None
+    name = "".join(part.capitalize() for part in spec.name.split("_")) + "Body"
+    fields = {p.name: _field(p) for p in in_body}
+    model: type[ActionBody] = create_model(name, __base__=ActionBody, **fields)  # type: ignore[call-overload]
+    model.spec = spec
+    return model
 
 
 # --------------------------------------------------------------------------- answers
 
 
-class AlarmModel(BaseModel):
+class _Answer(BaseModel):
+    """The schema of a part of the state document. The document itself is built by
+    :func:`~pymotoros.runtime.pendant.document.state_document`; FastAPI checks each
+    answer against these models, and a key they do not declare fails loudly instead of
+    vanishing from ``GET /api/state`` while the pendant shows it."""
+
+    model_config = ConfigDict(extra="forbid")
+
+
+class AlarmModel(_Answer):
     code: int
     subcode: int
     text: str
 
 
-class TcpSpeedModel(BaseModel):
+class TcpSpeedModel(_Answer):
     command: float
     feedback: float
 
 
-class TcpModel(BaseModel):
+class TcpModel(_Answer):
     command: list[float] = Field(
         description="TCP of the active tool in base coordinates: x, y, z (m), rx, ry, rz "
         "(rad, R = Rz·Ry·Rx), from the command"
@@ -132,7 +161,7 @@ class TcpModel(BaseModel):
     speed_mm_s: TcpSpeedModel
 
 
-class GroupModel(BaseModel):
+class GroupModel(_Answer):
     name: str
     joint_names: list[str]
     command_rad: list[float]
@@ -143,38 +172,31 @@ class GroupModel(BaseModel):
     tcp: TcpModel | None = Field(default=None, description="null: no kinematic chain")
 
 
-class LatenessModel(BaseModel):
+class LatenessModel(_Answer):
     p50: float
     p99: float
     max: float
 
 
-class TickModel(BaseModel):
+class TickModel(_Answer):
     period_ms: float
     count: int
     overruns: int
     lateness_ms: LatenessModel
 
 
-class ScenarioBody(BaseModel):
-    model_config = ConfigDict(extra="forbid", frozen=True)
-    events: list[dict[str, Any]] = Field(
-        description="timed events, the keys of a scenario file's [[events]] tables"
-    )
-
-
-class FsuModel(BaseModel):
+class FsuModel(_Answer):
     joint_speed_pct: int | None
     tcp_speed_mm_s: float | None
 
 
-class PortsModel(BaseModel):
+class PortsModel(_Answer):
     motion: int | None
     state: int | None
     io: int | None
 
 
-class StateModel(BaseModel):
+class StateModel(_Answer):
     mode: Literal["play", "teach"]
     remote: bool
     servo: bool
@@ -215,68 +237,12 @@ class IoValueModel(BaseModel):
     result_code: int
 
 
-def _tcp_model(tcp: TcpSnapshot | None) -> TcpModel | None:
-    if tcp is None:
-        return None
-    return TcpModel(
-        command=list(tcp.command),
-        feedback=list(tcp.feedback),
-        speed_mm_s=TcpSpeedModel(command=tcp.command_speed_mm_s, feedback=tcp.feedback_speed_mm_s),
-    )
-
-
 def state_model(
-    snapshot: ControllerSnapshot,
-    tick: TickStats,
-    ports: tuple[int | None, int | None, int | None] = (None, None, None),
+    snapshot: ControllerSnapshot, tick: TickStats, ports: Ports = (None, None, None)
 ) -> StateModel:
-    """The ``GET /api/state`` document for a controller snapshot and the loop's statistics."""
-    return StateModel(
-        mode="play" if snapshot.mode is PendantMode.PLAY else "teach",
-        remote=snapshot.remote,
-        servo=snapshot.servo,
-        estop=snapshot.estop,
-        hold=snapshot.hold,
-        alarms=[AlarmModel(code=a.code, subcode=a.subcode, text=a.text) for a in snapshot.alarms],
-        motion_ready=snapshot.motion_ready,
-        groups=[
-            GroupModel(
-                name=g.name,
-                joint_names=list(g.joint_names),
-                command_rad=list(g.command_rad),
-                feedback_rad=list(g.feedback_rad),
-                command_pulse=list(g.command_pulse),
-                queue=g.queue,
-                tool=g.tool,
-                tcp=_tcp_model(g.tcp),
-            )
-            for g in snapshot.groups
-        ],
-        fsu=FsuModel(
-            joint_speed_pct=snapshot.fsu_joint_speed_pct,
-            tcp_speed_mm_s=snapshot.fsu_tcp_speed_mm_s,
-        ),
-        pfl=snapshot.pfl,  # type: ignore[arg-type]
-        motoros=snapshot.motoros,
-        events=[
-            {
-                "t": e.t,
-                "action": e.action,
-                **dict(e.params),
-                **({"error": e.error} if e.error else {}),
-            }
-            for e in snapshot.events
-        ],
-        ports=PortsModel(motion=ports[0], state=ports[1], io=ports[2]),
-        tick=TickModel(
-            period_ms=tick.period_ms,
-            count=tick.count,
-            overruns=tick.overruns,
-            lateness_ms=LatenessModel(
-                p50=tick.lateness_ms.p50, p99=tick.lateness_ms.p99, max=tick.lateness_ms.max
-            ),
-        ),
-    )
+    """The ``GET /api/state`` document as its model (the one builder is
+    :func:`~pymotoros.runtime.pendant.document.state_document`)."""
+    return StateModel.model_validate(state_document(snapshot, tick, ports))
 
 
 # --------------------------------------------------------------------------- errors
@@ -296,6 +262,8 @@ def _describe_validation(exc: RequestValidationError) -> str:
             parts.append("the body must be a JSON object (send Content-Type: application/json)")
         elif kind == "extra_forbidden":
             parts.append(f"unknown field {where!r}")
+        elif kind == ACTION_PARAM_ERROR:  # the declaration's words, as in a scenario file
+            parts.append(str(err.get("msg", "invalid")))
         else:
             parts.append(f"{where}: {err.get('msg', 'invalid')}")
     return "; ".join(parts) or "invalid request"
@@ -325,7 +293,9 @@ async def _http_error(request: Request, exc: Exception) -> JSONResponse:
     return JSONResponse({"error": message}, status_code=status, headers=exc.headers)
 
 
-async def _value_error(request: Request, exc: Exception) -> JSONResponse:
+async def _our_error(request: Request, exc: Exception) -> JSONResponse:
+    """Our errors (a refused action, a bad scenario, an unreadable address) are the
+    client's: 400. Any other exception is a bug in the simulator: 500."""
     message = f"{request.method} {request.url.path}: {exc}"
     if api_refusal_allowed(request.scope, logger, logging.INFO):  # a flood: counted
         logger.info("control API refused a request: %s", message)
@@ -339,18 +309,39 @@ _ERRORS: dict[int | str, dict[str, object]] = {
     422: {"model": ErrorModel, "description": "the body is malformed"},
 }
 
+StateFn = Callable[[], dict[str, Any]]
+
 
 def create_http_app(
     controller: SimulatedController,
     tick_stats: Callable[[], TickStats],
     reset_tick_stats: Callable[[], None] | None = None,
     *,
-    ports: Callable[[], tuple[int | None, int | None, int | None]] | None = None,
+    ports: Callable[[], Ports] | None = None,
     clients: Callable[[], dict[str, int]] | None = None,
     after_ticks: Callable[[int], Awaitable[None]] | None = None,
     observers: Observers | None = None,
+    actions: Sequence[ActionSpec] = CONTROL_ACTIONS,
 ) -> FastAPI:
-    """The control API of one simulated controller."""
+    """The control API of one simulated controller; ``actions``: the declared actions
+    it serves (one endpoint each; a scenario's events may carry any of them)."""
+    actions = with_scenario_of(actions)
+    app = _new_app(observers)
+
+    def state() -> dict[str, Any]:
+        listening = ports() if ports is not None else (None, None, None)
+        return state_document(controller.snapshot(), tick_stats(), listening)
+
+    install_pendant(app, controller, tick_stats, ports, clients, after_ticks, actions=actions)
+    _install_state_routes(app, state, reset_tick_stats)
+    for spec in actions_by_name(actions).values():
+        _install_action(app, spec, controller, state)
+    _install_read_io(app, controller)
+    return app
+
+
+def _new_app(observers: Observers | None) -> FastAPI:
+    """The application with its middleware (CSRF, catch-up, body limit) and error answers."""
     app = FastAPI(
         title="pymotoros control API",
         version=__version__,
@@ -369,127 +360,85 @@ def create_http_app(
     app.add_middleware(BodyLimit)  # outermost: no body read beyond MAX_BODY_BYTES
     app.add_exception_handler(RequestValidationError, _validation_error)
     app.add_exception_handler(StarletteHTTPException, _http_error)
-    app.add_exception_handler(ValueError, _value_error)
+    app.add_exception_handler(PymotorosError, _our_error)
+    return app
 
-    def state() -> StateModel:
-        listening = ports() if ports is not None else (None, None, None)
-        return state_model(controller.snapshot(), tick_stats(), listening)
 
-    install_pendant(app, controller, tick_stats, ports, clients, after_ticks)
-
+def _install_state_routes(
+    app: FastAPI, state: StateFn, reset_tick_stats: Callable[[], None] | None
+) -> None:
     @app.get("/api/state", response_model=StateModel, tags=["state"])
-    async def get_state() -> StateModel:
+    async def get_state() -> dict[str, Any]:
         """Operator state, alarms, groups (command/feedback positions, queue, tool), loop timing."""
         return state()
 
-    @app.post("/api/estop", response_model=StateModel, responses=_ERRORS, tags=["operator"])
-    async def estop(body: EstopBody) -> StateModel:
-        """Press or release the pendant E-stop: cuts servo power, stops the job, no alarm."""
-        logger.info("operator: E-stop %s", "pressed" if body.pressed else "released")
-        controller.press_estop(body.pressed)
-        return state()
-
-    @app.post("/api/hold", response_model=StateModel, responses=_ERRORS, tags=["operator"])
-    async def hold(body: OnOffBody) -> StateModel:
-        """Switch HOLD on or off."""
-        logger.info("operator: hold %s", "on" if body.on else "off")
-        controller.set_hold(body.on)
-        return state()
-
-    @app.post("/api/mode", response_model=StateModel, responses=_ERRORS, tags=["operator"])
-    async def mode(body: ModeBody) -> StateModel:
-        """Turn the pendant's mode key to TEACH or PLAY."""
-        logger.info("operator: mode %s", body.mode)
-        controller.set_mode(PendantMode(body.mode))
-        return state()
-
-    @app.post("/api/remote", response_model=StateModel, responses=_ERRORS, tags=["operator"])
-    async def remote(body: OnOffBody) -> StateModel:
-        """Switch REMOTE on or off."""
-        logger.info("operator: remote %s", "on" if body.on else "off")
-        controller.set_remote(body.on)
-        return state()
-
-    @app.post("/api/servo", response_model=StateModel, responses=_ERRORS, tags=["operator"])
-    async def servo(body: OnOffBody) -> StateModel:
-        """Request servo power on or off (refused silently while E-stopped)."""
-        logger.info("operator: servo %s", "on" if body.on else "off")
-        controller.set_servo(body.on)
-        return state()
-
-    @app.post("/api/alarm", response_model=StateModel, responses=_ERRORS, tags=["operator"])
-    async def alarm(body: AlarmBody) -> StateModel:
-        """Raise an alarm."""
-        logger.info("operator: raise alarm %d/%d %r", body.code, body.subcode, body.text)
-        controller.raise_alarm(body.code, body.subcode, body.text)
-        return state()
-
-    @app.post("/api/reset", response_model=StateModel, responses=_ERRORS, tags=["operator"])
-    async def reset() -> StateModel:
-        """The pendant's RESET key: clears alarms and errors whose cause is gone."""
-        logger.info("operator: reset")
-        controller.reset()
-        return state()
-
-    @app.post("/api/io", response_model=StateModel, responses=_ERRORS, tags=["io"])
-    async def force_io(body: IoBody) -> StateModel:
-        """Force any bit (0/1) or M-register (address 1000000 + n, 0..65535)."""
-        logger.info("operator: force IO %d = %d", body.address, body.value)
-        controller.force_io(body.address, body.value)
-        return state()
-
-    @app.post("/api/error", response_model=StateModel, responses=_ERRORS, tags=["operator"])
-    async def raise_error(body: AlarmBody) -> StateModel:
-        """Raise an operator error (not an alarm): motion is refused with 5002 until reset."""
-        logger.info("operator: raise error %d/%d %r", body.code, body.subcode, body.text)
-        controller.raise_error(body.code, body.subcode, body.text)
-        return state()
-
-    @app.post("/api/io/failure", response_model=StateModel, responses=_ERRORS, tags=["io"])
-    async def io_failure(body: IoFailureBody) -> StateModel:
-        """Fault injection: make client IO reads (1004) and/or writes (1005) fail."""
-        logger.info("operator: IO API failure reads=%s writes=%s", body.reads, body.writes)
-        controller.set_io_api_failure(reads=body.reads, writes=body.writes)
-        return state()
-
-    @app.post("/api/pfl", response_model=StateModel, responses=_ERRORS, tags=["safety"])
-    async def pfl(body: PflBody) -> StateModel:
-        """A PFL contact (PFL stop) or clamping (stop, then retreat with PFL escape)."""
-        logger.info("operator: PFL %s", body.event)
-        kwargs: dict[str, int] = {}
-        if body.retreat_ms is not None:
-            if body.event != "clamping":
-                raise ValueError("retreat_ms applies to a clamping only")
-            kwargs["retreat_ms"] = body.retreat_ms
-        if body.stop_ms is not None:
-            kwargs["stop_ms"] = body.stop_ms
-        controller.pfl_event(body.event, **kwargs)
-        return state()
-
-    @app.post("/api/fsu", response_model=StateModel, responses=_ERRORS, tags=["safety"])
-    async def fsu(body: FsuBody) -> StateModel:
-        """Switch the FSU speed limits at run time (the cell file's value is the boot value)."""
-        logger.info("operator: FSU %s", body.model_dump(exclude_defaults=True))
-        controller.set_fsu(
-            joint_speed_pct=body.joint_speed_pct, tcp_speed_mm_s=body.tcp_speed_mm_s, off=body.off
-        )
-        return state()
-
-    @app.post("/api/scenario", response_model=StateModel, responses=_ERRORS, tags=["safety"])
-    async def scenario(body: ScenarioBody) -> StateModel:
-        """Run timed events (same keys as a scenario file); replaces events not fired yet."""
-        parsed = parse_scenario({"events": body.events}, source="POST /api/scenario")
-        logger.info("operator: scenario with %d events", len(parsed.events))
-        controller.load_scenario(parsed)
-        return state()
-
     @app.post("/api/tick/reset", response_model=StateModel, tags=["state"])
-    async def reset_tick() -> StateModel:
+    async def reset_tick() -> dict[str, Any]:
         """Forget the loop's lateness samples and overrun count (e.g. after a warm-up)."""
         if reset_tick_stats is not None:
             reset_tick_stats()
         return state()
 
+
+def _install_action(
+    app: FastAPI, spec: ActionSpec, controller: SimulatedController, state: StateFn
+) -> None:
+    """``spec.method spec.path``: the body (and the path's parameters) checked by the
+    declaration, then the action."""
+    model = action_body_model(spec)
+    path_keys = spec.path_keys
+
+    async def endpoint(body: BaseModel | None = None, **in_path: object) -> dict[str, Any]:
+        given = {} if body is None else body.model_dump(exclude_unset=True)
+        for key in path_keys:
+            try:
+                spec.check_value(key, in_path[key])
+            except ActionParamError as exc:
+                error = {"type": ACTION_PARAM_ERROR, "loc": ("path", key), "msg": str(exc)}
+                raise RequestValidationError([error]) from exc
+            given[key] = in_path[key]
+        logger.info("operator: %s %s", spec.name, given)
+        spec.perform(controller, given)
+        return state()
+
+    keyword = inspect.Parameter.KEYWORD_ONLY
+    parameters = [
+        inspect.Parameter(key, keyword, annotation=_PATH_TYPES[_param(spec, key).kind])
+        for key in path_keys
+    ]
+    if model is not None:
+        # with its key in the path, an action whose body is all optional may omit it
+        optional = bool(path_keys) and not any(
+            p.required for p in spec.params if p.name not in path_keys
+        )
+        default = None if optional else inspect.Parameter.empty
+        parameters.append(inspect.Parameter("body", keyword, annotation=model, default=default))
+    endpoint.__signature__ = inspect.Signature(parameters)  # type: ignore[attr-defined]
+    app.add_api_route(
+        spec.path,
+        endpoint,
+        methods=[spec.method],
+        response_model=StateModel,
+        responses=_ERRORS,
+        tags=[spec.tag],
+        summary=spec.doc.split(":")[0].rstrip("."),
+        description=spec.doc,
+        name=spec.name,
+    )
+
+
+_PATH_TYPES: dict[str, type] = {"str": str, "int": int, "number": float}
+"""What a path can carry (an action's other kinds go in the body)."""
+
+
+def _param(spec: ActionSpec, key: str) -> Param:
+    param = spec.param(key)
+    if param is None or param.kind not in _PATH_TYPES:
+        raise ValueError(f"action {spec.name!r}: {key!r} in {spec.path} is not a str or number")
+    return param
+
+
+def _install_read_io(app: FastAPI, controller: SimulatedController) -> None:
     @app.get("/api/io/{address}", response_model=IoValueModel, responses=_ERRORS, tags=["io"])
     async def read_io(address: int) -> IoValueModel:
         """Read a bit, or an M-register (address 1000000 + n), as a client would."""
@@ -498,7 +447,5 @@ def create_http_app(
         else:
             read = controller.read_io_bit(address)
         if read.result_code != 0:
-            raise ValueError(f"address {address}: {read.result_code.meaning}")
+            raise ActionRefusedError(f"address {address}: {read.result_code.meaning}")
         return IoValueModel(address=address, value=read.value, result_code=int(read.result_code))
-
-    return app

@@ -4,17 +4,12 @@ from __future__ import annotations
 
 from typing import Protocol
 
-from pymotoros.controller.api import (
-    FaultInjection,
-    MotoRosController,
-    OperatorPanel,
-    SafetyPanel,
-)
+from pymotoros.controller.actions import ActionTarget
+from pymotoros.controller.api import MotoRosController
 
 __all__ = ["SimulatedController"]
 
 
-class SimulatedController(
-    MotoRosController, OperatorPanel, FaultInjection, SafetyPanel, Protocol
-):
-    """``VirtualController`` satisfies this: the servers use one side, the HTTP API the rest."""
+class SimulatedController(MotoRosController, ActionTarget, Protocol):
+    """``VirtualController`` satisfies this: the servers use one side, the HTTP API and the
+    pendant the other (the declared actions' target)."""

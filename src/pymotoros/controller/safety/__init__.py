@@ -5,7 +5,10 @@ operator state, and the controller's own execution of increments (the FSU clip, 
 PFL retreat). MotoROS never calls into them: it sees them through the signals its
 status monitor reads and the results of its incremental-move calls.
 
-Adding a fault means one module here, its test, a control-API endpoint and the docs.
+Adding a fault means one module here (with its test), its declaration in
+``controller/actions.py`` (which gives it its control-API endpoint, its scenario action
+and its place in the pendant's list) and the state it shows in the controller's
+snapshot.
 """
 
 from __future__ import annotations

@@ -46,7 +46,7 @@ import asyncio
 import contextlib
 import logging
 import tomllib
-from collections.abc import Awaitable, Callable
+from collections.abc import Awaitable, Callable, Sequence
 from dataclasses import dataclass
 from importlib.resources import files
 from typing import Any, Final
@@ -56,7 +56,8 @@ from fastapi.responses import FileResponse, RedirectResponse
 from fastapi.staticfiles import StaticFiles
 from pydantic import BaseModel, ConfigDict, Field
 
-from pymotoros.controller.api import ControllerSnapshot
+from pymotoros.controller.actions import CONTROL_ACTIONS, ActionSpec, actions_by_name
+from pymotoros.controller.api import MOTOROS_FIRST_OUTPUT, ControllerSnapshot
 from pymotoros.controller.scenario import parse_scenario
 from pymotoros.errors import ConfigError, KinematicsError
 from pymotoros.kinematics import chain_for
@@ -70,24 +71,18 @@ from pymotoros.runtime.pendant.document import (
 from pymotoros.runtime.target import SimulatedController
 from pymotoros.runtime.ticker import TickStats
 
-__all__ = ["FEED_PERIOD_S", "PendantDocument", "PendantFeed", "install_pendant"]
+__all__ = [
+    "FEED_PERIOD_S",
+    "PendantDocument",
+    "PendantFeed",
+    "action_list",
+    "install_pendant",
+]
 
 logger = logging.getLogger(__name__)
 
 FEED_PERIOD_S: Final = 0.04
 """25 Hz: the issue asks for at least 20 Hz; 40 ms leaves headroom on a busy machine."""
-
-DEFAULT_PERIOD_MS: Final = 4
-"""YRC1000's interpolation period, for a controller that does not say its own."""
-
-MOTOROS_FIRST_OUTPUT: Final = 889
-"""OT#889..896: the outputs INIT_ROS and MotoROS use (motoros-1.9.12.md)."""
-MOTOROS_OUTPUTS: Final = 8
-OT889_ADDRESS: Final = 11120
-"""IO address of OT#889 (controller/readiness.py: ros_ready)."""
-IO_GROUP_BITS: Final = 10
-"""IO group ``n`` holds the bits at addresses ``n×10+0..7`` (MotoPlus addressing,
-``IoImage.read_group``): OT#889..896 are group 1112, bit 0 = OT#889."""
 
 STATIC_DIR: Final = files("pymotoros.runtime.pendant") / "static"
 
@@ -236,8 +231,8 @@ class PendantDocument:
     """The pendant's document: ``GET /api/state``'s, each group's joint positions for the
     3D view (``frames``), and under ``pendant`` what a pendant shows beyond the control
     API: eco mode, the operator errors, why motion is not ready, the INIT_ROS job's line,
-    MotoROS's outputs, the clients per port. Each extra only where the controller offers
-    it (a test double may not)."""
+    MotoROS's outputs, the clients per port. All of it comes from the controller's
+    snapshot; each extra only where the snapshot has it (a test double's may not)."""
 
     def __init__(
         self,
@@ -247,15 +242,14 @@ class PendantDocument:
         clients: Callable[[], dict[str, int]] | None = None,
     ) -> None:
         self._snapshot = controller.snapshot
-        self._controller = controller
         self._tick_stats = tick_stats
         self._stats: TickStats | None = None
         self._stats_tick = 0
         self._ports = ports
         self._clients = clients
         self._skeletons: list[Skeleton | None] = []
-        cell = getattr(controller, "cell", None)
-        for group in getattr(cell, "groups", ()):
+        cell = controller.snapshot().cell
+        for group in cell.groups if cell is not None else ():
             try:
                 self._skeletons.append(Skeleton(chain_for(group)))
             except KinematicsError:
@@ -303,29 +297,60 @@ class PendantDocument:
         return doc
 
     def _extras(self, snapshot: ControllerSnapshot) -> dict[str, Any]:
-        controller = self._controller
         out: dict[str, Any] = {"errors": errors_document(snapshot)}
-        operator = getattr(controller, "operator_state", None)  # VirtualController's
-        if operator is not None:
-            out["eco"] = bool(operator.eco)
-        motoros = getattr(controller, "motoros", None)
-        reason = getattr(motoros, "not_ready_reason", None)
+        if snapshot.eco is not None:
+            out["eco"] = snapshot.eco
+        reason = snapshot.not_ready
         if reason is not None:
-            code, name, meaning, why = reason()
-            out["not_ready"] = {"subcode": code, "name": name, "meaning": meaning, "why": why}
-        jobs = getattr(controller, "job_position", None)  # a property of VirtualController
-        if jobs is not None:
-            out["jobs"] = [{"job": job, "line": line} for job, line in jobs]
-        read_group = getattr(controller, "read_io_group", None)
-        if read_group is not None:  # OT#889..896 are one IO group: one read, not eight
-            byte = read_group(OT889_ADDRESS // IO_GROUP_BITS).value
+            out["not_ready"] = {
+                "subcode": reason.subcode,
+                "name": reason.name,
+                "meaning": reason.meaning,
+                "why": reason.why,
+            }
+        if snapshot.jobs is not None:
+            out["jobs"] = [{"job": j.job, "line": j.line} for j in snapshot.jobs]
+        if snapshot.motoros_outputs is not None:
             out["outputs"] = [
-                {"name": f"OT#{MOTOROS_FIRST_OUTPUT + i}", "value": (byte >> i) & 1}
-                for i in range(MOTOROS_OUTPUTS)
+                {"name": f"OT#{MOTOROS_FIRST_OUTPUT + i}", "value": bit}
+                for i, bit in enumerate(snapshot.motoros_outputs)
             ]
         if self._clients is not None:
             out["clients"] = self._clients()
         return out
+
+
+def action_list(actions: Sequence[ActionSpec]) -> list[dict[str, Any]]:
+    """``GET /api/pendant/actions``: what the pendant's buttons call, from the declarations
+    (each action's name, path, description and parameters with their bounds)."""
+    return [
+        {
+            "name": spec.name,
+            "method": spec.method,
+            "path": spec.path,
+            "doc": spec.doc,
+            "tag": spec.tag,
+            "params": [
+                {
+                    "name": p.name,
+                    "kind": p.kind,
+                    "doc": p.doc,
+                    "unit": p.unit,
+                    "required": p.required,
+                    "default": p.default,
+                    "choices": list(p.choices),
+                    "bounds": p.bounds_text(),
+                    "ge": p.ge,
+                    "gt": p.gt,
+                    "le": p.le,
+                    "length": p.length,
+                    "max_length": p.max_length,
+                }
+                for p in spec.params
+            ],
+        }
+        for spec in actions_by_name(actions).values()
+    ]
 
 
 def install_pendant(
@@ -335,15 +360,18 @@ def install_pendant(
     ports: Callable[[], Ports] | None = None,
     clients: Callable[[], dict[str, int]] | None = None,
     after_ticks: Callable[[int], Awaitable[None]] | None = None,
+    *,
+    actions: Sequence[ActionSpec] = CONTROL_ACTIONS,
 ) -> None:
-    """Serve the pendant at ``/`` (assets under ``/pendant``) and its feed at ``/ws/state``.
+    """Serve the pendant at ``/`` (assets under ``/pendant``), its feed at ``/ws/state``
+    and the actions its buttons call at ``/api/pendant/actions``.
 
     ``after_ticks(n)`` (the interpolation loop's ``Ticker.wait_ticks``) paces the feed
     on the loop: each document is built right after a tick, and each tab is sent it
     right after one of the following ticks, so the work falls in the idle part of a
     period in small pieces instead of colliding with the next tick's deadline.
     """
-    period_ms = int(getattr(controller, "period_ms", DEFAULT_PERIOD_MS))
+    period_ms = controller.period_ms
     feed = PendantFeed(
         PendantDocument(controller, tick_stats, ports, clients),
         after_ticks=after_ticks,
@@ -367,6 +395,25 @@ def install_pendant(
         tool0 and tcp) for the 3D view."""
         return feed.document()
 
+    @app.websocket("/ws/state")
+    async def state_ws(ws: WebSocket) -> None:
+        await feed.serve(ws)
+
+    _install_actions_routes(app, controller, feed, actions)
+
+
+def _install_actions_routes(
+    app: FastAPI, controller: SimulatedController, feed: PendantFeed, actions: Sequence[ActionSpec]
+) -> None:
+    """The pendant's buttons: the list of actions, and the scenario file it loads."""
+    listed = action_list(actions)
+
+    @app.get("/api/pendant/actions", tags=["state"])
+    async def pendant_actions() -> list[dict[str, Any]]:
+        """The actions the pendant's buttons call (method and path each), with their
+        parameters, units and bounds: the control API's declarations."""
+        return listed
+
     @app.post("/api/pendant/scenario", tags=["safety"])
     async def scenario_file(body: ScenarioFileBody) -> dict[str, Any]:
         """Load a scenario *file* (TOML, the format of ``pymotoros sim --scenario``), as
@@ -376,11 +423,7 @@ def install_pendant(
             data = tomllib.loads(body.toml)
         except tomllib.TOMLDecodeError as exc:
             raise ConfigError(f"{body.name}: not valid TOML: {exc}") from exc
-        scenario = parse_scenario(data, source=body.name)
+        scenario = parse_scenario(data, source=body.name, actions=actions)
         logger.info("operator: scenario file %s with %d events", body.name, len(scenario.events))
         controller.load_scenario(scenario)
         return feed.document()
-
-    @app.websocket("/ws/state")
-    async def state_ws(ws: WebSocket) -> None:
-        await feed.serve(ws)

@@ -1,12 +1,13 @@
-"""The pendant's state document, built straight from the controller's frozen snapshot.
+"""The state document, built straight from the controller's frozen snapshot: the one
+builder of ``GET /api/state``, ``/ws/state`` and the pendant.
 
 The feed sends this document 25 times a second, on the event loop that also runs the
 4 ms interpolation ticks, so every microsecond it takes is taken from the loop's idle
-time. It is therefore built without the control API's pydantic models: plain dicts and
-lists, filled once from :class:`~pymotoros.controller.api.ControllerSnapshot`, in the
-same shape and key order as ``GET /api/state`` (``StateModel``; a test holds the two
-equal, so a field added there must be added here too), then JSON-encoded once for every
-tab.
+time. It is therefore built without pydantic: plain dicts and lists, filled once from
+:class:`~pymotoros.controller.api.ControllerSnapshot`, then JSON-encoded once for every
+tab. ``GET /api/state`` answers the same dict; the control API's ``StateModel`` is its
+OpenAPI schema only (FastAPI checks each answer against it, and a test holds the two
+equal key for key).
 
 The 3D view needs each joint's position only (not the orientations
 :meth:`pymotoros.kinematics.Chain.joint_frames` also computes): :class:`Skeleton` runs

@@ -13,8 +13,8 @@
 
   function say(text) { $("message").textContent = text; }
 
-  async function post(path, body) {
-    const resp = await fetch(path, { method: "POST", headers: { "Content-Type": "application/json" },
+  async function post(path, body, method) {
+    const resp = await fetch(path, { method: method || "POST", headers: { "Content-Type": "application/json" },
                                      body: JSON.stringify(body === undefined ? {} : body) });
     const answer = await resp.json();
     if (!resp.ok) { say(answer.error || ("HTTP " + resp.status)); return null; }
@@ -225,22 +225,88 @@
   }
 
   // ------------------------------------------------------------------ buttons
+  // The actions and their paths come from the simulator's declarations
+  // (GET /api/pendant/actions): the buttons call an action by name, never a path of their own.
+  const actions = {};
+  state.actions = actions;          // for the browser test
+  async function loadActions() {
+    try {
+      const resp = await fetch("/api/pendant/actions");
+      for (const a of await resp.json()) actions[a.name] = a;
+    } catch (err) { say("cannot read the list of actions: " + err); return; }
+    boundInputs();
+    fillActionPicker();
+  }
+  // The number inputs take their limits from the declarations, not from copies here.
+  function boundInputs() {
+    const inputs = [["alarm-code", "alarm", "code"], ["fsu-pct", "fsu", "joint_speed_pct"],
+                    ["io-value", "io", "value"], ["m-value", "io", "value"]];
+    for (const [id, name, key] of inputs) {
+      const p = actions[name] && actions[name].params.find((q) => q.name === key);
+      if (!p) continue;
+      const low = p.ge !== null ? p.ge : p.gt;
+      if (low !== null) $(id).min = low;
+      if (p.le !== null) $(id).max = p.le;
+      $(id).title = p.doc + (p.bounds ? " (" + p.bounds + ")" : "");
+    }
+  }
+  function act(name, body) {
+    const a = actions[name];
+    if (!a) { say("the simulator has no action " + name); return null; }
+    const rest = Object.assign({}, body || {});
+    const path = a.path.replace(/\{(\w+)\}/g, (_, key) => {   // a parameter given in the path
+      const value = rest[key]; delete rest[key]; return encodeURIComponent(value);
+    });
+    return post(path, rest, a.method);
+  }
+
+  function paramHint(a) {
+    return a.params.map((p) => `${p.name}: ${p.kind}${p.bounds ? " " + p.bounds : ""}` +
+      `${p.choices.length ? " (" + p.choices.join("|") + ")" : ""}${p.required ? "" : " optional"}`).join(", ");
+  }
+  // Every declared action, also those without a button of their own: name + JSON parameters.
+  function fillActionPicker() {
+    const row = document.createElement("div");
+    row.className = "row";
+    row.innerHTML = '<label>Action <select id="action-name"></select></label>' +
+      '<input id="action-params" size="32" placeholder="{}">' +
+      '<button id="btn-action">Run</button>';
+    $("message").before(row);
+    const select = $("action-name");
+    for (const a of Object.values(actions)) {
+      const opt = document.createElement("option");
+      opt.value = a.name; opt.textContent = a.name; opt.title = a.doc;
+      select.appendChild(opt);
+    }
+    const hint = () => {
+      const a = actions[select.value];
+      $("action-params").title = a ? a.doc + (a.params.length ? " Parameters: " + paramHint(a) : "") : "";
+      $("action-params").placeholder = a && a.params.length ? paramHint(a) : "{}";
+    };
+    select.onchange = hint; hint();
+    $("btn-action").onclick = () => {
+      let body;
+      try { body = JSON.parse($("action-params").value || "{}"); } catch (err) { say("parameters: not JSON: " + err); return; }
+      act(select.value, body);
+    };
+  }
+
   function wire() {
     const last = () => state.last || {};
-    $("btn-estop").onclick = () => post("/api/estop", { pressed: !last().estop });
-    $("btn-hold").onclick = () => post("/api/hold", { on: !last().hold });
-    $("btn-mode").onclick = () => post("/api/mode", { mode: last().mode === "play" ? "teach" : "play" });
-    $("btn-remote").onclick = () => post("/api/remote", { on: !last().remote });
-    $("btn-servo").onclick = () => post("/api/servo", { on: !last().servo });
-    $("btn-reset").onclick = () => post("/api/reset");
-    $("btn-alarm").onclick = () => post("/api/alarm", { code: Number($("alarm-code").value), text: $("alarm-text").value });
-    $("btn-pfl").onclick = () => post("/api/pfl", { event: "contact" });
-    $("btn-fsu").onclick = () => post("/api/fsu", { joint_speed_pct: Number($("fsu-pct").value) });
-    $("btn-fsu-off").onclick = () => post("/api/fsu", { off: true });
+    $("btn-estop").onclick = () => act("estop", { pressed: !last().estop });
+    $("btn-hold").onclick = () => act("hold", { on: !last().hold });
+    $("btn-mode").onclick = () => act("mode", { mode: last().mode === "play" ? "teach" : "play" });
+    $("btn-remote").onclick = () => act("remote", { on: !last().remote });
+    $("btn-servo").onclick = () => act("servo", { on: !last().servo });
+    $("btn-reset").onclick = () => act("reset");
+    $("btn-alarm").onclick = () => act("alarm", { code: Number($("alarm-code").value), text: $("alarm-text").value });
+    $("btn-pfl").onclick = () => act("pfl", { event: "contact" });
+    $("btn-fsu").onclick = () => act("fsu", { joint_speed_pct: Number($("fsu-pct").value) });
+    $("btn-fsu-off").onclick = () => act("fsu", { off: true });
     $("btn-io-read").onclick = () => readIo(Number($("io-address").value), $("io-result"));
-    $("btn-io-write").onclick = () => post("/api/io", { address: Number($("io-address").value), value: Number($("io-value").value) });
+    $("btn-io-write").onclick = () => act("io", { address: Number($("io-address").value), value: Number($("io-value").value) });
     $("btn-m-read").onclick = () => readIo(M_BASE + Number($("m-number").value), $("m-result"));
-    $("btn-m-write").onclick = () => post("/api/io", { address: M_BASE + Number($("m-number").value), value: Number($("m-value").value) });
+    $("btn-m-write").onclick = () => act("io", { address: M_BASE + Number($("m-number").value), value: Number($("m-value").value) });
     $("btn-scenario").onclick = async () => {
       const file = $("scenario-file").files[0];
       if (!file) { say("choose a scenario file (.toml with [[events]], or JSON {\"events\": [...]}) first"); return; }
@@ -250,10 +316,10 @@
       }
       let doc;
       try { doc = JSON.parse(await file.text()); } catch (err) { say("not JSON: " + err); return; }
-      post("/api/scenario", Array.isArray(doc) ? { events: doc } : doc);
+      act("scenario", Array.isArray(doc) ? { events: doc } : doc);
     };
     $("units-rad").onchange = () => state.last && renderGroups(state.last.groups);
   }
 
-  wire(); setupOrbit(); connect();
+  wire(); loadActions(); setupOrbit(); connect();
 })();

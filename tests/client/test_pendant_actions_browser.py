@@ -1,0 +1,82 @@
+"""The pendant's actions come from the declarations (issue 19 item 1), in a real browser:
+the page reads ``GET /api/pendant/actions``, its number inputs take their limits from
+it, and its "Action" picker runs any declared action, a refusal shown in the control
+API's words (Debian's Chromium + chromedriver, driven by Selenium)."""
+
+from __future__ import annotations
+
+import shutil
+from collections.abc import Callable, Iterator
+from typing import Any
+
+import pytest
+from client_sim import Sim, running_sim
+
+webdriver = pytest.importorskip("selenium.webdriver", reason="selenium is not installed")
+
+from selenium.webdriver.chrome.options import Options  # noqa: E402
+from selenium.webdriver.chrome.service import Service  # noqa: E402
+from selenium.webdriver.common.by import By  # noqa: E402
+from selenium.webdriver.remote.webdriver import WebDriver  # noqa: E402
+from selenium.webdriver.support.ui import Select, WebDriverWait  # noqa: E402
+
+CHROMIUM = shutil.which("chromium") or shutil.which("chromium-browser")
+CHROMEDRIVER = shutil.which("chromedriver")
+WAIT_S = 20.0
+"""Bound on every wait for the page (a cold Chromium start on a busy 2-core machine)."""
+
+pytestmark = pytest.mark.skipif(
+    CHROMIUM is None or CHROMEDRIVER is None, reason="chromium and chromedriver are needed"
+)
+
+
+@pytest.fixture(scope="module")
+def sim() -> Iterator[Sim]:
+    with running_sim() as sim:
+        yield sim
+
+
+@pytest.fixture(scope="module")
+def browser() -> Iterator[WebDriver]:
+    options = Options()
+    options.binary_location = str(CHROMIUM)
+    for arg in ("--headless=new", "--no-sandbox", "--disable-dev-shm-usage", "--disable-gpu",
+                "--proxy-server=127.0.0.1:9", "--no-first-run"):  # fmt: skip
+        options.add_argument(arg)
+    driver = webdriver.Chrome(options=options, service=Service(str(CHROMEDRIVER)))
+    try:
+        yield driver
+    finally:
+        driver.quit()
+
+
+def _wait(driver: WebDriver, condition: Callable[[WebDriver], Any], what: str) -> Any:
+    return WebDriverWait(driver, WAIT_S, poll_frequency=0.05).until(condition, what)
+
+
+def _run(browser: WebDriver, action: str, params: str) -> None:
+    Select(browser.find_element(By.ID, "action-name")).select_by_value(action)
+    box = browser.find_element(By.ID, "action-params")
+    box.clear()
+    box.send_keys(params)
+    browser.find_element(By.ID, "btn-action").click()
+
+
+def test_the_pendants_actions_are_the_declared_ones(sim: Sim, browser: WebDriver) -> None:
+    browser.get(f"http://127.0.0.1:{sim.http}/")
+    _wait(browser, lambda d: d.find_elements(By.ID, "action-name"), "the action picker")
+    listed = browser.execute_script("return Object.keys(window.pendant.actions)")
+    assert listed == [a["name"] for a in sim.api("/api/pendant/actions")]
+    assert {"estop", "eco", "io_failure", "drop_motion"} <= set(listed)
+    # the inputs' limits are the declarations'
+    assert browser.find_element(By.ID, "alarm-code").get_attribute("max") == "9999"
+    assert browser.find_element(By.ID, "fsu-pct").get_attribute("min") == "1"
+    # any declared action runs from the picker
+    _run(browser, "hold", '{"on": true}')
+    _wait(browser, lambda d: sim.api("/api/state")["hold"] is True, "HOLD from the picker")
+    # a refused value is shown in the words every surface uses
+    _run(browser, "fsu", '{"tcp_speed_mm_s": 0}')
+    words = "POST /api/fsu: tcp_speed_mm_s: must be > 0 mm/s, not 0"
+    _wait(browser, lambda d: d.find_element(By.ID, "message").text == words, "the refusal")
+    _run(browser, "hold", '{"on": false}')
+    _wait(browser, lambda d: sim.api("/api/state")["hold"] is False, "HOLD off")
