@@ -309,7 +309,7 @@ class VirtualController:
             period_ms=self._clock.period_ms,
             eco=s.eco,
             not_ready=NotReadyInfo(*self._motoros.not_ready_reason()),
-            jobs=tuple(JobPosition(job, line) for job, line in self._runner.position()),
+            jobs=tuple(JobPosition(job, line) for job, line in self._ctx.runner.position()),
             motoros_outputs=self._motoros_outputs(),
             cell=self.cell,
         )
