@@ -218,11 +218,6 @@ class S1cxgTable:
         return dict(self.params).get(number, 0)
 
     @property
-    def needs_kinematics(self) -> bool:
-        """Some output needs the TCP (Cartesian position or TCP speed)."""
-        return any(o.quantity in (Quantity.CARTESIAN, Quantity.TCP_SPEED) for o in self.outputs)
-
-    @property
     def registers(self) -> tuple[int, ...]:
         """Every register written, in order (a register may appear twice)."""
         return tuple(r for o in self.outputs for r in o.registers)
