@@ -11,7 +11,7 @@ from __future__ import annotations
 from collections.abc import Sequence
 from typing import TYPE_CHECKING, Final
 
-from pymotoros.models.robots import Frame, RobotModel
+from pymotoros.models.robots import RobotModel, Transform
 from pymotoros.protocol.constants import MAX_TOOL_NUMBER
 
 if TYPE_CHECKING:  # the kinematics import numpy and Pinocchio: loaded when first used
@@ -27,7 +27,7 @@ class ToolTable:
 
     def __init__(self, robot: RobotModel) -> None:
         self._robot = robot
-        self._frames: dict[tuple[int, int], Frame] = {}
+        self._frames: dict[tuple[int, int], Transform] = {}
         self.selected: dict[int, int] = {}
 
     def define(
@@ -43,7 +43,7 @@ class ToolTable:
             raise ValueError(f"tool {number}: tool numbers are 0..{MAX_TOOL_NUMBER}")
         if len(tcp_m) != 3 or len(rpy_rad) != 3:
             raise ValueError("a tool needs tcp_m = (x, y, z) and rpy_rad = (roll, pitch, yaw)")
-        self._frames[(group, number)] = Frame(
+        self._frames[(group, number)] = Transform(
             (float(tcp_m[0]), float(tcp_m[1]), float(tcp_m[2])),
             (float(rpy_rad[0]), float(rpy_rad[1]), float(rpy_rad[2])),
         )
@@ -54,5 +54,5 @@ class ToolTable:
         from pymotoros.kinematics import chain_for
 
         number = self.selected.get(group, 0) if tool is None else tool
-        frame = self._frames.get((group, number), Frame())
+        frame = self._frames.get((group, number), Transform())
         return chain_for(self._robot.groups[group], frame)

@@ -22,7 +22,7 @@ import numpy.typing as npt
 import pinocchio as pin
 
 from pymotoros.errors import KinematicsError
-from pymotoros.models.robots import AxisModel, Frame, GroupModel, JointGeometry, robot_model
+from pymotoros.models.robots import AxisModel, GroupModel, JointGeometry, Transform, robot_model
 
 FloatArray = npt.NDArray[np.float64]
 FrameName = Literal["flange", "tool0", "tcp"]
@@ -52,7 +52,7 @@ IK_MAX_STEP_RAD: Final = 0.5
 SINGULARITY_SIGMA: Final = 1e-4
 """Smallest singular value of the 6×n Jacobian below which a pose counts as singular."""
 _RNG_SEED: Final = 20261124
-NO_TOOL: Final = Frame()
+NO_TOOL: Final = Transform()
 """Tool 0 as after a boot: the TCP is tool0 itself."""
 
 
@@ -101,7 +101,7 @@ def rotation_angle(a: FloatArray, b: FloatArray) -> float:
     return float(np.linalg.norm(pin.log3(a[:3, :3].T @ b[:3, :3])))
 
 
-def _se3(frame: Frame) -> Any:
+def _se3(frame: Transform) -> Any:
     return pin.SE3(pin.rpy.rpyToMatrix(*frame.rpy), np.array(frame.xyz, dtype=float))
 
 
@@ -120,7 +120,7 @@ class Chain:
     Build with :func:`chain_for` (cached per group) and :meth:`with_tool`.
     """
 
-    def __init__(self, group: GroupModel, tool: Frame = NO_TOOL) -> None:
+    def __init__(self, group: GroupModel, tool: Transform = NO_TOOL) -> None:
         if any(a.geometry is None for a in group.axes):
             raise KinematicsError(
                 f"group {group.name} has no joint geometry: give every axis an origin and axis"
@@ -181,7 +181,7 @@ class Chain:
     def num_joints(self) -> int:
         return len(self.joint_names)
 
-    def with_tool(self, tool: Frame) -> Chain:
+    def with_tool(self, tool: Transform) -> Chain:
         """The same chain with another tool on ``tool0`` (a new object; this one is unchanged)."""
         return Chain(self.group, tool)
 
@@ -402,11 +402,11 @@ def _frame_json(name: str, m: Any, axis: FloatArray | None) -> dict[str, Any]:
 
 
 @lru_cache(maxsize=64)
-def _cached(group: GroupModel, tool: Frame) -> Chain:
+def _cached(group: GroupModel, tool: Transform) -> Chain:
     return Chain(group, tool)
 
 
-def chain_for(group: GroupModel | str, tool: Frame = NO_TOOL, *, group_index: int = 0) -> Chain:
+def chain_for(group: GroupModel | str, tool: Transform = NO_TOOL, *, group_index: int = 0) -> Chain:
     """The chain of a group (or of a robot model's ``group_index``-th group, by name), with
     ``tool`` on ``tool0``. Cached: do not mutate the returned chain."""
     if isinstance(group, str):

@@ -21,6 +21,7 @@ from dataclasses import dataclass, field
 from typing import Final
 
 from pymotoros.errors import ConfigError
+from pymotoros.protocol.messages.dh import DhLink
 
 
 class GroupKind(enum.Enum):
@@ -35,7 +36,7 @@ Vec3 = tuple[float, float, float]
 
 
 @dataclass(frozen=True, slots=True)
-class Frame:
+class Transform:
     """A fixed transform as URDF writes it: translation (m), then fixed-axis roll, pitch,
     yaw (rad) applied about X, then Y, then Z (R = Rz·Ry·Rx)."""
 
@@ -48,7 +49,7 @@ class JointGeometry:
     """Where a joint sits in its parent link (URDF ``origin``) and the axis it turns about,
     in the joint's own frame (URDF ``axis``): the data of robot-models.md §1."""
 
-    origin: Frame
+    origin: Transform
     axis: Vec3
 
 
@@ -82,16 +83,6 @@ class AxisModel:
 
 
 @dataclass(frozen=True, slots=True)
-class DhLink:
-    """One link of the GET_DH_PARAMETERS reply: theta, d, a, alpha (rad, m)."""
-
-    theta: float
-    d: float
-    a: float
-    alpha: float
-
-
-@dataclass(frozen=True, slots=True)
 class GroupModel:
     """One control group (R1, B1, S1 …) with its axes in ROS order."""
 
@@ -104,10 +95,11 @@ class GroupModel:
     home: tuple[float, ...]
     """The built-in ``home`` pose, ROS order."""
     dh: tuple[DhLink, ...] = field(default=())
-    """Up to 8 DH links for GET_DH_PARAMETERS."""
-    mount: Frame = Frame()
+    """Up to 8 DH links for GET_DH_PARAMETERS (theta, d, a, alpha: rad, m), the wire's
+    own :class:`~pymotoros.protocol.messages.DhLink`: one type from model to reply."""
+    mount: Transform = Transform()
     """Where the first joint's parent link sits in ``base_link`` (SDA10F arms: the torso)."""
-    tool0: Frame | None = None
+    tool0: Transform | None = None
     """``tool0`` in the last link's frame (None: no tool0, the chain ends at the flange)."""
     base_height: float = 0.0
     """Height of the ROS-Industrial ``base`` frame (Yaskawa robot coordinates) above
@@ -286,9 +278,9 @@ _GP_TOOL0_RPY: Final = (math.pi, -_HALF_PI, 0.0)
 class _GroupGeometry:
     joints: tuple[tuple[Vec3, Vec3] | tuple[Vec3, Vec3, Vec3], ...]
     """Per ROS-order joint: (origin xyz, axis) or (origin xyz, axis, origin rpy)."""
-    tool0: Frame | None
+    tool0: Transform | None
     base_height: float
-    mount: Frame = Frame()
+    mount: Transform = Transform()
 
 
 def _with_geometry(robot: RobotModel, *geometries: _GroupGeometry) -> RobotModel:
@@ -301,7 +293,7 @@ def _with_geometry(robot: RobotModel, *geometries: _GroupGeometry) -> RobotModel
             dataclasses.replace(
                 axis,
                 geometry=JointGeometry(
-                    Frame(joint[0], joint[2] if len(joint) == 3 else (0.0, 0.0, 0.0)), joint[1]
+                    Transform(joint[0], joint[2] if len(joint) == 3 else (0.0, 0.0, 0.0)), joint[1]
                 ),
             )
             for axis, joint in zip(group.axes, geo.joints, strict=True)
@@ -329,7 +321,7 @@ def _hc10_geometry(flange: float) -> _GroupGeometry:
             ((0.0, 0.162, 0.0), _NY),
             ((0.0, 0.0, 0.0), _Z),
         ),
-        Frame((0.0, 0.0, -flange), (math.pi, 0.0, 0.0)),
+        Transform((0.0, 0.0, -flange), (math.pi, 0.0, 0.0)),
         0.275,
     )
 
@@ -347,7 +339,7 @@ def _gp_geometry(
             ((0.0, 0.0, 0.0), _NY),
             ((0.0, 0.0, 0.0), _NX),
         ),
-        Frame((tool, 0.0, 0.0), _GP_TOOL0_RPY),
+        Transform((tool, 0.0, 0.0), _GP_TOOL0_RPY),
         s,
     )
 
@@ -364,7 +356,7 @@ _MH5_GEOMETRY: Final = _GroupGeometry(
         ((0.305, 0.0, 0.0), _NY),
         ((0.080, 0.0, 0.0), _NX),
     ),
-    Frame((0.0, 0.0, 0.0), _GP_TOOL0_RPY),
+    Transform((0.0, 0.0, 0.0), _GP_TOOL0_RPY),
     0.330,
 )
 
@@ -379,7 +371,7 @@ _SIA20D_GEOMETRY: Final = _GroupGeometry(
         ((0.0, 0.0, 0.0), _NY),
         ((0.0, 0.0, 0.18), _NZ),
     ),
-    Frame((0.0, 0.0, 0.0), (0.0, 0.0, -math.pi)),
+    Transform((0.0, 0.0, 0.0), (0.0, 0.0, -math.pi)),
     0.41,
 )
 
@@ -405,10 +397,10 @@ def _sda10f_arm_geometry(reflect: float) -> _GroupGeometry:
             ((0.0, 0.0, 0.0), pos, down),
             ((0.0, 0.155, 0.0), neg, down),
         ),
-        Frame((0.0, 0.0, 0.0), (0.0, 0.0, math.pi)),
+        Transform((0.0, 0.0, 0.0), (0.0, 0.0, math.pi)),
         # robot-models.md names no `base` frame for the SDA10F: base = base_link (chosen).
         0.0,
-        Frame((0.0, 0.0, _SDA10F_TORSO_HEIGHT)),
+        Transform((0.0, 0.0, _SDA10F_TORSO_HEIGHT)),
     )
 
 
