@@ -38,7 +38,7 @@ from __future__ import annotations
 
 import functools
 from collections.abc import Callable, Sequence
-from typing import Any, Final
+from typing import Any, Final, NamedTuple
 
 import numpy as np
 import numpy.typing as npt
@@ -127,33 +127,14 @@ def batch_increments(
     with np.errstate(all="ignore"):
         if long.any():
             where = np.flatnonzero(long)
-            _gathered_steps(
-                rows[:, where],
-                start_ms[where],
-                first_ms[where],
-                end_ms[where],
-                full[where],
-                begin[where],
-                axes,
-                time_ms,
-                increments,
-            )
-    short = np.where(long, 0, full)
+            segments = _Segments(rows, start_ms, first_ms, end_ms, full, begin)
+            _gathered_steps(segments.pick(where), axes, time_ms, increments)
+    short = _Segments(rows, start_ms, first_ms, end_ms, np.where(long, 0, full), begin)
 
     def block(lo: int) -> None:
         hi = min(lo + SEGMENT_CHUNK, size)
         with np.errstate(all="ignore"):
-            _ranked_steps(
-                rows[:, lo:hi],
-                start_ms[lo:hi],
-                first_ms[lo:hi],
-                end_ms[lo:hi],
-                short[lo:hi],
-                begin[lo:hi],
-                axes,
-                time_ms,
-                increments,
-            )
+            _ranked_steps(short.pick(slice(lo, hi)), axes, time_ms, increments)
             # The target before the block: the end point of the segment before it.
             _difference(
                 increments, int(begin[lo]), int(stop[hi - 1]), previous if lo == 0 else ends[lo - 1]
@@ -184,30 +165,45 @@ def _difference(targets: I64Array, lo: int, hi: int, before: I64Array) -> None:
         targets[a] -= targets[a - 1] if a > lo else before
 
 
+class _Segments(NamedTuple):
+    """Some of :func:`batch_increments`'s segments: their rows (4, S, num_axes) and
+    grids (S,), and ``begin``, the entry index of each one's first entry."""
+
+    rows: F32Array
+    start_ms: I64Array
+    first_ms: I64Array
+    end_ms: I64Array
+    full: I64Array
+    begin: I64Array
+
+    def pick(self, where: Any) -> _Segments:
+        """The segments ``where`` selects (a slice or an index array)."""
+        rows, start_ms, first_ms, end_ms, full, begin = self
+        return _Segments(
+            rows[:, where],
+            start_ms[where],
+            first_ms[where],
+            end_ms[where],
+            full[where],
+            begin[where],
+        )
+
+
 def _ranked_steps(
-    rows: F32Array,
-    start_ms: I64Array,
-    first_ms: I64Array,
-    end_ms: I64Array,
-    full: I64Array,
-    begin: I64Array,
-    axes: GroupAxes,
-    time_ms: I64Array,
-    targets: I64Array,
+    segments: _Segments, axes: GroupAxes, time_ms: I64Array, targets: I64Array
 ) -> None:
     """The steps' targets of a block of short segments, rank by rank: step k of every segment that
     has one at once. Each segment's terms are used in place (no gather per step), and
     when every segment of the block has the same number of steps (points evenly
     spaced) the results go to a strided view of the output (no scatter)."""
     period = axes.period_ms
-    steps = int(full.max(initial=0))
+    steps = int(segments.full.max(initial=0))
     if not steps:
         return
-    busy = full > 0
+    busy = segments.full > 0
     if not busy.all():
-        where = np.flatnonzero(busy)
-        rows, full, begin = rows[:, where], full[where], begin[where]
-        start_ms, first_ms, end_ms = start_ms[where], first_ms[where], end_ms[where]
+        segments = segments.pick(np.flatnonzero(busy))
+    rows, start_ms, first_ms, end_ms, full, begin = segments
     count = len(full)
     duration = ms_to_seconds(end_ms - start_ms)[:, None]
     x87 = axes.float_mode is FloatMode.X87_EXTENDED
@@ -247,21 +243,13 @@ def _ranked_steps(
 
 
 def _gathered_steps(
-    rows: F32Array,
-    start_ms: I64Array,
-    first_ms: I64Array,
-    end_ms: I64Array,
-    full: I64Array,
-    begin: I64Array,
-    axes: GroupAxes,
-    time_ms: I64Array,
-    targets: I64Array,
+    segments: _Segments, axes: GroupAxes, time_ms: I64Array, targets: I64Array
 ) -> None:
     """The steps' targets of long segments (all with at least one step), :data:`CHUNK` steps at a
     time, each step taking its segment's terms with one gather."""
     mode = axes.float_mode
     period = axes.period_ms
-    steps = full
+    rows, start_ms, first_ms, end_ms, steps, begin = segments
     # Step k of a segment whose steps start at global step g is g + k = ramp.
     count = int(steps.sum())
     local = np.repeat(np.arange(len(steps)), steps)
