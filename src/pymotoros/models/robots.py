@@ -21,7 +21,7 @@ from dataclasses import dataclass, field
 from typing import Final
 
 from pymotoros.errors import ConfigError
-from pymotoros.protocol.messages.dh import DhLink
+from pymotoros.protocol.messages.dh import DhLink as DhLink  # re-exported: the models use it
 
 
 class GroupKind(enum.Enum):

@@ -461,22 +461,28 @@ def segment_targets(
     return part if axes.identity_columns else part[:, axes.columns]
 
 
+def _by_blocks(
+    terms: Callable[[F32Array, F32Array], AnyArray],
+    rows: F32Array,
+    duration: F32Array,
+    width: int,
+    dtype: type[np.floating[Any]],
+) -> AnyArray:
+    """``terms`` of many segments, :data:`SEGMENT_CHUNK` segments at a time, into one
+    (S, width, n) array: the kernels' temporaries stay the size of a block."""
+    size = rows.shape[1]
+    out: AnyArray = np.empty((size, width, rows.shape[2]), dtype=dtype)
+    for lo in range(0, size, SEGMENT_CHUNK):
+        hi = lo + SEGMENT_CHUNK
+        out[lo:hi] = terms(rows[:, lo:hi], duration[lo:hi])
+    return out
+
+
 def _terms_x87(rows: F32Array, duration: F32Array) -> F64Array:
     """(S, 5, n) float64: x0, v0, a1/2, a2 and the risk bound of each segment (x87)."""
-    size = rows.shape[1]
-    if size > SEGMENT_CHUNK:
-        out = np.empty((size, 5, rows.shape[2]), dtype=np.float64)
-        for lo in range(0, size, SEGMENT_CHUNK):
-            hi = lo + SEGMENT_CHUNK
-            out[lo:hi] = _terms_x87(rows[:, lo:hi], duration[lo:hi])
-        return out
-    rows64 = rows.astype(np.float64)
-    t64 = duration.astype(np.float64)
-    coef = coefficients_x87_checked(rows64, t64).astype(np.float64)
-    coef[0] *= 0.5  # a1/2: exact
-    x0, v0 = rows64[0], rows64[1]
-    bound = position_bound(x0, v0, coef[0], coef[1], t64)
-    return np.stack((x0, v0, coef[0], coef[1], bound), axis=1)
+    if rows.shape[1] > SEGMENT_CHUNK:
+        return _by_blocks(_terms_x87, rows, duration, 5, np.float64)
+    return np.stack(_terms_x87_split(rows, duration), axis=1)
 
 
 def _terms_x87_split(
@@ -493,13 +499,8 @@ def _terms_x87_split(
 
 def _terms_single(rows: F32Array, duration: F32Array) -> F32Array:
     """(S, 4, n) float32: x0, v0, a1 and a2 of each segment (FS100)."""
-    size = rows.shape[1]
-    if size > SEGMENT_CHUNK:
-        out = np.empty((size, 4, rows.shape[2]), dtype=np.float32)
-        for lo in range(0, size, SEGMENT_CHUNK):
-            hi = lo + SEGMENT_CHUNK
-            out[lo:hi] = _terms_single(rows[:, lo:hi], duration[lo:hi])
-        return out
+    if rows.shape[1] > SEGMENT_CHUNK:
+        return _by_blocks(_terms_single, rows, duration, 4, np.float32)
     tt32 = duration * duration
     coef = coefficients_kernel(
         rows, np.array((tt32, tt32 * duration)), np.array((duration, tt32)), FloatMode.STRICT_SINGLE
