@@ -202,6 +202,19 @@ def _floats(value: Any, count: int, where: str) -> list[float]:
         raise TrajectoryFileError(f"{where}: not all numbers: {value!r}") from None
 
 
+def _names_and_points(doc: dict[str, Any], name: str, key: str) -> tuple[list[str], list[Any]]:
+    """The joint names and the points of a JSON or YAML trajectory, checked; ``key`` is how
+    the format's messages write a key (``'"{}"'``: quoted as in JSON)."""
+    names = doc.get("joint_names")
+    if not isinstance(names, list) or not names or not all(isinstance(n, str) for n in names):
+        joint_names = key.format("joint_names")
+        raise TrajectoryFileError(f"{name}: {joint_names} must be a non-empty list of strings")
+    points = doc.get("points")
+    if not isinstance(points, list) or not points:
+        raise TrajectoryFileError(f"{name}: {key.format('points')} must be a non-empty list")
+    return names, points
+
+
 def parse_json(text: str, name: str = "JSON") -> Trajectory:
     try:
         doc = json.loads(text)
@@ -213,12 +226,7 @@ def parse_json(text: str, name: str = "JSON") -> Trajectory:
         raise TrajectoryFileError(
             f"{name}: version {doc.get('version')!r}; this pymotoros reads {JSON_VERSION}"
         )
-    names = doc.get("joint_names")
-    if not isinstance(names, list) or not all(isinstance(n, str) for n in names) or not names:
-        raise TrajectoryFileError(f'{name}: "joint_names" must be a non-empty list of strings')
-    points = doc.get("points")
-    if not isinstance(points, list) or not points:
-        raise TrajectoryFileError(f'{name}: "points" must be a non-empty list')
+    names, points = _names_and_points(doc, name, '"{}"')
     j = len(names)
     times, pos, vel = [], [], []
     for i, p in enumerate(points):
@@ -274,12 +282,7 @@ def parse_yaml(text: str, name: str = "YAML") -> Trajectory:
         raise TrajectoryFileError(
             f"{name}: not a trajectory_msgs/JointTrajectory (needs joint_names and points)"
         )
-    names = doc["joint_names"]
-    if not isinstance(names, list) or not names or not all(isinstance(n, str) for n in names):
-        raise TrajectoryFileError(f"{name}: joint_names must be a non-empty list of strings")
-    points = doc["points"]
-    if not isinstance(points, list) or not points:
-        raise TrajectoryFileError(f"{name}: points must be a non-empty list")
+    names, points = _names_and_points(doc, name, "{}")
     j = len(names)
     times, pos, vel = [], [], []
     for i, p in enumerate(points):
