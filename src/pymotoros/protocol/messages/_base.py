@@ -184,10 +184,11 @@ def _bind_joint_record(
     def unpack_record(buffer: bytes, start: int, end: int) -> _T:
         if end - start != size:
             raise _size_error(cls, buffer[start:end], size)
+        # Concatenation, not (*head, …): one tuple add instead of a list built and copied.
         return _tnew(
             cls,
-            (
-                *unpack_head(buffer, start),
+            unpack_head(buffer, start)  # noqa: RUF005
+            + (
                 unpack_joints(buffer, start + pos_at),
                 unpack_joints(buffer, start + vel_at),
                 unpack_joints(buffer, start + acc_at),
