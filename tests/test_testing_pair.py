@@ -8,7 +8,7 @@ import pytest
 
 from pymotoros.client import ConnectError
 from pymotoros.controller import default_cell
-from pymotoros.testing import Twin, VirtualClock, memory_stream_pair, twin
+from pymotoros.testing import Twin, VirtualClock, memory_stream_pair, ready_queue, twin
 
 PERIOD_S = 0.004
 """The YRC1000's interpolation period (4 ms)."""
@@ -29,6 +29,27 @@ async def test_memory_streams_carry_bytes_both_ways_and_eof() -> None:
     wb.write(b"lost")  # the peer is gone: the bytes go nowhere
     wb.close()
     await wb.wait_closed()
+
+
+async def test_ready_queue_sees_the_running_loops_ready_callbacks() -> None:
+    """The one reliance on asyncio's internals, pinned: a change there fails here, not
+    silently in the twin's speed (the driver would fall back to settle turns)."""
+    loop = asyncio.get_running_loop()
+    ready = ready_queue(loop)
+    assert ready is not None, f"{type(loop).__name__}: no ready queue seen"
+    before = len(ready)
+    handle = loop.call_soon(lambda: None)
+    assert len(ready) == before + 1
+    handle.cancel()
+    await asyncio.sleep(0)
+    assert len(ready) <= before  # the cancelled handle has been dropped
+
+
+def test_ready_queue_is_none_for_a_loop_it_cannot_see_into() -> None:
+    class Foreign(asyncio.AbstractEventLoop):
+        pass
+
+    assert ready_queue(Foreign()) is None
 
 
 @pytest.mark.parametrize("watch_ready", [True, False])

@@ -9,6 +9,10 @@
      +-- ConfigError                    a cell file, model name or option is wrong (ValueError)
      +-- JobError                       an INFORM job cannot be loaded (ValueError)
      +-- TrajectoryRejectedError        the offline engine refuses a point as MotoROS would
+     +-- KinematicsError                a pose no joint values reach (ValueError)
+     +-- RecordingError                 (pymotoros.client.recording, ValueError) a bad pcapng file
+     +-- PflRefusedError                (pymotoros.controller.safety, ValueError) a PFL event
+     |                                  the cell cannot produce now
      +-- ClientError                    (pymotoros.client.errors: connection, reply, IO errors…)
           +-- PlanningError             (ValueError) a move cannot be planned
           +-- NamedPoseError            (ValueError) an SRDF or a named pose is wrong
@@ -16,9 +20,10 @@
 Expected refusals of the virtual controller (NOT_READY, INVALID …) are *values*
 returned by the domain, not exceptions; these classes are for what must stop the
 caller. Exceptions also inherit the matching builtin (``ValueError`` …) so plain
-``except ValueError`` keeps working. Every class of the tree is importable from the
+``except ValueError`` keeps working. The classes users catch are importable from the
 front door (``pymotoros.PlanningError`` …); ``tests/test_front_door.py`` checks that
-each exception exported there derives from :class:`PymotorosError`.
+each exception exported there derives from :class:`PymotorosError`, and
+``tests/test_errors.py`` that every public exception class of the package does.
 """
 
 from __future__ import annotations

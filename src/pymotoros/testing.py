@@ -49,7 +49,7 @@ from pymotoros.runtime.motion_server import MotionServer
 from pymotoros.runtime.state_server import STATE_PERIOD_S, StateServer
 from pymotoros.runtime.tcp import TcpService
 
-__all__ = ["Twin", "VirtualClock", "memory_stream_pair", "sync_twin", "twin"]
+__all__ = ["Twin", "VirtualClock", "memory_stream_pair", "ready_queue", "sync_twin", "twin"]
 
 TWIN_HOST: Final = "twin"
 """The host name the twin's clients use (nothing resolves it: the connector is in memory)."""
@@ -265,14 +265,14 @@ class VirtualClock(ManualClock):
     async def drive(self, *, settle_turns: int = SETTLE_TURNS, watch_ready: bool = True) -> None:
         """Move time whenever the loop is idle; run until cancelled.
 
-        Idle means no callback but this one is ready to run. CPython's event loops keep
-        their ready callbacks in ``_ready``: looking at it lets time jump the moment
-        everything waits, so a round trip costs no virtual time and a jump no extra loop
-        turns, and lets ticks run back to back until one wakes someone. On a loop
-        without it (uvloop…), or with ``watch_ready=False``, ``settle_turns`` turns
-        stand in for "idle" and time moves one tick or one deadline at a time.
+        Idle means no callback but this one is ready to run. Where :func:`ready_queue`
+        sees the loop's ready callbacks, time jumps the moment everything waits, so a
+        round trip costs no virtual time and a jump no extra loop turns, and ticks run
+        back to back until one wakes someone. On a loop where it sees nothing (uvloop…),
+        or with ``watch_ready=False``, ``settle_turns`` turns stand in for "idle" and
+        time moves one tick or one deadline at a time.
         """
-        ready = getattr(asyncio.get_running_loop(), "_ready", None) if watch_ready else None
+        ready = ready_queue(asyncio.get_running_loop()) if watch_ready else None
         batch = isinstance(ready, collections.abc.Sized)
         quiet: collections.abc.Sized = ready if isinstance(ready, collections.abc.Sized) else ()
         while True:
@@ -286,6 +286,24 @@ class VirtualClock(ManualClock):
             target = self.next_deadline
             if self._run_ticks_until(target, quiet, batch=batch) and target is not None:
                 self.advance_to(max(target, self.now()))
+
+
+def ready_queue(loop: asyncio.AbstractEventLoop) -> collections.abc.Sized | None:
+    """The callbacks ``loop`` runs on its next turn (a live view), or None if unseen.
+
+    Why it exists: virtual time may jump only when every task waits, and asyncio has no
+    public "is the loop idle" query. CPython's own loops (every
+    :class:`asyncio.BaseEventLoop`: the selector and proactor loops ``asyncio.run``
+    makes) hold those callbacks in a deque, ``_ready``; this function is the one place
+    pymotoros relies on that, so that the twin keeps its speed on any loop the caller
+    runs, and ``tests/test_testing_pair.py`` pins it on the running Python (an asyncio
+    change fails a test instead of silently slowing every twin). Any other loop (uvloop…)
+    gives None: :meth:`VirtualClock.drive` then counts settle turns.
+    """
+    if not isinstance(loop, asyncio.BaseEventLoop):
+        return None
+    ready = vars(loop).get("_ready")
+    return ready if isinstance(ready, collections.abc.Sized) else None
 
 
 _EPSILON: Final = 1e-9
@@ -485,13 +503,13 @@ def sync_twin(
     the_twin = Twin(cell, robot=robot, controller=controller)
     facade = SyncRobotClient(TWIN_HOST, **the_twin.client_options(**client_options))
     try:
-        facade._run(the_twin.start())  # the facade's loop runs the twin too
+        facade.run(the_twin.start())  # the facade's loop runs the twin too
         try:
             facade.connect()
             facade.wait_for_state()
             yield facade, the_twin
         finally:
-            facade._run(facade.client.close())
-            facade._run(the_twin.stop())
+            facade.run(facade.client.close())
+            facade.run(the_twin.stop())
     finally:
         facade.close()

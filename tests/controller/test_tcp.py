@@ -10,7 +10,7 @@ import pytest
 from pymotoros.controller import VirtualController
 from pymotoros.controller.cell import cell_from_dict
 from pymotoros.kinematics import chain_for
-from pymotoros.models.robots import Frame
+from pymotoros.models.robots import Transform
 
 from .helpers import enter_traj_mode, point, send, start_at_current, tick_until
 
@@ -51,7 +51,7 @@ def test_select_tool_moves_the_tcp_by_the_tool_offset() -> None:
     assert tcp is not None
     # tool0 points down (rolled by π): the tool's +z goes to −z of base, +y to −y.
     assert tcp.command[:3] == pytest.approx((0.01, 0.162 - 0.02, 0.07 - 0.15), abs=1e-9)
-    expected = chain_for("hc10", Frame(TOOL_TCP, TOOL_RPY)).pose([0.0] * 6)
+    expected = chain_for("hc10", Transform(TOOL_TCP, TOOL_RPY)).pose([0.0] * 6)
     assert tcp.command == pytest.approx(expected, abs=1e-9)
     # An undefined tool file is empty: the TCP is tool0 again.
     assert vc.select_tool(0, 7).ok

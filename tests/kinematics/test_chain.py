@@ -11,7 +11,7 @@ import pytest
 
 from pymotoros.errors import KinematicsError
 from pymotoros.kinematics import chain_for, matrix_to_pose, pose_to_matrix, urdf_for
-from pymotoros.models.robots import ROBOTS, Frame, GroupModel
+from pymotoros.models.robots import ROBOTS, GroupModel, Transform
 
 CASES = [(name, i) for name, robot in ROBOTS.items() for i in range(len(robot.groups))]
 SAMPLES = 12
@@ -30,14 +30,14 @@ def _rpy(r: float, p: float, y: float) -> np.ndarray:
     return _rot(z_, y) @ _rot(y_, p) @ _rot(x_, r)
 
 
-def _tf(frame: Frame) -> np.ndarray:
+def _tf(frame: Transform) -> np.ndarray:
     m = np.eye(4)
     m[:3, :3] = _rpy(*frame.rpy)
     m[:3, 3] = frame.xyz
     return m
 
 
-def _reference_fk(group: GroupModel, q: np.ndarray, tool: Frame | None = None) -> np.ndarray:
+def _reference_fk(group: GroupModel, q: np.ndarray, tool: Transform | None = None) -> np.ndarray:
     """tcp in base_link by plain matrix products over the model data (no Pinocchio)."""
     m = _tf(group.mount)
     for axis, angle in zip(group.axes, q, strict=True):
@@ -46,13 +46,13 @@ def _reference_fk(group: GroupModel, q: np.ndarray, tool: Frame | None = None) -
         joint = np.eye(4)
         joint[:3, :3] = _rot(np.array(axis.geometry.axis), float(angle))
         m = m @ joint
-    return m @ _tf(group.tool0 or Frame()) @ _tf(tool or Frame())
+    return m @ _tf(group.tool0 or Transform()) @ _tf(tool or Transform())
 
 
 @pytest.mark.parametrize(("robot", "index"), CASES)
 def test_fk_matches_an_independent_matrix_chain(robot: str, index: int) -> None:
     group = ROBOTS[robot].groups[index]
-    tool = Frame((0.01, -0.02, 0.15), (0.1, -0.2, 0.3))
+    tool = Transform((0.01, -0.02, 0.15), (0.1, -0.2, 0.3))
     chain = chain_for(group, tool)
     rng = np.random.default_rng(index + len(robot))
     for _ in range(SAMPLES):
@@ -159,7 +159,7 @@ def test_wrong_number_of_joints_is_refused() -> None:
 
 
 def test_tcp_speed_of_a_step_matches_the_jacobian() -> None:
-    chain = chain_for("hc10", Frame((0.0, 0.0, 0.2)))
+    chain = chain_for("hc10", Transform((0.0, 0.0, 0.2)))
     q = np.array([0.1, 0.5, 1.8, 0.2, 0.4, 0.0])
     qd = np.array([0.3, -0.2, 0.1, 0.5, 0.4, 0.2])
     dt = 0.004

@@ -40,7 +40,8 @@ from pymotoros.errors import KinematicsError
 from pymotoros.kinematics import Chain, interpolate_pose, pose_to_matrix, rotation_angle
 
 FloatArray = npt.NDArray[np.float64]
-Frame = Literal["base", "tool"]
+ReferenceFrame = Literal["base", "tool"]
+"""What a relative move's offsets are measured in: the base axes or the tool's own."""
 
 PATH_STEP_M: Final = 0.001
 """Spacing of the IK nodes along the line (1 mm): the joint-space derivatives used for
@@ -288,7 +289,7 @@ def plan_linear_move(
 def relative_target(
     current: FloatArray,
     delta: Sequence[float],
-    frame: Frame = "base",
+    frame: ReferenceFrame = "base",
 ) -> FloatArray:
     """The pose ``current`` (4×4) moved by ``delta`` = (dx, dy, dz, drx, dry, drz): in
     ``base`` the translation is along the base axes and the rotation about base axes

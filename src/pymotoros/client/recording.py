@@ -37,7 +37,7 @@ from typing import Final, TypeAlias
 import dpkt
 import dpkt.pcapng
 
-from pymotoros.errors import RemoteProtocolError
+from pymotoros.errors import PymotorosError, RemoteProtocolError
 from pymotoros.protocol.constants import (
     HEADER_SIZE,
     MAX_LENGTH_PREFIX,
@@ -89,8 +89,10 @@ _PREFIX_LE: Final = struct.Struct("<i")
 _PREFIX_BE: Final = struct.Struct(">i")
 
 
-class RecordingError(ValueError):
-    """The file is not a readable recording of a Simple Message session; says why."""
+class RecordingError(PymotorosError, ValueError):
+    """The file is not a readable recording of a Simple Message session; says why.
+
+    Also a ``ValueError``: ``pymotoros replay`` and ``check --recording`` catch it as one."""
 
 
 class Direction(enum.StrEnum):

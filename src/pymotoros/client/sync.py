@@ -46,7 +46,7 @@ def _forward(
 
     @functools.wraps(method)
     def blocking(self: SyncRobotClient, /, *args: _P.args, **kwargs: _P.kwargs) -> _R:
-        return self._run(method(self.client, *args, **kwargs))
+        return self.run(method(self.client, *args, **kwargs))
 
     blocking.__qualname__ = f"SyncRobotClient.{method.__name__}"
     return blocking
@@ -74,7 +74,7 @@ def _after_first_state(
     @functools.wraps(method)
     def after(self: SyncRobotClient, /, *args: _P.args, **kwargs: _P.kwargs) -> _R:
         if not self.client.state.joints:
-            self._run(self.client.wait_for_state())
+            self.run(self.client.wait_for_state())
         return method(self.client, *args, **kwargs)
 
     after.__qualname__ = f"SyncRobotClient.{method.__name__}"
@@ -93,7 +93,13 @@ class SyncRobotClient:
         self.client = RobotClient(host, **options)
         """The async client behind this facade (use it only from the loop's thread)."""
 
-    def _run(self, coro: Coroutine[Any, Any, _R]) -> _R:
+    def run(self, coro: Coroutine[Any, Any, _R]) -> _R:
+        """Run ``coro`` on the facade's event loop and block until it returns its result.
+
+        For async code that must share the client's loop: an in-memory twin
+        (:func:`pymotoros.testing.sync_twin` starts its servers this way), or a coroutine
+        of :attr:`client` the facade does not wrap. Interrupting the call cancels ``coro``.
+        """
         future = asyncio.run_coroutine_threadsafe(coro, self._loop)
         try:
             return future.result()
@@ -102,7 +108,7 @@ class SyncRobotClient:
             raise
 
     def connect(self, *, motion: bool = True, state: bool = True, io: bool = True) -> Self:
-        self._run(self.client.connect(motion=motion, state=state, io=io))
+        self.run(self.client.connect(motion=motion, state=state, io=io))
         return self
 
     def close(self) -> None:
@@ -110,7 +116,7 @@ class SyncRobotClient:
         if self._loop.is_closed():
             return
         try:
-            self._run(self.client.close())
+            self.run(self.client.close())
         finally:
             self._loop.call_soon_threadsafe(self._loop.stop)
             self._thread.join(_THREAD_JOIN_TIMEOUT_S)
@@ -154,7 +160,7 @@ class SyncRobotClient:
         try:
             while True:
                 try:
-                    yield self._run(_next(iterator))
+                    yield self.run(_next(iterator))
                 except StopAsyncIteration:
                     return
         finally:

@@ -26,7 +26,7 @@ from typing import TYPE_CHECKING, Final
 
 from pymotoros.client.planning import PlanningError
 from pymotoros.models.cell_tools import CellTool
-from pymotoros.models.robots import Frame, RobotModel
+from pymotoros.models.robots import RobotModel, Transform
 from pymotoros.protocol.constants import MAX_TOOL_NUMBER
 
 if TYPE_CHECKING:  # the kinematics import numpy and Pinocchio: loaded when first used
@@ -71,7 +71,7 @@ class ToolTable:
             raise ValueError("a tool needs tcp_m = (x, y, z) and rpy_rad = (roll, pitch, yaw)")
         if not all(math.isfinite(float(v)) for v in (*tcp_m, *rpy_rad)):
             raise ValueError(f"tool {number}: tcp_m and rpy_rad must be finite numbers")
-        frame = Frame(
+        frame = Transform(
             (float(tcp_m[0]), float(tcp_m[1]), float(tcp_m[2])),
             (float(rpy_rad[0]), float(rpy_rad[1]), float(rpy_rad[2])),
         )

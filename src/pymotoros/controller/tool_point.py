@@ -14,7 +14,7 @@ from pymotoros.controller.api import TcpSnapshot
 from pymotoros.controller.cell import CellConfig
 from pymotoros.errors import KinematicsError
 from pymotoros.kinematics import Chain, chain_for
-from pymotoros.models.robots import Frame, GroupKind
+from pymotoros.models.robots import GroupKind, Transform
 
 MM_PER_M = 1000.0
 
@@ -47,7 +47,7 @@ class TcpTracker:
         if self._cell.groups[group_index].kind is not GroupKind.ROBOT:
             return base
         t = self._cell.tool(group_index, tool)
-        return chain_for(base.group, Frame(t.tcp_m, t.rpy_rad))
+        return chain_for(base.group, Transform(t.tcp_m, t.rpy_rad))
 
     def increment_speed_mm_s(
         self,

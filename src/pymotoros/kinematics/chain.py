@@ -22,7 +22,7 @@ import numpy.typing as npt
 import pinocchio as pin
 
 from pymotoros.errors import KinematicsError
-from pymotoros.models.robots import AxisModel, Frame, GroupModel, JointGeometry, robot_model
+from pymotoros.models.robots import AxisModel, GroupModel, JointGeometry, Transform, robot_model
 
 FloatArray = npt.NDArray[np.float64]
 FrameName = Literal["flange", "tool0", "tcp"]
@@ -52,7 +52,7 @@ IK_MAX_STEP_RAD: Final = 0.5
 SINGULARITY_SIGMA: Final = 1e-4
 """Smallest singular value of the 6×n Jacobian below which a pose counts as singular."""
 _RNG_SEED: Final = 20261124
-NO_TOOL: Final = Frame()
+NO_TOOL: Final = Transform()
 """Tool 0 as after a boot: the TCP is tool0 itself."""
 
 
@@ -101,7 +101,7 @@ def rotation_angle(a: FloatArray, b: FloatArray) -> float:
     return float(np.linalg.norm(pin.log3(a[:3, :3].T @ b[:3, :3])))
 
 
-def _se3(frame: Frame) -> Any:
+def _se3(frame: Transform) -> Any:
     return pin.SE3(pin.rpy.rpyToMatrix(*frame.rpy), np.array(frame.xyz, dtype=float))
 
 
@@ -124,7 +124,7 @@ class _Built:
 
 
 @lru_cache(maxsize=64)
-def _built(group: GroupModel, tool: Frame) -> _Built:
+def _built(group: GroupModel, tool: Transform) -> _Built:
     """Build the Pinocchio model of ``group`` with ``tool`` on tool0 (once per pair)."""
     model = pin.Model()
     model.name = group.name
@@ -173,7 +173,7 @@ class Chain:
     never shares one. The model behind is built once per group and tool (read-only).
     """
 
-    def __init__(self, group: GroupModel, tool: Frame = NO_TOOL) -> None:
+    def __init__(self, group: GroupModel, tool: Transform = NO_TOOL) -> None:
         if any(a.geometry is None for a in group.axes):
             raise KinematicsError(
                 f"group {group.name} has no joint geometry: give every axis an origin and axis"
@@ -197,7 +197,7 @@ class Chain:
     def num_joints(self) -> int:
         return len(self.joint_names)
 
-    def with_tool(self, tool: Frame) -> Chain:
+    def with_tool(self, tool: Transform) -> Chain:
         """The same chain with another tool on ``tool0`` (a new object; this one is unchanged)."""
         return Chain(self.group, tool)
 
@@ -413,7 +413,7 @@ def _frame_json(name: str, m: Any, axis: FloatArray | None) -> dict[str, Any]:
     return out
 
 
-def chain_for(group: GroupModel | str, tool: Frame = NO_TOOL, *, group_index: int = 0) -> Chain:
+def chain_for(group: GroupModel | str, tool: Transform = NO_TOOL, *, group_index: int = 0) -> Chain:
     """A new chain of a group (or of a robot model's ``group_index``-th group, by name),
     with ``tool`` on ``tool0``, and its own workspace: keep it rather than calling this
     per pose (the model behind is built once per group and tool)."""

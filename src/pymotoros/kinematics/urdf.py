@@ -15,7 +15,7 @@ from typing import Final
 
 from pymotoros.errors import KinematicsError
 from pymotoros.kinematics.chain import joint_geometry
-from pymotoros.models.robots import Frame, RobotModel
+from pymotoros.models.robots import RobotModel, Transform
 
 LINK_RADIUS_M: Final = 0.04
 """Radius of the cylinders drawn for the links (chosen: a visible, slim arm)."""
@@ -36,7 +36,7 @@ def _fmt(values: tuple[float, ...]) -> str:
     return " ".join(_num(v) for v in values)
 
 
-def _origin(parent: ET.Element, frame: Frame) -> None:
+def _origin(parent: ET.Element, frame: Transform) -> None:
     ET.SubElement(parent, "origin", xyz=_fmt(frame.xyz), rpy=_fmt(frame.rpy))
 
 
@@ -71,12 +71,12 @@ def urdf_for(robot: RobotModel) -> str:
         if not base_written and group.base_height:
             _link(root, "base", None)
             joint = ET.SubElement(root, "joint", name="base_link-base", type="fixed")
-            _origin(joint, Frame((0.0, 0.0, group.base_height)))
+            _origin(joint, Transform((0.0, 0.0, group.base_height)))
             ET.SubElement(joint, "parent", link="base_link")
             ET.SubElement(joint, "child", link="base")
             base_written = True
         parent = "base_link"
-        if group.mount != Frame():
+        if group.mount != Transform():
             mount = f"{prefix}mount"
             _link(root, mount, None)
             joint = ET.SubElement(root, "joint", name=f"{prefix}base_link-mount", type="fixed")
@@ -112,13 +112,13 @@ def urdf_for(robot: RobotModel) -> str:
         flange = f"{prefix}flange"
         _link(root, flange, None)
         joint = ET.SubElement(root, "joint", name=f"{prefix}link_t-flange", type="fixed")
-        _origin(joint, Frame())
+        _origin(joint, Transform())
         ET.SubElement(joint, "parent", link=parent)
         ET.SubElement(joint, "child", link=flange)
         tool0 = f"{prefix}tool0"
         _link(root, tool0, None)
         joint = ET.SubElement(root, "joint", name=f"{prefix}link_t-tool0", type="fixed")
-        _origin(joint, group.tool0 or Frame())
+        _origin(joint, group.tool0 or Transform())
         ET.SubElement(joint, "parent", link=parent)
         ET.SubElement(joint, "child", link=tool0)
     ET.indent(root)

@@ -17,10 +17,10 @@ from dataclasses import dataclass
 from typing import Final
 
 from pymotoros.errors import ConfigError
-from pymotoros.models.robots import DEFAULT_ROBOT, Frame, GroupKind, GroupModel, robot_model
+from pymotoros.models.robots import DEFAULT_ROBOT, GroupKind, GroupModel, Transform, robot_model
 from pymotoros.protocol.constants import MAX_TOOL_NUMBER
 
-NO_OFFSET: Final = Frame()
+NO_OFFSET: Final = Transform()
 """An unset tool file: the TCP is tool0 itself."""
 
 
@@ -30,7 +30,7 @@ class CellTool:
 
     number: int
     name: str = ""
-    tcp: Frame = NO_OFFSET
+    tcp: Transform = NO_OFFSET
 
 
 def _triple(entry: Mapping[str, object], key: str, where: str, unit: str) -> tuple[float, ...]:
@@ -66,7 +66,7 @@ def _tool_list(value: object, where: str) -> tuple[CellTool, ...]:
         name = entry.get("name", "")
         xyz = _triple(entry, "tcp_m", at, "metres [x, y, z]")
         rpy = _triple(entry, "rpy_rad", at, "radians [roll, pitch, yaw]")
-        frame = Frame((xyz[0], xyz[1], xyz[2]), (rpy[0], rpy[1], rpy[2]))
+        frame = Transform((xyz[0], xyz[1], xyz[2]), (rpy[0], rpy[1], rpy[2]))
         tools.append(CellTool(number, str(name), frame))
     return tuple(tools)
 

@@ -109,150 +109,80 @@ class ControllerModel:
         return None
 
 
-def _ranges(table: dict[IoArea, tuple[int, int]]) -> tuple[IoRange, ...]:
-    return tuple(IoRange(area, first, last) for area, (first, last) in table.items())
+_IoTable = dict[IoArea, tuple[int, int]]
 
-
-_COMMON: Final = {
+# §6.2 of the reference: the YRC1000's map in full, then each controller as its
+# differences from the one it is closest to (the reference's columns, read across).
+_YRC1000_IO: Final[_IoTable] = {
+    IoArea.GENERAL_INPUT: (10, 5127),
+    IoArea.GENERAL_OUTPUT: (10010, 15127),
+    IoArea.EXTERNAL_INPUT: (20010, 25127),
+    IoArea.NETWORK_INPUT: (27010, 29567),
+    IoArea.EXTERNAL_OUTPUT: (30010, 35127),
+    IoArea.NETWORK_OUTPUT: (37010, 39567),
+    IoArea.SPECIFIC_INPUT: (40010, 42567),
+    IoArea.SPECIFIC_OUTPUT: (50010, 55127),
     IoArea.INTERFACE_PANEL: (60010, 60647),
     IoArea.AUXILIARY_RELAY: (70010, 79997),
+    IoArea.CONTROL_STATUS: (80010, 85127),
+    IoArea.PSEUDO_INPUT: (87010, 87207),
 }
-
-# §6.2 of the reference, column by column.
-_DX100_IO: Final = _ranges(
-    {
-        IoArea.GENERAL_INPUT: (10, 2567),
-        IoArea.GENERAL_OUTPUT: (10010, 12567),
-        IoArea.EXTERNAL_INPUT: (20010, 22567),
-        IoArea.NETWORK_INPUT: (25010, 27567),
-        IoArea.EXTERNAL_OUTPUT: (30010, 32567),
-        IoArea.NETWORK_OUTPUT: (35010, 37567),
-        IoArea.SPECIFIC_INPUT: (40010, 41607),
-        IoArea.SPECIFIC_OUTPUT: (50010, 52007),
-        **_COMMON,
-        IoArea.CONTROL_STATUS: (80010, 80647),
-        IoArea.PSEUDO_INPUT: (82010, 82207),
-    }
-)
-_FS100_IO: Final = _ranges(
-    {
-        IoArea.GENERAL_INPUT: (10, 1287),
-        IoArea.GENERAL_OUTPUT: (10010, 11287),
-        IoArea.EXTERNAL_INPUT: (20010, 21287),
-        IoArea.NETWORK_INPUT: (25010, 26287),
-        IoArea.EXTERNAL_OUTPUT: (30010, 31287),
-        IoArea.NETWORK_OUTPUT: (35010, 36287),
-        IoArea.SPECIFIC_INPUT: (40010, 41607),
-        IoArea.SPECIFIC_OUTPUT: (50010, 52007),
-        **_COMMON,
-        IoArea.CONTROL_STATUS: (80010, 80647),
-        IoArea.PSEUDO_INPUT: (82010, 82207),
-    }
-)
-_DX200_IO: Final = _ranges(
-    {
-        IoArea.GENERAL_INPUT: (10, 5127),
-        IoArea.GENERAL_OUTPUT: (10010, 15127),
-        IoArea.EXTERNAL_INPUT: (20010, 25127),
-        IoArea.NETWORK_INPUT: (27010, 29567),
-        IoArea.EXTERNAL_OUTPUT: (30010, 35127),
-        IoArea.NETWORK_OUTPUT: (37010, 39567),
-        IoArea.SPECIFIC_INPUT: (40010, 41607),
-        IoArea.SPECIFIC_OUTPUT: (50010, 53007),
-        **_COMMON,
-        IoArea.CONTROL_STATUS: (80010, 82007),
-        IoArea.PSEUDO_INPUT: (82010, 82207),
-    }
-)
-_YRC1000_IO: Final = _ranges(
-    {
-        IoArea.GENERAL_INPUT: (10, 5127),
-        IoArea.GENERAL_OUTPUT: (10010, 15127),
-        IoArea.EXTERNAL_INPUT: (20010, 25127),
-        IoArea.NETWORK_INPUT: (27010, 29567),
-        IoArea.EXTERNAL_OUTPUT: (30010, 35127),
-        IoArea.NETWORK_OUTPUT: (37010, 39567),
-        IoArea.SPECIFIC_INPUT: (40010, 42567),
-        IoArea.SPECIFIC_OUTPUT: (50010, 55127),
-        **_COMMON,
-        IoArea.CONTROL_STATUS: (80010, 85127),
-        IoArea.PSEUDO_INPUT: (87010, 87207),
-    }
-)
-_YRC1000MICRO_IO: Final = _ranges(
-    {
-        IoArea.GENERAL_INPUT: (10, 5127),
-        IoArea.GENERAL_OUTPUT: (10010, 15127),
-        IoArea.EXTERNAL_INPUT: (20010, 21287),
-        IoArea.NETWORK_INPUT: (27010, 29567),
-        IoArea.EXTERNAL_OUTPUT: (30010, 31287),
-        IoArea.NETWORK_OUTPUT: (37010, 39567),
-        IoArea.SPECIFIC_INPUT: (40010, 42567),
-        IoArea.SPECIFIC_OUTPUT: (50010, 55127),
-        **_COMMON,
-        IoArea.CONTROL_STATUS: (80010, 85127),
-        IoArea.PSEUDO_INPUT: (87010, 87207),
-    }
-)
+_YRC1000MICRO_IO: Final[_IoTable] = _YRC1000_IO | {
+    IoArea.EXTERNAL_INPUT: (20010, 21287),
+    IoArea.EXTERNAL_OUTPUT: (30010, 31287),
+}
+_DX200_IO: Final[_IoTable] = _YRC1000_IO | {
+    IoArea.SPECIFIC_INPUT: (40010, 41607),
+    IoArea.SPECIFIC_OUTPUT: (50010, 53007),
+    IoArea.CONTROL_STATUS: (80010, 82007),
+    IoArea.PSEUDO_INPUT: (82010, 82207),
+}
+_DX100_IO: Final[_IoTable] = _DX200_IO | {
+    IoArea.GENERAL_INPUT: (10, 2567),
+    IoArea.GENERAL_OUTPUT: (10010, 12567),
+    IoArea.EXTERNAL_INPUT: (20010, 22567),
+    IoArea.NETWORK_INPUT: (25010, 27567),
+    IoArea.EXTERNAL_OUTPUT: (30010, 32567),
+    IoArea.NETWORK_OUTPUT: (35010, 37567),
+    IoArea.SPECIFIC_OUTPUT: (50010, 52007),
+    IoArea.CONTROL_STATUS: (80010, 80647),
+}
+_FS100_IO: Final[_IoTable] = _DX100_IO | {
+    IoArea.GENERAL_INPUT: (10, 1287),
+    IoArea.GENERAL_OUTPUT: (10010, 11287),
+    IoArea.EXTERNAL_INPUT: (20010, 21287),
+    IoArea.NETWORK_INPUT: (25010, 26287),
+    IoArea.EXTERNAL_OUTPUT: (30010, 31287),
+    IoArea.NETWORK_OUTPUT: (35010, 36287),
+}
 
 # Interpolation period: 4 ms everywhere, the generic Yaskawa figure (robot-models.md §3.1).
 # max_groups: MotoROS caps at 3 on DX100 and 4 elsewhere (§2.1).
+# type, max groups, byte order, float mode, IO map, pfl_signals, skillsnd, sets_jog_tool
+_LE, _BE = ByteOrder.LITTLE, ByteOrder.BIG
+_X87, _SINGLE = FloatMode.X87_EXTENDED, FloatMode.STRICT_SINGLE
+_FAMILIES: Final[
+    tuple[tuple[ControllerType, int, ByteOrder, FloatMode, _IoTable, bool, bool, bool], ...]
+] = (
+    (ControllerType.DX100, 3, _LE, _X87, _DX100_IO, False, True, True),
+    (ControllerType.FS100, 4, _BE, _SINGLE, _FS100_IO, False, False, False),
+    (ControllerType.DX200, 4, _LE, _X87, _DX200_IO, False, False, True),
+    (ControllerType.YRC1000, 4, _LE, _X87, _YRC1000_IO, True, False, True),
+    (ControllerType.YRC1000MICRO, 4, _LE, _X87, _YRC1000MICRO_IO, True, False, True),
+)
 CONTROLLERS: Final[dict[ControllerType, ControllerModel]] = {
-    ControllerType.DX100: ControllerModel(
-        ControllerType.DX100,
+    kind: ControllerModel(
+        kind,
         4,
-        3,
-        ByteOrder.LITTLE,
-        FloatMode.X87_EXTENDED,
-        _DX100_IO,
-        pfl_signals=False,
-        skillsnd=True,
-        sets_jog_tool=True,
-    ),
-    ControllerType.FS100: ControllerModel(
-        ControllerType.FS100,
-        4,
-        4,
-        ByteOrder.BIG,
-        FloatMode.STRICT_SINGLE,
-        _FS100_IO,
-        pfl_signals=False,
-        skillsnd=False,
-        sets_jog_tool=False,
-    ),
-    ControllerType.DX200: ControllerModel(
-        ControllerType.DX200,
-        4,
-        4,
-        ByteOrder.LITTLE,
-        FloatMode.X87_EXTENDED,
-        _DX200_IO,
-        pfl_signals=False,
-        skillsnd=False,
-        sets_jog_tool=True,
-    ),
-    ControllerType.YRC1000: ControllerModel(
-        ControllerType.YRC1000,
-        4,
-        4,
-        ByteOrder.LITTLE,
-        FloatMode.X87_EXTENDED,
-        _YRC1000_IO,
-        pfl_signals=True,
-        skillsnd=False,
-        sets_jog_tool=True,
-    ),
-    ControllerType.YRC1000MICRO: ControllerModel(
-        ControllerType.YRC1000MICRO,
-        4,
-        4,
-        ByteOrder.LITTLE,
-        FloatMode.X87_EXTENDED,
-        _YRC1000MICRO_IO,
-        pfl_signals=True,
-        skillsnd=False,
-        sets_jog_tool=True,
-    ),
+        groups,
+        order,
+        floats,
+        tuple(IoRange(area, first, last) for area, (first, last) in io.items()),
+        pfl_signals=pfl,
+        skillsnd=skillsnd,
+        sets_jog_tool=jog_tool,
+    )
+    for kind, groups, order, floats, io, pfl, skillsnd, jog_tool in _FAMILIES
 }
 
 DEFAULT_CONTROLLER: Final = ControllerType.YRC1000

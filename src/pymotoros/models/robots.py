@@ -21,6 +21,7 @@ from dataclasses import dataclass, field
 from typing import Final
 
 from pymotoros.errors import ConfigError
+from pymotoros.protocol.messages.dh import DhLink as DhLink  # re-exported: the models use it
 
 
 class GroupKind(enum.Enum):
@@ -35,7 +36,7 @@ Vec3 = tuple[float, float, float]
 
 
 @dataclass(frozen=True, slots=True)
-class Frame:
+class Transform:
     """A fixed transform as URDF writes it: translation (m), then fixed-axis roll, pitch,
     yaw (rad) applied about X, then Y, then Z (R = Rz·Ry·Rx)."""
 
@@ -48,7 +49,7 @@ class JointGeometry:
     """Where a joint sits in its parent link (URDF ``origin``) and the axis it turns about,
     in the joint's own frame (URDF ``axis``): the data of robot-models.md §1."""
 
-    origin: Frame
+    origin: Transform
     axis: Vec3
 
 
@@ -82,16 +83,6 @@ class AxisModel:
 
 
 @dataclass(frozen=True, slots=True)
-class DhLink:
-    """One link of the GET_DH_PARAMETERS reply: theta, d, a, alpha (rad, m)."""
-
-    theta: float
-    d: float
-    a: float
-    alpha: float
-
-
-@dataclass(frozen=True, slots=True)
 class GroupModel:
     """One control group (R1, B1, S1 …) with its axes in ROS order."""
 
@@ -104,10 +95,11 @@ class GroupModel:
     home: tuple[float, ...]
     """The built-in ``home`` pose, ROS order."""
     dh: tuple[DhLink, ...] = field(default=())
-    """Up to 8 DH links for GET_DH_PARAMETERS."""
-    mount: Frame = Frame()
+    """Up to 8 DH links for GET_DH_PARAMETERS (theta, d, a, alpha: rad, m), the wire's
+    own :class:`~pymotoros.protocol.messages.DhLink`: one type from model to reply."""
+    mount: Transform = Transform()
     """Where the first joint's parent link sits in ``base_link`` (SDA10F arms: the torso)."""
-    tool0: Frame | None = None
+    tool0: Transform | None = None
     """``tool0`` in the last link's frame (None: no tool0, the chain ends at the flange)."""
     base_height: float = 0.0
     """Height of the ROS-Industrial ``base`` frame (Yaskawa robot coordinates) above
@@ -286,9 +278,9 @@ _GP_TOOL0_RPY: Final = (math.pi, -_HALF_PI, 0.0)
 class _GroupGeometry:
     joints: tuple[tuple[Vec3, Vec3] | tuple[Vec3, Vec3, Vec3], ...]
     """Per ROS-order joint: (origin xyz, axis) or (origin xyz, axis, origin rpy)."""
-    tool0: Frame | None
+    tool0: Transform | None
     base_height: float
-    mount: Frame = Frame()
+    mount: Transform = Transform()
 
 
 def _with_geometry(robot: RobotModel, *geometries: _GroupGeometry) -> RobotModel:
@@ -301,7 +293,7 @@ def _with_geometry(robot: RobotModel, *geometries: _GroupGeometry) -> RobotModel
             dataclasses.replace(
                 axis,
                 geometry=JointGeometry(
-                    Frame(joint[0], joint[2] if len(joint) == 3 else (0.0, 0.0, 0.0)), joint[1]
+                    Transform(joint[0], joint[2] if len(joint) == 3 else (0.0, 0.0, 0.0)), joint[1]
                 ),
             )
             for axis, joint in zip(group.axes, geo.joints, strict=True)
@@ -329,27 +321,40 @@ def _hc10_geometry(flange: float) -> _GroupGeometry:
             ((0.0, 0.162, 0.0), _NY),
             ((0.0, 0.0, 0.0), _Z),
         ),
-        Frame((0.0, 0.0, -flange), (math.pi, 0.0, 0.0)),
+        Transform((0.0, 0.0, -flange), (math.pi, 0.0, 0.0)),
         0.275,
     )
 
 
-def _gp_geometry(
-    s: float, l_x: float, u_z: float, r_x: float, r_z: float, tool: float
-) -> _GroupGeometry:
-    """The GP-family chain of robot-models.md §1.3 (S, L, U, R origins; B and T at R)."""
-    return _GroupGeometry(
+_Opw = tuple[float, float, float, float, float, float]
+"""The OPW lengths of a GP-family arm (robot-models.md §1.3): c1, a1, c2, a2, c3, c4 (m)."""
+
+
+def _gp_arm(
+    name: str,
+    description: str,
+    axes: tuple[AxisModel, ...],
+    opw: _Opw,
+    controllers: frozenset[str],
+) -> RobotModel:
+    """A GP-family arm: its DH parameters and its URDF chain both from its OPW lengths,
+    so that each length is written once (S height c1 and offset a1, upper arm c2,
+    elbow offset a2, forearm c3, flange c4; B and T sit at R)."""
+    c1, a1, c2, a2, c3, c4 = opw
+    geometry = _GroupGeometry(
         (
-            ((0.0, 0.0, s), _Z),
-            ((l_x, 0.0, 0.0), _Y),
-            ((0.0, 0.0, u_z), _NY),
-            ((r_x, 0.0, r_z), _NX),
+            ((0.0, 0.0, c1), _Z),
+            ((a1, 0.0, 0.0), _Y),
+            ((0.0, 0.0, c2), _NY),
+            ((c3, 0.0, a2), _NX),
             ((0.0, 0.0, 0.0), _NY),
             ((0.0, 0.0, 0.0), _NX),
         ),
-        Frame((tool, 0.0, 0.0), _GP_TOOL0_RPY),
-        s,
+        Transform((c4, 0.0, 0.0), _GP_TOOL0_RPY),
+        c1,
     )
+    dh = _dh_6axis(c1, a1, c2, a2, c3, c4)
+    return _with_geometry(_single_arm(name, description, axes, dh, controllers), geometry)
 
 
 # MH5: the ROS2 origins (robot-models.md §1.4: S z 0.330, L x 0.088, U z 0.310, R z 0.040,
@@ -364,7 +369,7 @@ _MH5_GEOMETRY: Final = _GroupGeometry(
         ((0.305, 0.0, 0.0), _NY),
         ((0.080, 0.0, 0.0), _NX),
     ),
-    Frame((0.0, 0.0, 0.0), _GP_TOOL0_RPY),
+    Transform((0.0, 0.0, 0.0), _GP_TOOL0_RPY),
     0.330,
 )
 
@@ -379,7 +384,7 @@ _SIA20D_GEOMETRY: Final = _GroupGeometry(
         ((0.0, 0.0, 0.0), _NY),
         ((0.0, 0.0, 0.18), _NZ),
     ),
-    Frame((0.0, 0.0, 0.0), (0.0, 0.0, -math.pi)),
+    Transform((0.0, 0.0, 0.0), (0.0, 0.0, -math.pi)),
     0.41,
 )
 
@@ -405,10 +410,10 @@ def _sda10f_arm_geometry(reflect: float) -> _GroupGeometry:
             ((0.0, 0.0, 0.0), pos, down),
             ((0.0, 0.155, 0.0), neg, down),
         ),
-        Frame((0.0, 0.0, 0.0), (0.0, 0.0, math.pi)),
+        Transform((0.0, 0.0, 0.0), (0.0, 0.0, math.pi)),
         # robot-models.md names no `base` frame for the SDA10F: base = base_link (chosen).
         0.0,
-        Frame((0.0, 0.0, _SDA10F_TORSO_HEIGHT)),
+        Transform((0.0, 0.0, _SDA10F_TORSO_HEIGHT)),
     )
 
 
@@ -454,63 +459,54 @@ HC10DT: Final = _with_geometry(
 # GP7 / GP8 / GP12: limits and speeds from robot-models.md §1.3 (datasheets; manuals
 # HW1486547, HW1484060; GP8 L 385°/s from the manual, the ROS1 URDF's 6.7495 rad/s is
 # 386.7°/s). Pulses/degree chosen: whole pulses per tick at the datasheet speed.
-GP7: Final = _with_geometry(
-    _single_arm(
-        "gp7",
-        "Yaskawa GP7 industrial robot, 7 kg, 6 axes",
-        (
-            _axis("joint_1_s", -170, 170, 375, 1400),
-            _axis("joint_2_l", -65, 145, 315, 1400),
-            _axis("joint_3_u", -70, 190, 410, 1200),
-            _axis("joint_4_r", -190, 190, 550, 800),
-            _axis("joint_5_b", -135, 135, 550, 800),
-            _axis("joint_6_t", -360, 360, 1000, 480),
-        ),
-        # OPW geometry of robot-models.md §1.3: c1 0.330, a1 0.040, c2 0.445, a2 0.040,
-        # c3 0.440, c4 0.080.
-        _dh_6axis(0.330, 0.040, 0.445, 0.040, 0.440, 0.080),
-        # Not in the stored sources: the GP7 is sold with the YRC1000micro (and YRC1000).
-        frozenset({"yrc1000micro", "yrc1000"}),
+GP7: Final = _gp_arm(
+    "gp7",
+    "Yaskawa GP7 industrial robot, 7 kg, 6 axes",
+    (
+        _axis("joint_1_s", -170, 170, 375, 1400),
+        _axis("joint_2_l", -65, 145, 315, 1400),
+        _axis("joint_3_u", -70, 190, 410, 1200),
+        _axis("joint_4_r", -190, 190, 550, 800),
+        _axis("joint_5_b", -135, 135, 550, 800),
+        _axis("joint_6_t", -360, 360, 1000, 480),
     ),
-    _gp_geometry(0.330, 0.040, 0.445, 0.440, 0.040, 0.080),
+    # OPW geometry of robot-models.md §1.3: c1 0.330, a1 0.040, c2 0.445, a2 0.040,
+    # c3 0.440, c4 0.080.
+    (0.330, 0.040, 0.445, 0.040, 0.440, 0.080),
+    # Not in the stored sources: the GP7 is sold with the YRC1000micro (and YRC1000).
+    frozenset({"yrc1000micro", "yrc1000"}),
 )
 
-GP8: Final = _with_geometry(
-    _single_arm(
-        "gp8",
-        "Yaskawa GP8 industrial robot, 8 kg, 6 axes",
-        (
-            _axis("joint_1_s", -170, 170, 455, 1150),
-            _axis("joint_2_l", -65, 145, 385, 1150),
-            _axis("joint_3_u", -70, 190, 520, 1000),
-            _axis("joint_4_r", -190, 190, 550, 800),
-            _axis("joint_5_b", -135, 135, 550, 800),
-            _axis("joint_6_t", -360, 360, 1000, 480),
-        ),
-        _dh_6axis(0.330, 0.040, 0.345, 0.040, 0.340, 0.080),
-        # Not in the stored sources: the GP8 is sold with the YRC1000micro (and YRC1000).
-        frozenset({"yrc1000micro", "yrc1000"}),
+GP8: Final = _gp_arm(
+    "gp8",
+    "Yaskawa GP8 industrial robot, 8 kg, 6 axes",
+    (
+        _axis("joint_1_s", -170, 170, 455, 1150),
+        _axis("joint_2_l", -65, 145, 385, 1150),
+        _axis("joint_3_u", -70, 190, 520, 1000),
+        _axis("joint_4_r", -190, 190, 550, 800),
+        _axis("joint_5_b", -135, 135, 550, 800),
+        _axis("joint_6_t", -360, 360, 1000, 480),
     ),
-    _gp_geometry(0.330, 0.040, 0.345, 0.340, 0.040, 0.080),
+    (0.330, 0.040, 0.345, 0.040, 0.340, 0.080),
+    # Not in the stored sources: the GP8 is sold with the YRC1000micro (and YRC1000).
+    frozenset({"yrc1000micro", "yrc1000"}),
 )
 
-GP12: Final = _with_geometry(
-    _single_arm(
-        "gp12",
-        "Yaskawa GP12 industrial robot, 12 kg, 6 axes",
-        (
-            _axis("joint_1_s", -170, 170, 260, 1600),
-            _axis("joint_2_l", -90, 155, 230, 1700),
-            _axis("joint_3_u", -85, 150, 260, 1450),
-            _axis("joint_4_r", -200, 200, 470, 975),
-            _axis("joint_5_b", -150, 150, 470, 975),
-            _axis("joint_6_t", -455, 455, 700, 650),
-        ),
-        _dh_6axis(0.450, 0.155, 0.614, 0.200, 0.640, 0.100),
-        # Not in the stored sources: the GP12 is a YRC1000 robot.
-        frozenset({"yrc1000"}),
+GP12: Final = _gp_arm(
+    "gp12",
+    "Yaskawa GP12 industrial robot, 12 kg, 6 axes",
+    (
+        _axis("joint_1_s", -170, 170, 260, 1600),
+        _axis("joint_2_l", -90, 155, 230, 1700),
+        _axis("joint_3_u", -85, 150, 260, 1450),
+        _axis("joint_4_r", -200, 200, 470, 975),
+        _axis("joint_5_b", -150, 150, 470, 975),
+        _axis("joint_6_t", -455, 455, 700, 650),
     ),
-    _gp_geometry(0.450, 0.155, 0.614, 0.640, 0.200, 0.100),
+    (0.450, 0.155, 0.614, 0.200, 0.640, 0.100),
+    # Not in the stored sources: the GP12 is a YRC1000 robot.
+    frozenset({"yrc1000"}),
 )
 
 # MH5: joint names of the ROS1 package (older joint_s naming); limits and speeds of the

@@ -159,6 +159,25 @@ P_AXIS_POS_FB_REG: Final = 1300
 _MAX_REGISTER: Final = M_REGISTER_COUNT - 1
 _CART_COORDS: Final = 7
 
+_AXIS_MASKS: Final = (
+    P_PULSE1_CMD,
+    P_PULSE1_FB,
+    P_PULSE1_SIZE,
+    P_PULSE2_CMD,
+    P_PULSE2_FB,
+    P_PULSE2_SIZE,
+)
+"""The parameters that hold one bit per axis (which axes a pulse output covers)."""
+_AXIS_REGISTERS: Final = (
+    P_PULSE1_REG,
+    P_PULSE2_REG,
+    P_AXIS_SPEED_CMD_REG,
+    P_AXIS_SPEED_FB_REG,
+    P_AXIS_POS_CMD_REG,
+    P_AXIS_POS_FB_REG,
+)
+"""The first of the per-axis register parameters: axis k's register is ``base + k``."""
+
 
 def _parameter_ranges() -> dict[int, tuple[int, int, str]]:
     """Every known parameter: (lowest, highest value, what it is)."""
@@ -171,17 +190,10 @@ def _parameter_ranges() -> dict[int, tuple[int, int, str]]:
     for base in (P_CART_CMD_REG, P_CART_FB_REG):
         for k in range(_CART_COORDS):
             r[base + k] = reg
-    for p in (P_PULSE1_CMD, P_PULSE1_FB, P_PULSE1_SIZE, P_PULSE2_CMD, P_PULSE2_FB, P_PULSE2_SIZE):
+    for p in _AXIS_MASKS:
         r[p] = (0, 255, "an axis bit mask 0..255")
     for k in range(MAX_AXES):
-        for base in (
-            P_PULSE1_REG,
-            P_PULSE2_REG,
-            P_AXIS_SPEED_CMD_REG,
-            P_AXIS_SPEED_FB_REG,
-            P_AXIS_POS_CMD_REG,
-            P_AXIS_POS_FB_REG,
-        ):
+        for base in _AXIS_REGISTERS:
             r[base + k] = reg
         for base in (P_PULSE1_RES, P_PULSE2_RES):
             r[base + k] = (0, MAX_OFFSET, "a resolution ≥ 0 (0 counts as 1)")
@@ -216,11 +228,6 @@ class S1cxgTable:
 
     def get(self, number: int) -> int:
         return dict(self.params).get(number, 0)
-
-    @property
-    def needs_kinematics(self) -> bool:
-        """Some output needs the TCP (Cartesian position or TCP speed)."""
-        return any(o.quantity in (Quantity.CARTESIAN, Quantity.TCP_SPEED) for o in self.outputs)
 
     @property
     def registers(self) -> tuple[int, ...]:
@@ -353,25 +360,11 @@ def parse_s1cxg(
     for mode in (P_TCP_CMD_MODE, P_TCP_FB_MODE):
         if params.get(mode) and not robot:
             raise err(mode, "the TCP speed needs a manipulator (robot group)")
-    for mask in (
-        P_PULSE1_CMD,
-        P_PULSE1_FB,
-        P_PULSE1_SIZE,
-        P_PULSE2_CMD,
-        P_PULSE2_FB,
-        P_PULSE2_SIZE,
-    ):
+    for mask in _AXIS_MASKS:
         extra = params.get(mask, 0) >> num_axes
         if extra:
             raise err(mask, f"sets a bit for an axis beyond the group's {num_axes} axes")
-    for base in (
-        P_PULSE1_REG,
-        P_PULSE2_REG,
-        P_AXIS_SPEED_CMD_REG,
-        P_AXIS_SPEED_FB_REG,
-        P_AXIS_POS_CMD_REG,
-        P_AXIS_POS_FB_REG,
-    ):
+    for base in _AXIS_REGISTERS:
         for k in range(num_axes, MAX_AXES):
             if params.get(base + k):
                 raise err(base + k, f"names a register for axis {k + 1}; the group has {num_axes}")

@@ -38,7 +38,7 @@ from __future__ import annotations
 
 import functools
 from collections.abc import Callable, Sequence
-from typing import Any, Final
+from typing import Any, Final, NamedTuple
 
 import numpy as np
 import numpy.typing as npt
@@ -127,33 +127,14 @@ def batch_increments(
     with np.errstate(all="ignore"):
         if long.any():
             where = np.flatnonzero(long)
-            _gathered_steps(
-                rows[:, where],
-                start_ms[where],
-                first_ms[where],
-                end_ms[where],
-                full[where],
-                begin[where],
-                axes,
-                time_ms,
-                increments,
-            )
-    short = np.where(long, 0, full)
+            segments = _Segments(rows, start_ms, first_ms, end_ms, full, begin)
+            _gathered_steps(segments.pick(where), axes, time_ms, increments)
+    short = _Segments(rows, start_ms, first_ms, end_ms, np.where(long, 0, full), begin)
 
     def block(lo: int) -> None:
         hi = min(lo + SEGMENT_CHUNK, size)
         with np.errstate(all="ignore"):
-            _ranked_steps(
-                rows[:, lo:hi],
-                start_ms[lo:hi],
-                first_ms[lo:hi],
-                end_ms[lo:hi],
-                short[lo:hi],
-                begin[lo:hi],
-                axes,
-                time_ms,
-                increments,
-            )
+            _ranked_steps(short.pick(slice(lo, hi)), axes, time_ms, increments)
             # The target before the block: the end point of the segment before it.
             _difference(
                 increments, int(begin[lo]), int(stop[hi - 1]), previous if lo == 0 else ends[lo - 1]
@@ -184,30 +165,45 @@ def _difference(targets: I64Array, lo: int, hi: int, before: I64Array) -> None:
         targets[a] -= targets[a - 1] if a > lo else before
 
 
+class _Segments(NamedTuple):
+    """Some of :func:`batch_increments`'s segments: their rows (4, S, num_axes) and
+    grids (S,), and ``begin``, the entry index of each one's first entry."""
+
+    rows: F32Array
+    start_ms: I64Array
+    first_ms: I64Array
+    end_ms: I64Array
+    full: I64Array
+    begin: I64Array
+
+    def pick(self, where: Any) -> _Segments:
+        """The segments ``where`` selects (a slice or an index array)."""
+        rows, start_ms, first_ms, end_ms, full, begin = self
+        return _Segments(
+            rows[:, where],
+            start_ms[where],
+            first_ms[where],
+            end_ms[where],
+            full[where],
+            begin[where],
+        )
+
+
 def _ranked_steps(
-    rows: F32Array,
-    start_ms: I64Array,
-    first_ms: I64Array,
-    end_ms: I64Array,
-    full: I64Array,
-    begin: I64Array,
-    axes: GroupAxes,
-    time_ms: I64Array,
-    targets: I64Array,
+    segments: _Segments, axes: GroupAxes, time_ms: I64Array, targets: I64Array
 ) -> None:
     """The steps' targets of a block of short segments, rank by rank: step k of every segment that
     has one at once. Each segment's terms are used in place (no gather per step), and
     when every segment of the block has the same number of steps (points evenly
     spaced) the results go to a strided view of the output (no scatter)."""
     period = axes.period_ms
-    steps = int(full.max(initial=0))
+    steps = int(segments.full.max(initial=0))
     if not steps:
         return
-    busy = full > 0
+    busy = segments.full > 0
     if not busy.all():
-        where = np.flatnonzero(busy)
-        rows, full, begin = rows[:, where], full[where], begin[where]
-        start_ms, first_ms, end_ms = start_ms[where], first_ms[where], end_ms[where]
+        segments = segments.pick(np.flatnonzero(busy))
+    rows, start_ms, first_ms, end_ms, full, begin = segments
     count = len(full)
     duration = ms_to_seconds(end_ms - start_ms)[:, None]
     x87 = axes.float_mode is FloatMode.X87_EXTENDED
@@ -247,21 +243,13 @@ def _ranked_steps(
 
 
 def _gathered_steps(
-    rows: F32Array,
-    start_ms: I64Array,
-    first_ms: I64Array,
-    end_ms: I64Array,
-    full: I64Array,
-    begin: I64Array,
-    axes: GroupAxes,
-    time_ms: I64Array,
-    targets: I64Array,
+    segments: _Segments, axes: GroupAxes, time_ms: I64Array, targets: I64Array
 ) -> None:
     """The steps' targets of long segments (all with at least one step), :data:`CHUNK` steps at a
     time, each step taking its segment's terms with one gather."""
     mode = axes.float_mode
     period = axes.period_ms
-    steps = full
+    rows, start_ms, first_ms, end_ms, steps, begin = segments
     # Step k of a segment whose steps start at global step g is g + k = ramp.
     count = int(steps.sum())
     local = np.repeat(np.arange(len(steps)), steps)
@@ -473,22 +461,28 @@ def segment_targets(
     return part if axes.identity_columns else part[:, axes.columns]
 
 
+def _by_blocks(
+    terms: Callable[[F32Array, F32Array], AnyArray],
+    rows: F32Array,
+    duration: F32Array,
+    width: int,
+    dtype: type[np.floating[Any]],
+) -> AnyArray:
+    """``terms`` of many segments, :data:`SEGMENT_CHUNK` segments at a time, into one
+    (S, width, n) array: the kernels' temporaries stay the size of a block."""
+    size = rows.shape[1]
+    out: AnyArray = np.empty((size, width, rows.shape[2]), dtype=dtype)
+    for lo in range(0, size, SEGMENT_CHUNK):
+        hi = lo + SEGMENT_CHUNK
+        out[lo:hi] = terms(rows[:, lo:hi], duration[lo:hi])
+    return out
+
+
 def _terms_x87(rows: F32Array, duration: F32Array) -> F64Array:
     """(S, 5, n) float64: x0, v0, a1/2, a2 and the risk bound of each segment (x87)."""
-    size = rows.shape[1]
-    if size > SEGMENT_CHUNK:
-        out = np.empty((size, 5, rows.shape[2]), dtype=np.float64)
-        for lo in range(0, size, SEGMENT_CHUNK):
-            hi = lo + SEGMENT_CHUNK
-            out[lo:hi] = _terms_x87(rows[:, lo:hi], duration[lo:hi])
-        return out
-    rows64 = rows.astype(np.float64)
-    t64 = duration.astype(np.float64)
-    coef = coefficients_x87_checked(rows64, t64).astype(np.float64)
-    coef[0] *= 0.5  # a1/2: exact
-    x0, v0 = rows64[0], rows64[1]
-    bound = position_bound(x0, v0, coef[0], coef[1], t64)
-    return np.stack((x0, v0, coef[0], coef[1], bound), axis=1)
+    if rows.shape[1] > SEGMENT_CHUNK:
+        return _by_blocks(_terms_x87, rows, duration, 5, np.float64)
+    return np.stack(_terms_x87_split(rows, duration), axis=1)
 
 
 def _terms_x87_split(
@@ -505,13 +499,8 @@ def _terms_x87_split(
 
 def _terms_single(rows: F32Array, duration: F32Array) -> F32Array:
     """(S, 4, n) float32: x0, v0, a1 and a2 of each segment (FS100)."""
-    size = rows.shape[1]
-    if size > SEGMENT_CHUNK:
-        out = np.empty((size, 4, rows.shape[2]), dtype=np.float32)
-        for lo in range(0, size, SEGMENT_CHUNK):
-            hi = lo + SEGMENT_CHUNK
-            out[lo:hi] = _terms_single(rows[:, lo:hi], duration[lo:hi])
-        return out
+    if rows.shape[1] > SEGMENT_CHUNK:
+        return _by_blocks(_terms_single, rows, duration, 4, np.float32)
     tt32 = duration * duration
     coef = coefficients_kernel(
         rows, np.array((tt32, tt32 * duration)), np.array((duration, tt32)), FloatMode.STRICT_SINGLE

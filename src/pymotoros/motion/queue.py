@@ -80,11 +80,6 @@ class IncrementQueue:
     def full(self) -> bool:
         return len(self) >= QUEUE_SIZE
 
-    def peek(self) -> Increment | None:
-        if not self._entries:
-            self.realise()
-        return self._entries[0] if self._entries else None
-
     def pop(self) -> Increment:
         """The oldest entry; IndexError when empty."""
         if not self._entries:

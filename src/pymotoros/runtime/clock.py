@@ -109,7 +109,24 @@ _PR_SET_TIMERSLACK: Final = 29
 """From <linux/prctl.h>."""
 
 
-class ThreadClock:
+class _MonotonicClock:
+    """Real time on ``time.monotonic`` (the loop's own time line), woken by something
+    other than the loop's millisecond timer: the subclass's :meth:`_wait`."""
+
+    def now(self) -> float:
+        return time.monotonic()
+
+    async def sleep_until(self, deadline: float) -> None:
+        if deadline <= time.monotonic():
+            await asyncio.sleep(0)  # a deadline already past still yields once
+            return
+        await self._wait(deadline, asyncio.get_running_loop())
+
+    async def _wait(self, deadline: float, loop: asyncio.AbstractEventLoop) -> None:
+        raise NotImplementedError
+
+
+class ThreadClock(_MonotonicClock):
     """Real time, precise and cheap: a timer thread wakes the loop at the deadline.
 
     The event loop's selector rounds its timeouts up to whole milliseconds, so a
@@ -132,14 +149,7 @@ class ThreadClock:
             raise ValueError(f"early must be >= 0, got {early}")
         self.early = early
 
-    def now(self) -> float:
-        return time.monotonic()
-
-    async def sleep_until(self, deadline: float) -> None:
-        if deadline <= time.monotonic():
-            await asyncio.sleep(0)
-            return
-        loop = asyncio.get_running_loop()
+    async def _wait(self, deadline: float, loop: asyncio.AbstractEventLoop) -> None:
         future: asyncio.Future[None] = loop.create_future()
         _timer_thread().add(deadline, self.early, loop, future)
         await future
@@ -233,7 +243,7 @@ class _Itimerspec(ctypes.Structure):
     _fields_ = (("it_interval", _Timespec), ("it_value", _Timespec))
 
 
-class TimerFdClock:
+class TimerFdClock(_MonotonicClock):
     """Real time, precise and cheap, on the loop itself (Linux): a timerfd in the selector.
 
     The selector's own timeouts are whole milliseconds, but a Linux timerfd armed on an
@@ -260,14 +270,7 @@ class TimerFdClock:
         lib = _libc()
         return lib is not None and hasattr(lib, "timerfd_create")
 
-    def now(self) -> float:
-        return time.monotonic()
-
-    async def sleep_until(self, deadline: float) -> None:
-        if deadline <= time.monotonic():
-            await asyncio.sleep(0)
-            return
-        loop = asyncio.get_running_loop()
+    async def _wait(self, deadline: float, loop: asyncio.AbstractEventLoop) -> None:
         self._open(loop)
         future: asyncio.Future[None] = loop.create_future()
         heapq.heappush(self._sleepers, (deadline, next(self._order), future))

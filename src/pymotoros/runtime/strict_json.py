@@ -30,6 +30,7 @@ from fastapi.routing import APIRoute
 from starlette.requests import Request
 from starlette.responses import JSONResponse, Response
 
+from pymotoros.errors import PymotorosError
 from pymotoros.runtime.log_limit import api_refusal_allowed
 
 __all__ = ["DuplicateKeyError", "StrictJsonRoute", "loads_strict"]
@@ -40,7 +41,7 @@ DUPLICATE_KEY_STATUS: Final = 422
 """The control API's status for a malformed body (the same as invalid JSON)."""
 
 
-class DuplicateKeyError(ValueError):
+class DuplicateKeyError(PymotorosError, ValueError):
     """A JSON object names the same key more than once."""
 
     def __init__(self, key: str, where: str) -> None:

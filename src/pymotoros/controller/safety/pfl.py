@@ -23,6 +23,7 @@ from typing import Final
 from pymotoros.controller import signals
 from pymotoros.controller.io_image import IoImage
 from pymotoros.controller.servo import ServoGroup
+from pymotoros.errors import PymotorosError
 
 logger = logging.getLogger(__name__)
 
@@ -37,8 +38,10 @@ DEFAULT_RETREAT_MS: Final = 100
 """Retreat after a clamping when the request names none (the seed's example value)."""
 
 
-class PflRefusedError(ValueError):
-    """A PFL event that the cell cannot produce (no option, standing still, busy)."""
+class PflRefusedError(PymotorosError, ValueError):
+    """A PFL event that the cell cannot produce (no option, standing still, busy).
+
+    Also a ``ValueError``: a scenario event and the HTTP API refuse it as any bad value."""
 
 
 @dataclass(frozen=True, slots=True)

@@ -148,6 +148,56 @@ def _pad_joints(owner: str, name: str, values: Iterable[float] | None) -> tuple[
     return padded + ZERO_JOINTS[len(padded) :]
 
 
+def _pad_arrays(
+    owner: str,
+    pos: Iterable[float] | None,
+    vel: Iterable[float] | None,
+    acc: Iterable[float] | None,
+) -> tuple[tuple[float, ...], tuple[float, ...], tuple[float, ...]]:
+    """``pos``, ``vel`` and ``acc`` padded to the wire's 10 slots (:func:`_pad_joints`):
+    the three arrays of every joint record (feedback, trajectory point, FULL_EX slot)."""
+    return (
+        _pad_joints(owner, "pos", pos),
+        _pad_joints(owner, "vel", vel),
+        _pad_joints(owner, "acc", acc),
+    )
+
+
+def _bind_joint_record(
+    cls: type[_T], head: struct.Struct, joints: struct.Struct, size: int
+) -> Callable[[bytes, int, int], _T]:
+    """The decoder of a joint record: ``head`` (the int and float fields), then pos, vel
+    and acc as 10 float32 each; ``size`` bytes in all (the three arrays end it).
+
+    JOINT_FEEDBACK (the client's per-frame work) and JOINT_TRAJ_PT_FULL (the motion
+    server's per-point work) both decode here. Hand-unrolled, no validation: three
+    10-float unpacks are cheaper than one unpack plus slicing, and the Structs' bound
+    methods and the offsets are picked once here, so a record costs no byte-order test
+    and no attribute or global lookup.
+    """
+    unpack_head = head.unpack_from
+    unpack_joints = joints.unpack_from
+    acc_at = size - joints.size
+    vel_at = acc_at - joints.size
+    pos_at = vel_at - joints.size
+
+    def unpack_record(buffer: bytes, start: int, end: int) -> _T:
+        if end - start != size:
+            raise _size_error(cls, buffer[start:end], size)
+        # Concatenation, not (*head, …): one tuple add instead of a list built and copied.
+        return _tnew(
+            cls,
+            unpack_head(buffer, start)  # noqa: RUF005
+            + (
+                unpack_joints(buffer, start + pos_at),
+                unpack_joints(buffer, start + vel_at),
+                unpack_joints(buffer, start + acc_at),
+            ),
+        )
+
+    return unpack_record
+
+
 # --------------------------------------------------------------------------- base class
 
 

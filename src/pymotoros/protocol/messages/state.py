@@ -21,9 +21,10 @@ from pymotoros.protocol.messages._base import (
     ZERO_JOINTS,
     Message,
     Role,
+    _bind_joint_record,
     _check_int,
     _Kind,
-    _pad_joints,
+    _pad_arrays,
     _pick,
     _size_error,
     _structs,
@@ -84,10 +85,7 @@ _GROUP_RECORD_FIELDS: Final[tuple[tuple[str, _Kind], ...]] = (
     ("acc", _JOINTS),
 )
 
-_RECORD_POS_AT: Final = 12
-_RECORD_VEL_AT: Final = 52
-_RECORD_ACC_AT: Final = 92
-"""Offsets of pos, vel and acc in the 132-byte group record (§1.4)."""
+# pos, vel and acc end the 132-byte group record, at offsets 12, 52 and 92 (§1.4).
 
 
 class JointFeedback(Message, _GroupRecord):
@@ -123,15 +121,7 @@ class JointFeedback(Message, _GroupRecord):
         """
         if valid_fields is None:
             valid_fields = ValidFields.POSITION | (ValidFields.VELOCITY if vel is not None else 0)
-        name = cls.__name__
-        return cls(
-            group_no,
-            int(valid_fields),
-            time,
-            _pad_joints(name, "pos", pos),
-            _pad_joints(name, "vel", vel),
-            _pad_joints(name, "acc", acc),
-        )
+        return cls(group_no, int(valid_fields), time, *_pad_arrays(cls.__name__, pos, vel, acc))
 
     def pack(self, order: ByteOrder) -> bytes:
         """Hand-unrolled: the state server packs one per group every cycle."""
@@ -152,34 +142,11 @@ class JointFeedback(Message, _GroupRecord):
         """The only JOINT_FEEDBACK decoder: the client's per-frame work on the state port.
 
         ``next_reply``, ``decode_reply``, :meth:`unpack_from`, :meth:`unpack` and
-        FEEDBACK_EX's slots all come here. Hand-unrolled, no validation (see
-        :mod:`._base`); three 10-float unpacks are cheaper than one 33-value
-        unpack plus slicing, and the Structs' bound methods are picked once here,
-        so each message costs no byte-order test and no attribute lookup.
+        FEEDBACK_EX's slots all come here: :func:`._base._bind_joint_record`.
         """
-        head, joints = (
-            (_RECORD_HEAD_BE, _JOINTS_BE) if order == ">" else (_RECORD_HEAD_LE, _JOINTS_LE)
-        )
-        unpack_head = head.unpack_from
-        unpack_joints = joints.unpack_from
-
-        def unpack_feedback(buffer: bytes, start: int, end: int) -> JointFeedback:
-            if end - start != BODY_SIZE_GROUP_RECORD:
-                raise _size_error(cls, buffer[start:end], BODY_SIZE_GROUP_RECORD)
-            group_no, valid_fields, time = unpack_head(buffer, start)
-            return _tnew(
-                cls,
-                (
-                    group_no,
-                    valid_fields,
-                    time,
-                    unpack_joints(buffer, start + _RECORD_POS_AT),
-                    unpack_joints(buffer, start + _RECORD_VEL_AT),
-                    unpack_joints(buffer, start + _RECORD_ACC_AT),
-                ),
-            )
-
-        return unpack_feedback
+        if order == ">":
+            return _bind_joint_record(cls, _RECORD_HEAD_BE, _JOINTS_BE, BODY_SIZE_GROUP_RECORD)
+        return _bind_joint_record(cls, _RECORD_HEAD_LE, _JOINTS_LE, BODY_SIZE_GROUP_RECORD)
 
 
 _RECORD_LE, _RECORD_BE = JointFeedback._STRUCTS

@@ -28,10 +28,11 @@ from pymotoros.protocol.messages._base import (
     ZERO_JOINTS,
     Message,
     Role,
+    _bind_joint_record,
     _check_int,
     _Kind,
     _offsets,
-    _pad_joints,
+    _pad_arrays,
     _pick,
     _size_error,
     _structs,
@@ -81,15 +82,7 @@ class JointTrajPtExData(Message, _GroupRecord):
         """Build from joint lists of any length ≤ 10; flags default to time+pos+vel(+acc)."""
         if valid_fields is None:
             valid_fields = _point_flags(acc)
-        name = cls.__name__
-        return cls(
-            group_no,
-            int(valid_fields),
-            time,
-            _pad_joints(name, "pos", pos),
-            _pad_joints(name, "vel", vel),
-            _pad_joints(name, "acc", acc),
-        )
+        return cls(group_no, int(valid_fields), time, *_pad_arrays(cls.__name__, pos, vel, acc))
 
 
 def _point_flags(acc: object) -> int:
@@ -97,10 +90,7 @@ def _point_flags(acc: object) -> int:
     return int(flags | ValidFields.ACCELERATION if acc is not None else flags)
 
 
-_POINT_POS_AT: Final = 16
-_POINT_VEL_AT: Final = 56
-_POINT_ACC_AT: Final = 96
-"""Offsets of pos, vel and acc in the JOINT_TRAJ_PT_FULL body (§1.4)."""
+# pos, vel and acc end the JOINT_TRAJ_PT_FULL body, at offsets 16, 56 and 96 (§1.4).
 
 
 class _Point(NamedTuple):
@@ -150,16 +140,8 @@ class JointTrajPtFull(Message, _Point):
         """Build from joint lists of any length ≤ 10; flags default to time+pos+vel(+acc)."""
         if valid_fields is None:
             valid_fields = _point_flags(acc)
-        name = cls.__name__
-        return cls(
-            group_no,
-            sequence,
-            int(valid_fields),
-            time,
-            _pad_joints(name, "pos", pos),
-            _pad_joints(name, "vel", vel),
-            _pad_joints(name, "acc", acc),
-        )
+        arrays = _pad_arrays(cls.__name__, pos, vel, acc)
+        return cls(group_no, sequence, int(valid_fields), time, *arrays)
 
     def pack(self, order: ByteOrder) -> bytes:
         """Hand-unrolled: the client packs one per trajectory point."""
@@ -182,30 +164,9 @@ class JointTrajPtFull(Message, _Point):
         Hand-unrolled, no validation (see :mod:`._base`); the Structs' bound
         methods are picked once here, per byte order.
         """
-        head, joints = (
-            (_POINT_HEAD_BE, _JOINTS_BE) if order == ">" else (_POINT_HEAD_LE, _JOINTS_LE)
-        )
-        unpack_head = head.unpack_from
-        unpack_joints = joints.unpack_from
-
-        def unpack_point(buffer: bytes, start: int, end: int) -> JointTrajPtFull:
-            if end - start != BODY_SIZE_TRAJ_PT_FULL:
-                raise _size_error(cls, buffer[start:end], BODY_SIZE_TRAJ_PT_FULL)
-            group_no, sequence, valid_fields, time = unpack_head(buffer, start)
-            return _tnew(
-                cls,
-                (
-                    group_no,
-                    sequence,
-                    valid_fields,
-                    time,
-                    unpack_joints(buffer, start + _POINT_POS_AT),
-                    unpack_joints(buffer, start + _POINT_VEL_AT),
-                    unpack_joints(buffer, start + _POINT_ACC_AT),
-                ),
-            )
-
-        return unpack_point
+        if order == ">":
+            return _bind_joint_record(cls, _POINT_HEAD_BE, _JOINTS_BE, BODY_SIZE_TRAJ_PT_FULL)
+        return _bind_joint_record(cls, _POINT_HEAD_LE, _JOINTS_LE, BODY_SIZE_TRAJ_PT_FULL)
 
 
 _POINT_LE, _POINT_BE = JointTrajPtFull._STRUCTS
