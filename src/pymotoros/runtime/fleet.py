@@ -32,7 +32,6 @@ import asyncio
 import math
 import re
 import time
-import tomllib
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -42,6 +41,7 @@ from typing import Final, Self
 import numpy as np
 
 from pymotoros.errors import ConfigError
+from pymotoros.models.cell import PORT_KINDS, CellPorts, read_cell_file
 from pymotoros.runtime.app import SimulatorApp, SimulatorConfig
 from pymotoros.runtime.clock import Clock, precise_clock
 from pymotoros.runtime.target import SimulatedController
@@ -57,62 +57,16 @@ __all__ = [
     "read_cell_ports",
 ]
 
-PORT_KINDS: Final = ("motion", "state", "io", "http")
-"""The servers of one cell, in the order of the ready line."""
-
-MAX_PORT: Final = 65535
-"""The largest TCP port number."""
-
 _NOT_IN_NAME: Final = re.compile(r"[^A-Za-z0-9._-]")
 """Characters a cell's name on the ready line may not hold (it is one ``key=value``
 token of a space-separated line)."""
 
 
-@dataclass(frozen=True, slots=True)
-class CellPorts:
-    """The ``[ports]`` table of a cell file; None where the file does not set a port."""
-
-    motion: int | None = None
-    state: int | None = None
-    io: int | None = None
-    http: int | None = None
-
-    def get(self, kind: str) -> int | None:
-        value: int | None = getattr(self, kind)
-        return value
-
-
 def read_cell_ports(path: Path) -> CellPorts:
-    """The ``[ports]`` table of the cell file ``path`` (empty when it has none).
-
-    The rest of the file is the controller's business (``load_cell``); a mistake here
-    raises ConfigError naming the file and the key, as cell-file errors do.
-    """
-    try:
-        data = tomllib.loads(path.read_text(encoding="utf-8"))
-    except OSError as exc:
-        raise ConfigError(f"{path}: cannot read the cell file ({exc.strerror})") from exc
-    except tomllib.TOMLDecodeError as exc:
-        raise ConfigError(f"{path}: not valid TOML: {exc}") from exc
-    table = data.get("ports", {})
-    if not isinstance(table, dict):
-        raise ConfigError(f"{path}: ports must be a table ([ports] motion = ..., http = ...)")
-    unknown = sorted(set(table) - set(PORT_KINDS))
-    if unknown:
-        raise ConfigError(
-            f"{path}: ports.{unknown[0]}: unknown key (misspelt?); the keys are "
-            f"{', '.join(PORT_KINDS)}"
-        )
-    values: dict[str, int] = {}
-    for kind, value in table.items():
-        if isinstance(value, bool) or not isinstance(value, int):
-            raise ConfigError(f"{path}: ports.{kind}: must be an integer, not {value!r}")
-        if not 0 <= value <= MAX_PORT:
-            raise ConfigError(
-                f"{path}: ports.{kind}: must lie in 0..{MAX_PORT} (0: the OS chooses), not {value}"
-            )
-        values[kind] = value
-    return CellPorts(**values)
+    """The ``[ports]`` table of the cell file ``path`` (empty when it has none), read by
+    the one cell-file reader (:func:`~pymotoros.models.cell.read_cell_file`): a mistake
+    anywhere in the file's shared part raises ConfigError naming the file and the key."""
+    return read_cell_file(path).ports
 
 
 def cell_names(paths: Sequence[Path]) -> list[str]:
