@@ -17,7 +17,7 @@ import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Final
+from typing import Any, Final
 
 from pymotoros.controller.api import AlarmInfo, PendantMode
 from pymotoros.controller.inform import BUILTIN_VARIANTS, JobRunner, load_jobs
@@ -146,7 +146,7 @@ class CellConfig:
                 return t
         return ToolConfig(number)
 
-    def as_table(self) -> dict[str, object]:
+    def as_table(self) -> dict[str, Any]:
         """Its name, controller and groups in the cell file's shape (JSON-able): what
         ``pymotoros sim --ports-file`` tells the robot commands about the cell."""
         names = self.model_groups or tuple(g.name for g in self.groups)

@@ -22,7 +22,6 @@ from __future__ import annotations
 
 import logging
 import math
-import tomllib
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -30,6 +29,7 @@ from typing import Final, Protocol
 
 from pymotoros.controller.api import PendantMode
 from pymotoros.errors import ConfigError
+from pymotoros.models.toml_file import read_toml
 
 logger = logging.getLogger(__name__)
 
@@ -104,14 +104,7 @@ class Scenario:
 
 def load_scenario(path: str | Path) -> Scenario:
     """Read a scenario TOML file; a mistake raises ConfigError naming the event and key."""
-    p = Path(path)
-    try:
-        data = tomllib.loads(p.read_text(encoding="utf-8"))
-    except OSError as exc:
-        raise ConfigError(f"{p}: cannot read the scenario file ({exc.strerror})") from exc
-    except tomllib.TOMLDecodeError as exc:
-        raise ConfigError(f"{p}: not valid TOML: {exc}") from exc
-    return parse_scenario(data, source=str(p))
+    return parse_scenario(read_toml(path, "scenario file"), source=str(path))
 
 
 def _number(value: object) -> bool:

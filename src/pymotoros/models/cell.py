@@ -21,7 +21,7 @@ from __future__ import annotations
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, replace
 from pathlib import Path
-from typing import Final, NamedTuple
+from typing import Any, Final, NamedTuple
 
 from pymotoros.errors import ConfigError
 from pymotoros.models.controllers import DEFAULT_CONTROLLER, ControllerModel, controller_model
@@ -283,7 +283,7 @@ def load_cell_models(path: str | Path) -> CellModels:
 
 def cell_table(
     name: str, controller: str, robots: Sequence[str], model_groups: Sequence[str]
-) -> dict[str, object]:
+) -> dict[str, Any]:
     """A cell's name, controller and groups in the cell file's own shape (JSON-able):
     :func:`cell_models_from_dict` reads it back into the same models. ``robots`` and
     ``model_groups`` name each group by its robot model and its name in that model."""

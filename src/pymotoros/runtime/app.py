@@ -30,6 +30,7 @@ from typing import Final, Self
 
 import uvicorn
 
+from pymotoros.models.cell import PORT_KINDS
 from pymotoros.protocol.constants import (
     TCP_PORT_IO,
     TCP_PORT_MOTION,
@@ -63,6 +64,13 @@ STARTUP_POLL_TICKS: Final = 25
 """How often (ticks: 100 ms at 4 ms) the runtime looks whether MotoROS has started."""
 HTTP_STOP_TIMEOUT_S: Final = 3.0
 """How long the HTTP server may take to finish its requests at shutdown."""
+
+
+def _port_role(kind: str, port: int) -> str:
+    """Which server a port is for, in the words of an error: "the MotoROS motion port
+    50240" or "the control API (http) port 8080" (0: "a port the OS chooses")."""
+    which = "the control API (http)" if kind == "http" else f"the MotoROS {kind}"
+    return f"{which} port {port}" if port else f"{which} port (0: the OS chooses)"
 
 
 @dataclass(frozen=True, slots=True)
@@ -291,11 +299,14 @@ class SimulatorApp:
             ports.append(cfg.http_port)
         socks: list[socket.socket] = []
         try:
-            for i, port in enumerate(ports):
+            for i, (kind, port) in enumerate(zip(PORT_KINDS, ports, strict=False)):
                 # MotoROS's ports are bound now (a port in use fails at once) but listen
                 # only when its servers start
                 bind = bind_unlistened if i < MOTOROS_PORTS else bind_socket
-                socks.append(bind(cfg.host, port))
+                try:
+                    socks.append(bind(cfg.host, port))
+                except OSError as exc:  # say which server's port: e.g. "the motion port 50240"
+                    raise OSError(exc.errno, f"{_port_role(kind, port)}: {exc.strerror}") from exc
         except BaseException:
             for sock in socks:
                 sock.close()

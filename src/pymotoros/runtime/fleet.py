@@ -55,6 +55,7 @@ __all__ = [
     "cell_names",
     "check_port_clashes",
     "read_cell_ports",
+    "short_name",
 ]
 
 _NOT_IN_NAME: Final = re.compile(r"[^A-Za-z0-9._-]")
@@ -69,13 +70,19 @@ def read_cell_ports(path: Path) -> CellPorts:
     return read_cell_file(path).ports
 
 
+def short_name(text: str) -> str:
+    """``text`` made one token of the ready line: anything but letters, digits, ``.``,
+    ``_`` and ``-`` becomes ``_`` (``"hc10 on yrc1000"`` is ``hc10_on_yrc1000``)."""
+    return _NOT_IN_NAME.sub("_", text) or "cell"
+
+
 def cell_names(paths: Sequence[Path]) -> list[str]:
     """A short, unique name per cell file for the ready line and the ports file: the
     file's stem with anything but letters, digits, ``.``, ``_`` and ``-`` made ``_``;
     a name seen before gets ``-2``, ``-3`` ... in the order given."""
     names: list[str] = []
     for path in paths:
-        base = _NOT_IN_NAME.sub("_", path.stem) or "cell"
+        base = short_name(path.stem)
         name, n = base, 1
         while name in names:
             n += 1
