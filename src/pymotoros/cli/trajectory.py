@@ -147,7 +147,10 @@ def load(
 
 
 def load_models(
-    path: Path, robot_name: str | None, controller_name: str | None, cell_path: Path | None
+    path: Path,
+    robot_name: str | None,
+    controller_name: str | None,
+    cell_path: Path | CellModels | None,
 ) -> Loaded:
     """:func:`load`, or with a cell file its models (numpy-free models layer, as
     ``pymotoros move --config`` reads it); errors are usage errors (exit 2)."""
@@ -163,7 +166,7 @@ def load_models(
             raise click.BadParameter(str(exc), param_hint="TRAJ") from None
         return Loaded(traj, robot, controller)
     try:
-        cell = load_cell_models(cell_path)
+        cell = cell_path if isinstance(cell_path, CellModels) else load_cell_models(cell_path)
     except ConfigError as exc:
         raise click.BadParameter(str(exc), param_hint="--config") from None
     try:
