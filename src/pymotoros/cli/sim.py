@@ -142,6 +142,20 @@ class RepeatableOption(click.Option):
         return super().type_cast_value(ctx, value)
 
 
+def simulator_config(host: str, ports: Sequence[int], cell: CellConfig) -> SimulatorConfig:
+    """Where one cell listens (``ports``: motion, state, io, http; 0: the OS chooses),
+    in its controller's byte order (FS100 speaks big-endian, reference §1.1)."""
+    motion, state, io, http = ports
+    return SimulatorConfig(
+        host=host,
+        motion_port=motion,
+        state_port=state,
+        io_port=io,
+        http_port=http,
+        byte_order=cell.controller.byte_order,
+    )
+
+
 def _label(cell: CellConfig, config_file: Path | None) -> CellLabel:
     """The ports file's words for the one cell: named after its file, else its title."""
     name = cell_names([config_file])[0] if config_file is not None else short_name(cell.name)
@@ -308,15 +322,7 @@ def sim(
             controller.load_scenario(load_scenario(scenario_path))
     except ConfigError as exc:
         raise click.UsageError(str(exc)) from exc
-    order = cell.controller.byte_order  # FS100 speaks big-endian (reference §1.1)
-    config = SimulatorConfig(
-        host=host,
-        motion_port=motion_port,
-        state_port=state_port,
-        io_port=io_port,
-        http_port=http_port,
-        byte_order=order,
-    )
+    config = simulator_config(host, (motion_port, state_port, io_port, http_port), cell)
     if realtime:
         from pymotoros.runtime.realtime import request_realtime
 

@@ -25,12 +25,11 @@ from pathlib import Path
 import click
 
 from pymotoros.cli.ports_file import CellLabel
-from pymotoros.cli.sim import announce, open_recorder, serve, stop_on_signals
+from pymotoros.cli.sim import announce, open_recorder, serve, simulator_config, stop_on_signals
 from pymotoros.controller import VirtualController
 from pymotoros.controller.cell import CellConfig, cell_from_file
 from pymotoros.errors import ConfigError
 from pymotoros.models.cell import PORT_KINDS, CellPorts, read_cell_file
-from pymotoros.runtime.app import SimulatorConfig
 from pymotoros.runtime.fleet import Fleet, FleetCell, cell_names, check_port_clashes
 
 __all__ = ["run_cells", "run_fleet"]
@@ -112,14 +111,7 @@ def run_cells(
 
 def _fleet_cell(name: str, cell: CellConfig, ports: CellPorts, host: str) -> FleetCell:
     """One cell of the fleet: its controller, on its file's ports (else 0, the OS chooses)."""
-    config = SimulatorConfig(
-        host=host,
-        motion_port=ports.motion or 0,
-        state_port=ports.state or 0,
-        io_port=ports.io or 0,
-        http_port=ports.http or 0,
-        byte_order=cell.controller.byte_order,  # FS100 speaks big-endian
-    )
+    config = simulator_config(host, [ports.get(kind) or 0 for kind in PORT_KINDS], cell)
     return FleetCell(name, VirtualController(cell), config)
 
 
