@@ -293,10 +293,7 @@ def sim(
     if len(config_path) > 1:
         from pymotoros.cli.sim_cells import run_cells
 
-        if realtime:
-            from pymotoros.runtime.realtime import request_realtime
-
-            request_realtime()  # a warning line if refused; the cells run on either way
+        _request_realtime(realtime)
         run_cells(
             ctx,
             config_path,
@@ -308,26 +305,17 @@ def sim(
         )
         return
     config_file = config_path[0] if config_path else None
-    try:
-        cell_file = read_cell_file(config_file) if config_file is not None else None
-        if cell_file is not None:  # a [ports] table fills the port flags not given
-            motion_port, state_port, io_port, http_port = cell_file_ports(
-                ctx, cell_file.ports, (motion_port, state_port, io_port, http_port)
-            )
-        cell = _cell(ctx, controller_name, robot_name, cell_file)
-        controller = VirtualController(cell)
-        if scenario_path is not None:
-            from pymotoros.controller.scenario import load_scenario
-
-            controller.load_scenario(load_scenario(scenario_path))
-    except ConfigError as exc:
-        raise click.UsageError(str(exc)) from exc
-    config = simulator_config(host, (motion_port, state_port, io_port, http_port), cell)
-    if realtime:
-        from pymotoros.runtime.realtime import request_realtime
-
-        request_realtime()  # a warning line if refused; the twin runs on either way
-    app = SimulatorApp(controller, config, idle_batching=False if no_idle_batching else None)
+    ports = (motion_port, state_port, io_port, http_port)
+    cell, controller, asked = _one_cell(
+        ctx, (controller_name, robot_name), config_file, scenario_path
+    )
+    ports = cell_file_ports(ctx, asked, ports)  # a [ports] table fills the flags not given
+    _request_realtime(realtime)
+    app = SimulatorApp(
+        controller,
+        simulator_config(host, ports, cell),
+        idle_batching=False if no_idle_batching else None,
+    )
     recorder = open_recorder(record_path, [app])  # before the coroutine: it may refuse
     serve(
         run_simulator(app, ports_file, _label(cell, config_file)),
@@ -337,6 +325,35 @@ def sim(
         port_hint="let the OS choose with --motion-port 0 --state-port 0 --io-port 0 "
         "--http-port 0 --ports-file FILE",
     )
+
+
+def _one_cell(
+    ctx: click.Context,
+    models: tuple[str, str],
+    config_file: Path | None,
+    scenario_path: Path | None,
+) -> tuple[CellConfig, VirtualController, CellPorts]:
+    """The one cell's controller (``models``: --controller and --robot, when no file),
+    with the scenario loaded, and the ports its file asks for (none without a file); a
+    mistake in a file is a usage error."""
+    try:
+        cell_file = read_cell_file(config_file) if config_file is not None else None
+        cell = _cell(ctx, *models, cell_file)
+        controller = VirtualController(cell)
+        if scenario_path is not None:
+            from pymotoros.controller.scenario import load_scenario
+
+            controller.load_scenario(load_scenario(scenario_path))
+    except ConfigError as exc:
+        raise click.UsageError(str(exc)) from exc
+    return cell, controller, cell_file.ports if cell_file is not None else CellPorts()
+
+
+def _request_realtime(realtime: bool) -> None:
+    if realtime:
+        from pymotoros.runtime.realtime import request_realtime
+
+        request_realtime()  # a warning line if refused; the twin runs on either way
 
 
 def serve(
