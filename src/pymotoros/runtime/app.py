@@ -25,7 +25,6 @@ import logging
 import socket
 from collections.abc import Generator
 from dataclasses import dataclass, field
-from types import TracebackType
 from typing import Final, Self
 
 import uvicorn
@@ -42,6 +41,7 @@ from pymotoros.runtime.http_api import create_http_app
 from pymotoros.runtime.io_server import IoServer
 from pymotoros.runtime.motion_server import MotionServer
 from pymotoros.runtime.observers import Observers
+from pymotoros.runtime.served import Served
 from pymotoros.runtime.state_server import (
     STATE_MESSAGE_GAP_S,
     STATE_PERIOD_S,
@@ -98,8 +98,10 @@ class BoundPorts:
     http: int | None = field(default=None)
 
 
-class SimulatorApp:
+class SimulatorApp(Served):
     """The servers, the interpolation loop and the control API around one controller."""
+
+    _what = "simulator"
 
     def __init__(
         self,
@@ -110,6 +112,7 @@ class SimulatorApp:
         idle_batching: bool | None = None,
         ticker: Ticker | None = None,
     ) -> None:
+        super().__init__()
         self.controller = controller
         self.config = config or SimulatorConfig()
         self.clock: Clock = clock or LoopClock()
@@ -148,8 +151,6 @@ class SimulatorApp:
             controller.drop_motion_hook = self.motion.drop_clients
         self._ports: BoundPorts | None = None
         self._ready = asyncio.Event()
-        self._stop = asyncio.Event()
-        self._serve_task: asyncio.Task[None] | None = None
         self._http: _EmbeddedUvicorn | None = None
         self._http_task: asyncio.Task[None] | None = None
         self._loop_tasks: list[asyncio.Task[None]] = []
@@ -172,17 +173,6 @@ class SimulatorApp:
     def ready(self) -> asyncio.Event:
         """Set once every listener is up."""
         return self._ready
-
-    def request_stop(self) -> None:
-        """Ask :meth:`serve` to shut down (safe from a signal handler; idempotent)."""
-        self._stop.set()
-
-    async def wait_stopped(self) -> None:
-        """Wait until the simulator entered with ``async with`` has shut down (after
-        :meth:`request_stop`, a signal, or a crash, which this re-raises)."""
-        if self._serve_task is None:
-            raise RuntimeError("wait_stopped() needs the simulator started with `async with`")
-        await asyncio.shield(self._serve_task)
 
     async def serve(self) -> None:
         """Listen and run until :meth:`request_stop` or cancellation; then shut down in order.
@@ -314,33 +304,18 @@ class SimulatorApp:
         return socks
 
     async def __aenter__(self) -> Self:
-        self._serve_task = asyncio.create_task(self.serve(), name="simulator")
+        self._task = asyncio.create_task(self.serve(), name="simulator")
         ready = asyncio.create_task(self._ready.wait(), name="simulator-ready")
         try:
-            await asyncio.wait({self._serve_task, ready}, return_when=asyncio.FIRST_COMPLETED)
+            await asyncio.wait({self._task, ready}, return_when=asyncio.FIRST_COMPLETED)
         finally:
             ready.cancel()
             with contextlib.suppress(asyncio.CancelledError):
                 await ready
-        if self._serve_task.done():
-            self._serve_task.result()  # raises what stopped it
+        if self._task.done():
+            self._task.result()  # raises what stopped it
             raise RuntimeError("the simulator stopped before it was ready")
         return self
-
-    async def __aexit__(
-        self,
-        exc_type: type[BaseException] | None,
-        exc: BaseException | None,
-        tb: TracebackType | None,
-    ) -> None:
-        await self.stop()
-
-    async def stop(self) -> None:
-        """Shut down and wait until everything is released (idempotent)."""
-        self.request_stop()
-        task = self._serve_task
-        if task is not None and not task.done():
-            await task
 
     # ----------------------------------------------------------- internals
 

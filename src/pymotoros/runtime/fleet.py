@@ -35,7 +35,6 @@ import time
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from types import TracebackType
 from typing import Final, Self
 
 import numpy as np
@@ -44,6 +43,7 @@ from pymotoros.errors import ConfigError
 from pymotoros.models.cell import PORT_KINDS, CellPorts, read_cell_file
 from pymotoros.runtime.app import SimulatorApp, SimulatorConfig
 from pymotoros.runtime.clock import Clock, precise_clock
+from pymotoros.runtime.served import Served
 from pymotoros.runtime.target import SimulatedController
 from pymotoros.runtime.ticker import LATENESS_WINDOW, LatenessStats, Ticker, TickStats
 
@@ -156,7 +156,7 @@ class _TickAll:
         self._steps = 0
 
 
-class Fleet:
+class Fleet(Served):
     """Several :class:`SimulatorApp` on one event loop, ticked by one :class:`Ticker`.
 
     ::
@@ -172,6 +172,8 @@ class Fleet:
     it, as one :class:`SimulatorApp` does.
     """
 
+    _what = "fleet"
+
     def __init__(
         self,
         cells: Sequence[FleetCell],
@@ -179,6 +181,7 @@ class Fleet:
         clock: Clock | None = None,
         idle_batching: bool | None = None,
     ) -> None:
+        super().__init__()
         if not cells:
             raise ValueError("a fleet needs at least one cell")
         names = [c.name for c in cells]
@@ -210,8 +213,6 @@ class Fleet:
             )
             for c in cells
         )
-        self._stop = asyncio.Event()
-        self._supervisor: asyncio.Task[None] | None = None
         self._started = False
 
     def _nobody_observes(self) -> bool:
@@ -230,24 +231,6 @@ class Fleet:
         self.ticker.reset_stats()
         self._step.reset()
 
-    def request_stop(self) -> None:
-        """Ask every cell to shut down (safe from a signal handler; idempotent)."""
-        self._stop.set()
-
-    async def wait_stopped(self) -> None:
-        """Wait until the fleet has shut down (after :meth:`request_stop`, a signal, or a
-        crash, which this re-raises)."""
-        if self._supervisor is None:
-            raise RuntimeError("wait_stopped() needs the fleet started with `async with`")
-        await asyncio.shield(self._supervisor)
-
-    async def stop(self) -> None:
-        """Shut every cell down and wait until everything is released (idempotent)."""
-        self.request_stop()
-        task = self._supervisor
-        if task is not None and not task.done():
-            await task
-
     async def __aenter__(self) -> Self:
         if self._started:
             raise RuntimeError("this Fleet has already served; create a new one")
@@ -264,16 +247,8 @@ class Fleet:
             await _stop_all(started)
             raise
         ticking = asyncio.create_task(self.ticker.run(), name="interpolation")
-        self._supervisor = asyncio.create_task(self._supervise(ticking), name="fleet")
+        self._task = asyncio.create_task(self._supervise(ticking), name="fleet")
         return self
-
-    async def __aexit__(
-        self,
-        exc_type: type[BaseException] | None,
-        exc: BaseException | None,
-        tb: TracebackType | None,
-    ) -> None:
-        await self.stop()
 
     async def _supervise(self, ticking: asyncio.Task[None]) -> None:
         """Run until a stop is asked or anything ends (a crash); then stop every cell
