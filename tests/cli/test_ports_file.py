@@ -181,3 +181,23 @@ def test_a_bad_settings_value_is_named_by_its_key(tmp_path: Path) -> None:
     assert f"Invalid value for timeout in the settings file {settings} (--timeout)" in (
         result.stderr
     )
+
+
+def test_the_settings_file_can_name_the_cell(tmp_path: Path) -> None:
+    """``cell = "b"`` at the top of the settings file chooses, as --cell would: the
+    command then tries cell b's ports (nobody listens: a connection error, exit 3)."""
+    with socket.create_server(("127.0.0.1", 0)) as probe:
+        free = probe.getsockname()[1]  # closed below: connecting to it is refused
+    entry = {"motion": free, "state": free, "io": free, "http": None}
+    cells = [{"cell": "a", **entry, "motion": 1}, {"cell": "b", **entry}]
+    ports = tmp_path / "ports.json"
+    ports.write_text(json.dumps({**entry, "cells": cells}))
+    settings = tmp_path / "settings.toml"
+    settings.write_text(f'ports_file = "{ports}"\ncell = "b"\ntimeout = 1\n')
+    result = CliRunner().invoke(cli, ["status"], env={"PYMOTOROS_SETTINGS": str(settings)})
+    assert result.exit_code == 3, result.output
+    assert str(free) in result.stderr
+    settings.write_text(f'ports_file = "{ports}"\n')
+    result = CliRunner().invoke(cli, ["status"], env={"PYMOTOROS_SETTINGS": str(settings)})
+    assert result.exit_code == 2, result.output
+    assert "choose one with --cell NAME" in result.stderr
