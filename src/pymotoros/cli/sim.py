@@ -241,8 +241,8 @@ def _cell(
     "--ports-file",
     type=click.Path(dir_okay=False, writable=True, path_type=Path),
     default=None,
-    help="Write the ports taken as JSON here once listening (removed on exit); "
-    "robot commands read it with --ports-file.",
+    help="Write the ports taken, and what each cell is, as JSON here once listening "
+    "(removed on exit); robot commands read it with --ports-file (and --cell NAME).",
 )
 @click.option(
     "--record",
