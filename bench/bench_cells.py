@@ -81,6 +81,7 @@ def serve(paths: list[Path], ports_file: Path, batch: bool = False) -> None:
     """The measured process: N cells served as ``pymotoros sim`` serves them. SIGUSR1
     resets the statistics (end of the warm-up); at SIGTERM it prints them as JSON.
     ``batch``: every queued segment computed at once (``GroupInterpolator.front`` off)."""
+    from pymotoros.cli.ports_file import CellLabel
     from pymotoros.cli.sim_cells import run_fleet
     from pymotoros.controller import VirtualController
     from pymotoros.controller.cell import load_cell
@@ -90,17 +91,17 @@ def serve(paths: list[Path], ports_file: Path, batch: bool = False) -> None:
 
     GroupInterpolator.front = not batch
 
-    cells, titles = [], []
+    cells, labels = [], []
     for name, path in zip(cell_names(paths), paths, strict=True):
         cell = load_cell(path)
         config = SimulatorConfig(motion_port=0, state_port=0, io_port=0, http_port=0)
         cells.append(FleetCell(name, VirtualController(cell), config))
-        titles.append(cell.name)
+        labels.append(CellLabel.of(name, cell, path))
     fleet = Fleet(cells)
 
     async def main() -> None:
         asyncio.get_running_loop().add_signal_handler(signal.SIGUSR1, fleet.reset_stats)
-        await run_fleet(fleet, paths, titles, ports_file)
+        await run_fleet(fleet, labels, ports_file)
 
     asyncio.run(main())
     tick, step = fleet.tick_stats(), fleet.step_stats()

@@ -2,9 +2,12 @@
 
 from __future__ import annotations
 
+import ast
+import importlib
 import inspect
 import subprocess
 import sys
+from pathlib import Path
 
 import pytest
 
@@ -40,6 +43,29 @@ def test_front_door_exports_what_users_need() -> None:
     for name in pymotoros.__all__:
         assert hasattr(pymotoros, name), name
     assert len(set(pymotoros.__all__)) == len(pymotoros.__all__)
+
+
+def test_the_names_are_declared_once() -> None:
+    """The ``TYPE_CHECKING`` imports are the one declaration (issue 19): the run-time map
+    from name to module and ``__all__`` are read from them, every line an explicit
+    re-export (``X as X``) that type checkers see."""
+    tree = ast.parse(Path(pymotoros.__file__).read_text(encoding="utf-8"))
+    block = next(
+        node
+        for node in tree.body
+        if isinstance(node, ast.If) and ast.unparse(node.test) == "TYPE_CHECKING"
+    )
+    declared: dict[str, str] = {}
+    for node in block.body:
+        assert isinstance(node, ast.ImportFrom), ast.unparse(node)
+        assert node.module is not None
+        for alias in node.names:
+            assert alias.asname == alias.name, f"{alias.name}: write it `X as X`"
+            declared[alias.name] = node.module
+    assert declared == pymotoros._WHERE
+    assert pymotoros.__all__ == sorted([*declared, "__version__"])
+    for name, module in declared.items():
+        assert getattr(pymotoros, name) is getattr(importlib.import_module(module), name)
 
 
 def test_one_name_per_concept() -> None:

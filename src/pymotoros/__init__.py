@@ -20,236 +20,107 @@ The front door: one name per concept, whatever sub-package defines it::
 Every name is imported on first use (PEP 562): ``import pymotoros`` runs first for
 any sub-package, and the sans-I/O codec (``pymotoros.protocol``) must load neither
 asyncio nor socket. The in-memory twin for tests is :mod:`pymotoros.testing`.
+
+The names are declared once, by the ``TYPE_CHECKING`` imports below: type checkers read
+them (``X as X`` is an explicit re-export), and at run time :func:`_exports` reads the
+same lines to know which module defines each name, and ``__all__`` follows.
 """
 
 from __future__ import annotations
 
 import importlib
-from typing import TYPE_CHECKING, Any
+import re
+from typing import TYPE_CHECKING, Any, Final
 
 if TYPE_CHECKING:
-    from pymotoros.client.connection import Ports
-    from pymotoros.client.errors import (
-        AxisDeviation,
-        BusyTimeoutError,
-        ClientError,
-        CommandFailedError,
-        ConnectError,
-        ConnectionLostError,
-        GroupError,
-        InvalidRequestError,
-        IoAddressError,
-        IoError,
-        ModelMismatchError,
-        MotionIncompleteError,
-        MotionTimeoutError,
-        MoveStoppedError,
-        NotReadyError,
-        ReplyError,
-        RequestTimeoutError,
-        SpeedLimitError,
-        StartPositionError,
-    )
-    from pymotoros.client.motion_port import MotionReadiness
-    from pymotoros.client.planning import (
-        JointLimits,
-        JointTrajectory,
-        PlanningError,
-        TrajectoryPoint,
-        plan_joint_move,
-    )
-    from pymotoros.client.robot import RobotClient, connect
-    from pymotoros.client.srdf import NamedPose, NamedPoseError, parse_srdf
-    from pymotoros.client.state import JointState, Mode, RobotState, Status
-    from pymotoros.client.streaming import FollowingReport, FollowingSample, MoveResult
-    from pymotoros.client.sync import SyncRobotClient
-    from pymotoros.client.timing import ClientClock
-    from pymotoros.controller import CellConfig, VirtualController, default_cell, load_cell
-    from pymotoros.controller.scenario import Scenario, load_scenario, parse_scenario
-    from pymotoros.errors import (
-        ConfigError,
-        JobError,
-        KinematicsError,
-        LocalProtocolError,
-        ProtocolError,
-        PymotorosError,
-        RemoteProtocolError,
-        TrajectoryRejectedError,
-    )
-    from pymotoros.kinematics import Chain, chain_for
-    from pymotoros.models import (
-        AxisModel,
-        ControllerModel,
-        ControllerType,
-        DhLink,
-        GroupModel,
-        RobotModel,
-        controller_model,
-        robot_model,
-    )
-    from pymotoros.trajectory import (
-        CheckReport,
-        Trajectory,
-        check_trajectory,
-        plan_waypoints,
-        read_trajectory_file,
-        write_trajectory_file,
-    )
+    from pymotoros.client.connection import Ports as Ports
+    from pymotoros.client.errors import AxisDeviation as AxisDeviation
+    from pymotoros.client.errors import BusyTimeoutError as BusyTimeoutError
+    from pymotoros.client.errors import ClientError as ClientError
+    from pymotoros.client.errors import CommandFailedError as CommandFailedError
+    from pymotoros.client.errors import ConnectError as ConnectError
+    from pymotoros.client.errors import ConnectionLostError as ConnectionLostError
+    from pymotoros.client.errors import GroupError as GroupError
+    from pymotoros.client.errors import InvalidRequestError as InvalidRequestError
+    from pymotoros.client.errors import IoAddressError as IoAddressError
+    from pymotoros.client.errors import IoError as IoError
+    from pymotoros.client.errors import ModelMismatchError as ModelMismatchError
+    from pymotoros.client.errors import MotionIncompleteError as MotionIncompleteError
+    from pymotoros.client.errors import MotionTimeoutError as MotionTimeoutError
+    from pymotoros.client.errors import MoveStoppedError as MoveStoppedError
+    from pymotoros.client.errors import NotReadyError as NotReadyError
+    from pymotoros.client.errors import ReplyError as ReplyError
+    from pymotoros.client.errors import RequestTimeoutError as RequestTimeoutError
+    from pymotoros.client.errors import SpeedLimitError as SpeedLimitError
+    from pymotoros.client.errors import StartPositionError as StartPositionError
+    from pymotoros.client.motion_port import MotionReadiness as MotionReadiness
+    from pymotoros.client.planning import JointLimits as JointLimits
+    from pymotoros.client.planning import JointTrajectory as JointTrajectory
+    from pymotoros.client.planning import PlanningError as PlanningError
+    from pymotoros.client.planning import TrajectoryPoint as TrajectoryPoint
+    from pymotoros.client.planning import plan_joint_move as plan_joint_move
+    from pymotoros.client.robot import RobotClient as RobotClient
+    from pymotoros.client.robot import connect as connect
+    from pymotoros.client.srdf import NamedPose as NamedPose
+    from pymotoros.client.srdf import NamedPoseError as NamedPoseError
+    from pymotoros.client.srdf import parse_srdf as parse_srdf
+    from pymotoros.client.state import JointState as JointState
+    from pymotoros.client.state import Mode as Mode
+    from pymotoros.client.state import RobotState as RobotState
+    from pymotoros.client.state import Status as Status
+    from pymotoros.client.streaming import FollowingReport as FollowingReport
+    from pymotoros.client.streaming import FollowingSample as FollowingSample
+    from pymotoros.client.streaming import MoveResult as MoveResult
+    from pymotoros.client.sync import SyncRobotClient as SyncRobotClient
+    from pymotoros.client.timing import ClientClock as ClientClock
+    from pymotoros.controller import CellConfig as CellConfig
+    from pymotoros.controller import VirtualController as VirtualController
+    from pymotoros.controller import default_cell as default_cell
+    from pymotoros.controller import load_cell as load_cell
+    from pymotoros.controller.scenario import Scenario as Scenario
+    from pymotoros.controller.scenario import load_scenario as load_scenario
+    from pymotoros.controller.scenario import parse_scenario as parse_scenario
+    from pymotoros.errors import ConfigError as ConfigError
+    from pymotoros.errors import JobError as JobError
+    from pymotoros.errors import KinematicsError as KinematicsError
+    from pymotoros.errors import LocalProtocolError as LocalProtocolError
+    from pymotoros.errors import ProtocolError as ProtocolError
+    from pymotoros.errors import PymotorosError as PymotorosError
+    from pymotoros.errors import RemoteProtocolError as RemoteProtocolError
+    from pymotoros.errors import TrajectoryRejectedError as TrajectoryRejectedError
+    from pymotoros.kinematics import Chain as Chain
+    from pymotoros.kinematics import chain_for as chain_for
+    from pymotoros.models import AxisModel as AxisModel
+    from pymotoros.models import ControllerModel as ControllerModel
+    from pymotoros.models import ControllerType as ControllerType
+    from pymotoros.models import DhLink as DhLink
+    from pymotoros.models import GroupModel as GroupModel
+    from pymotoros.models import RobotModel as RobotModel
+    from pymotoros.models import controller_model as controller_model
+    from pymotoros.models import robot_model as robot_model
+    from pymotoros.trajectory import CheckReport as CheckReport
+    from pymotoros.trajectory import Trajectory as Trajectory
+    from pymotoros.trajectory import check_trajectory as check_trajectory
+    from pymotoros.trajectory import plan_waypoints as plan_waypoints
+    from pymotoros.trajectory import read_trajectory_file as read_trajectory_file
+    from pymotoros.trajectory import write_trajectory_file as write_trajectory_file
 
-_WHERE: dict[str, str] = {
-    # the client
-    "RobotClient": "pymotoros.client.robot",
-    "connect": "pymotoros.client.robot",
-    "SyncRobotClient": "pymotoros.client.sync",
-    "Ports": "pymotoros.client.connection",
-    "ClientClock": "pymotoros.client.timing",
-    "MotionReadiness": "pymotoros.client.motion_port",
-    "RobotState": "pymotoros.client.state",
-    "JointState": "pymotoros.client.state",
-    "Status": "pymotoros.client.state",
-    "Mode": "pymotoros.client.state",
-    "MoveResult": "pymotoros.client.streaming",
-    "FollowingReport": "pymotoros.client.streaming",
-    "FollowingSample": "pymotoros.client.streaming",
-    "JointLimits": "pymotoros.client.planning",
-    "JointTrajectory": "pymotoros.client.planning",
-    "TrajectoryPoint": "pymotoros.client.planning",
-    "plan_joint_move": "pymotoros.client.planning",
-    "NamedPose": "pymotoros.client.srdf",
-    "parse_srdf": "pymotoros.client.srdf",
-    # kinematics
-    "Chain": "pymotoros.kinematics",
-    "chain_for": "pymotoros.kinematics",
-    # trajectory files, waypoint timing and the offline pre-flight
-    "Trajectory": "pymotoros.trajectory",
-    "CheckReport": "pymotoros.trajectory",
-    "check_trajectory": "pymotoros.trajectory",
-    "plan_waypoints": "pymotoros.trajectory",
-    "read_trajectory_file": "pymotoros.trajectory",
-    "write_trajectory_file": "pymotoros.trajectory",
-    # the virtual controller
-    "VirtualController": "pymotoros.controller",
-    "CellConfig": "pymotoros.controller",
-    "default_cell": "pymotoros.controller",
-    "load_cell": "pymotoros.controller",
-    "Scenario": "pymotoros.controller.scenario",
-    "load_scenario": "pymotoros.controller.scenario",
-    "parse_scenario": "pymotoros.controller.scenario",
-    # models (GroupModel and DhLink: the models' ones, not the HTTP or wire shapes)
-    "RobotModel": "pymotoros.models",
-    "GroupModel": "pymotoros.models",
-    "AxisModel": "pymotoros.models",
-    "DhLink": "pymotoros.models",
-    "ControllerModel": "pymotoros.models",
-    "ControllerType": "pymotoros.models",
-    "robot_model": "pymotoros.models",
-    "controller_model": "pymotoros.models",
-    # the one exception tree
-    "PymotorosError": "pymotoros.errors",
-    "ProtocolError": "pymotoros.errors",
-    "LocalProtocolError": "pymotoros.errors",
-    "RemoteProtocolError": "pymotoros.errors",
-    "ConfigError": "pymotoros.errors",
-    "JobError": "pymotoros.errors",
-    "KinematicsError": "pymotoros.errors",
-    "TrajectoryRejectedError": "pymotoros.errors",
-    "ClientError": "pymotoros.client.errors",
-    "ConnectError": "pymotoros.client.errors",
-    "ConnectionLostError": "pymotoros.client.errors",
-    "RequestTimeoutError": "pymotoros.client.errors",
-    "MotionTimeoutError": "pymotoros.client.errors",
-    "MotionIncompleteError": "pymotoros.client.errors",
-    "GroupError": "pymotoros.client.errors",
-    "ModelMismatchError": "pymotoros.client.errors",
-    "MoveStoppedError": "pymotoros.client.errors",
-    "ReplyError": "pymotoros.client.errors",
-    "NotReadyError": "pymotoros.client.errors",
-    "InvalidRequestError": "pymotoros.client.errors",
-    "StartPositionError": "pymotoros.client.errors",
-    "SpeedLimitError": "pymotoros.client.errors",
-    "CommandFailedError": "pymotoros.client.errors",
-    "BusyTimeoutError": "pymotoros.client.errors",
-    "IoError": "pymotoros.client.errors",
-    "IoAddressError": "pymotoros.client.errors",
-    "AxisDeviation": "pymotoros.client.errors",
-    "PlanningError": "pymotoros.client.planning",
-    "NamedPoseError": "pymotoros.client.srdf",
-}
+_IMPORT: Final = re.compile(r"^    from (pymotoros[\w.]*) import (\w+) as \2$", re.MULTILINE)
+"""One line of the declaration above: ``from MODULE import NAME as NAME``."""
 
-__all__ = [
-    "AxisDeviation",
-    "AxisModel",
-    "BusyTimeoutError",
-    "CellConfig",
-    "Chain",
-    "CheckReport",
-    "ClientClock",
-    "ClientError",
-    "CommandFailedError",
-    "ConfigError",
-    "ConnectError",
-    "ConnectionLostError",
-    "ControllerModel",
-    "ControllerType",
-    "DhLink",
-    "FollowingReport",
-    "FollowingSample",
-    "GroupError",
-    "GroupModel",
-    "InvalidRequestError",
-    "IoAddressError",
-    "IoError",
-    "JobError",
-    "JointLimits",
-    "JointState",
-    "JointTrajectory",
-    "KinematicsError",
-    "LocalProtocolError",
-    "Mode",
-    "ModelMismatchError",
-    "MotionIncompleteError",
-    "MotionReadiness",
-    "MotionTimeoutError",
-    "MoveResult",
-    "MoveStoppedError",
-    "NamedPose",
-    "NamedPoseError",
-    "NotReadyError",
-    "PlanningError",
-    "Ports",
-    "ProtocolError",
-    "PymotorosError",
-    "RemoteProtocolError",
-    "ReplyError",
-    "RequestTimeoutError",
-    "RobotClient",
-    "RobotModel",
-    "RobotState",
-    "Scenario",
-    "SpeedLimitError",
-    "StartPositionError",
-    "Status",
-    "SyncRobotClient",
-    "Trajectory",
-    "TrajectoryPoint",
-    "TrajectoryRejectedError",
-    "VirtualController",
-    "__version__",
-    "chain_for",
-    "check_trajectory",
-    "connect",
-    "controller_model",
-    "default_cell",
-    "load_cell",
-    "load_scenario",
-    "parse_scenario",
-    "parse_srdf",
-    "plan_joint_move",
-    "plan_waypoints",
-    "read_trajectory_file",
-    "robot_model",
-    "write_trajectory_file",
-]
+
+def _exports() -> dict[str, str]:
+    """Name -> defining module, read from this file's ``TYPE_CHECKING`` block (the one
+    declaration). Read as text, not imported (that would load every sub-package) nor
+    parsed with :mod:`ast` (milliseconds at every ``import pymotoros``)."""
+    with open(__file__, encoding="utf-8") as file:  # not pathlib: it costs an import
+        source = file.read()
+    block = source.split("\nif TYPE_CHECKING:\n", 1)[1].split("\n\n", 1)[0]
+    return {name: module for module, name in _IMPORT.findall(block)}
+
+
+_WHERE: Final = _exports()
+__all__ = sorted([*_WHERE, "__version__"])
 
 
 def __getattr__(name: str) -> Any:

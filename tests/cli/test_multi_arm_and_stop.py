@@ -48,7 +48,19 @@ def _positions(result: Result) -> list[float]:
 def test_ports_file_has_the_ready_line_ports(two_arms: tuple[Sim, Path]) -> None:
     sim, ports = two_arms
     data = json.loads(ports.read_text())
-    assert data == {"motion": sim.motion, "state": sim.state, "io": sim.io, "http": sim.http}
+    top = {k: data[k] for k in ("motion", "state", "io", "http")}
+    assert top == {"motion": sim.motion, "state": sim.state, "io": sim.io, "http": sim.http}
+    (cell,) = data["cells"]  # and what the cell is: no --config needed to read it
+    assert (cell["controller"], cell["robots"]) == ("dx100", ["hc10"])
+    assert [g["name"] for g in cell["groups"]] == ["R1", "R2"]
+
+
+def _ports_only(ports: Path) -> Path:
+    """A ports file as written before it carried the cell: the client knows no models."""
+    data = json.loads(ports.read_text())
+    old = ports.with_name("ports_only.json")
+    old.write_text(json.dumps({k: data[k] for k in ("motion", "state", "io", "http")}))
+    return old
 
 
 def test_two_arms_group_by_group_and_together(two_arms: tuple[Sim, Path]) -> None:
@@ -91,7 +103,7 @@ def test_unknown_group_is_one_line_with_the_groups(two_arms: tuple[Sim, Path]) -
 def test_single_arm_model_against_two_arms_is_a_mismatch(two_arms: tuple[Sim, Path]) -> None:
     _, ports = two_arms
     result = invoke(
-        ports,
+        _ports_only(ports),
         "status",
         env={"PYMOTOROS_CONFIG": ""},
     )
@@ -103,7 +115,9 @@ def test_single_arm_model_against_two_arms_is_a_mismatch(two_arms: tuple[Sim, Pa
 def test_group_1_without_a_cell_names_the_cell_option(two_arms: tuple[Sim, Path]) -> None:
     _, ports = two_arms
     result = invoke(
-        ports, "move", "0", "0", "0", "0", "0", "0", "--group", "1", env={"PYMOTOROS_CONFIG": ""}
+        _ports_only(ports),
+        *("move", "0", "0", "0", "0", "0", "0", "--group", "1"),
+        env={"PYMOTOROS_CONFIG": ""},
     )
     assert result.exit_code == EXIT_USAGE
     assert "no group 1" in result.stderr

@@ -128,9 +128,29 @@ def test_two_cells_in_one_process(tmp_path: Path) -> None:
                 cell.http,
             )
 
-        # a robot command reading the ports file reaches the first cell
+        # each entry says what the cell is
+        assert [(e["controller"], e["robots"]) for e in data["cells"]] == [
+            ("yrc1000", ["hc10"]),
+            ("fs100", ["mh5"]),
+        ]
+
+        # a robot command reading the ports file must be told which cell: it lists them
         result = CliRunner().invoke(cli, ["status", "--ports-file", str(ports_file)])
-        assert result.exit_code == 0, result.output
+        assert result.exit_code == 2, result.output
+        assert "2 cells (hc10_yrc1000, fs100): choose one with --cell NAME" in result.stderr
+        result = CliRunner().invoke(cli, ["status", "--ports-file", str(ports_file), "--cell", "x"])
+        assert result.exit_code == 2, result.output
+        assert "no cell 'x' in this simulator (its cells: hc10_yrc1000, fs100)" in result.stderr
+        # --cell (or PYMOTOROS_CELL) chooses; the big-endian cell needs no --controller
+        for name, title in (("hc10_yrc1000", "HC10 on YRC1000"), ("fs100", "MH5 on FS100")):
+            result = CliRunner().invoke(
+                cli,
+                ["status", "--ports-file", str(ports_file)],
+                env={"PYMOTOROS_CELL": name},
+            )
+            assert result.exit_code == 0, result.output
+            assert result.stdout.startswith(title), result.stdout
+            assert "ERROR" not in result.stderr, result.stderr
 
         # a raw client drives each cell, in its own byte order
         for cell, order in zip(found, (ByteOrder.LITTLE, ByteOrder.BIG), strict=True):

@@ -19,6 +19,7 @@ from pymotoros.cli.settings import (
     check_section,
     load_settings,
     name_envvars,
+    name_the_source,
     settings_path,
 )
 from pymotoros.errors import ConfigError
@@ -55,6 +56,10 @@ _COMMANDS: Final[dict[str, tuple[str, str]]] = {
 }
 
 
+_TYPED: Final = "pymotoros.typed_args"
+"""``ctx.meta`` key: the arguments after the command's name, as typed."""
+
+
 class _LazyGroup(click.Group):
     """A group whose subcommands are imported when first used."""
 
@@ -72,6 +77,18 @@ class _LazyGroup(click.Group):
             raise TypeError(f"{target} is not a click command")
         name_envvars(command, f"{ENV_PREFIX}_{cmd_name.upper()}")
         return command
+
+    def resolve_command(
+        self, ctx: click.Context, args: list[str]
+    ) -> tuple[str | None, click.Command | None, list[str]]:
+        ctx.meta[_TYPED] = list(args)  # what the user typed: see invoke
+        return super().resolve_command(ctx, args)
+
+    def invoke(self, ctx: click.Context) -> object:
+        try:
+            return super().invoke(ctx)
+        except click.BadParameter as exc:  # from the environment? say which variable
+            raise name_the_source(exc, ctx.meta.get(_TYPED, ())) from exc
 
     def format_commands(self, ctx: click.Context, formatter: click.HelpFormatter) -> None:
         # Listed from the table, so that --help imports no subcommand module.

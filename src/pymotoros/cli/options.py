@@ -25,7 +25,7 @@ from typing import TYPE_CHECKING, Any, Final, TypeAlias, TypeVar
 import click
 from click.shell_completion import CompletionItem
 
-from pymotoros.cli.settings import envvar
+from pymotoros.cli.settings import cell_option, envvar
 from pymotoros.models import DEFAULT_CONTROLLER, DEFAULT_ROBOT, ROBOTS, ControllerType
 from pymotoros.protocol.constants import TCP_PORT_IO, TCP_PORT_MOTION, TCP_PORT_STATE
 
@@ -332,9 +332,10 @@ def connection_options(func: _F) -> _F:
 
 
 def robot_options(func: _F) -> _F:
-    """The options every robot command takes: connection, models, timeout, debug, record."""
+    """The options every robot command takes: connection, models, timeout, debug, record,
+    and ``--cell`` (which cell of a ports file)."""
     return _apply(
-        func,
+        cell_option(func),
         [
             connection_options,
             controller_option(env=True),

@@ -41,6 +41,7 @@ from pymotoros.cli.options import (
     robot_options,
     scale_options,
 )
+from pymotoros.cli.ports_file import ports_file_target, read_ports
 from pymotoros.cli.sim_view import fetch_state_async, safety_data, safety_lines
 from pymotoros.client import (
     ClientError,
@@ -59,6 +60,7 @@ from pymotoros.client.state import RobotState
 from pymotoros.client.streaming import FollowingSample, MoveResult
 from pymotoros.errors import ConfigError, PymotorosError
 from pymotoros.models import GroupModel
+from pymotoros.models.cell import CellModels
 from pymotoros.protocol.constants import (
     MAX_TOOL_NUMBER,
     TCP_PORT_IO,
@@ -105,8 +107,9 @@ class Target:
     robot: str
     timeout_s: float
     debug: bool
-    cell: Path | None = None
-    """A cell file (``--config``): controller and groups, instead of --controller/--robot."""
+    cell: Path | CellModels | None = None
+    """A cell file (``--config``), or the cell a ports file describes: controller and
+    groups, instead of --controller/--robot."""
     http_port: int | None = None
     """The twin's control API port, when a ports file told it."""
     record: Path | None = None
@@ -150,27 +153,17 @@ def to_user(value: float, deg: bool, linear: bool = False) -> float:
 
 def read_ports_file(path: Path) -> dict[str, int]:
     """The ports a ``pymotoros sim --ports-file`` wrote (motion, state, io, http)."""
-    try:
-        data = json.loads(path.read_text(encoding="utf-8"))
-    except OSError as exc:
-        raise ConfigError(
-            f"{path}: cannot read the ports file ({exc.strerror}); start "
-            f"`pymotoros sim --ports-file {path}` first"
-        ) from exc
-    except json.JSONDecodeError as exc:
-        raise ConfigError(f"{path}: not a ports file (not JSON: {exc})") from exc
-    if not isinstance(data, dict) or not all(isinstance(data.get(k), int) for k in _DEFAULT_PORTS):
-        raise ConfigError(f"{path}: not a ports file (needs motion, state and io numbers)")
-    return {k: v for k, v in data.items() if isinstance(v, int)}
+    return read_ports(path)
 
 
 def _target(kwargs: dict[str, Any]) -> Target:
     debug = kwargs.pop("debug")
     ports_file: Path | None = kwargs.pop("ports_file")
     try:
-        from_file = read_ports_file(ports_file) if ports_file is not None else {}
+        told = ports_file_target(ports_file, kwargs.pop("cell"))
     except ConfigError as exc:
         fail(exc, debug=debug)
+    from_file = told.ports
 
     def port(kind: str) -> int:
         given: int | None = kwargs.pop(f"{kind}_port")
@@ -178,13 +171,11 @@ def _target(kwargs: dict[str, Any]) -> Target:
 
     cell = kwargs.get("cell_path")
     ctx = click.get_current_context(silent=True)
-    if cell is not None and ctx is not None:
+    named_by = f"the cell file {cell}" if cell is not None else told.named_by(ports_file)
+    if named_by is not None and ctx is not None:
         for option in ("controller", "robot"):
             if ctx.get_parameter_source(option) is click.core.ParameterSource.COMMANDLINE:
-                click.echo(
-                    f"warning: --{option} is ignored: the cell file {cell} names the models",
-                    err=True,
-                )
+                click.echo(f"warning: --{option} is ignored: {named_by} names the models", err=True)
     return Target(
         host=kwargs.pop("host"),
         motion_port=port("motion"),
@@ -194,7 +185,7 @@ def _target(kwargs: dict[str, Any]) -> Target:
         robot=kwargs.pop("robot"),
         timeout_s=kwargs.pop("timeout_s"),
         debug=debug,
-        cell=kwargs.pop("cell_path"),
+        cell=kwargs.pop("cell_path") or told.models,
         http_port=from_file.get("http"),
         record=kwargs.pop("record", None),
     )

@@ -21,14 +21,16 @@ builds the ``default_map`` from the file and refuses keys no command knows.
 from __future__ import annotations
 
 import os
-import tomllib
-from collections.abc import Iterable, Mapping
+from collections.abc import Callable, Iterable, Mapping, Sequence
 from pathlib import Path
-from typing import Any, Final
+from typing import Any, Final, TypeVar
 
 import click
 
 from pymotoros.errors import ConfigError
+from pymotoros.models.toml_file import read_toml
+
+_F = TypeVar("_F", bound=Callable[..., Any])
 
 ENV_PREFIX: Final = "PYMOTOROS"
 SETTINGS_ENV: Final = "PYMOTOROS_SETTINGS"
@@ -56,6 +58,7 @@ SHARED_KEYS: Final = frozenset(
         "timeout",
         "config",
         "ports_file",
+        "cell",
         "debug",
         "deg",
     }
@@ -66,6 +69,20 @@ SHARED_KEYS: Final = frozenset(
 def envvar(name: str) -> str:
     """A shared option's environment variable: ``envvar("io_port")`` is PYMOTOROS_IO_PORT."""
     return f"{ENV_PREFIX}_{name.upper()}"
+
+
+def cell_option(func: _F) -> _F:
+    """``--cell NAME`` (``PYMOTOROS_CELL``): which cell of a ports file a robot command
+    talks to, when ``pymotoros sim`` runs several (``--config a.toml --config b.toml``)."""
+    option = click.option(
+        "--cell",
+        default=None,
+        envvar=envvar("cell"),
+        metavar="NAME",
+        help="The cell of the --ports-file to talk to, by the name on its ready line "
+        "(cell=NAME); needed when the simulator runs several cells.",
+    )
+    return option(func)
 
 
 def name_envvars(command: click.Command, prefix: str) -> None:
@@ -113,12 +130,7 @@ def _with_aliases(values: Mapping[str, object]) -> dict[str, object]:
 
 def load_settings(path: Path, commands: Iterable[str]) -> dict[str, Any]:
     """The ``default_map`` for the ``pymotoros`` group from the settings file ``path``."""
-    try:
-        data = tomllib.loads(path.read_text(encoding="utf-8"))
-    except OSError as exc:
-        raise ConfigError(f"{path}: cannot read the settings file ({exc.strerror})") from exc
-    except tomllib.TOMLDecodeError as exc:
-        raise ConfigError(f"{path}: not valid TOML: {exc}") from exc
+    data = read_toml(path, "settings file")
     names = set(commands)
     shared: dict[str, object] = {}
     sections: dict[str, Mapping[str, object]] = {}
@@ -150,6 +162,31 @@ def load_settings(path: Path, commands: Iterable[str]) -> dict[str, Any]:
     return result
 
 
+def name_the_source(exc: click.BadParameter, args: Sequence[str]) -> click.BadParameter:
+    """A bad option value that did not come from the command line (``args``, what the
+    user typed after the command's name), named by where it came from: the environment
+    variable (``PYMOTOROS_MOTION_PORT``) or the settings file's key, not the flag
+    (``--motion-port``) the user never typed."""
+    param = exc.param
+    if not isinstance(param, click.Option) or exc.param_hint is not None:
+        return exc
+    flags = [*param.opts, *param.secondary_opts]
+    if any(arg == flag or arg.startswith(f"{flag}=") for arg in args for flag in flags):
+        return exc  # typed on the command line: click's words are right
+    flag = max(param.opts, key=len)
+    variables = [param.envvar] if isinstance(param.envvar, str) else list(param.envvar or ())
+    hint = next(
+        (f"{v} (the environment variable of {flag})" for v in variables if v in os.environ), None
+    )
+    name = param.name or ""
+    if hint is None and exc.ctx is not None and exc.ctx.lookup_default(name) is not None:
+        key = next((k for k, v in _ALIASES.items() if v == name), name)
+        hint = f"{key} in the settings file {settings_path()} ({flag})"
+    if hint is None:
+        return exc
+    return click.BadParameter(exc.message, ctx=exc.ctx, param=param, param_hint=hint)
+
+
 def check_section(ctx: click.Context, command: click.Command) -> None:
     """Refuse a settings-file key the command has no option for (nothing silently ignored)."""
     table = (ctx.default_map or {}).get(command.name or "")
@@ -170,9 +207,11 @@ def check_section(ctx: click.Context, command: click.Command) -> None:
 __all__ = [
     "ENV_PREFIX",
     "SETTINGS_ENV",
+    "cell_option",
     "check_section",
     "envvar",
     "load_settings",
     "name_envvars",
+    "name_the_source",
     "settings_path",
 ]

@@ -15,7 +15,6 @@ import asyncio
 import contextlib
 import errno
 import gc
-import json
 import logging
 import signal
 import sys
@@ -25,12 +24,15 @@ from typing import TYPE_CHECKING, Any
 
 import click
 
+from pymotoros.cli.ports_file import CellLabel, write_ports_file
 from pymotoros.controller import VirtualController
-from pymotoros.controller.cell import CellConfig, default_cell, load_cell
+from pymotoros.controller.cell import CellConfig, cell_from_file, default_cell
 from pymotoros.errors import ConfigError
 from pymotoros.models import ROBOTS, ControllerType
+from pymotoros.models.cell import PORT_KINDS, CellFile, CellPorts, read_cell_file
 from pymotoros.protocol.constants import TCP_PORT_IO, TCP_PORT_MOTION, TCP_PORT_STATE
 from pymotoros.runtime.app import DEFAULT_HTTP_PORT, SimulatorApp, SimulatorConfig
+from pymotoros.runtime.fleet import cell_names, short_name
 
 if TYPE_CHECKING:
     from pymotoros.capture import SessionRecorder
@@ -91,38 +93,39 @@ def stop_on_signals(request_stop: Callable[[], None]) -> Iterator[None]:
             loop.remove_signal_handler(sig)
 
 
-async def run_simulator(app: SimulatorApp, ports_file: Path | None = None) -> None:
-    """Serve until SIGINT/SIGTERM; print the ready line (and write ``ports_file``) once
-    listening."""
+async def run_simulator(
+    app: SimulatorApp, ports_file: Path | None = None, label: CellLabel | None = None
+) -> None:
+    """Serve until SIGINT/SIGTERM; print the ready line (and write ``ports_file``, with
+    what ``label`` says the cell is) once listening."""
     with stop_on_signals(app.request_stop):
         async with app:
-            ports = app.ports
-            motion, state, io = app.listening_ports()
-            if ports_file is not None:  # the bound ports: they listen once MotoROS starts
-                write_ports_file(ports_file, ports.motion, ports.state, ports.io, ports.http)
-            sys.stdout.write(ready_line(motion, state, io, ports.http) + "\n")
-            sys.stdout.flush()
+            announce([app], [label or CellLabel("cell")], ports_file, several=False)
             await app.wait_stopped()
 
 
-def write_ports_file(
-    path: Path,
-    motion: int,
-    state: int,
-    io: int,
-    http: int | None,
+def announce(
+    apps: Sequence[SimulatorApp],
+    labels: Sequence[CellLabel],
+    ports_file: Path | None,
     *,
-    cells: list[dict[str, Any]] | None = None,
+    several: bool,
 ) -> None:
-    """Write the ports as JSON, atomically (a reader never sees half a file): robot
-    commands read it with ``--ports-file`` / ``PYMOTOROS_PORTS_FILE``. With several
-    cells, the top-level ports are the first cell's and ``cells`` lists every cell."""
-    data: dict[str, Any] = {"motion": motion, "state": state, "io": io, "http": http}
-    if cells is not None:
-        data["cells"] = cells
-    tmp = path.with_name(path.name + ".tmp")
-    tmp.write_text(json.dumps(data) + "\n", encoding="utf-8")
-    tmp.replace(path)
+    """Once every cell listens: write ``ports_file`` (each cell's bound ports, the first
+    cell's at the top, and what each cell is), then print one ready line per cell, ended
+    by ``cell=NAME`` when ``several`` (one write, so a reader never sees half of them)."""
+    lines: list[str] = []
+    entries: list[dict[str, Any]] = []
+    for app, label in zip(apps, labels, strict=True):
+        bound = app.ports
+        line = ready_line(*app.listening_ports(), bound.http)
+        lines.append(f"{line} cell={label.name}" if several else line)
+        entries.append(label.entry((bound.motion, bound.state, bound.io, bound.http)))
+    if ports_file is not None:  # the bound ports: they listen once MotoROS starts
+        first = apps[0].ports
+        write_ports_file(ports_file, first.motion, first.state, first.io, first.http, cells=entries)
+    sys.stdout.write("".join(line + "\n" for line in lines))
+    sys.stdout.flush()
 
 
 class RepeatableOption(click.Option):
@@ -139,14 +142,33 @@ class RepeatableOption(click.Option):
         return super().type_cast_value(ctx, value)
 
 
+def simulator_config(host: str, ports: Sequence[int], cell: CellConfig) -> SimulatorConfig:
+    """Where one cell listens (``ports``: motion, state, io, http; 0: the OS chooses),
+    in its controller's byte order (FS100 speaks big-endian, reference §1.1)."""
+    motion, state, io, http = ports
+    return SimulatorConfig(
+        host=host,
+        motion_port=motion,
+        state_port=state,
+        io_port=io,
+        http_port=http,
+        byte_order=cell.controller.byte_order,
+    )
+
+
+def _label(cell: CellConfig, config_file: Path | None) -> CellLabel:
+    """The ports file's words for the one cell: named after its file, else its title."""
+    name = cell_names([config_file])[0] if config_file is not None else short_name(cell.name)
+    return CellLabel.of(name, cell, config_file)
+
+
 def cell_file_ports(
-    ctx: click.Context, path: Path, ports: tuple[int, int, int, int]
+    ctx: click.Context, path: Path | CellPorts, ports: tuple[int, int, int, int]
 ) -> tuple[int, int, int, int]:
     """The ports of one cell: a flag given (command line, environment, settings file)
-    wins, else the cell file's ``[ports]``, else the flag's default."""
-    from pymotoros.runtime.fleet import PORT_KINDS, read_cell_ports
-
-    asked = read_cell_ports(path)
+    wins, else the cell file's ``[ports]`` (``path``: the file, or its table read), else
+    the flag's default."""
+    asked = read_cell_file(path).ports if isinstance(path, Path) else path
     chosen = []
     for kind, port in zip(PORT_KINDS, ports, strict=True):
         from_file = asked.get(kind)
@@ -157,18 +179,18 @@ def cell_file_ports(
 
 
 def _cell(
-    ctx: click.Context, controller_name: str, robot_name: str, config_path: Path | None
+    ctx: click.Context, controller_name: str, robot_name: str, cell_file: CellFile | None
 ) -> CellConfig:
-    if config_path is None:
+    if cell_file is None:
         return default_cell(controller_name, robot_name)
     for option in ("controller_name", "robot_name"):
         if ctx.get_parameter_source(option) is click.core.ParameterSource.COMMANDLINE:
             logger.warning(
                 "--%s is ignored: the cell file %s names the models",
                 option.removesuffix("_name"),
-                config_path,
+                cell_file.source,
             )
-    return load_cell(config_path)
+    return cell_from_file(cell_file)
 
 
 @click.command()
@@ -219,8 +241,8 @@ def _cell(
     "--ports-file",
     type=click.Path(dir_okay=False, writable=True, path_type=Path),
     default=None,
-    help="Write the ports taken as JSON here once listening (removed on exit); "
-    "robot commands read it with --ports-file.",
+    help="Write the ports taken, and what each cell is, as JSON here once listening "
+    "(removed on exit); robot commands read it with --ports-file (and --cell NAME).",
 )
 @click.option(
     "--record",
@@ -271,10 +293,7 @@ def sim(
     if len(config_path) > 1:
         from pymotoros.cli.sim_cells import run_cells
 
-        if realtime:
-            from pymotoros.runtime.realtime import request_realtime
-
-            request_realtime()  # a warning line if refused; the cells run on either way
+        _request_realtime(realtime)
         run_cells(
             ctx,
             config_path,
@@ -286,12 +305,40 @@ def sim(
         )
         return
     config_file = config_path[0] if config_path else None
+    ports = (motion_port, state_port, io_port, http_port)
+    cell, controller, asked = _one_cell(
+        ctx, (controller_name, robot_name), config_file, scenario_path
+    )
+    ports = cell_file_ports(ctx, asked, ports)  # a [ports] table fills the flags not given
+    _request_realtime(realtime)
+    app = SimulatorApp(
+        controller,
+        simulator_config(host, ports, cell),
+        idle_batching=False if no_idle_batching else None,
+    )
+    recorder = open_recorder(record_path, [app])  # before the coroutine: it may refuse
+    serve(
+        run_simulator(app, ports_file, _label(cell, config_file)),
+        host=host,
+        ports_file=ports_file,
+        recorder=recorder,
+        port_hint="let the OS choose with --motion-port 0 --state-port 0 --io-port 0 "
+        "--http-port 0 --ports-file FILE",
+    )
+
+
+def _one_cell(
+    ctx: click.Context,
+    models: tuple[str, str],
+    config_file: Path | None,
+    scenario_path: Path | None,
+) -> tuple[CellConfig, VirtualController, CellPorts]:
+    """The one cell's controller (``models``: --controller and --robot, when no file),
+    with the scenario loaded, and the ports its file asks for (none without a file); a
+    mistake in a file is a usage error."""
     try:
-        if config_file is not None:  # a [ports] table fills the port flags not given
-            motion_port, state_port, io_port, http_port = cell_file_ports(
-                ctx, config_file, (motion_port, state_port, io_port, http_port)
-            )
-        cell = _cell(ctx, controller_name, robot_name, config_file)
+        cell_file = read_cell_file(config_file) if config_file is not None else None
+        cell = _cell(ctx, *models, cell_file)
         controller = VirtualController(cell)
         if scenario_path is not None:
             from pymotoros.controller.scenario import load_scenario
@@ -299,29 +346,14 @@ def sim(
             controller.load_scenario(load_scenario(scenario_path))
     except ConfigError as exc:
         raise click.UsageError(str(exc)) from exc
-    order = cell.controller.byte_order  # FS100 speaks big-endian (reference §1.1)
-    config = SimulatorConfig(
-        host=host,
-        motion_port=motion_port,
-        state_port=state_port,
-        io_port=io_port,
-        http_port=http_port,
-        byte_order=order,
-    )
+    return cell, controller, cell_file.ports if cell_file is not None else CellPorts()
+
+
+def _request_realtime(realtime: bool) -> None:
     if realtime:
         from pymotoros.runtime.realtime import request_realtime
 
         request_realtime()  # a warning line if refused; the twin runs on either way
-    app = SimulatorApp(controller, config, idle_batching=False if no_idle_batching else None)
-    recorder = open_recorder(record_path, [app])  # before the coroutine: it may refuse
-    serve(
-        run_simulator(app, ports_file),
-        host=host,
-        ports_file=ports_file,
-        recorder=recorder,
-        port_hint="let the OS choose with --motion-port 0 --state-port 0 --io-port 0 "
-        "--http-port 0 --ports-file FILE",
-    )
 
 
 def serve(

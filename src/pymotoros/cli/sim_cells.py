@@ -19,26 +19,18 @@ are usage errors. ``--host`` applies to every cell.
 
 from __future__ import annotations
 
-import sys
 from collections.abc import Sequence
 from pathlib import Path
-from typing import Any
 
 import click
 
-from pymotoros.cli.sim import open_recorder, ready_line, serve, stop_on_signals, write_ports_file
+from pymotoros.cli.ports_file import CellLabel
+from pymotoros.cli.sim import announce, open_recorder, serve, simulator_config, stop_on_signals
 from pymotoros.controller import VirtualController
-from pymotoros.controller.cell import load_cell
+from pymotoros.controller.cell import CellConfig, cell_from_file
 from pymotoros.errors import ConfigError
-from pymotoros.runtime.app import SimulatorConfig
-from pymotoros.runtime.fleet import (
-    PORT_KINDS,
-    Fleet,
-    FleetCell,
-    cell_names,
-    check_port_clashes,
-    read_cell_ports,
-)
+from pymotoros.models.cell import PORT_KINDS, CellPorts, read_cell_file
+from pymotoros.runtime.fleet import Fleet, FleetCell, cell_names, check_port_clashes
 
 __all__ = ["run_cells", "run_fleet"]
 
@@ -95,29 +87,21 @@ def run_cells(
     _refuse_single_cell_options(ctx, scenario_path)
     names = cell_names(paths)
     try:
-        asked = [read_cell_ports(p) for p in paths]
+        files = [read_cell_file(p) for p in paths]
         where = [f"cell {n} ({p})" for n, p in zip(names, paths, strict=True)]
-        check_port_clashes(list(zip(where, asked, strict=True)))
-        cells = []
-        titles = []
-        for name, path, ports in zip(names, paths, asked, strict=True):
-            cell = load_cell(path)
-            config = SimulatorConfig(
-                host=host,
-                motion_port=ports.motion or 0,
-                state_port=ports.state or 0,
-                io_port=ports.io or 0,
-                http_port=ports.http or 0,
-                byte_order=cell.controller.byte_order,  # FS100 speaks big-endian
-            )
-            cells.append(FleetCell(name, VirtualController(cell), config))
-            titles.append(cell.name)
+        check_port_clashes([(w, f.ports) for w, f in zip(where, files, strict=True)])
+        cells: list[FleetCell] = []
+        labels: list[CellLabel] = []
+        for name, path, cell_file in zip(names, paths, files, strict=True):
+            cell = cell_from_file(cell_file)
+            cells.append(_fleet_cell(name, cell, cell_file.ports, host))
+            labels.append(CellLabel.of(name, cell, path))
         fleet = Fleet(cells, idle_batching=idle_batching)
     except ConfigError as exc:
         raise click.UsageError(str(exc)) from exc
     recorder = open_recorder(record_path, fleet.apps)  # before the coroutine: it may refuse
     serve(
-        run_fleet(fleet, paths, titles, ports_file),
+        run_fleet(fleet, labels, ports_file),
         host=host,
         ports_file=ports_file,
         recorder=recorder,
@@ -125,39 +109,18 @@ def run_cells(
     )
 
 
+def _fleet_cell(name: str, cell: CellConfig, ports: CellPorts, host: str) -> FleetCell:
+    """One cell of the fleet: its controller, on its file's ports (else 0, the OS chooses)."""
+    config = simulator_config(host, [ports.get(kind) or 0 for kind in PORT_KINDS], cell)
+    return FleetCell(name, VirtualController(cell), config)
+
+
 async def run_fleet(
-    fleet: Fleet,
-    paths: Sequence[Path],
-    titles: Sequence[str],
-    ports_file: Path | None = None,
+    fleet: Fleet, labels: Sequence[CellLabel], ports_file: Path | None = None
 ) -> None:
     """Serve until SIGINT/SIGTERM; once every cell listens, print one ready line per
-    cell (and write ``ports_file``: the first cell's ports at the top, for the readers of
-    a single cell's file, and every cell under ``cells``)."""
+    cell (and write ``ports_file``: every cell, the first one's ports at the top)."""
     with stop_on_signals(fleet.request_stop):
         async with fleet:
-            lines: list[str] = []
-            entries: list[dict[str, Any]] = []
-            for name, path, title, app in zip(fleet.names, paths, titles, fleet.apps, strict=True):
-                bound = app.ports
-                motion, state, io = app.listening_ports()
-                lines.append(f"{ready_line(motion, state, io, bound.http)} cell={name}")
-                entries.append(
-                    {
-                        "cell": name,
-                        "name": title,
-                        "config": str(path),
-                        "motion": bound.motion,
-                        "state": bound.state,
-                        "io": bound.io,
-                        "http": bound.http,
-                    }
-                )
-            if ports_file is not None:  # the bound ports: they listen once MotoROS starts
-                first = fleet.apps[0].ports
-                write_ports_file(
-                    ports_file, first.motion, first.state, first.io, first.http, cells=entries
-                )
-            sys.stdout.write("".join(line + "\n" for line in lines))
-            sys.stdout.flush()
+            announce(fleet.apps, labels, ports_file, several=True)
             await fleet.wait_stopped()

@@ -134,7 +134,10 @@ def load(
 
 
 def load_models(
-    path: Path, robot_name: str | None, controller_name: str | None, cell_path: Path | None
+    path: Path,
+    robot_name: str | None,
+    controller_name: str | None,
+    cell_path: Path | CellModels | None,
 ) -> Loaded:
     """:func:`load`, or with a cell file its models (numpy-free models layer, as
     ``pymotoros move --config`` reads it); errors are usage errors (exit 2)."""
@@ -150,7 +153,7 @@ def load_models(
             raise BadInput(f"TRAJ: {exc}") from None
         return Loaded(traj, robot, controller)
     try:
-        cell = load_cell_models(cell_path)
+        cell = cell_path if isinstance(cell_path, CellModels) else load_cell_models(cell_path)
     except ConfigError as exc:
         raise BadInput(f"--config: {exc}") from None
     try:

@@ -8,13 +8,13 @@ the rules of :mod:`pymotoros.models.s1cxg`.
 
 from __future__ import annotations
 
-import tomllib
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING
 
 from pymotoros.errors import ConfigError
+from pymotoros.models.cell import read_cell_file
 from pymotoros.models.robots import GroupKind, GroupModel
 from pymotoros.models.s1cxg import Quantity, Reading, S1cxgTable, Source, decode, parse_s1cxg
 
@@ -30,10 +30,7 @@ def s1cxg_table(
     where = "s1cxg"
     if isinstance(source, str | Path):
         path = Path(source)
-        try:
-            data = tomllib.loads(path.read_text(encoding="utf-8"))
-        except (OSError, tomllib.TOMLDecodeError) as exc:
-            raise ConfigError(f"{path}: cannot read the S1CxG table ({exc})") from exc
+        data = read_cell_file(path).data
         groups = data.get("groups")
         if not isinstance(groups, list) or index >= len(groups):
             raise ConfigError(f"{path}: no [[groups]] entry {index}")

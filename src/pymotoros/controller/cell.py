@@ -14,18 +14,17 @@ from __future__ import annotations
 
 import logging
 import math
-import tomllib
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Final
+from typing import Any, Final
 
 from pymotoros.controller.api import AlarmInfo, PendantMode
 from pymotoros.controller.inform import BUILTIN_VARIANTS, JobRunner, load_jobs
 from pymotoros.controller.io_image import IoImage
 from pymotoros.controller.peripherals import MAX_DELAY_MS, PeripheralConfig
 from pymotoros.controller.safety.startup import StartupConfig, check_parameters
-from pymotoros.errors import ConfigError, JobError
+from pymotoros.errors import JobError
 from pymotoros.models import (
     DEFAULT_CONTROLLER,
     DEFAULT_ROBOT,
@@ -36,8 +35,15 @@ from pymotoros.models import (
     controller_model,
     robot_model,
 )
-from pymotoros.models.cell import combine_groups, group_parts, rename_groups
+from pymotoros.models.cell import (
+    CellFile,
+    GroupPart,
+    cell_file_from_dict,
+    cell_table,
+    read_cell_file,
+)
 from pymotoros.models.s1cxg import S1cxgTable, parse_s1cxg
+from pymotoros.models.toml_file import TomlTable
 from pymotoros.protocol.constants import MAX_TOOL_NUMBER
 
 logger = logging.getLogger(__name__)
@@ -123,10 +129,13 @@ class CellConfig:
     warnings: tuple[str, ...] = ()
     source: str = "<default cell>"
     startup: StartupConfig = field(default_factory=StartupConfig)
-    peripherals: tuple[PeripheralConfig, ...] = ()
-    """``[[peripherals]]``: inputs that follow other bits like devices (docs/cell.md)."""
     """What MotoROS's start-up checks read: software version, conveyor tracking, set-up
     parameters (``[controller]``, ``[controller.parameters]``)."""
+    peripherals: tuple[PeripheralConfig, ...] = ()
+    """``[[peripherals]]``: inputs that follow other bits like devices (docs/cell.md)."""
+    model_groups: tuple[str, ...] = ()
+    """Each group's name in its robot model (empty: the group's own name), see
+    :attr:`pymotoros.models.cell.CellModels.model_groups`."""
 
     def tool(self, group_index: int, number: int) -> ToolConfig:
         """Tool file ``number`` of a group: its own ``[[groups.tools]]`` entry, else the
@@ -136,6 +145,12 @@ class CellConfig:
             if t.number == number:
                 return t
         return ToolConfig(number)
+
+    def as_table(self) -> dict[str, Any]:
+        """Its name, controller and groups in the cell file's shape (JSON-able): what
+        ``pymotoros sim --ports-file`` tells the robot commands about the cell."""
+        names = self.model_groups or tuple(g.name for g in self.groups)
+        return cell_table(self.name, self.controller.type.value, self.robots, names)
 
     @property
     def job_variant(self) -> str | None:
@@ -150,237 +165,65 @@ class CellConfig:
         return "multi_group" if multi else "single_arm"
 
 
-_rename = rename_groups
-_combine = combine_groups
-
-
 def default_cell(
     controller: str | ControllerType = DEFAULT_CONTROLLER, robot: str = DEFAULT_ROBOT
 ) -> CellConfig:
-    """The embedded cell: an HC10 on a YRC1000 unless other models are named."""
+    """The embedded cell: an HC10 on a YRC1000 unless other models are named (the cell
+    a file naming only ``[controller] model`` and ``[robot] model`` describes)."""
     ctrl = controller_model(controller)
     model = robot_model(robot)
-    warnings: list[str] = []
-    groups, robots = _combine(ctrl, [(model.name, g) for g in model.groups], warnings)
-    for w in warnings:
-        logger.warning("%s", w)
-    return CellConfig(
-        controller=ctrl,
-        groups=groups,
-        robots=robots,
-        name=f"{model.name} on {ctrl.type.value}",
-        pfl=ctrl.pfl_signals and model.pfl,
-        warnings=tuple(warnings),
-    )
+    data = {
+        "name": f"{model.name} on {ctrl.type.value}",
+        "controller": {"model": ctrl.type.value},
+        "robot": {"model": model.name},
+    }
+    return cell_from_dict(data, source="<default cell>")
 
 
 def load_cell(path: str | Path) -> CellConfig:
     """Read a cell TOML file; a mistake raises ConfigError naming the key."""
-    p = Path(path)
-    try:
-        data = tomllib.loads(p.read_text(encoding="utf-8"))
-    except OSError as exc:
-        raise ConfigError(f"{p}: cannot read the cell file ({exc.strerror})") from exc
-    except tomllib.TOMLDecodeError as exc:
-        raise ConfigError(f"{p}: not valid TOML: {exc}") from exc
-    return cell_from_dict(data, source=str(p), base_dir=p.parent)
-
-
-# ------------------------------------------------------------------------------ parsing
-
-
-class _Table:
-    """A TOML table with its key path, so every error can name the key."""
-
-    def __init__(self, data: object, path: str, source: str) -> None:
-        if not isinstance(data, Mapping):
-            raise ConfigError(f"{source}: {path or 'the file'} must be a table")
-        self.data: Mapping[str, object] = data
-        self.path = path
-        self.source = source
-        self.used: set[str] = set()
-
-    def key(self, name: str) -> str:
-        return f"{self.path}.{name}" if self.path else name
-
-    def error(self, name: str, problem: str) -> ConfigError:
-        return ConfigError(f"{self.source}: {self.key(name)}: {problem}")
-
-    def get(self, name: str) -> object:
-        self.used.add(name)
-        return self.data.get(name)
-
-    def string(self, name: str, default: str) -> str:
-        v = self.get(name)
-        if v is None:
-            return default
-        if not isinstance(v, str):
-            raise self.error(name, f"must be a string, not {v!r}")
-        return v
-
-    def boolean(self, name: str, default: bool) -> bool:
-        v = self.get(name)
-        if v is None:
-            return default
-        if not isinstance(v, bool):
-            raise self.error(name, f"must be true or false, not {v!r}")
-        return v
-
-    def integer(self, name: str, default: int, lo: int, hi: int) -> int:
-        v = self.get(name)
-        if v is None:
-            return default
-        if not isinstance(v, int) or isinstance(v, bool):
-            raise self.error(name, f"must be an integer, not {v!r}")
-        if not lo <= v <= hi:
-            raise self.error(name, f"must lie in {lo}..{hi}, not {v}")
-        return v
-
-    def number(self, name: str, default: float) -> float:
-        v = self.get(name)
-        if v is None:
-            return default
-        if not isinstance(v, int | float) or isinstance(v, bool) or not math.isfinite(v):
-            raise self.error(name, f"must be a finite number, not {v!r}")
-        return float(v)
-
-    def table(self, name: str) -> _Table:
-        v = self.get(name)
-        return _Table({} if v is None else v, self.key(name), self.source)
-
-    def array(self, name: str) -> list[object]:
-        v = self.get(name)
-        if v is None:
-            return []
-        if not isinstance(v, list):
-            raise self.error(name, f"must be an array, not {v!r}")
-        return v
-
-    def finish(self) -> None:
-        unknown = sorted(set(self.data) - self.used)
-        if unknown:
-            raise self.error(unknown[0], "unknown key (misspelt?)")
-
-
-def _model(table: _Table, name: str, default: str, kind: str) -> str:
-    value = table.string(name, default)
-    try:
-        if kind == "controller":
-            controller_model(value)
-        else:
-            robot_model(value)
-    except ConfigError as exc:
-        raise table.error(name, str(exc)) from None
-    return value.lower()
+    return cell_from_file(read_cell_file(path))
 
 
 def cell_from_dict(
     data: Mapping[str, object], *, source: str = "<cell>", base_dir: Path | None = None
 ) -> CellConfig:
     """Build a cell from parsed TOML (see ``docs/cell.md``)."""
-    top = _Table(data, "", source)
-    name = top.string("name", "cell")
+    return cell_from_file(cell_file_from_dict(data, source=source, base_dir=base_dir))
 
+
+# ------------------------------------------------------------------------------ parsing
+
+
+def cell_from_file(cell_file: CellFile) -> CellConfig:
+    """The simulator's cell from a file :func:`~pymotoros.models.cell.read_cell_file`
+    read: its controller and groups as every reader sees them, plus what only the
+    simulator reads (servo, jobs, tools, the state at boot, peripherals)."""
+    models = cell_file.models
+    top = TomlTable(cell_file.data, "", cell_file.source)
+    top.used.update(("name", "groups", "robot", "ports"))  # read by models/cell.py
     ctrl_t = top.table("controller")
-    ctrl = controller_model(_model(ctrl_t, "model", DEFAULT_CONTROLLER.value, "controller"))
-    jobs_value = ctrl_t.get("jobs")
-    jobs: str | tuple[Path, ...] = "auto"
-    if isinstance(jobs_value, str) and jobs_value in ("auto", *BUILTIN_VARIANTS):
-        jobs = jobs_value
-    elif isinstance(jobs_value, str | list):
-        items = [jobs_value] if isinstance(jobs_value, str) else jobs_value
-        if not all(isinstance(i, str) for i in items):
-            raise ctrl_t.error("jobs", "must be a variant name, a path or a list of paths")
-        base = base_dir or Path.cwd()
-        jobs = tuple(base / str(i) for i in items)
-        for p in jobs:
-            if not p.exists():
-                raise ctrl_t.error("jobs", f"{p} does not exist")
-        try:  # refuse a bad job now, with the key, rather than when the controller boots
-            JobRunner(load_jobs(jobs), IoImage(ctrl))
-        except JobError as exc:
-            raise ctrl_t.error("jobs", str(exc)) from exc
-    elif jobs_value is not None:
-        raise ctrl_t.error(
-            "jobs", f"must be 'auto', one of {', '.join(BUILTIN_VARIANTS)} or job file paths"
-        )
-    servo = ServoConfig(
-        servo_on_delay_ms=ctrl_t.integer("servo_on_delay_ms", SERVO_ON_DELAY_MS, 0, 4900),
-        lag_ticks=ctrl_t.integer("feedback_lag_ticks", FEEDBACK_LAG_TICKS, 0, 50),
-        noise_pulses=ctrl_t.integer("feedback_noise_pulses", 0, 0, MAX_NOISE_PULSES),
-        brake_sag_pulses=ctrl_t.integer("brake_sag_pulses", 0, 0, MAX_BRAKE_SAG_PULSES),
-        eco_idle_s=(
-            ctrl_t.integer("eco_idle_s", 600, 1, 86400)
-            if ctrl_t.data.get("eco_idle_s") is not None
-            else None
-        ),
-        fsu_speed_limit_pct=(
-            ctrl_t.integer("fsu_speed_limit_pct", 100, 1, 100)
-            if ctrl_t.data.get("fsu_speed_limit_pct") is not None
-            else None
-        ),
-    )
-    pfl_value = ctrl_t.get("pfl")
+    ctrl_t.used.update(("model", "fsu_speed_limit_pct"))  # read by models/cell.py
+    ctrl = models.controller
+    jobs = _jobs(ctrl_t, ctrl, cell_file.base_dir)
+    servo = _servo(ctrl_t, models.fsu_speed_limit_pct)
+    pfl = _pfl(ctrl_t, ctrl, models.robots)
     startup = _startup(ctrl_t)
     ctrl_t.finish()
-
-    parts = group_parts(data, source)  # the rules the client shares (models/cell.py)
-    top.used.update(("groups", "robot"))
-    top.used.add("ports")  # where `pymotoros sim` listens: read by runtime/fleet.py
-    entry_tools: list[tuple[ToolConfig, ...]] = []
-    entry_s1cxg: list[S1cxgTable | None] = []
-    """Per element of ``parts``, the ``[[groups.tools]]`` / ``[groups.s1cxg]`` of its entry."""
-    if "groups" in data:
-        at = 0
-        for i, entry in enumerate(top.array("groups")):
-            g_t = _Table(entry, f"groups[{i}]", source)
-            count = 1 if g_t.get("group") is not None else len(robot_model(parts[at][0]).groups)
-            mine = [g for _, g in parts[at : at + count]]
-            at += count
-            own = _tools(g_t, "tools", source)
-            if own and not any(g.kind is GroupKind.ROBOT for g in mine):
-                raise g_t.error("tools", "only robot groups take tools")
-            entry_tools.extend(own if g.kind is GroupKind.ROBOT else () for g in mine)
-            entry_s1cxg.extend(_s1cxg(g_t, mine))
-            g_t.used.update(("robot", "group"))
-            g_t.finish()
-    else:
-        entry_tools.extend(() for _ in parts)
-        entry_s1cxg.extend(None for _ in parts)
-
-    warnings: list[str] = []
-    groups, robots = _combine(ctrl, parts, warnings)
-    kept_entries = range(len(groups))  # _combine keeps the first max_groups parts, in order
-
-    if pfl_value is None:
-        pfl = ctrl.pfl_signals and any(robot_model(r).pfl for r in robots)
-    elif isinstance(pfl_value, bool):
-        pfl = pfl_value
-        if pfl and not ctrl.pfl_signals:
-            raise ConfigError(
-                f"{source}: controller.pfl: the {ctrl.type.value} build of MotoROS has no PFL "
-                "support (YRC1000 and YRC1000micro only)"
-            )
-    else:
-        raise ConfigError(f"{source}: controller.pfl: must be true or false, not {pfl_value!r}")
-
-    tools = _tools(top, "tools", source)
-    numbers = {t.number for t in tools}
-    group_tools = tuple(entry_tools[i] for i in kept_entries)
-    s1cxg = tuple(entry_s1cxg[i] for i in kept_entries)
-    for gt in group_tools:
-        numbers.update(t.number for t in gt)
-
+    groups = models.robot.groups
+    group_tools, s1cxg = _group_entries(top, cell_file.parts, len(groups))
+    tools = _tools(top, "tools")
+    numbers = {t.number for t in tools}.union(t.number for gt in group_tools for t in gt)
     initial = _initial(top.table("initial"), groups, numbers)
     peripherals = _peripherals(top, ctrl)
     top.finish()
-    for w in warnings:
-        logger.warning("%s: %s", source, w)
+    for w in models.warnings:
+        logger.warning("%s: %s", cell_file.source, w)
     return CellConfig(
         controller=ctrl,
         groups=groups,
-        robots=robots,
-        name=name,
+        robots=models.robots,
+        name=models.name,
         tools=tools,
         initial=initial,
         group_tools=group_tools if any(group_tools) else (),
@@ -388,28 +231,101 @@ def cell_from_dict(
         servo=servo,
         pfl=pfl,
         jobs=jobs,
-        warnings=tuple(warnings),
-        source=source,
+        warnings=models.warnings,
+        source=cell_file.source,
         startup=startup,
         peripherals=peripherals,
+        model_groups=models.model_groups,
     )
 
 
-def _peripherals(top: _Table, ctrl: ControllerModel) -> tuple[PeripheralConfig, ...]:
+def _jobs(
+    ctrl_t: TomlTable, ctrl: ControllerModel, base_dir: Path | None
+) -> str | tuple[Path, ...]:
+    """``controller.jobs``: "auto", a built-in variant, or job files (checked now, with
+    the key, rather than when the controller boots)."""
+    value = ctrl_t.get("jobs")
+    if value is None:
+        return "auto"
+    if isinstance(value, str) and value in ("auto", *BUILTIN_VARIANTS):
+        return value
+    if not isinstance(value, str | list):
+        raise ctrl_t.error(
+            "jobs", f"must be 'auto', one of {', '.join(BUILTIN_VARIANTS)} or job file paths"
+        )
+    items = [value] if isinstance(value, str) else value
+    if not all(isinstance(i, str) for i in items):
+        raise ctrl_t.error("jobs", "must be a variant name, a path or a list of paths")
+    base = base_dir or Path.cwd()
+    jobs = tuple(base / str(i) for i in items)
+    for p in jobs:
+        if not p.exists():
+            raise ctrl_t.error("jobs", f"{p} does not exist")
+    try:
+        JobRunner(load_jobs(jobs), IoImage(ctrl))
+    except JobError as exc:
+        raise ctrl_t.error("jobs", str(exc)) from exc
+    return jobs
+
+
+def _servo(ctrl_t: TomlTable, fsu_speed_limit_pct: int | None) -> ServoConfig:
+    return ServoConfig(
+        servo_on_delay_ms=ctrl_t.integer("servo_on_delay_ms", SERVO_ON_DELAY_MS, 0, 4900),
+        lag_ticks=ctrl_t.integer("feedback_lag_ticks", FEEDBACK_LAG_TICKS, 0, 50),
+        noise_pulses=ctrl_t.integer("feedback_noise_pulses", 0, 0, MAX_NOISE_PULSES),
+        brake_sag_pulses=ctrl_t.integer("brake_sag_pulses", 0, 0, MAX_BRAKE_SAG_PULSES),
+        eco_idle_s=ctrl_t.optional_integer("eco_idle_s", 1, 86400),
+        fsu_speed_limit_pct=fsu_speed_limit_pct,
+    )
+
+
+def _pfl(ctrl_t: TomlTable, ctrl: ControllerModel, robots: Sequence[str]) -> bool:
+    """``controller.pfl``; by default on where the controller and a robot support it."""
+    if ctrl_t.get("pfl") is None:
+        return ctrl.pfl_signals and any(robot_model(r).pfl for r in robots)
+    pfl = ctrl_t.boolean("pfl", False)
+    if pfl and not ctrl.pfl_signals:
+        raise ctrl_t.error(
+            "pfl",
+            f"the {ctrl.type.value} build of MotoROS has no PFL support "
+            "(YRC1000 and YRC1000micro only)",
+        )
+    return pfl
+
+
+def _group_entries(
+    top: TomlTable, parts: Sequence[GroupPart], kept: int
+) -> tuple[tuple[tuple[ToolConfig, ...], ...], tuple[S1cxgTable | None, ...]]:
+    """Per group MotoROS keeps (the first ``kept``), the ``[[groups.tools]]`` and the
+    ``[groups.s1cxg]`` of the ``[[groups]]`` entry that names it."""
+    tools: list[tuple[ToolConfig, ...]] = [() for _ in parts]
+    s1cxg: list[S1cxgTable | None] = [None for _ in parts]
+    for i, entry in enumerate(top.array("groups")):
+        g_t = TomlTable(entry, f"groups[{i}]", top.source)
+        g_t.used.update(("robot", "group"))  # read by models/cell.py
+        mine = [k for k, p in enumerate(parts) if p.entry == i]
+        own = _tools(g_t, "tools")
+        robots = [k for k in mine if parts[k].group.kind is GroupKind.ROBOT]
+        if own and not robots:
+            raise g_t.error("tools", "only robot groups take tools")
+        for k in robots:
+            tools[k] = own
+        if g_t.get("s1cxg") is not None:
+            if len(mine) != 1:
+                raise g_t.error(
+                    "s1cxg", 'applies to one group: add group = "R1" (or the group meant)'
+                )
+            s1cxg[mine[0]] = _s1cxg(g_t.table("s1cxg"), parts[mine[0]].group)
+        g_t.finish()
+    return tuple(tools[:kept]), tuple(s1cxg[:kept])
+
+
+def _peripherals(top: TomlTable, ctrl: ControllerModel) -> tuple[PeripheralConfig, ...]:
     image = IoImage(ctrl)
     out: list[PeripheralConfig] = []
     for i, entry in enumerate(top.array("peripherals")):
-        t = _Table(entry, f"peripherals[{i}]", top.source)
-        addresses = []
-        for key in ("input", "follows"):
-            address = t.integer(key, -1, 0, 10**6 - 1)
-            if address < 0:
-                raise t.error(key, "is required (a bit address, e.g. 20010 or 10010)")
-            try:
-                image.check_forcible(address, 0)
-            except ValueError as exc:
-                raise t.error(key, str(exc)) from None
-            addresses.append(address)
+        t = TomlTable(entry, f"peripherals[{i}]", top.source)
+        addresses = [_peripheral_bit(t, key, image) for key in ("input", "follows")]
         if addresses[0] == addresses[1]:
             raise t.error("follows", "a peripheral cannot follow its own input")
         if addresses[0] in {p.input for p in out}:
@@ -427,7 +343,18 @@ def _peripherals(top: _Table, ctrl: ControllerModel) -> tuple[PeripheralConfig, 
     return tuple(out)
 
 
-def _startup(ctrl_t: _Table) -> StartupConfig:
+def _peripheral_bit(t: TomlTable, key: str, image: IoImage) -> int:
+    address = t.optional_integer(key, 0, 10**6 - 1)
+    if address is None:
+        raise t.error(key, "is required (a bit address, e.g. 20010 or 10010)")
+    try:
+        image.check_forcible(address, 0)
+    except ValueError as exc:
+        raise t.error(key, str(exc)) from None
+    return address
+
+
+def _startup(ctrl_t: TomlTable) -> StartupConfig:
     software = ctrl_t.get("software")
     if software is not None and not isinstance(software, str):
         raise ctrl_t.error(
@@ -452,24 +379,17 @@ def _startup(ctrl_t: _Table) -> StartupConfig:
     )
 
 
-def _s1cxg(g_t: _Table, groups: Sequence[GroupModel]) -> list[S1cxgTable | None]:
-    """The entry's ``[groups.s1cxg]`` table (seed 003 Appendix A), for its one group."""
-    if g_t.get("s1cxg") is None:
-        return [None] * len(groups)
-    table = g_t.table("s1cxg")
-    if len(groups) != 1:
-        raise g_t.error("s1cxg", 'applies to one group: add group = "R1" (or the group meant)')
-    group = groups[0]
-    parsed = parse_s1cxg(
+def _s1cxg(table: TomlTable, group: GroupModel) -> S1cxgTable:
+    """A ``[groups.s1cxg]`` table (seed 003 Appendix A), for its entry's one group."""
+    return parse_s1cxg(
         table.data,
         num_axes=group.num_axes,
         robot=group.kind is GroupKind.ROBOT,
-        where=f"{g_t.source}: {table.path}",
+        where=f"{table.source}: {table.path}",
     )
-    return [parsed]
 
 
-def _triple(t: _Table, name: str, unit: str) -> tuple[float, float, float]:
+def _triple(t: TomlTable, name: str, unit: str) -> tuple[float, float, float]:
     values = t.array(name)
     nums = [float(x) for x in values if isinstance(x, int | float) and not isinstance(x, bool)]
     if values and (len(values) != 3 or len(nums) != 3 or not all(map(math.isfinite, nums))):
@@ -477,28 +397,13 @@ def _triple(t: _Table, name: str, unit: str) -> tuple[float, float, float]:
     return (nums[0], nums[1], nums[2]) if nums else (0.0, 0.0, 0.0)
 
 
-def _tools(parent: _Table, key: str, source: str) -> tuple[ToolConfig, ...]:
+def _tools(parent: TomlTable, key: str) -> tuple[ToolConfig, ...]:
     """The tool files of ``[[tools]]`` or ``[[groups.tools]]``: number 0..63, name, mass,
     TCP offset ``tcp_m = [x, y, z]`` and orientation ``rpy_rad = [r, p, y]`` on tool0."""
-    tools: list[ToolConfig] = []
-    for i, entry in enumerate(parent.array(key)):
-        t_t = _Table(entry, f"{parent.key(key)}[{i}]", source)
-        number = t_t.integer("number", -1, 0, MAX_TOOL_NUMBER)
-        if number < 0:
-            raise t_t.error("number", f"is required (0..{MAX_TOOL_NUMBER})")
-        mass = t_t.number("mass_kg", 0.0)
-        if mass < 0:
-            raise t_t.error("mass_kg", f"must not be negative, not {mass}")
-        tools.append(
-            ToolConfig(
-                number,
-                t_t.string("name", ""),
-                mass,
-                _triple(t_t, "tcp_m", "metres [x, y, z]"),
-                _triple(t_t, "rpy_rad", "radians [roll, pitch, yaw]"),
-            )
-        )
-        t_t.finish()
+    tools = [
+        _tool(TomlTable(entry, f"{parent.key(key)}[{i}]", parent.source))
+        for i, entry in enumerate(parent.array(key))
+    ]
     numbers = [t.number for t in tools]
     if len(set(numbers)) != len(numbers):
         dup = next(n for n in numbers if numbers.count(n) > 1)
@@ -506,40 +411,88 @@ def _tools(parent: _Table, key: str, source: str) -> tuple[ToolConfig, ...]:
     return tuple(tools)
 
 
-def _initial(t: _Table, groups: tuple[GroupModel, ...], tool_numbers: set[int]) -> InitialState:
+def _tool(t_t: TomlTable) -> ToolConfig:
+    number = t_t.optional_integer("number", 0, MAX_TOOL_NUMBER)
+    if number is None:
+        raise t_t.error("number", f"is required (0..{MAX_TOOL_NUMBER})")
+    mass = t_t.number("mass_kg", 0.0)
+    if mass < 0:
+        raise t_t.error("mass_kg", f"must not be negative, not {mass}")
+    tool = ToolConfig(
+        number,
+        t_t.string("name", ""),
+        mass,
+        _triple(t_t, "tcp_m", "metres [x, y, z]"),
+        _triple(t_t, "rpy_rad", "radians [roll, pitch, yaw]"),
+    )
+    t_t.finish()
+    return tool
+
+
+def _initial(t: TomlTable, groups: tuple[GroupModel, ...], tool_numbers: set[int]) -> InitialState:
     mode_s = t.string("mode", "play")
     try:
         mode = PendantMode(mode_s.lower())
     except ValueError:
         raise t.error("mode", f"must be 'play' or 'teach', not {mode_s!r}") from None
+    state = InitialState(
+        mode=mode,
+        remote=t.boolean("remote", True),
+        servo=t.boolean("servo", False),
+        estop=t.boolean("estop", False),
+        hold=t.boolean("hold", False),
+        eco=t.boolean("eco", False),
+        alarms=_alarms(t),
+        joints=_initial_joints(t.table("joints"), groups),
+        tools=_initial_tools(t.table("tool"), groups, tool_numbers),
+    )
+    if state.servo and (state.estop or state.alarms):
+        raise t.error("servo", "cannot be on at boot with an E-stop pressed or an alarm active")
+    if state.eco and not state.servo:
+        raise t.error("eco", "eco mode needs servo power on")
+    t.finish()
+    return state
+
+
+def _refuse_unknown_groups(t: TomlTable, groups: Sequence[GroupModel]) -> None:
     names = [g.name for g in groups]
-
-    joints_t = t.table("joints")
-    joints: list[tuple[float, ...]] = []
-    for g in groups:
-        raw = joints_t.get(g.name)
-        if raw is None:
-            joints.append(tuple(0.0 for _ in g.axes))
-            continue
-        if not isinstance(raw, list) or not all(
-            isinstance(x, int | float) and not isinstance(x, bool) for x in raw
-        ):
-            raise joints_t.error(g.name, "must be an array of numbers (rad, or m)")
-        if len(raw) != g.num_axes:
-            raise joints_t.error(g.name, f"needs {g.num_axes} values (ROS order), got {len(raw)}")
-        for axis, value in zip(g.axes, raw, strict=True):
-            if not axis.lower <= float(value) <= axis.upper:
-                raise joints_t.error(
-                    g.name,
-                    f"{axis.name} = {value} is outside its limits "
-                    f"{axis.lower:.4f}..{axis.upper:.4f}",
-                )
-        joints.append(tuple(float(x) for x in raw))
-    unknown = sorted(set(joints_t.data) - set(names))
+    unknown = sorted(set(t.data) - set(names))
     if unknown:
-        raise joints_t.error(unknown[0], f"no such group (groups: {', '.join(names)})")
+        raise t.error(unknown[0], f"no such group (groups: {', '.join(names)})")
 
-    tools_t = t.table("tool")
+
+def _initial_joints(
+    joints_t: TomlTable, groups: Sequence[GroupModel]
+) -> tuple[tuple[float, ...], ...]:
+    """``[initial.joints]``: per group, ROS order, within the limits (absent: zeros)."""
+    joints = [_group_joints(joints_t, g) for g in groups]
+    _refuse_unknown_groups(joints_t, groups)
+    return tuple(joints)
+
+
+def _group_joints(joints_t: TomlTable, g: GroupModel) -> tuple[float, ...]:
+    raw = joints_t.get(g.name)
+    if raw is None:
+        return tuple(0.0 for _ in g.axes)
+    if not isinstance(raw, list) or not all(
+        isinstance(x, int | float) and not isinstance(x, bool) for x in raw
+    ):
+        raise joints_t.error(g.name, "must be an array of numbers (rad, or m)")
+    if len(raw) != g.num_axes:
+        raise joints_t.error(g.name, f"needs {g.num_axes} values (ROS order), got {len(raw)}")
+    for axis, value in zip(g.axes, raw, strict=True):
+        if not axis.lower <= float(value) <= axis.upper:
+            raise joints_t.error(
+                g.name,
+                f"{axis.name} = {value} is outside its limits {axis.lower:.4f}..{axis.upper:.4f}",
+            )
+    return tuple(float(x) for x in raw)
+
+
+def _initial_tools(
+    tools_t: TomlTable, groups: Sequence[GroupModel], tool_numbers: set[int]
+) -> tuple[int, ...]:
+    """``[initial.tool]``: per group, the selected tool (absent: 0)."""
     tools: list[int] = []
     for g in groups:
         n = tools_t.integer(g.name, 0, 0, MAX_TOOL_NUMBER)
@@ -548,34 +501,18 @@ def _initial(t: _Table, groups: tuple[GroupModel, ...], tool_numbers: set[int]) 
         if n and tool_numbers and n not in tool_numbers:
             raise tools_t.error(g.name, f"tool {n} is not defined under [[tools]]")
         tools.append(n)
-    unknown = sorted(set(tools_t.data) - set(names))
-    if unknown:
-        raise tools_t.error(unknown[0], f"no such group (groups: {', '.join(names)})")
+    _refuse_unknown_groups(tools_t, groups)
+    return tuple(tools)
 
+
+def _alarms(t: TomlTable) -> tuple[AlarmInfo, ...]:
     alarms: list[AlarmInfo] = []
     for i, entry in enumerate(t.array("alarms")):
-        a_t = _Table(entry, f"{t.key('alarms')}[{i}]", t.source)
-        code = a_t.integer("code", -1, 0, 9999)
-        if code < 0:
+        a_t = TomlTable(entry, f"{t.key('alarms')}[{i}]", t.source)
+        code = a_t.optional_integer("code", 0, 9999)
+        if code is None:
             raise a_t.error("code", "is required (0..9999)")
         subcode = a_t.integer("subcode", 0, 0, 2**31 - 1)
         alarms.append(AlarmInfo(code, subcode, a_t.string("text", "")))
         a_t.finish()
-
-    state = InitialState(
-        mode=mode,
-        remote=t.boolean("remote", True),
-        servo=t.boolean("servo", False),
-        estop=t.boolean("estop", False),
-        hold=t.boolean("hold", False),
-        eco=t.boolean("eco", False),
-        alarms=tuple(alarms),
-        joints=tuple(joints),
-        tools=tuple(tools),
-    )
-    if state.servo and (state.estop or state.alarms):
-        raise t.error("servo", "cannot be on at boot with an E-stop pressed or an alarm active")
-    if state.eco and not state.servo:
-        raise t.error("eco", "eco mode needs servo power on")
-    t.finish()
-    return state
+    return tuple(alarms)

@@ -24,7 +24,6 @@ from __future__ import annotations
 import difflib
 import logging
 import math
-import tomllib
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -38,6 +37,7 @@ from pymotoros.controller.actions import (
     actions_by_name,
 )
 from pymotoros.errors import ConfigError
+from pymotoros.models.toml_file import read_toml
 
 logger = logging.getLogger(__name__)
 
@@ -78,14 +78,7 @@ class Scenario:
 
 def load_scenario(path: str | Path) -> Scenario:
     """Read a scenario TOML file; a mistake raises ConfigError naming the event and key."""
-    p = Path(path)
-    try:
-        data = tomllib.loads(p.read_text(encoding="utf-8"))
-    except OSError as exc:
-        raise ConfigError(f"{p}: cannot read the scenario file ({exc.strerror})") from exc
-    except tomllib.TOMLDecodeError as exc:
-        raise ConfigError(f"{p}: not valid TOML: {exc}") from exc
-    return parse_scenario(data, source=str(p))
+    return parse_scenario(read_toml(path, "scenario file"), source=str(path))
 
 
 def _seconds(value: object) -> TypeGuard[float]:

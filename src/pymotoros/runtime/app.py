@@ -25,11 +25,11 @@ import logging
 import socket
 from collections.abc import Generator
 from dataclasses import dataclass, field
-from types import TracebackType
 from typing import Final, Self
 
 import uvicorn
 
+from pymotoros.models.cell import PORT_KINDS
 from pymotoros.protocol.constants import (
     TCP_PORT_IO,
     TCP_PORT_MOTION,
@@ -41,6 +41,7 @@ from pymotoros.runtime.http_api import create_http_app
 from pymotoros.runtime.io_server import IoServer
 from pymotoros.runtime.motion_server import MotionServer
 from pymotoros.runtime.observers import Observers
+from pymotoros.runtime.served import Served
 from pymotoros.runtime.state_server import (
     STATE_MESSAGE_GAP_S,
     STATE_PERIOD_S,
@@ -63,6 +64,13 @@ STARTUP_POLL_TICKS: Final = 25
 """How often (ticks: 100 ms at 4 ms) the runtime looks whether MotoROS has started."""
 HTTP_STOP_TIMEOUT_S: Final = 3.0
 """How long the HTTP server may take to finish its requests at shutdown."""
+
+
+def _port_role(kind: str, port: int) -> str:
+    """Which server a port is for, in the words of an error: "the MotoROS motion port
+    50240" or "the control API (http) port 8080" (0: "a port the OS chooses")."""
+    which = "the control API (http)" if kind == "http" else f"the MotoROS {kind}"
+    return f"{which} port {port}" if port else f"{which} port (0: the OS chooses)"
 
 
 @dataclass(frozen=True, slots=True)
@@ -90,8 +98,10 @@ class BoundPorts:
     http: int | None = field(default=None)
 
 
-class SimulatorApp:
+class SimulatorApp(Served):
     """The servers, the interpolation loop and the control API around one controller."""
+
+    _what = "simulator"
 
     def __init__(
         self,
@@ -102,6 +112,7 @@ class SimulatorApp:
         idle_batching: bool | None = None,
         ticker: Ticker | None = None,
     ) -> None:
+        super().__init__()
         self.controller = controller
         self.config = config or SimulatorConfig()
         self.clock: Clock = clock or LoopClock()
@@ -140,8 +151,6 @@ class SimulatorApp:
             controller.drop_motion_hook = self.motion.drop_clients
         self._ports: BoundPorts | None = None
         self._ready = asyncio.Event()
-        self._stop = asyncio.Event()
-        self._serve_task: asyncio.Task[None] | None = None
         self._http: _EmbeddedUvicorn | None = None
         self._http_task: asyncio.Task[None] | None = None
         self._loop_tasks: list[asyncio.Task[None]] = []
@@ -164,17 +173,6 @@ class SimulatorApp:
     def ready(self) -> asyncio.Event:
         """Set once every listener is up."""
         return self._ready
-
-    def request_stop(self) -> None:
-        """Ask :meth:`serve` to shut down (safe from a signal handler; idempotent)."""
-        self._stop.set()
-
-    async def wait_stopped(self) -> None:
-        """Wait until the simulator entered with ``async with`` has shut down (after
-        :meth:`request_stop`, a signal, or a crash, which this re-raises)."""
-        if self._serve_task is None:
-            raise RuntimeError("wait_stopped() needs the simulator started with `async with`")
-        await asyncio.shield(self._serve_task)
 
     async def serve(self) -> None:
         """Listen and run until :meth:`request_stop` or cancellation; then shut down in order.
@@ -291,11 +289,14 @@ class SimulatorApp:
             ports.append(cfg.http_port)
         socks: list[socket.socket] = []
         try:
-            for i, port in enumerate(ports):
+            for i, (kind, port) in enumerate(zip(PORT_KINDS, ports, strict=False)):
                 # MotoROS's ports are bound now (a port in use fails at once) but listen
                 # only when its servers start
                 bind = bind_unlistened if i < MOTOROS_PORTS else bind_socket
-                socks.append(bind(cfg.host, port))
+                try:
+                    socks.append(bind(cfg.host, port))
+                except OSError as exc:  # say which server's port: e.g. "the motion port 50240"
+                    raise OSError(exc.errno, f"{_port_role(kind, port)}: {exc.strerror}") from exc
         except BaseException:
             for sock in socks:
                 sock.close()
@@ -303,33 +304,18 @@ class SimulatorApp:
         return socks
 
     async def __aenter__(self) -> Self:
-        self._serve_task = asyncio.create_task(self.serve(), name="simulator")
+        self._task = asyncio.create_task(self.serve(), name="simulator")
         ready = asyncio.create_task(self._ready.wait(), name="simulator-ready")
         try:
-            await asyncio.wait({self._serve_task, ready}, return_when=asyncio.FIRST_COMPLETED)
+            await asyncio.wait({self._task, ready}, return_when=asyncio.FIRST_COMPLETED)
         finally:
             ready.cancel()
             with contextlib.suppress(asyncio.CancelledError):
                 await ready
-        if self._serve_task.done():
-            self._serve_task.result()  # raises what stopped it
+        if self._task.done():
+            self._task.result()  # raises what stopped it
             raise RuntimeError("the simulator stopped before it was ready")
         return self
-
-    async def __aexit__(
-        self,
-        exc_type: type[BaseException] | None,
-        exc: BaseException | None,
-        tb: TracebackType | None,
-    ) -> None:
-        await self.stop()
-
-    async def stop(self) -> None:
-        """Shut down and wait until everything is released (idempotent)."""
-        self.request_stop()
-        task = self._serve_task
-        if task is not None and not task.done():
-            await task
 
     # ----------------------------------------------------------- internals
 

@@ -32,18 +32,18 @@ import asyncio
 import math
 import re
 import time
-import tomllib
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from types import TracebackType
 from typing import Final, Self
 
 import numpy as np
 
 from pymotoros.errors import ConfigError
+from pymotoros.models.cell import PORT_KINDS, CellPorts, read_cell_file
 from pymotoros.runtime.app import SimulatorApp, SimulatorConfig
 from pymotoros.runtime.clock import Clock, precise_clock
+from pymotoros.runtime.served import Served
 from pymotoros.runtime.target import SimulatedController
 from pymotoros.runtime.ticker import LATENESS_WINDOW, LatenessStats, Ticker, TickStats
 
@@ -55,64 +55,25 @@ __all__ = [
     "cell_names",
     "check_port_clashes",
     "read_cell_ports",
+    "short_name",
 ]
-
-PORT_KINDS: Final = ("motion", "state", "io", "http")
-"""The servers of one cell, in the order of the ready line."""
-
-MAX_PORT: Final = 65535
-"""The largest TCP port number."""
 
 _NOT_IN_NAME: Final = re.compile(r"[^A-Za-z0-9._-]")
 """Characters a cell's name on the ready line may not hold (it is one ``key=value``
 token of a space-separated line)."""
 
 
-@dataclass(frozen=True, slots=True)
-class CellPorts:
-    """The ``[ports]`` table of a cell file; None where the file does not set a port."""
-
-    motion: int | None = None
-    state: int | None = None
-    io: int | None = None
-    http: int | None = None
-
-    def get(self, kind: str) -> int | None:
-        value: int | None = getattr(self, kind)
-        return value
-
-
 def read_cell_ports(path: Path) -> CellPorts:
-    """The ``[ports]`` table of the cell file ``path`` (empty when it has none).
+    """The ``[ports]`` table of the cell file ``path`` (empty when it has none), read by
+    the one cell-file reader (:func:`~pymotoros.models.cell.read_cell_file`): a mistake
+    anywhere in the file's shared part raises ConfigError naming the file and the key."""
+    return read_cell_file(path).ports
 
-    The rest of the file is the controller's business (``load_cell``); a mistake here
-    raises ConfigError naming the file and the key, as cell-file errors do.
-    """
-    try:
-        data = tomllib.loads(path.read_text(encoding="utf-8"))
-    except OSError as exc:
-        raise ConfigError(f"{path}: cannot read the cell file ({exc.strerror})") from exc
-    except tomllib.TOMLDecodeError as exc:
-        raise ConfigError(f"{path}: not valid TOML: {exc}") from exc
-    table = data.get("ports", {})
-    if not isinstance(table, dict):
-        raise ConfigError(f"{path}: ports must be a table ([ports] motion = ..., http = ...)")
-    unknown = sorted(set(table) - set(PORT_KINDS))
-    if unknown:
-        raise ConfigError(
-            f"{path}: ports.{unknown[0]}: unknown key (misspelt?); the keys are "
-            f"{', '.join(PORT_KINDS)}"
-        )
-    values: dict[str, int] = {}
-    for kind, value in table.items():
-        if isinstance(value, bool) or not isinstance(value, int):
-            raise ConfigError(f"{path}: ports.{kind}: must be an integer, not {value!r}")
-        if not 0 <= value <= MAX_PORT:
-            raise ConfigError(
-                f"{path}: ports.{kind}: must lie in 0..{MAX_PORT} (0: the OS chooses), not {value}"
-            )
-        values[kind] = value
-    return CellPorts(**values)
+
+def short_name(text: str) -> str:
+    """``text`` made one token of the ready line: anything but letters, digits, ``.``,
+    ``_`` and ``-`` becomes ``_`` (``"hc10 on yrc1000"`` is ``hc10_on_yrc1000``)."""
+    return _NOT_IN_NAME.sub("_", text) or "cell"
 
 
 def cell_names(paths: Sequence[Path]) -> list[str]:
@@ -121,7 +82,7 @@ def cell_names(paths: Sequence[Path]) -> list[str]:
     a name seen before gets ``-2``, ``-3`` ... in the order given."""
     names: list[str] = []
     for path in paths:
-        base = _NOT_IN_NAME.sub("_", path.stem) or "cell"
+        base = short_name(path.stem)
         name, n = base, 1
         while name in names:
             n += 1
@@ -195,7 +156,7 @@ class _TickAll:
         self._steps = 0
 
 
-class Fleet:
+class Fleet(Served):
     """Several :class:`SimulatorApp` on one event loop, ticked by one :class:`Ticker`.
 
     ::
@@ -211,6 +172,8 @@ class Fleet:
     it, as one :class:`SimulatorApp` does.
     """
 
+    _what = "fleet"
+
     def __init__(
         self,
         cells: Sequence[FleetCell],
@@ -218,6 +181,7 @@ class Fleet:
         clock: Clock | None = None,
         idle_batching: bool | None = None,
     ) -> None:
+        super().__init__()
         if not cells:
             raise ValueError("a fleet needs at least one cell")
         names = [c.name for c in cells]
@@ -249,8 +213,6 @@ class Fleet:
             )
             for c in cells
         )
-        self._stop = asyncio.Event()
-        self._supervisor: asyncio.Task[None] | None = None
         self._started = False
 
     def _nobody_observes(self) -> bool:
@@ -269,24 +231,6 @@ class Fleet:
         self.ticker.reset_stats()
         self._step.reset()
 
-    def request_stop(self) -> None:
-        """Ask every cell to shut down (safe from a signal handler; idempotent)."""
-        self._stop.set()
-
-    async def wait_stopped(self) -> None:
-        """Wait until the fleet has shut down (after :meth:`request_stop`, a signal, or a
-        crash, which this re-raises)."""
-        if self._supervisor is None:
-            raise RuntimeError("wait_stopped() needs the fleet started with `async with`")
-        await asyncio.shield(self._supervisor)
-
-    async def stop(self) -> None:
-        """Shut every cell down and wait until everything is released (idempotent)."""
-        self.request_stop()
-        task = self._supervisor
-        if task is not None and not task.done():
-            await task
-
     async def __aenter__(self) -> Self:
         if self._started:
             raise RuntimeError("this Fleet has already served; create a new one")
@@ -303,16 +247,8 @@ class Fleet:
             await _stop_all(started)
             raise
         ticking = asyncio.create_task(self.ticker.run(), name="interpolation")
-        self._supervisor = asyncio.create_task(self._supervise(ticking), name="fleet")
+        self._task = asyncio.create_task(self._supervise(ticking), name="fleet")
         return self
-
-    async def __aexit__(
-        self,
-        exc_type: type[BaseException] | None,
-        exc: BaseException | None,
-        tb: TracebackType | None,
-    ) -> None:
-        await self.stop()
 
     async def _supervise(self, ticking: asyncio.Task[None]) -> None:
         """Run until a stop is asked or anything ends (a crash); then stop every cell
