@@ -6,7 +6,7 @@ One test per document. Its blocks share what a reader following the page shares:
 working directory (a fresh temporary one with ``examples`` linked into it, so paths in
 the docs resolve and nothing is written into the repository), one Python namespace, one
 running ``pymotoros sim``. Every failing block is reported with its line, not only the
-first.
+first. Documents run two at a time (a module fixture), each still reported by its test.
 
 How each kind of block runs:
 
@@ -19,9 +19,13 @@ How each kind of block runs:
 * ``sh`` and ``console`` (only the ``$ `` lines of a console block): each command in
   ``bash`` in the document's directory, and it must exit 0, or with one of the codes its
   comment names (``# exit 4``; ``# exit 0 clear, 1 refused, 4 warnings``), and print no
-  traceback. Commands find the twin through ``PYMOTOROS_PORTS_FILE`` (the file the
-  harness's sim writes with ``--ports-file``), and ``python examples/...`` scripts
-  through ``PYMOTOROS_MOTION_PORT``/``_STATE_PORT``/``_IO_PORT``.
+  traceback. Where a console block shows a command's output, the command must print it
+  (``...`` stands for anything; of JSON shown, every key must be in what it prints).
+  Commands find the twin through ``PYMOTOROS_PORTS_FILE`` (the file the harness's sim
+  writes with ``--ports-file``), and ``python examples/...`` scripts through
+  ``PYMOTOROS_MOTION_PORT``/``_STATE_PORT``/``_IO_PORT``. A robot command (``status``,
+  ``move`` ...) with no sim running starts the default one first, as the README has the
+  reader keep ``pymotoros sim`` running in a second terminal.
 * ``toml``: parsed (a syntax error in a documented file fails).
 * Blocks without a language, ``text`` and ``json`` are diagrams, output and schemas:
   not run.
@@ -71,6 +75,7 @@ import shutil
 import signal
 import subprocess
 import sys
+import threading
 import time
 import tomllib
 from collections.abc import Iterator
@@ -95,6 +100,10 @@ DOCUMENTS = [ROOT / "README.md", *sorted((ROOT / "docs").glob("*.md"))]
 NOT_RUN_REASONS = frozenset({"real robot", "your files", "docker", "heavy"})
 EXAMPLE_CONTROLLER = "192.168.1.31"
 """The controller address the docs use in examples: the harness's sim stands in for it."""
+WORKERS = 2
+"""Documents run at once."""
+PYTHON_BLOCK = threading.Lock()
+"""Held while a Python block runs (it changes the process's working directory)."""
 COMMAND_TIMEOUT_S = 60.0
 """Bound of one documented command (a plan, a move, a replay take seconds)."""
 READY_TIMEOUT_S = 60.0
@@ -287,7 +296,7 @@ one first (the README has the reader keep ``pymotoros sim`` running in a second 
 def run_command(harness: Harness, command: str, shown: str | None = None) -> str | None:
     """Run one documented command; a failure message, or None. ``shown``: the output a
     console block shows for it, which it must print (then any exit status is right: the
-    block shows what happens, errors included); ``...`` in it stands for anything."""
+    block shows what happens, errors included; see ``_compare_output``)."""
     words = [w for w in shlex.split(command, comments=True) if w != "-q"]
     robot_command = words[:1] == ["pymotoros"] and words[1:2] and words[1] in ROBOT_COMMANDS
     if robot_command or re.search(r"(127\.0\.0\.1|localhost):8080", command):
@@ -343,16 +352,39 @@ def run_command(harness: Harness, command: str, shown: str | None = None) -> str
     except subprocess.TimeoutExpired:
         return f"`{command}` did not end within {COMMAND_TIMEOUT_S:.0f} s"
     if shown is not None:
-        pattern = ".*".join(re.escape(part) for part in shown.strip().split("..."))
-        if re.fullmatch(pattern, done.stdout.strip(), re.DOTALL) is None:
-            return f"`{command}` printed\n{done.stdout.strip()}\nbut the docs show\n{shown.strip()}"
-        return None
+        return _compare_output(command, done.stdout.strip(), shown.strip())
     expected = allowed_exit_codes(command)
     if done.returncode not in expected or "Traceback" in done.stderr:
         return (
             f"`{command}` exited {done.returncode} (expected {sorted(expected)})\n"
             f"stdout: {done.stdout[-1500:]}\nstderr: {done.stderr[-1500:]}"
         )
+    return None
+
+
+def _json_keys(value: Any) -> set[str]:
+    if isinstance(value, dict):
+        return set(value) | {k for v in value.values() for k in _json_keys(v)}
+    if isinstance(value, list):
+        return {k for v in value for k in _json_keys(v)}
+    return set()
+
+
+def _compare_output(command: str, printed: str, shown: str) -> str | None:
+    """Shown JSON (abridged, with values of the moment): every key it names must be in
+    the printed JSON. Other output: the same text, ``...`` standing for anything."""
+    if shown.startswith("{"):
+        try:
+            keys = _json_keys(json.loads(printed))
+        except json.JSONDecodeError:
+            return f"`{command}` printed no JSON:\n{printed[:1500]}"
+        missing = sorted(set(re.findall(r'"(\w+)":', shown)) - keys)
+        if missing:
+            return f"`{command}`: the docs show keys it does not print: {missing}"
+        return None
+    pattern = ".*".join(re.escape(part) for part in shown.split("..."))
+    if re.fullmatch(pattern, printed, re.DOTALL) is None:
+        return f"`{command}` printed\n{printed[:1500]}\nbut the docs show\n{shown}"
     return None
 
 
@@ -427,12 +459,13 @@ def python_parser(harness: Harness) -> CodeBlockParser:
     def evaluate(example: Example) -> str | None:
         if harness.take_not_run(example):
             return None
-        source = harness.substitute(str(example.parsed))
+        source = str(example.parsed)
+        if "127.0.0.1" in source or EXAMPLE_CONTROLLER in source:
+            harness.ensure_sim()
+        source = harness.substitute(source)
         if re.search(r"^(async )?def test_", source, re.MULTILINE):
             return _run_as_test_file(harness, source)
         real_sockets = "127.0.0.1" in source
-        if real_sockets:
-            harness.ensure_sim()
         namespace = example.namespace
         namespace.setdefault("__name__", "__docs__")
         code = compile(
@@ -442,7 +475,7 @@ def python_parser(harness: Harness) -> CodeBlockParser:
             flags=ast.PyCF_ALLOW_TOP_LEVEL_AWAIT,
         )
         defaults = _client_defaults(harness) if real_sockets else contextlib.nullcontext()
-        with defaults, contextlib.chdir(harness.workdir):
+        with PYTHON_BLOCK, defaults, contextlib.chdir(harness.workdir):
             if code.co_flags & inspect.CO_COROUTINE:
                 harness.loop.run_until_complete(eval(code, namespace))  # noqa: S307
             else:
@@ -496,11 +529,18 @@ def toml_parser(harness: Harness) -> CodeBlockParser:
 # --- the test ---------------------------------------------------------------------------
 
 
-@pytest.mark.timeout(420)
-@pytest.mark.parametrize("path", DOCUMENTS, ids=[str(p.relative_to(ROOT)) for p in DOCUMENTS])
-def test_the_documentation_runs(path: Path, tmp_path: Path) -> None:
-    (tmp_path / "examples").symlink_to(ROOT / "examples")
-    harness = Harness(tmp_path)
+@dataclass
+class Outcome:
+    failures: list[str]
+    not_run: list[str]
+    slowest: list[tuple[float, int]]
+
+
+def run_document(path: Path, workdir: Path) -> Outcome:
+    """Every block of one document, in order; every failure, not only the first."""
+    workdir.mkdir(parents=True)
+    (workdir / "examples").symlink_to(ROOT / "examples")
+    harness = Harness(workdir)
     parsers = [
         NotRunParser(harness),
         python_parser(harness),
@@ -520,7 +560,36 @@ def test_the_documentation_runs(path: Path, tmp_path: Path) -> None:
             seconds.append((time.monotonic() - start, example.line))
     finally:
         harness.close()
-    print("slowest blocks:", ", ".join(f"line {n} {s:.1f} s" for s, n in sorted(seconds)[-5:]))
-    if harness.not_run:
-        print("not run:", *harness.not_run, sep="\n  ")
+    return Outcome(failures, harness.not_run, sorted(seconds)[-5:])
+
+
+@pytest.fixture(scope="module")
+def outcomes(
+    request: pytest.FixtureRequest, tmp_path_factory: pytest.TempPathFactory
+) -> dict[Path, Outcome]:
+    """The selected documents, run two at a time (CI's two cores: most of the time goes
+    to the commands' and sims' own processes). Python blocks take ``PYTHON_BLOCK`` in
+    turn: they change the working directory and the client's default ports."""
+    selected = [
+        item.callspec.params["path"]
+        for item in request.session.items
+        if getattr(item, "originalname", None) == "test_the_documentation_runs"
+    ]
+    base = tmp_path_factory.mktemp("docs")
+    with concurrent.futures.ThreadPoolExecutor(WORKERS) as pool:
+        futures = {
+            path: pool.submit(run_document, path, base / f"{i}-{path.stem}")
+            for i, path in enumerate(selected)
+        }
+        return {path: future.result() for path, future in futures.items()}
+
+
+@pytest.mark.timeout(900)
+@pytest.mark.parametrize("path", DOCUMENTS, ids=[str(p.relative_to(ROOT)) for p in DOCUMENTS])
+def test_the_documentation_runs(path: Path, outcomes: dict[Path, Outcome]) -> None:
+    outcome = outcomes[path]
+    print("slowest blocks:", ", ".join(f"line {n} {s:.1f} s" for s, n in outcome.slowest))
+    if outcome.not_run:
+        print("not run:", *outcome.not_run, sep="\n  ")
+    failures = outcome.failures
     assert not failures, "\n\n".join(failures)
