@@ -82,9 +82,11 @@ def _requests_that_left(driver: WebDriver) -> list[str]:
         params = message.get("params", {})
         if message.get("method") == "Network.requestWillBeSent":
             asked[params["requestId"]] = params["request"]["url"]
-        elif message.get("method") == "Network.loadingFailed":
-            if params.get("blockedReason") == "csp":
-                refused.add(params["requestId"])
+        elif (
+            message.get("method") == "Network.loadingFailed"
+            and params.get("blockedReason") == "csp"
+        ):
+            refused.add(params["requestId"])
     return [
         u
         for rid, u in asked.items()
