@@ -13,6 +13,7 @@ from __future__ import annotations
 import concurrent.futures
 import json
 import math
+import re
 import shutil
 from base64 import b64encode
 from collections.abc import Callable, Iterator
@@ -304,3 +305,46 @@ def test_non_local_requests_are_blocked(sim: Sim, browser: WebDriver) -> None:
     )
     assert str(outcome).startswith("blocked")
     assert _non_local(_requested_urls(browser)) == ["http://example.com/"]
+
+
+RECORD_PLOT_TEXT_JS = """
+window.plotTexts = {};
+const original = CanvasRenderingContext2D.prototype.fillText;
+CanvasRenderingContext2D.prototype.fillText = function (text, x, y, ...rest) {
+  const id = this.canvas.id;
+  if (id.startsWith("plot-")) {
+    (window.plotTexts[id] = window.plotTexts[id] || new Set()).add(String(text));
+  }
+  return original.call(this, text, x, y, ...rest);
+};
+"""
+PLOT_TEXTS_JS = """
+const out = {};
+for (const [id, texts] of Object.entries(window.plotTexts || {})) out[id] = Array.from(texts);
+return out;
+"""
+
+
+def test_plots_have_ticks_units_and_a_joint_legend(sim: Sim, browser: WebDriver) -> None:
+    """Each plot draws value ticks, time ticks in seconds, its unit and a legend naming
+    every joint (the texts the page draws on the canvases, recorded as it draws them)."""
+    browser.get(f"http://127.0.0.1:{sim.http}/")
+    _wait(browser, lambda d: d.find_element(By.ID, "link").text == "live", "the live feed")
+    browser.execute_script(RECORD_PLOT_TEXT_JS)
+    _wait(
+        browser,
+        lambda d: {"plot-joints-0", "plot-lateness"} <= set(d.execute_script(PLOT_TEXTS_JS)),
+        "the plots to be redrawn",
+    )
+    texts = browser.execute_script(PLOT_TEXTS_JS)
+    joints = texts["plot-joints-0"]
+    names = sim.api("/api/state")["groups"][0]["joint_names"]
+    assert set(names) <= set(joints), joints  # the legend
+    assert any("(rad)" in t for t in joints), joints  # the unit
+    value_ticks = [t for t in joints if re.fullmatch(r"−?-?\d+(\.\d+)?", t)]
+    assert len(value_ticks) >= 3, joints
+    assert {"now", "−2 s", "−10 s"} <= set(joints), joints  # time ticks
+    lateness = texts["plot-lateness"]
+    assert any("(ms)" in t for t in lateness), lateness
+    assert len([t for t in lateness if re.fullmatch(r"-?\d+(\.\d+)?", t)]) >= 2, lateness
+    assert "−4 s" in lateness, lateness

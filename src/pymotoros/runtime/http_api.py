@@ -346,7 +346,7 @@ def _new_app(observers: Observers | None) -> FastAPI:
         title="pymotoros control API",
         version=__version__,
         docs_url=None,  # /docs is served offline by install_offline_docs below
-        redoc_url=None,  # ReDoc needs a CDN: install_offline_docs redirects /redoc to /docs
+        redoc_url=None,  # /redoc too (ReDoc from the installed files, not a CDN)
         description=(
             "The operator of the virtual controller: pendant keys, E-stop, mode switch, "
             'alarms and forced IO. Errors are 4xx with {"error": "..."}.'

@@ -5,7 +5,7 @@
   const M_BASE = 1000000;          // M-register n is IO address 1000000 + n (control API)
   const PLOT_SECONDS = 10;         // history shown by the plots
   const RECONNECT_MS = 1000;       // retry delay after the feed closed
-  const PLOT_W = 560, PLOT_H = 160; // one command-vs-feedback plot per group, in pixels
+  const PLOT_W = 560, PLOT_H = 200; // one command-vs-feedback plot per group, in pixels
   const COLORS = ["#4fc3f7", "#ffb74d", "#81c784", "#e57373", "#ba68c8", "#fff176", "#90a4ae", "#f06292"];
   const $ = (id) => document.getElementById(id);
   const state = { last: null, updates: 0, history: [], answeredAt: -1, view: { yaw: -0.7, pitch: 0.4, dist: 2.4, cx: 0, cy: 0, cz: 0.5 } };
@@ -116,13 +116,80 @@
   function escapeHtml(s) { return String(s).replace(/[&<>"]/g, (c) => ({ "&": "&amp;", "<": "&lt;", ">": "&gt;", '"': "&quot;" }[c])); }
 
   // ------------------------------------------------------------------ plots
-  function drawSeries(ctx, w, h, now, series, lo, hi, color, dash) {
+  // Each plot: a title, value ticks on the left (in the plot's unit), time ticks below
+  // (seconds before now), and a legend of the joints in their colours under it.
+  const PLOT_PAD = { left: 46, right: 8, top: 18, bottom: 16 };
+  const LEGEND_ROW = 13;
+  const TEXT = "#aab", GRID = "#2a3138";
+
+  // About `count` round tick values covering lo..hi (steps of 1, 2 or 5 × 10^k).
+  function ticks(lo, hi, count) {
+    const raw = (hi - lo) / count, mag = Math.pow(10, Math.floor(Math.log10(raw)));
+    const step = [1, 2, 5, 10].map((m) => m * mag).find((s) => s >= raw);
+    const out = [];
+    for (let v = Math.ceil(lo / step) * step; v <= hi + step * 1e-9; v += step) out.push(Math.abs(v) < step * 1e-9 ? 0 : v);
+    return { values: out, digits: Math.max(0, -Math.floor(Math.log10(step))) };
+  }
+
+  // The value range with a margin; a flat line (a robot at rest) gets ±0.1.
+  function range(values) {
+    let lo = Math.min(...values), hi = Math.max(...values);
+    if (!isFinite(lo)) { lo = 0; hi = 0; }
+    if (hi - lo < 1e-6) { lo -= 0.1; hi += 0.1; }
+    const m = (hi - lo) * 0.05;
+    return [lo - m, hi + m];
+  }
+
+  // Legend entries laid out in rows that fit the width; returns [{x, row, text, color}].
+  function legendLayout(ctx, entries, width) {
+    const out = []; let x = PLOT_PAD.left, row = 0;
+    for (const [text, color] of entries) {
+      const w = 18 + ctx.measureText(text).width + 10;
+      if (x + w > width && x > PLOT_PAD.left) { x = PLOT_PAD.left; row += 1; }
+      out.push({ x, row, text, color }); x += w;
+    }
+    return out;
+  }
+
+  // Axes, ticks and legend; returns the plot's inner box and a value -> y mapping.
+  function drawFrame(ctx, w, h, title, unit, lo, hi, legend) {
+    ctx.font = "10px sans-serif"; ctx.textBaseline = "middle";
+    const items = legendLayout(ctx, legend, w - PLOT_PAD.right);
+    const rows = items.length ? items[items.length - 1].row + 1 : 0;
+    const box = { x0: PLOT_PAD.left, x1: w - PLOT_PAD.right, y0: PLOT_PAD.top,
+                  y1: h - PLOT_PAD.bottom - rows * LEGEND_ROW };
+    const y = (v) => box.y1 - (v - lo) / (hi - lo) * (box.y1 - box.y0);
+    ctx.fillStyle = TEXT; ctx.textAlign = "left"; ctx.fillText(`${title} (${unit})`, 6, 9);
+    const vt = ticks(lo, hi, 4);
+    ctx.textAlign = "right";
+    for (const v of vt.values) {
+      ctx.strokeStyle = GRID; ctx.beginPath(); ctx.moveTo(box.x0, y(v)); ctx.lineTo(box.x1, y(v)); ctx.stroke();
+      ctx.fillStyle = TEXT; ctx.fillText(v.toFixed(vt.digits), box.x0 - 4, y(v));
+    }
+    ctx.textAlign = "center";
+    for (let s = 0; s <= PLOT_SECONDS; s += 2) {
+      const x = box.x1 - s / PLOT_SECONDS * (box.x1 - box.x0);
+      ctx.strokeStyle = GRID; ctx.beginPath(); ctx.moveTo(x, box.y0); ctx.lineTo(x, box.y1); ctx.stroke();
+      ctx.fillStyle = TEXT; ctx.fillText(s === 0 ? "now" : `−${s} s`, Math.min(x, box.x1 - 10), box.y1 + 8);
+    }
+    ctx.textAlign = "left";
+    for (const it of items) {
+      const ly = box.y1 + PLOT_PAD.bottom + it.row * LEGEND_ROW + 4;
+      ctx.strokeStyle = it.color; ctx.lineWidth = 2; ctx.beginPath(); ctx.moveTo(it.x, ly); ctx.lineTo(it.x + 14, ly); ctx.stroke();
+      ctx.lineWidth = 1; ctx.fillStyle = TEXT; ctx.fillText(it.text, it.x + 18, ly);
+    }
+    return { box, y };
+  }
+
+  function drawSeries(ctx, frame, now, series, color, dash) {
+    const { box, y } = frame;
+    ctx.save(); ctx.beginPath(); ctx.rect(box.x0, box.y0, box.x1 - box.x0, box.y1 - box.y0); ctx.clip();
     ctx.strokeStyle = color; ctx.setLineDash(dash || []); ctx.beginPath();
     series.forEach(([t, v], i) => {
-      const x = w - (now - t) / PLOT_SECONDS * w, y = h - (v - lo) / (hi - lo || 1) * (h - 10) - 5;
-      if (i === 0) ctx.moveTo(x, y); else ctx.lineTo(x, y);
+      const x = box.x1 - (now - t) / PLOT_SECONDS * (box.x1 - box.x0);
+      if (i === 0) ctx.moveTo(x, y(v)); else ctx.lineTo(x, y(v));
     });
-    ctx.stroke(); ctx.setLineDash([]);
+    ctx.stroke(); ctx.restore();
   }
 
   // One canvas per group, made when the group first appears (SDA10F: two arms, two torso axes).
@@ -143,20 +210,22 @@
       const c = plotCanvas(gi), ctx = c.getContext("2d");
       ctx.clearRect(0, 0, c.width, c.height);
       const rows = state.history.filter((s) => s.groups[gi]);
-      let lo = Infinity, hi = -Infinity;
-      for (const s of rows) for (const v of s.groups[gi].c.concat(s.groups[gi].f)) { lo = Math.min(lo, v); hi = Math.max(hi, v); }
+      const [lo, hi] = range(rows.flatMap((s) => s.groups[gi].c.concat(s.groups[gi].f)));
+      const group = state.last && state.last.groups[gi];
+      const name = group ? group.name : "group " + (gi + 1);
+      const names = group ? group.joint_names : g.c.map((_, j) => "joint " + (j + 1));
+      const frame = drawFrame(ctx, c.width, c.height, `${name}: dashed command, solid feedback`, "rad", lo, hi,
+                              names.map((n, j) => [n, COLORS[j % COLORS.length]]));
       for (let j = 0; j < g.c.length; j++) {
-        drawSeries(ctx, c.width, c.height, now, rows.map((s) => [s.t, s.groups[gi].c[j]]), lo, hi, COLORS[j % COLORS.length], [4, 3]);
-        drawSeries(ctx, c.width, c.height, now, rows.map((s) => [s.t, s.groups[gi].f[j]]), lo, hi, COLORS[j % COLORS.length]);
+        drawSeries(ctx, frame, now, rows.map((s) => [s.t, s.groups[gi].c[j]]), COLORS[j % COLORS.length], [4, 3]);
+        drawSeries(ctx, frame, now, rows.map((s) => [s.t, s.groups[gi].f[j]]), COLORS[j % COLORS.length]);
       }
-      const name = state.last && state.last.groups[gi] ? state.last.groups[gi].name : "group " + (gi + 1);
-      ctx.fillStyle = "#aab"; ctx.fillText(`${name}: dashed command, solid feedback (rad)`, 6, 12);
     });
     const l = $("plot-lateness"), lctx = l.getContext("2d");
     lctx.clearRect(0, 0, l.width, l.height);
-    const hi = Math.max(1, ...state.history.map((s) => s.late));
-    drawSeries(lctx, l.width, l.height, now, state.history.map((s) => [s.t, s.late]), 0, hi, "#ffb74d");
-    lctx.fillStyle = "#aab"; lctx.fillText(`loop lateness p99 (ms), scale 0–${hi.toFixed(2)}`, 6, 12);
+    const hi = Math.max(1, ...state.history.map((s) => s.late)) * 1.05;
+    const frame = drawFrame(lctx, l.width, l.height, "interpolation loop lateness, p99", "ms", 0, hi, []);
+    drawSeries(lctx, frame, now, state.history.map((s) => [s.t, s.late]), "#ffb74d");
   }
 
   // ------------------------------------------------------------------ 3D view
