@@ -116,13 +116,11 @@ def accepted(monkeypatch: pytest.MonkeyPatch) -> Counter[str]:
 def resend_until_accepted(vc: VirtualController, sequence: int, pts: list[PointData]) -> int:
     """What every client does (reference §2: BUSY makes it resend the same point):
     resend after a tick until the reply is not BUSY. Returns the BUSY replies seen."""
-    busy = 0
-    for _ in range(5000):
+    for busy in range(5000):
         o = complete(vc, vc.trajectory_point_ex(sequence, pts))
         if o.result != R.BUSY:
             assert o.ok, o
             return busy
-        busy += 1
         vc.tick()
     raise AssertionError("still BUSY after 5000 ticks")
 
@@ -142,8 +140,8 @@ async def test_the_clients_resend_queues_each_point_once(accepted: Counter[str])
     """The same through the real client's BUSY retry (``TrajectoryStreamer.send_point``),
     over the in-memory twin: group 1 pending, group 0 free."""
     from pymotoros.client import StreamStats
-    from pymotoros.client.streaming import build_message
     from pymotoros.client.planning import TrajectoryPoint
+    from pymotoros.client.streaming import build_message
     from pymotoros.testing import twin
 
     cell = cell_from_dict({"groups": [{"robot": "hc10"}, {"robot": "hc10"}]})
