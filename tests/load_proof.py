@@ -82,6 +82,8 @@ def assert_loop_kept_time(stats: _Stats, watch: Stopwatch, budget_ticks: int) ->
     while its thread waited for a CPU (a resync skips the deadlines that passed)."""
     lost_s = stats.skipped * stats.period_ms / 1000.0
     allowed_s = budget_ticks * stats.period_ms / 1000.0 + watch.waited()
+    # shown with ``pytest -s``: the figures docs/testing.md records
+    print(f"loop timing: {stats.skipped} ticks skipped ({lost_s:.2f} s) over {watch.describe()}")
     assert lost_s <= allowed_s, (
         f"{stats.skipped} ticks skipped ({lost_s:.2f} s) over {watch.describe()}; "
         f"budget {budget_ticks} ticks plus the wait for a CPU"
