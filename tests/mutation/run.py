@@ -10,8 +10,8 @@ Each mutant (:data:`MUTANTS`) replaces one exact piece of source text with a pla
 wrong version, then runs only the tests that guard that rule. A run that fails kills the
 mutant; one that passes lets it survive. The source tree is copied once into a temporary
 directory and mutated *there* (``PYTHONPATH`` points the tests at the copy), so the
-checkout is never edited: an interrupted run (Ctrl-C, a CI timeout) leaves it as it
-was, and the copy goes with its directory.
+checkout is never edited: an interrupted run (Ctrl-C, or SIGTERM from a CI timeout)
+leaves it as it was, ends the test runs still going and removes the copies.
 
 A mutant whose text is no longer in its file is reported as *stale* (the code moved or
 changed): update its ``old`` text, do not delete it. The run fails (exit 1) when a mutant
@@ -26,9 +26,11 @@ import concurrent.futures
 import os
 import queue
 import shutil
+import signal
 import subprocess
 import sys
 import tempfile
+import threading
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -251,6 +253,29 @@ MUTANTS: tuple[Mutant, ...] = (
 )
 
 
+HISTORY: tuple[tuple[str, str], ...] = (
+    (
+        "busy-multi-precheck",
+        "issue 24: passed all ~300 tests of the twelve relevant files; killed by "
+        "tests/controller/test_busy_all_or_nothing.py (every pending combination of 2-4 "
+        "groups, and the resend counted)",
+    ),
+    (
+        "fsu-joint-pct-plus-5",
+        "issue 24: caught only by two copies of the formula agreeing; the formula is now "
+        "models/fsu.py, pinned by tests/models/test_fsu_formula.py and "
+        "tests/controller/test_fsu_by_hand.py",
+    ),
+    (
+        "pfl-latch-ignored",
+        "the first run of this list (2026-11-26): a PFL contact while moving also latches "
+        "5012, which hid the PFL latch; tests/controller/test_pfl_latch.py sets the latch "
+        "alone (the PFL signal at rest)",
+    ),
+)
+"""Mutants that once survived, and what kills them now (kept in the report)."""
+
+
 @dataclass
 class Result:
     mutant: Mutant
@@ -278,16 +303,51 @@ def _env(src: Path) -> dict[str, str]:
     return env
 
 
+_CHILDREN: set[subprocess.Popen[str]] = set()
+_CHILDREN_LOCK = threading.Lock()
+_STOPPING = threading.Event()
+
+
 def _pytest(src: Path, args: tuple[str, ...]) -> subprocess.CompletedProcess[str]:
-    return subprocess.run(  # noqa: S603 - this interpreter, fixed arguments
-        [sys.executable, "-m", "pytest", "-x", "-q", "-p", "no:cacheprovider", *args],
-        cwd=ROOT,
-        env=_env(src),
-        capture_output=True,
-        text=True,
-        timeout=RUN_TIMEOUT_S,
-        check=False,
-    )
+    """One pytest run on the copy at ``src``; the child is tracked so that an interrupted
+    run can end it (:func:`_stop_children`)."""
+    command = [sys.executable, "-m", "pytest", "-x", "-q", "-p", "no:cacheprovider", *args]
+    with _CHILDREN_LOCK:
+        if _STOPPING.is_set():
+            raise KeyboardInterrupt
+        child = subprocess.Popen(  # noqa: S603 - this interpreter, fixed arguments
+            command,
+            cwd=ROOT,
+            env=_env(src),
+            stdout=subprocess.PIPE,
+            stderr=subprocess.PIPE,
+            text=True,
+        )
+        _CHILDREN.add(child)
+    try:
+        out, err = child.communicate(timeout=RUN_TIMEOUT_S)
+    except subprocess.TimeoutExpired:
+        child.kill()
+        child.communicate()
+        raise
+    finally:
+        with _CHILDREN_LOCK:
+            _CHILDREN.discard(child)
+    return subprocess.CompletedProcess(command, child.returncode, out, err)
+
+
+def _stop_children() -> None:
+    """End every pytest run still going (an interrupt): no orphan outlives the runner."""
+    with _CHILDREN_LOCK:
+        _STOPPING.set()
+        children = list(_CHILDREN)
+    for child in children:
+        child.kill()
+
+
+def _interrupt(signum: int, frame: object) -> None:
+    """SIGTERM (a CI timeout) as Ctrl-C: the temporary copies are removed on the way out."""
+    raise KeyboardInterrupt
 
 
 def _failing(output: str) -> list[str]:
@@ -362,15 +422,23 @@ def report(results: list[Result], baseline_s: float, total_s: float, jobs: int) 
         failing = ", ".join(f"`{f}`" for f in r.failing) or r.detail
         outcome = r.outcome if not (r.outcome == "survived" and m.accepted) else "survived (ok)"
         lines.append(
-            f"| `{m.name}` | {m.rule} | `{m.path}` | **{outcome}** | {failing} | {r.seconds:.0f} |"
+            f"| `{m.name}` | {m.rule.replace('|', '&#124;')} | `{m.path}` | **{outcome}** | "
+            f"{failing} | {r.seconds:.0f} |"
         )
     killed = sum(r.outcome == "killed" for r in results)
     lines += [
         "",
         f"{killed} of {len(results)} killed. Whole run {total_s:.0f} s with {jobs} at once "
-        f"(the unmutated baseline {baseline_s:.0f} s of it); the seconds per mutant are wall "
-        "time, on the machine the report was made on.",
+        + (
+            f"(the unmutated baseline {baseline_s:.0f} s of it)"
+            if baseline_s
+            else "(no baseline: the suite had just passed)"
+        )
+        + f"; load average {os.getloadavg()[0]:.1f} at the end. The seconds per mutant are "
+        "wall time on the machine the report was made on.",
     ]
+    lines += ["", "## Survivors found before, and the tests that now kill them", ""]
+    lines += [f"- `{name}`: {what}" for name, what in HISTORY]
     reasons = [r for r in results if r.outcome == "survived" and r.mutant.accepted]
     if reasons:
         lines += ["", "## Survivors and why they are acceptable", ""]
@@ -411,7 +479,12 @@ def _run_all(tmp: Path, chosen: list[Mutant], jobs: int) -> list[Result]:
         return r
 
     with concurrent.futures.ThreadPoolExecutor(jobs) as pool:
-        return list(pool.map(one, chosen))
+        try:
+            return list(pool.map(one, chosen))
+        except BaseException:
+            _stop_children()
+            pool.shutdown(wait=True, cancel_futures=True)
+            raise
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -436,6 +509,7 @@ def main(argv: list[str] | None = None) -> int:
     if unknown:
         parser.error(f"no mutant named {sorted(unknown)}; --list shows them")
     chosen = [m for m in MUTANTS if not args.only or m.name in args.only]
+    signal.signal(signal.SIGTERM, _interrupt)
     started = time.monotonic()
     with tempfile.TemporaryDirectory(prefix="pymotoros-mutation-") as tmp:
         src = _copy_source(Path(tmp) / "base")

@@ -7,7 +7,11 @@ take a second, so a change that moves a mutated line is noticed in the ordinary 
 from __future__ import annotations
 
 import importlib.util
+import os
+import signal
+import subprocess
 import sys
+import time
 from pathlib import Path
 from types import ModuleType
 from typing import Any
@@ -71,3 +75,64 @@ def test_stale_text_is_reported_not_skipped(tmp_path: Path) -> None:
     result = RUN.run_one(src, gone)
     assert result.outcome == "stale"
     assert "not found" in result.detail
+
+
+def _children(pid: int) -> list[int]:
+    """Process ids whose parent is ``pid`` (Linux /proc)."""
+    found = []
+    for stat in Path("/proc").glob("[0-9]*/stat"):
+        try:
+            fields = stat.read_text().rsplit(")", 1)[1].split()
+        except OSError:
+            continue
+        if int(fields[1]) == pid:
+            found.append(int(stat.parent.name))
+    return found
+
+
+@pytest.mark.skipif(not Path("/proc/self/stat").exists(), reason="Linux /proc")
+def test_an_interrupted_run_ends_its_tests_and_removes_its_copies(tmp_path: Path) -> None:
+    """SIGTERM (a CI timeout) in the middle of a mutant's test run: the runner ends its
+    pytest child, removes its temporary copies and leaves the checkout as it was."""
+    mutant = RUN.MUTANTS[0]
+    original = (SRC / mutant.path).read_text(encoding="utf-8")
+    env = dict(os.environ, TMPDIR=str(tmp_path))
+    runner = subprocess.Popen(  # noqa: S603 - this interpreter, fixed arguments
+        [sys.executable, str(HERE / "run.py"), "--no-baseline", "--only", mutant.name],
+        env=env,
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.DEVNULL,
+    )
+    try:
+        child: list[int] = []
+        for _ in range(1200):  # bounded: up to a minute for the first pytest to start
+            child = [pid for pid in _children(runner.pid) if b"pytest" in _cmdline(pid)]
+            if child or runner.poll() is not None:
+                break
+            time.sleep(0.05)
+        assert child, "the runner never started a test run"
+        runner.send_signal(signal.SIGTERM)
+        runner.wait(timeout=60)
+    finally:
+        if runner.poll() is None:
+            runner.kill()
+            runner.wait()
+    assert runner.returncode != 0
+    for pid in child:
+        assert not Path(f"/proc/{pid}").exists() or "Z" in _state(pid), f"pytest {pid} left"
+    assert not list(tmp_path.glob("pymotoros-mutation-*"))
+    assert (SRC / mutant.path).read_text(encoding="utf-8") == original
+
+
+def _state(pid: int) -> str:
+    try:
+        return Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0]
+    except OSError:
+        return "gone"
+
+
+def _cmdline(pid: int) -> bytes:
+    try:
+        return Path(f"/proc/{pid}/cmdline").read_bytes()
+    except OSError:
+        return b""
