@@ -432,7 +432,7 @@ def report(results: list[Result], baseline_s: float, total_s: float, jobs: int) 
         + (
             f"(the unmutated baseline {baseline_s:.0f} s of it)"
             if baseline_s
-            else "(no baseline: the suite had just passed)"
+            else "(no baseline run: --no-baseline)"
         )
         + f"; load average {os.getloadavg()[0]:.1f} at the end. The seconds per mutant are "
         "wall time on the machine the report was made on.",
