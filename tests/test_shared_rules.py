@@ -7,6 +7,11 @@ each live in one numpy-free place (``models.rules``, ``models.io``,
 sides hold the very same objects, that no copy is left in the source, and, on random
 points, that the client's pre-flight predicts the virtual controller's answer
 (accept, 3011 or 3013, the axis and the sentence) to the bit.
+
+Both sides call the same rule objects, so those property tests check the *wiring* (the
+same rule, fed the same inputs, reached from both sides): under a wrong rule they still
+agree. What the rule itself must answer is pinned by ``test_*_by_hand`` below, with
+expected answers worked out from the reference, not from the code.
 """
 
 from __future__ import annotations
@@ -315,7 +320,7 @@ def _case(draw: st.DrawFn, use: str) -> tuple[str, str, tuple[float, ...], tuple
     suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large],
 )
 @given(case=_case("start"))
-def test_preflight_agrees_with_the_controller_on_a_start(
+def test_preflight_is_wired_to_the_controllers_start_rules(
     case: tuple[str, str, tuple[float, ...], tuple[float, ...]],
 ) -> None:
     controller, robot, pos, vel = case
@@ -343,7 +348,7 @@ def test_preflight_agrees_with_the_controller_on_a_start(
 
 @settings(max_examples=150, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(case=_case("after"))
-def test_preflight_agrees_with_the_controller_after_the_start(
+def test_preflight_is_wired_to_the_controllers_speed_rule_after_the_start(
     case: tuple[str, str, tuple[float, ...], tuple[float, ...]],
 ) -> None:
     controller, robot, _, vel = case
@@ -417,7 +422,7 @@ def _multi_case(
 
 @settings(max_examples=100, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(case=_multi_case())
-def test_preflight_agrees_with_the_controller_on_a_multi_group_start(
+def test_preflight_is_wired_to_the_controllers_multi_group_start_rules(
     case: tuple[tuple[int, ...], list[tuple[float, ...]], list[tuple[float, ...]]],
 ) -> None:
     order, positions, velocities = case
@@ -442,3 +447,121 @@ def test_preflight_agrees_with_the_controller_on_a_multi_group_start(
     g = order[predicted.group]
     assert outcome.subcode == predicted.refusal.subcode
     assert outcome.detail == f"point 0 of group {g}: {predicted.refusal.message}"
+
+
+# --------------------------------------------------------------------------- by hand
+#
+# HC10 on a YRC1000, at rest at the zero pose (commanded position 0 pulses). Pulses per
+# radian: S, L 81646.4858; U 71619.7244; R 52998.596; B 52139.159; T 37242.257. The
+# speed limit maxSpeed (reference §5.5) is 100 % of the axis maximum: S, L 2.2689 rad/s
+# (130°/s), U, R 3.1416, B, T 4.3633. Reference §3.4 step 5.3, per index in turn:
+# |trunc(pos × ppr) − 0| > 30 → 3011; trunc(|vel|) > maxSpeed → 3013.
+
+S_30_PULSES = 0.000373  # 0.000373 × 81646.4858 = 30.45 → 30: within the tolerance
+S_31_PULSES = 0.000381  # 31.11 → 31: one pulse over
+
+BY_HAND_START = [
+    # (positions, velocities, expected subcode or None, axis (slot / ROS index))
+    ((S_30_PULSES, 0, 0, 0, 0, 0), (0,) * 6, None, None),
+    ((S_31_PULSES, 0, 0, 0, 0, 0), (0,) * 6, InvalidSubcode.DATA_START_POS, 0),
+    ((-S_31_PULSES, 0, 0, 0, 0, 0), (0,) * 6, InvalidSubcode.DATA_START_POS, 0),
+    ((0, S_31_PULSES, 0, 0, 0, 0), (0,) * 6, InvalidSubcode.DATA_START_POS, 1),
+    # U: 0.000433 × 71619.7244 = 31.01 → 31; 0.000419 → 30.01 → 30
+    ((0, 0, 0.000433, 0, 0, 0), (0,) * 6, InvalidSubcode.DATA_START_POS, 2),
+    ((0, 0, 0.000419, 0, 0, 0), (0,) * 6, None, None),
+    # the speed quirk: trunc(2.99) = 2 ≤ 2.2689 passes, trunc(3.0) = 3 does not
+    ((0,) * 6, (2.99, 0, 0, 0, 0, 0), None, None),
+    ((0,) * 6, (3.0, 0, 0, 0, 0, 0), InvalidSubcode.DATA_SPEED, 0),
+    ((0,) * 6, (-3.0, 0, 0, 0, 0, 0), InvalidSubcode.DATA_SPEED, 0),
+    ((0,) * 6, (0, 0, 0, 0, 4.99, 0), None, None),  # B: trunc 4 ≤ 4.3633
+    ((0,) * 6, (0, 0, 0, 0, 5.0, 0), InvalidSubcode.DATA_SPEED, 4),
+    # interleaved per index: index 0's speed before index 1's position, and back
+    ((0, S_31_PULSES, 0, 0, 0, 0), (3.0, 0, 0, 0, 0, 0), InvalidSubcode.DATA_SPEED, 0),
+    ((S_31_PULSES, 0, 0, 0, 0, 0), (0, 3.0, 0, 0, 0, 0), InvalidSubcode.DATA_START_POS, 0),
+]
+
+
+@pytest.mark.parametrize(("pos", "vel", "subcode", "axis"), BY_HAND_START)
+def test_start_rules_by_hand(
+    pos: tuple[float, ...], vel: tuple[float, ...], subcode: int | None, axis: int | None
+) -> None:
+    vc = VirtualController()
+    assert vc.snapshot().groups[0].command_pulse == (0,) * 6
+    assert _complete(vc, vc.motion_ctrl(0, MotionCommand.START_TRAJ_MODE)).ok
+    group = vc.cell.groups[0]
+    pos_f = tuple(float(x) for x in pos)
+    vel_f = tuple(float(x) for x in vel)
+    predicted = client_preflight.first_refusal(
+        TrajectoryPoint(0.0, pos_f, vel_f), 0, [group], vc.cell.controller, (0.0,) * 6
+    )
+    outcome = _complete(
+        vc, vc.trajectory_point(0, PointData(0, 7, 0.0, _pad(pos_f), _pad(vel_f), _pad(())))
+    )
+    if subcode is None:
+        assert predicted is None
+        assert outcome.ok, outcome.detail
+        return
+    assert predicted is not None
+    assert (predicted.refusal.subcode, predicted.refusal.axis) == (subcode, axis)
+    assert (outcome.result, outcome.subcode) == (ResultCode.INVALID, subcode)
+
+
+# After the start (sequence > 0) only the speed check runs, for i < numAxes.
+BY_HAND_AFTER = [
+    ((2.99, 0, 0, 0, 0, 0), None, None),
+    ((3.0, 0, 0, 0, 0, 0), InvalidSubcode.DATA_SPEED, 0),
+    ((0, 0, 3.99, 0, 0, 0), None, None),  # U: trunc 3 ≤ 3.1416
+    ((0, 0, 4.0, 0, 0, 0), InvalidSubcode.DATA_SPEED, 2),
+    ((0, 0, 0, 0, 0, -5.5), InvalidSubcode.DATA_SPEED, 5),
+]
+
+
+@pytest.mark.parametrize(("vel", "subcode", "axis"), BY_HAND_AFTER)
+def test_speed_rule_after_the_start_by_hand(
+    vel: tuple[float, ...], subcode: int | None, axis: int | None
+) -> None:
+    vc = VirtualController()
+    assert _complete(vc, vc.motion_ctrl(0, MotionCommand.START_TRAJ_MODE)).ok
+    zero = (0.0,) * 6
+    assert _complete(
+        vc, vc.trajectory_point(0, PointData(0, 7, 0.0, _pad(zero), _pad(()), _pad(())))
+    ).ok
+    vel_f = tuple(float(x) for x in vel)
+    point = TrajectoryPoint(0.5, zero, vel_f)
+    predicted = client_preflight.first_refusal(point, 1, [vc.cell.groups[0]], vc.cell.controller)
+    outcome = _complete(
+        vc, vc.trajectory_point(1, PointData(0, 7, 0.5, _pad(zero), _pad(vel_f), _pad(())))
+    )
+    if subcode is None:
+        assert predicted is None
+        assert outcome.ok, outcome.detail
+        return
+    assert predicted is not None
+    assert (predicted.refusal.subcode, predicted.refusal.axis) == (subcode, axis)
+    assert (outcome.result, outcome.subcode) == (ResultCode.INVALID, subcode)
+
+
+def test_multi_group_start_by_hand() -> None:
+    """Two HC10s (2016, sequence 0): groups are checked in message order and the first
+    failing one answers; the speed quirk and the 30-pulse tolerance as above."""
+    from pymotoros.controller import cell_from_dict
+
+    vc = VirtualController(cell_from_dict({"groups": [{"robot": "hc10"}, {"robot": "hc10"}]}))
+    assert _complete(vc, vc.motion_ctrl(0, MotionCommand.START_TRAJ_MODE)).ok
+    zero = (0.0,) * 6
+    over = (S_31_PULSES, 0.0, 0.0, 0.0, 0.0, 0.0)
+    fast = (0.0, 0.0, 0.0, 0.0, 5.0, 0.0)  # B: trunc 5 > 4.3633
+    cases = [
+        # (group order, positions, velocities, expected subcode, the group that answers)
+        ((0, 1), (zero, zero), (zero, zero), None, 1),
+        ((0, 1), (zero, over), (zero, zero), InvalidSubcode.DATA_START_POS, 1),
+        ((1, 0), (over, zero), (zero, fast), InvalidSubcode.DATA_START_POS, 1),
+        ((1, 0), (zero, zero), (zero, fast), InvalidSubcode.DATA_SPEED, 0),
+    ]
+    for order, positions, velocities, subcode, group_no in cases:
+        data = [
+            PointData(g, 7, 0.0, _pad(p), _pad(v), _pad(()))
+            for g, p, v in zip(order, positions, velocities, strict=True)
+        ]
+        outcome = _complete(vc, vc.trajectory_point_ex(0, data))
+        assert (outcome.subcode or None, outcome.group_no) == (subcode, group_no), outcome

@@ -290,13 +290,17 @@ def _state_stream(state: StateStream) -> None:
         if isinstance(msg, JointFeedback):
             stamps.append(time.monotonic())
     periods = [b - a for a, b in itertools.pairwise(stamps)]
+    # a median over 39 cycles shrugs off stalls: 25.2 and 27.6 ms were measured under load
+    # (docs/testing.md)
     assert 0.020 <= statistics.median(periods) <= 0.040
     # one message per recv(): the messages of a cycle are written separately, ~1 ms apart
     # (clients that parse one message per recv depend on it); tolerant of a loaded machine
     state.decoder.discard()
     chunks = [len(state.sock.recv(4096)) for _ in range(40)]
     single = sum(1 for n in chunks if n in (148, 44))
-    assert single >= 20, chunks
+    # at least 5: a cycle written in one piece gives 0; 19 of 40 were measured with two
+    # busy loops beside other test runs (docs/testing.md)
+    assert single >= 5, chunks
 
 
 def _boot_and_enable(motion: Wire, client: httpx.Client) -> None:

@@ -13,6 +13,7 @@ from pathlib import Path
 import pytest
 from client_sim import running_sim
 
+from load_proof import Stopwatch
 from pymotoros.client import JointTrajectory, NotReadyError, RobotClient, SyncRobotClient
 from pymotoros.client.planning import TrajectoryPoint
 from pymotoros.client.srdf import parse_srdf
@@ -25,10 +26,11 @@ TOLERANCE = 1e-3
 LONG_MOVE_S = 60.0
 """The issue's yardstick: a minute of motion."""
 VIRTUAL_SPEEDUP_AT_LEAST = 10.0
-"""How much faster than real time the move must at least run here: a bound no busy CI
-runner misses (issue 8's "well under a second" is measured quietly, by
-``bench/bench_minute_move.py``: 0.7-1.0 s, 60-90x real time, figures in
-docs/benchmarks.md), yet one a twin that waited on the wall clock fails by far."""
+"""How much less CPU time than motion time the move must take (issue 8's "well under a
+second" is measured quietly, by ``bench/bench_minute_move.py``: 0.7-1.0 s, 60-90x real
+time, figures in docs/benchmarks.md). CPU time, so a loaded runner cannot fail it; the
+wall clock, less the time spent waiting for a CPU, is held only to half the motion time,
+which a twin that waited on it misses by far (docs/testing.md)."""
 MOVEIT_LIKE_SPACING_S = 0.1
 """Points every 100 ms, as a time-parameterised MoveIt plan typically has them."""
 
@@ -62,9 +64,9 @@ async def test_a_minute_long_trajectory_runs_in_virtual_time(
     assert minute.duration >= LONG_MOVE_S
     assert len(minute.points) >= LONG_MOVE_S / MOVEIT_LIKE_SPACING_S
     virtual_start = cell.clock.now()
-    wall_start = time.perf_counter()
+    cpu_start, watch = time.process_time(), Stopwatch()
     result = await client.execute(minute)
-    wall = time.perf_counter() - wall_start
+    cpu, wall = time.process_time() - cpu_start, watch.unloaded()
     assert _off(goal, result.final_positions) < TOLERANCE
     assert result.stream.points == len(minute.points)
     # Paced BUSY retries: with the queue full, about one BUSY per point (a fixed 2 ms
@@ -72,7 +74,11 @@ async def test_a_minute_long_trajectory_runs_in_virtual_time(
     assert result.stream.busy_replies <= 2 * len(minute.points)
     virtual = cell.clock.now() - virtual_start
     assert virtual >= LONG_MOVE_S
-    assert wall < virtual / VIRTUAL_SPEEDUP_AT_LEAST, f"{virtual:.1f} s of motion took {wall:.2f} s"
+    # The work in CPU time, which a loaded runner does not stretch; and the wall clock
+    # (less the wait for a CPU, tests/load_proof.py) only against a twin that waited on
+    # it (it would need all 60 s).
+    assert cpu < virtual / VIRTUAL_SPEEDUP_AT_LEAST, f"{virtual:.1f} s of motion: {cpu:.2f} s CPU"
+    assert wall < virtual / 2, f"{virtual:.1f} s of motion took {wall:.2f} s"
 
 
 async def test_a_long_planned_move_runs_much_faster_than_real_time(
@@ -83,13 +89,14 @@ async def test_a_long_planned_move_runs_much_faster_than_real_time(
     goal = (0.6, 0.3, 0.2, 0.1, -0.6, 0.3)
     plan = client.plan(here, goal, speed_scale=0.02)
     assert plan.duration > 10.0
-    wall_start = time.perf_counter()
+    cpu_start, watch = time.process_time(), Stopwatch()
     result = await client.execute(plan)
-    wall = time.perf_counter() - wall_start
+    cpu, wall = time.process_time() - cpu_start, watch.unloaded()
     assert _off(goal, result.final_positions) < TOLERANCE
     assert result.stream.busy_replies > 0
     assert not result.following.slowed
-    assert wall < plan.duration / 2
+    assert cpu < plan.duration / 4  # the work (CPU time: load does not stretch it)
+    assert wall < 0.9 * plan.duration  # not paced by the wall clock (less CPU waits)
 
 
 def _estop(c: VirtualController) -> None:

@@ -240,6 +240,24 @@ def test_axis_position_example_2_feedback_ten_thousandth_deg() -> None:
     assert got == [(_lo(v), _hi(v)) for v in values]
 
 
+def test_axis_position_words_by_hand() -> None:
+    """POSE in pulses, truncated (§5.7): 0.1 × 81646.4858 = 8164.6 → 8164, 0.2 → 16329,
+    1.5 × 71619.7244 = 107429.6 → 107429, 0.3 × 52998.596 = 15899.6 → 15899,
+    −0.4 × 52139.159 = −20855.7 → −20855, 0.5 × 37242.257 = 18621.1 → 18621.
+
+    Two bytes, whole degrees, rounded half away from zero: 5.73 → 6, 11.46 → 11,
+    85.94 → 86, 17.19 → 17, −22.92 → −23 (65536 − 23 = 65513), 28.65 → 29.
+    Four bytes, 0.0001°: 8164 / 81646.4858 rad = 5.72912° → 57291 (0, 57291);
+    114589 = 1·65536 + 49053; 859432 = 13·65536 + 7464; 171881 = 2·65536 + 40809;
+    −229176 → 0xFFFC80C8 = (65532, 32968); 286477 = 4·65536 + 24333."""
+    vc = _cell({"336": 1, "337": 0} | {str(1290 + k): 10 + k for k in range(6)})
+    assert vc.snapshot().groups[0].command_pulse == (8164, 16329, 107429, 15899, -20855, 18621)
+    assert [_m(vc, 10 + k) for k in range(6)] == [6, 11, 86, 17, 65513, 29]
+    vc = _cell({"336": 0, "337": 2} | {str(1300 + k): 10 + 2 * k for k in range(6)})
+    got = [(_m(vc, 10 + 2 * k), _m(vc, 11 + 2 * k)) for k in range(6)]
+    assert got == [(57291, 0), (49053, 1), (7464, 13), (40809, 2), (32968, 65532), (24333, 4)]
+
+
 # ------------------------------------------------------------------ randomised tables
 
 
@@ -326,9 +344,14 @@ def test_no_table_no_outputs() -> None:
     assert all(_m(vc, n) == 0 for n in range(1, 100))
 
 
-def test_vectorised_outputs_match_the_reference_rules() -> None:
+def test_vectorised_outputs_are_wired_like_the_reference_rules() -> None:
     """controller/registers.py's compiled path writes the words of models/s1cxg.py's
-    reference ``write_outputs`` for the same values, on random tables."""
+    reference ``write_outputs`` for the same values, on random tables.
+
+    Both sides take their scale from the same ``unit_scale``, so this checks the wiring
+    (which value goes to which register, word split, truncation path), not the units:
+    those are pinned by the examples above and, with written-out numbers, by
+    :func:`test_axis_position_words_by_hand`."""
     from pymotoros.controller.registers import RegisterOutputs, _Plan
     from pymotoros.models.s1cxg import GroupValues, parse_s1cxg, write_outputs
 

@@ -26,13 +26,13 @@ import math
 import os
 import random
 import struct
-import time
 from collections.abc import AsyncIterator, Iterable
 from dataclasses import replace
 
 import httpx
 import pytest
 
+from load_proof import Stopwatch, assert_loop_kept_time, within
 from pymotoros.controller import VirtualController
 from pymotoros.protocol.constants import ByteOrder, MotionCommand, Port, ResultCode
 from pymotoros.protocol.framing import encode
@@ -149,9 +149,9 @@ async def drain(reader: asyncio.StreamReader) -> None:
 async def assert_served(app: SimulatorApp) -> None:
     """A normal client gets its answers in time."""
     peer = await Peer.connect(app.ports.motion, Port.MOTION)
-    async with asyncio.timeout(REPLY_BUDGET_S):
+    async with within(REPLY_BUDGET_S):
         assert await peer.request(Ping()) == PingReply()
-    async with asyncio.timeout(REPLY_BUDGET_S):
+    async with within(REPLY_BUDGET_S):
         result, _ = await ctrl(peer, MotionCommand.CHECK_QUEUE_CNT)
     assert result == ResultCode.SUCCESS
     await peer.close()
@@ -234,6 +234,7 @@ async def test_mutated_frames_in_random_chunks_on_every_port(
     frames = seeds()
     baseline = _fd_count()
     app.ticker.reset_stats()
+    watch = Stopwatch()
     async with asyncio.timeout(FUZZ_BUDGET_S):
         for port, decoded in (
             (app.ports.motion, lambda: app.motion.requests),
@@ -252,13 +253,14 @@ async def test_mutated_frames_in_random_chunks_on_every_port(
     assert app.io.requests >= FRAMES
     assert not caplog.records, [r.getMessage() for r in caplog.records[:5]]
     await settle_fds(app, baseline)
-    assert app.tick_stats().skipped <= STALL_BUDGET_TICKS, app.tick_stats()
+    assert_loop_kept_time(app.tick_stats(), watch, STALL_BUDGET_TICKS)
 
 
 @needs_proc
 async def test_connection_floods_and_a_slow_state_reader(app: SimulatorApp) -> None:
     baseline = _fd_count()
     app.ticker.reset_stats()
+    watch = Stopwatch()
     async with asyncio.timeout(60.0):
         for port in (app.ports.motion, app.ports.state, app.ports.io):
             for _ in range(FLOOD_CONNECTS):
@@ -272,19 +274,19 @@ async def test_connection_floods_and_a_slow_state_reader(app: SimulatorApp) -> N
         # last one in is a normal reader, the other survivors never read (slow readers).
         normal_reader = held[-1][0]
         try:
-            async with asyncio.timeout(1.0):
+            async with within(1.0, "the first state message"):
                 assert await normal_reader.read(4096)
             await app.ticker.wait_ticks(250)  # a second of state stream into full buffers
             await assert_served(app)
             for _ in range(10):  # the normal reader still gets the stream
-                async with asyncio.timeout(1.0):
+                async with within(1.0, "the state stream"):
                     assert await normal_reader.read(65536)
             assert app.state.clients == 4
         finally:
             for _, writer in held:
                 writer.transport.abort()
     await settle_fds(app, baseline)
-    assert app.tick_stats().skipped <= STALL_BUDGET_TICKS, app.tick_stats()
+    assert_loop_kept_time(app.tick_stats(), watch, STALL_BUDGET_TICKS)
 
 
 EXTREMES: list[float] = [
@@ -308,6 +310,7 @@ async def test_extreme_values_in_every_field_are_answered_in_time(app: Simulator
     peer = await Peer.connect(app.ports.motion, Port.MOTION)
     assert await ctrl(peer, MotionCommand.START_TRAJ_MODE) == (ResultCode.SUCCESS, 0)
     app.ticker.reset_stats()
+    watch = Stopwatch()
     zero = [0.0] * 6
     cases: list[JointTrajPtFull] = []
     for t in TIMES:
@@ -325,17 +328,17 @@ async def test_extreme_values_in_every_field_are_answered_in_time(app: Simulator
     async with asyncio.timeout(60.0):
         for case in cases:
             # each point after a fresh start at the current position (seq 0)
-            async with asyncio.timeout(REPLY_BUDGET_S):
+            async with within(REPLY_BUDGET_S):
                 start = await peer.request(JointTrajPtFull.for_joints(0, 0, 0.0, zero, zero))
             assert isinstance(start, MotoMotionReply)
-            async with asyncio.timeout(REPLY_BUDGET_S):
+            async with within(REPLY_BUDGET_S):
                 reply = await peer.request(case)
             assert isinstance(reply, MotoMotionReply), (case, reply)
-            async with asyncio.timeout(REPLY_BUDGET_S):
+            async with within(REPLY_BUDGET_S):
                 await ctrl(peer, MotionCommand.STOP_MOTION)
             await app.ticker.wait_ticks(3)
     await assert_served(app)
-    assert app.tick_stats().skipped <= STALL_BUDGET_TICKS, app.tick_stats()
+    assert_loop_kept_time(app.tick_stats(), watch, STALL_BUDGET_TICKS)
     await peer.close()
 
 
@@ -360,13 +363,13 @@ async def far_point_then_stop(app: SimulatorApp, ticks: int) -> None:
     peer = await Peer.connect(app.ports.motion, Port.MOTION)
     zero = [0.0] * 6
     assert await ctrl(peer, MotionCommand.START_TRAJ_MODE) == (ResultCode.SUCCESS, 0)
-    async with asyncio.timeout(REPLY_BUDGET_S):
+    async with within(REPLY_BUDGET_S):
         await peer.request(JointTrajPtFull.for_joints(0, 0, 0.0, zero, zero))
-    async with asyncio.timeout(REPLY_BUDGET_S):
+    async with within(REPLY_BUDGET_S):
         reply = await peer.request(JointTrajPtFull.for_joints(0, 1, 14399.0, [1.0] * 6, zero))
     assert isinstance(reply, MotoMotionReply)
     await app.ticker.wait_ticks(ticks)
-    async with asyncio.timeout(REPLY_BUDGET_S):
+    async with within(REPLY_BUDGET_S):
         await ctrl(peer, MotionCommand.STOP_MOTION)
     await peer.close()
 
@@ -477,13 +480,13 @@ NO_BODY_ENDPOINTS = frozenset({"/api/reset", "/api/tick/reset", "/api/drop_motio
 
 
 async def ping_loop(app: SimulatorApp, stop: asyncio.Event, worst: list[float]) -> None:
-    """A normal motion client pinging throughout: its slowest round trip."""
+    """A normal motion client pinging throughout: its slowest round trip, less the time the
+    loop's thread waited for a CPU (tests/load_proof.py)."""
     peer = await Peer.connect(app.ports.motion, Port.MOTION)
     while not stop.is_set():
-        began = time.perf_counter()
-        async with asyncio.timeout(REPLY_BUDGET_S):
+        async with within(REPLY_BUDGET_S) as watch:
             assert await peer.request(Ping()) == PingReply()
-        worst[0] = max(worst[0], time.perf_counter() - began)
+        worst[0] = max(worst[0], watch.unloaded())
         await app.ticker.wait_ticks(5)
     await peer.close()
 
@@ -502,6 +505,7 @@ async def test_malformed_and_oversized_http_bodies(http_app: SimulatorApp) -> No
         stop, worst = asyncio.Event(), [0.0]
         pinger = asyncio.create_task(ping_loop(app, stop, worst))
         app.ticker.reset_stats()
+        watch = Stopwatch()
         rss_before = _rss_mib()
         async with asyncio.timeout(120.0):
             for path in endpoints:
@@ -548,4 +552,4 @@ async def test_malformed_and_oversized_http_bodies(http_app: SimulatorApp) -> No
         k: before[k] for k in ("mode", "estop", "servo", "alarms", "remote")
     }
     assert rss_growth < RSS_GROWTH_BUDGET_MIB, f"RSS grew {rss_growth:.1f} MiB"
-    assert app.tick_stats().skipped <= STALL_BUDGET_TICKS, app.tick_stats()
+    assert_loop_kept_time(app.tick_stats(), watch, STALL_BUDGET_TICKS)

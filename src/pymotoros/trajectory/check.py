@@ -26,6 +26,7 @@ import numpy.typing as npt
 from pymotoros.errors import TrajectoryRejectedError
 from pymotoros.models import ControllerModel, FloatMode, GroupModel, RobotModel
 from pymotoros.models.cell import CellModels
+from pymotoros.models.fsu import fsu_joint_clip
 from pymotoros.models.rules import START_TOLERANCE_PULSES, check_start
 from pymotoros.models.rules import TrajPoint as RulesPoint
 from pymotoros.motion import GroupAxes, interpolate_arrays, to_pulses
@@ -261,7 +262,7 @@ def fsu_clip(axes: GroupAxes, pct: int) -> tuple[int, ...]:
     """Per slot, the most pulses an FSU joint-speed limit of ``pct`` % lets the
     controller execute in one tick: that share of the axis's maximum increment, at
     least one pulse (the twin's :class:`~pymotoros.controller.safety.fsu.FsuFunction`)."""
-    return tuple(max(1, m * pct // 100) if m else 0 for m in axes.max_increment)
+    return fsu_joint_clip(axes.max_increment, pct)
 
 
 def fsu_execution(groups: Sequence[tuple[GroupAxes, I64Array]], pct: int) -> list[I64Array]:

@@ -21,6 +21,7 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
 from pymotoros.controller.servo import ServoGroup
+from pymotoros.models.fsu import fsu_joint_clip
 from pymotoros.motion import GroupAxes
 
 logger = logging.getLogger(__name__)
@@ -104,12 +105,7 @@ class FsuFunction:
     def _set_joint(self, pct: int | None) -> None:
         self._joint_pct = pct
         self._joint_clip = (
-            None
-            if pct is None
-            else tuple(
-                tuple(max(1, m * pct // 100) if m else 0 for m in a.max_increment)
-                for a in self._axes
-            )
+            None if pct is None else tuple(fsu_joint_clip(a.max_increment, pct) for a in self._axes)
         )
 
     def limits(self) -> tuple[tuple[int, ...], ...] | None:
