@@ -1,13 +1,18 @@
 """The state document, built straight from the controller's frozen snapshot: the one
 builder of ``GET /api/state``, ``/ws/state`` and the pendant.
 
+The document is derived from the snapshot's declaration
+(:mod:`pymotoros.runtime.snapshot_document`): a field added to
+:class:`~pymotoros.controller.api.ControllerSnapshot` or one of its parts appears here
+and in the control API's ``StateModel`` (the OpenAPI schema, derived from the same
+declaration) with no other edit. The runtime adds what only it knows: the loop's
+``tick`` statistics and the listening ``ports``.
+
 The feed sends this document 25 times a second, on the event loop that also runs the
 4 ms interpolation ticks, so every microsecond it takes is taken from the loop's idle
-time. It is therefore built without pydantic: plain dicts and lists, filled once from
-:class:`~pymotoros.controller.api.ControllerSnapshot`, then JSON-encoded once for every
-tab. ``GET /api/state`` answers the same dict; the control API's ``StateModel`` is its
-OpenAPI schema only (FastAPI checks each answer against it, and a test holds the two
-equal key for key).
+time. It is therefore built without pydantic: plain dicts and lists, by an encoder
+compiled once per snapshot type, then JSON-encoded once for every tab. ``GET
+/api/state`` answers the same dict; FastAPI checks it against ``StateModel``.
 
 The 3D view needs each joint's position only (not the orientations
 :meth:`pymotoros.kinematics.Chain.joint_frames` also computes): :class:`Skeleton` runs
@@ -17,15 +22,16 @@ the translations, and reuses its answer while the joints stand still.
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from typing import Any, Final
 
 import numpy as np
 import orjson
 import pinocchio as pin
 
-from pymotoros.controller.api import ControllerSnapshot, PendantMode, TcpSnapshot
+from pymotoros.controller.api import AlarmInfo, ControllerSnapshot
 from pymotoros.kinematics import Chain
+from pymotoros.runtime.snapshot_document import document_encoder
 from pymotoros.runtime.ticker import TickStats
 
 __all__ = ["END_FRAMES", "Skeleton", "encode", "state_document"]
@@ -64,71 +70,36 @@ class Skeleton:
         return out
 
 
-def _tcp(tcp: TcpSnapshot | None) -> dict[str, Any] | None:
-    if tcp is None:
-        return None
-    return {
-        "command": list(tcp.command),
-        "feedback": list(tcp.feedback),
-        "speed_mm_s": {"command": tcp.command_speed_mm_s, "feedback": tcp.feedback_speed_mm_s},
-    }
-
-
-def _alarms(alarms: Sequence[Any]) -> list[dict[str, Any]]:
+def _alarms(alarms: Sequence[AlarmInfo]) -> list[dict[str, Any]]:
     return [{"code": a.code, "subcode": a.subcode, "text": a.text} for a in alarms]
 
 
 def state_document(
     snapshot: ControllerSnapshot, tick: TickStats, ports: Ports, tick_count: int | None = None
 ) -> dict[str, Any]:
-    """``GET /api/state``'s document (``state_model(...).model_dump()``), without pydantic;
-    ``tick_count``, when given, replaces ``tick.count`` (the feed's percentiles are
-    refreshed less often than the count advances)."""
+    """``GET /api/state``'s document: the snapshot's own document
+    (:func:`~pymotoros.runtime.snapshot_document.document_encoder` of its type), then
+    the loop's ``tick`` and the listening ``ports``; ``tick_count``, when given,
+    replaces ``tick.count`` (the feed's percentiles are refreshed less often than the
+    count advances)."""
+    cls = type(snapshot)
+    encoder = _ENCODERS.get(cls)
+    if encoder is None:
+        encoder = _ENCODERS[cls] = document_encoder(cls)
+    doc = encoder(snapshot)
     late = tick.lateness_ms
-    return {
-        "mode": "play" if snapshot.mode is PendantMode.PLAY else "teach",
-        "remote": snapshot.remote,
-        "servo": snapshot.servo,
-        "estop": snapshot.estop,
-        "hold": snapshot.hold,
-        "alarms": _alarms(snapshot.alarms),
-        "motion_ready": snapshot.motion_ready,
-        "groups": [
-            {
-                "name": g.name,
-                "joint_names": list(g.joint_names),
-                "command_rad": list(g.command_rad),
-                "feedback_rad": list(g.feedback_rad),
-                "command_pulse": list(g.command_pulse),
-                "queue": g.queue,
-                "tool": g.tool,
-                "tcp": _tcp(g.tcp),
-            }
-            for g in snapshot.groups
-        ],
-        "tick": {
-            "period_ms": tick.period_ms,
-            "count": tick.count if tick_count is None else tick_count,
-            "overruns": tick.overruns,
-            "lateness_ms": {"p50": late.p50, "p99": late.p99, "max": late.max},
-        },
-        "fsu": {
-            "joint_speed_pct": snapshot.fsu_joint_speed_pct,
-            "tcp_speed_mm_s": snapshot.fsu_tcp_speed_mm_s,
-        },
-        "pfl": snapshot.pfl,
-        "events": [
-            {
-                "t": e.t,
-                "action": e.action,
-                **dict(e.params),
-                **({"error": e.error} if e.error else {}),
-            }
-            for e in snapshot.events
-        ],
-        "motoros": snapshot.motoros,
-        "ports": {"motion": ports[0], "state": ports[1], "io": ports[2]},
+    doc["tick"] = {
+        "period_ms": tick.period_ms,
+        "count": tick.count if tick_count is None else tick_count,
+        "overruns": tick.overruns,
+        "lateness_ms": {"p50": late.p50, "p99": late.p99, "max": late.max},
     }
+    doc["ports"] = {"motion": ports[0], "state": ports[1], "io": ports[2]}
+    return doc
+
+
+_ENCODERS: dict[type, Callable[[Any], dict[str, Any]]] = {}
+"""The encoder of each snapshot type met: one dict lookup per document."""
 
 
 def encode(doc: dict[str, Any]) -> str:
