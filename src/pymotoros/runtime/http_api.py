@@ -19,7 +19,6 @@ the action, in the same shape as ``GET /api/state``.
 
 from __future__ import annotations
 
-import functools
 import inspect
 import logging
 from collections.abc import Awaitable, Callable, Sequence
@@ -159,12 +158,14 @@ class PortsModel(Answer):
     io: int | None
 
 
-@functools.cache
 def state_model_for(snapshot_type: type[ControllerSnapshot]) -> type[Answer]:
     """The schema of ``GET /api/state`` for a snapshot type: its fields, types and
     docstrings (:func:`~pymotoros.runtime.snapshot_document.document_model`), then what
-    the runtime adds (the loop's ``tick``, the listening ``ports``)."""
-    model: type[Answer] = create_model(  # type: ignore[call-overload]
+    the runtime adds (the loop's ``tick``, the listening ``ports``). Built once per type."""
+    known = _STATE_MODELS.get(snapshot_type)
+    if known is not None:
+        return known
+    model: type[Answer] = create_model(
         "StateModel",
         __base__=document_model(snapshot_type),
         tick=(TickModel, Field(description="the interpolation loop's counters")),
@@ -173,7 +174,11 @@ def state_model_for(snapshot_type: type[ControllerSnapshot]) -> type[Answer]:
             Field(description="MotoROS's ports that accept connections (null: not listening)"),
         ),
     )
+    _STATE_MODELS[snapshot_type] = model
     return model
+
+
+_STATE_MODELS: dict[type, type[Answer]] = {}
 
 
 StateModel = state_model_for(ControllerSnapshot)

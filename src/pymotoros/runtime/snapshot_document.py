@@ -32,7 +32,6 @@ from __future__ import annotations
 import ast
 import dataclasses
 import enum
-import functools
 import inspect
 import itertools
 import textwrap
@@ -200,7 +199,7 @@ class _Encoder:
         expanded in place."""
         hints = _hints(cls)
         out: list[tuple[str, str]] = []
-        for f in dataclasses.fields(cls):  # type: ignore[arg-type]
+        for f in dataclasses.fields(cls):
             how = _how(f)
             if how == "omit":
                 continue
@@ -223,14 +222,22 @@ class _Encoder:
         return name
 
 
-@functools.cache
+_ENCODERS: dict[type, Callable[[Any], dict[str, Any]]] = {}
+_MODELS: dict[tuple[type, str | None], type[Answer]] = {}
+
+
 def document_encoder(cls: type) -> Callable[[Any], dict[str, Any]]:
-    """The encoder of a snapshot type (a dataclass): an instance → its document."""
+    """The encoder of a snapshot type (a dataclass): an instance → its document. Built
+    once per type; a type the rules cannot encode is a TypeError here, not at a call."""
+    known = _ENCODERS.get(cls)
+    if known is not None:
+        return known
     encoder = _Encoder()
     name = encoder.function(cls)
     code = compile("\n".join(encoder.sources), f"<state document of {cls.__name__}>", "exec")
     exec(code, encoder.namespace)  # noqa: S102 - our own source, written from field names
     function: Callable[[Any], dict[str, Any]] = encoder.namespace[name]
+    _ENCODERS[cls] = function
     return function
 
 
@@ -256,7 +263,7 @@ def _fields(cls: type) -> dict[str, tuple[Any, Any]]:
     hints = _hints(cls)
     docs = field_docs(cls)
     out: dict[str, tuple[Any, Any]] = {}
-    for f in dataclasses.fields(cls):  # type: ignore[arg-type]
+    for f in dataclasses.fields(cls):
         how = _how(f)
         if how == "omit":
             continue
@@ -271,12 +278,15 @@ def _fields(cls: type) -> dict[str, tuple[Any, Any]]:
     return out
 
 
-@functools.cache
 def document_model(cls: type, name: str | None = None) -> type[Answer]:
-    """The pydantic model (OpenAPI schema) of a snapshot type's document."""
+    """The pydantic model (OpenAPI schema) of a snapshot type's document, built once."""
+    known = _MODELS.get((cls, name))
+    if known is not None:
+        return known
     model: type[Answer] = create_model(  # type: ignore[call-overload]
         name or cls.__name__, __base__=Answer, __doc__=_first_line(cls), **_fields(cls)
     )
+    _MODELS[cls, name] = model
     return model
 
 

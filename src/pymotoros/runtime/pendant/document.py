@@ -22,7 +22,7 @@ the translations, and reuses its answer while the joints stand still.
 
 from __future__ import annotations
 
-from collections.abc import Callable, Sequence
+from collections.abc import Sequence
 from typing import Any, Final
 
 import numpy as np
@@ -82,11 +82,7 @@ def state_document(
     the loop's ``tick`` and the listening ``ports``; ``tick_count``, when given,
     replaces ``tick.count`` (the feed's percentiles are refreshed less often than the
     count advances)."""
-    cls = type(snapshot)
-    encoder = _ENCODERS.get(cls)
-    if encoder is None:
-        encoder = _ENCODERS[cls] = document_encoder(cls)
-    doc = encoder(snapshot)
+    doc = document_encoder(type(snapshot))(snapshot)
     late = tick.lateness_ms
     doc["tick"] = {
         "period_ms": tick.period_ms,
@@ -96,10 +92,6 @@ def state_document(
     }
     doc["ports"] = {"motion": ports[0], "state": ports[1], "io": ports[2]}
     return doc
-
-
-_ENCODERS: dict[type, Callable[[Any], dict[str, Any]]] = {}
-"""The encoder of each snapshot type met: one dict lookup per document."""
 
 
 def encode(doc: dict[str, Any]) -> str:
