@@ -228,7 +228,7 @@ class ControllerSnapshot:
     This is the one declaration of the state document: ``GET /api/state``, the
     ``/ws/state`` feed, the pendant and the control API's OpenAPI schema are derived from
     these fields, their types and their docstrings
-    (:mod:`pymotoros.runtime.state_document`). A new field appears in all of them with
+    (:mod:`pymotoros.runtime.snapshot_document`). A new field appears in all of them with
     no other edit; metadata :data:`OMIT` keeps one out of the document, :data:`INLINE`
     merges a part's fields into it. A safety function shows its state through
     :attr:`safety`, the part its module fills.
