@@ -70,10 +70,6 @@ class Skeleton:
         return out
 
 
-def _alarms(alarms: Sequence[AlarmInfo]) -> list[dict[str, Any]]:
-    return [{"code": a.code, "subcode": a.subcode, "text": a.text} for a in alarms]
-
-
 def state_document(
     snapshot: ControllerSnapshot, tick: TickStats, ports: Ports, tick_count: int | None = None
 ) -> dict[str, Any]:
@@ -106,5 +102,7 @@ def encode(doc: dict[str, Any]) -> str:
 
 
 def errors_document(snapshot: ControllerSnapshot) -> list[dict[str, Any]]:
-    """The operator errors (not alarms) with code, subcode and text, as the pendant lists them."""
-    return _alarms(snapshot.errors)
+    """The operator errors (not alarms) with code, subcode and text, as the pendant lists
+    them: the alarms' shape, from the same declaration."""
+    encode = document_encoder(AlarmInfo)
+    return [encode(e) for e in snapshot.errors]
