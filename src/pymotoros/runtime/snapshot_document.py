@@ -43,9 +43,24 @@ from typing import Any, Final, Literal, Union
 
 from pydantic import BaseModel, ConfigDict, Field, create_model
 
-from pymotoros.controller.api import FiredEventInfo, TcpSnapshot, snapshot_names
+from pymotoros.controller.api import (
+    AlarmInfo,
+    FiredEventInfo,
+    GroupSnapshot,
+    TcpSnapshot,
+    snapshot_names,
+)
+from pymotoros.controller.safety import FsuLimits
 
-__all__ = ["FORMS", "Answer", "Form", "document_encoder", "document_model", "field_docs"]
+__all__ = [
+    "FORMS",
+    "SCHEMA_NAMES",
+    "Answer",
+    "Form",
+    "document_encoder",
+    "document_model",
+    "field_docs",
+]
 
 _SCALARS: Final = (int, float, str, bool, type(None))
 
@@ -98,6 +113,16 @@ FORMS: Final[Mapping[type, Form]] = {
     TcpSnapshot: Form(_tcp, TcpModel),
     FiredEventInfo: Form(_event, dict[str, Any]),
 }
+
+
+SCHEMA_NAMES: Final[Mapping[type, str]] = {
+    AlarmInfo: "AlarmModel",
+    GroupSnapshot: "GroupModel",
+    FsuLimits: "FsuModel",
+}
+"""The OpenAPI names the hand-written models had before the schema was derived (a client
+generated from the schema keeps its class names); any other part is named after its
+dataclass."""
 
 
 def field_docs(cls: type) -> dict[str, str]:
@@ -284,7 +309,10 @@ def document_model(cls: type, name: str | None = None) -> type[Answer]:
     if known is not None:
         return known
     model: type[Answer] = create_model(  # type: ignore[call-overload]
-        name or cls.__name__, __base__=Answer, __doc__=_first_line(cls), **_fields(cls)
+        name or SCHEMA_NAMES.get(cls, cls.__name__),
+        __base__=Answer,
+        __doc__=_first_line(cls),
+        **_fields(cls),
     )
     _MODELS[cls, name] = model
     return model
