@@ -5,15 +5,18 @@ from __future__ import annotations
 import json
 import sys
 import time
+from dataclasses import dataclass
 from pathlib import Path
 
+import pytest
 from click.testing import CliRunner, Result
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "client"))
 from client_sim import Sim, running_sim
 
 from pymotoros.cli.main import cli
-from pymotoros.cli.sim_view import safety_lines
+from pymotoros.cli.sim_view import safety_data, safety_lines
+from pymotoros.controller import safety
 
 STATUS_WAIT_S = 10.0
 
@@ -54,3 +57,24 @@ def test_without_the_api_motoros_alarms_get_their_text() -> None:
     ]
     assert safety_lines(None, 4107) == []
     assert safety_lines(None, None) == []
+
+
+def test_a_new_safety_field_gets_its_status_line_and_json_key(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """The status view follows the safety unit's declared part: a field added to
+    ``SafetySnapshot`` (here a toy subclass) is shown without an edit to ``sim_view``."""
+
+    @dataclass(frozen=True, slots=True)
+    class WithDoor(safety.SafetySnapshot):
+        door_open: bool = False
+
+    monkeypatch.setattr(safety, "SafetySnapshot", WithDoor)
+    doc = {"alarms": [], "pfl": "idle", "fsu": None, "door_open": True, "motoros": "running"}
+    assert safety_lines(doc, None) == [
+        "  PFL               idle",
+        "  FSU limit         off",
+        "  door open         on",
+    ]
+    assert safety_data(doc)["door_open"] is True
+    assert set(safety_data(doc)) == {"alarms", "pfl", "fsu", "door_open", "motoros"}

@@ -1,12 +1,15 @@
 """What ``pymotoros status --api URL`` adds from the simulator's control API.
 
 A real controller shows PFL, FSU and alarm texts on its pendant only; the simulator's
-``GET /api/state`` has them, so ``status`` can show them next to the wire's view.
+``GET /api/state`` has them, so ``status`` can show them next to the wire's view. The
+safety lines follow the safety unit's declared part of the snapshot
+(:class:`~pymotoros.controller.safety.SafetySnapshot`): one line per safety function.
 """
 
 from __future__ import annotations
 
 import asyncio
+import dataclasses
 import json
 import urllib.error
 import urllib.request
@@ -39,8 +42,45 @@ async def fetch_state_async(api: str) -> dict[str, Any]:
     return await asyncio.to_thread(fetch_state, api)
 
 
+def safety_keys() -> tuple[str, ...]:
+    """The state document's keys that the safety unit contributes, one per safety
+    function (the fields of :class:`~pymotoros.controller.safety.SafetySnapshot`): the
+    ones this view has always shown first, in their order, then any other in field order,
+    so a new safety function is shown with no edit here."""
+    from pymotoros.controller.safety import SafetySnapshot  # numpy: only with --api
+
+    names = [f.name for f in dataclasses.fields(SafetySnapshot)]
+    known = [name for name in _LABELS if name in names]
+    return tuple(known + [name for name in names if name not in _LABELS])
+
+
+_LABELS: Final[dict[str, str]] = {"pfl": "PFL", "fsu": "FSU limit"}
+
+
+def _fsu_text(fsu: Any) -> str:
+    fsu = fsu or {}
+    limits = []
+    if fsu.get("joint_speed_pct") is not None:
+        limits.append(f"joints {fsu['joint_speed_pct']} %")
+    if fsu.get("tcp_speed_mm_s") is not None:
+        limits.append(f"TCP {fsu['tcp_speed_mm_s']:g} mm/s")
+    return ", ".join(limits) or "off"
+
+
+def _text(value: Any) -> str:
+    """A safety function's state in words: null and false are "off", true is "on", an
+    object its keys and values."""
+    if value is None or value is False:
+        return "off"
+    if value is True:
+        return "on"
+    if isinstance(value, dict):
+        return ", ".join(f"{k} {_text(v)}" for k, v in value.items()) or "off"
+    return str(value)
+
+
 def safety_lines(doc: dict[str, Any] | None, error_code: int | None) -> list[str]:
-    """The status table's extra lines: alarm texts, PFL, FSU, MotoROS start-up."""
+    """The status table's extra lines: alarm texts, each safety function, MotoROS start-up."""
     lines: list[str] = []
     if doc is None:
         text = alarm_text(error_code) if error_code else ""
@@ -51,14 +91,11 @@ def safety_lines(doc: dict[str, Any] | None, error_code: int | None) -> list[str
         lines.append(
             f"  alarm             {alarm['code']}/{alarm['subcode']} {alarm['text']}".rstrip()
         )
-    lines.append(f"  PFL               {doc.get('pfl', 'off')}")
-    fsu = doc.get("fsu") or {}
-    limits = []
-    if fsu.get("joint_speed_pct") is not None:
-        limits.append(f"joints {fsu['joint_speed_pct']} %")
-    if fsu.get("tcp_speed_mm_s") is not None:
-        limits.append(f"TCP {fsu['tcp_speed_mm_s']:g} mm/s")
-    lines.append(f"  FSU limit         {', '.join(limits) or 'off'}")
+    for key in safety_keys():
+        value = doc.get(key)
+        text = _fsu_text(value) if key == "fsu" else _text(value)
+        label = _LABELS.get(key, key.replace("_", " "))
+        lines.append(f"  {label:<18}{text}")
     motoros = doc.get("motoros", "running")
     if motoros != "running":
         lines.append(f"  MotoROS           {motoros}")
@@ -71,7 +108,6 @@ def safety_data(doc: dict[str, Any] | None) -> dict[str, Any]:
         return {}
     return {
         "alarms": doc.get("alarms", []),
-        "pfl": doc.get("pfl"),
-        "fsu": doc.get("fsu"),
+        **{key: doc.get(key) for key in safety_keys()},
         "motoros": doc.get("motoros"),
     }

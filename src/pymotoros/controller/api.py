@@ -15,14 +15,16 @@ done-callback (servers). Nothing here knows about asyncio or the wall clock.
 from __future__ import annotations
 
 import enum
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
+from types import MappingProxyType
 from typing import TYPE_CHECKING, Final, Protocol
 
 from pymotoros.protocol.constants import IoResultCode, ResultCode
 
 if TYPE_CHECKING:
     from pymotoros.controller.cell import CellConfig
+    from pymotoros.controller.safety import SafetySnapshot, SafetyUnit
     from pymotoros.controller.scenario import Scenario
 
 
@@ -197,54 +199,108 @@ class GroupSnapshot:
     feedback_rad: tuple[float, ...]
     command_pulse: tuple[int, ...]
     queue: int
+    """Increments queued for the group."""
     tool: int
     tcp: TcpSnapshot | None = None
-    """None for a group without a kinematic chain."""
+    """The active tool's TCP (null: the group has no kinematic chain)."""
+
+
+OMIT: Final[Mapping[str, str]] = MappingProxyType({"document": "omit"})
+"""A snapshot field's metadata: not in the state document (``GET /api/state``), because
+the document shows it elsewhere (the pendant's extras, the loop's ``tick``) or it is
+fixed at boot (the cell)."""
+INLINE: Final[Mapping[str, str]] = MappingProxyType({"document": "inline"})
+"""A snapshot field's metadata: its own fields join the document's top level (the safety
+unit's part keeps the keys ``fsu`` and ``pfl`` where they have always been)."""
+
+
+def _no_safety() -> SafetySnapshot:
+    # imported here: the safety unit imports the IO image, which imports this module
+    from pymotoros.controller.safety import SafetySnapshot
+
+    return SafetySnapshot()
 
 
 @dataclass(frozen=True, slots=True)
 class ControllerSnapshot:
-    """An immutable picture of the controller for observers (HTTP API, pendant, tests)."""
+    """An immutable picture of the controller for observers (HTTP API, pendant, tests).
 
-    time_ms: int
-    tick_count: int
+    This is the one declaration of the state document: ``GET /api/state``, the
+    ``/ws/state`` feed, the pendant and the control API's OpenAPI schema are derived from
+    these fields, their types and their docstrings
+    (:mod:`pymotoros.runtime.snapshot_document`). A new field appears in all of them with
+    no other edit; metadata :data:`OMIT` keeps one out of the document, :data:`INLINE`
+    merges a part's fields into it. A safety function shows its state through
+    :attr:`safety`, the part its module fills.
+    """
+
+    time_ms: int = field(metadata=OMIT)
+    tick_count: int = field(metadata=OMIT)
     mode: PendantMode
+    """The pendant's mode switch."""
     remote: bool
+    """Remote mode: play commands come from outside (MotoROS needs it)."""
     servo: bool
+    """Servo power is on."""
     estop: bool
+    """An E-stop is pressed (pendant, external or the cell's)."""
     hold: bool
+    """The hold key (or the external hold input) is on."""
     alarms: tuple[AlarmInfo, ...]
+    """Active alarms: code, subcode and text."""
     motion_ready: bool
     """Motion-ready as of the current signals: what CHECK_MOTION_READY answers once
     MotoROS's 10 ms status monitor has seen them (never a reading from before the
     latest operator action)."""
     groups: tuple[GroupSnapshot, ...]
-    errors: tuple[AlarmInfo, ...] = field(default=())
-    fsu_joint_speed_pct: int | None = None
-    """The FSU joint-speed limit in force (None: off)."""
-    fsu_tcp_speed_mm_s: float | None = None
-    """The FSU TCP-speed limit in force (None: off)."""
-    pfl: str = "off"
-    """The PFL function: "off" (no PFL in this cell), "idle", "stop" (81702 on) or
-    "escape" (81703 on, retreating after a clamping)."""
+    """Every control group, in group order."""
+    errors: tuple[AlarmInfo, ...] = field(default=(), metadata=OMIT)
+    safety: SafetySnapshot = field(default_factory=_no_safety, metadata=INLINE)
+    """What the cell's safety functions show (``controller/safety``): one key each."""
     events: tuple[FiredEventInfo, ...] = ()
-    """Scenario events fired so far."""
+    """Scenario events fired: {"t": seconds since boot, "action": ..., its parameters,
+    "error" when the controller refused it}."""
     motoros: str = "running"
     """MotoROS's start-up: "running", what it waits for, or why it halted (§2.1, §8)."""
-    # What a pendant shows beyond the control API's document; None where a controller
-    # (a test double) does not model it.
-    period_ms: int | None = None
+    # What a pendant shows beyond the control API's document (its ``pendant`` extras);
+    # None where a controller (a test double) does not model it.
+    period_ms: int | None = field(default=None, metadata=OMIT)
     """The interpolation period (ms)."""
-    eco: bool | None = None
+    eco: bool | None = field(default=None, metadata=OMIT)
     """Eco mode: servo power saved while idle."""
-    not_ready: NotReadyInfo | None = None
+    not_ready: NotReadyInfo | None = field(default=None, metadata=OMIT)
     """Why motion is not ready now (subcode 0 when it is)."""
-    jobs: tuple[JobPosition, ...] | None = None
+    jobs: tuple[JobPosition, ...] | None = field(default=None, metadata=OMIT)
     """The line of every running job task (empty when no job runs)."""
-    motoros_outputs: tuple[int, ...] | None = None
+    motoros_outputs: tuple[int, ...] | None = field(default=None, metadata=OMIT)
     """OT#889..896 (:data:`MOTOROS_FIRST_OUTPUT` on), 0 or 1 each."""
-    cell: CellConfig | None = None
+    cell: CellConfig | None = field(default=None, metadata=OMIT)
     """The cell the controller was built from (models, tools, groups): fixed at boot."""
+
+    # The names the snapshot had before the safety unit contributed its own part.
+    @property
+    def fsu_joint_speed_pct(self) -> int | None:
+        """The FSU joint-speed limit in force (None: off)."""
+        return self.safety.fsu.joint_speed_pct
+
+    @property
+    def fsu_tcp_speed_mm_s(self) -> float | None:
+        """The FSU TCP-speed limit in force (None: off)."""
+        return self.safety.fsu.tcp_speed_mm_s
+
+    @property
+    def pfl(self) -> str:
+        """The PFL function: "off", "idle", "stop" or "escape"."""
+        return self.safety.pfl
+
+
+def snapshot_names() -> dict[str, object]:
+    """The names the snapshot's annotations use from modules this one cannot import at
+    load time (an import cycle), for ``typing.get_type_hints(..., localns=...)``."""
+    from pymotoros.controller.cell import CellConfig
+    from pymotoros.controller.safety import SafetySnapshot
+
+    return {"CellConfig": CellConfig, "SafetySnapshot": SafetySnapshot}
 
 
 class MotoRosController(Protocol):
@@ -375,6 +431,12 @@ class SafetyPanel(Protocol):
     """The cell's safety functions as the operator drives them (HTTP ``/api/pfl``,
     ``/api/fsu``, ``/api/scenario``). ``VirtualController`` implements it; refusals raise
     ``ValueError`` saying why."""
+
+    @property
+    def safety(self) -> SafetyUnit:
+        """The safety unit itself: a safety function's action (``controller/actions.py``)
+        calls its module here, so a new fault needs no facade method."""
+        ...
 
     def load_scenario(self, scenario: Scenario) -> None:
         """Run a scenario's timed events from the next tick."""

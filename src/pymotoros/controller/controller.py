@@ -297,9 +297,7 @@ class VirtualController:
             motion_ready=self._readiness.monitor.outlook(),
             groups=self._state.group_snapshots(),
             errors=tuple(e.info for e in s.errors),
-            fsu_joint_speed_pct=self._safety.fsu.active.joint_speed_pct,
-            fsu_tcp_speed_mm_s=self._safety.fsu.active.tcp_speed_mm_s,
-            pfl=self._safety.pfl.status.phase if self._safety.pfl.enabled else "off",
+            safety=self._safety.snapshot(),
             motoros=self._startup.phase,
             events=tuple(
                 FiredEventInfo(f.t, f.action, tuple(f.params.items()), f.error)

@@ -19,9 +19,11 @@ def inc_move(groups: Sequence[GroupInterpolator]) -> tuple[Increment, ...] | Non
     reached. A group with an empty queue gets zero pulses and tool 0.
 
     The caller checks the rest of the send condition (motion-ready, no stop pending)
-    and adds each group's pulses to its commanded position. The FSU pulse
-    compensation of v1.9.12 is not modelled: on a controller that executes every
-    pulse it changes nothing.
+    and adds each group's pulses to its commanded position. The v1.9.12 compensation
+    for a controller whose FSU clips the increments is not in this function: it needs
+    the controller's answer (which pulses it executed), so the controller's IncMove
+    task does it (``pymotoros.controller.incmove_task``, §5.6 step 3); on a controller
+    that executes every pulse it changes nothing.
     """
     out: list[Increment] = []
     moved = False

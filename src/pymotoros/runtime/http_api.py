@@ -50,11 +50,18 @@ from pymotoros.runtime.log_limit import api_refusal_allowed
 from pymotoros.runtime.observers import CatchUpMiddleware, Observers
 from pymotoros.runtime.pendant import install_pendant
 from pymotoros.runtime.pendant.document import Ports, state_document
+from pymotoros.runtime.snapshot_document import Answer, document_model
 from pymotoros.runtime.strict_json import StrictJsonRoute
 from pymotoros.runtime.target import SimulatedController
 from pymotoros.runtime.ticker import TickStats
 
-__all__ = ["StateModel", "action_body_model", "create_http_app", "state_model"]
+__all__ = [
+    "StateModel",
+    "action_body_model",
+    "create_http_app",
+    "state_model",
+    "state_model_for",
+]
 
 logger = logging.getLogger(__name__)
 
@@ -132,99 +139,50 @@ def action_body_model(spec: ActionSpec) -> type[ActionBody] | None:
 # --------------------------------------------------------------------------- answers
 
 
-class _Answer(BaseModel):
-    """The schema of a part of the state document. The document itself is built by
-    :func:`~pymotoros.runtime.pendant.document.state_document`; FastAPI checks each
-    answer against these models, and a key they do not declare fails loudly instead of
-    vanishing from ``GET /api/state`` while the pendant shows it."""
-
-    model_config = ConfigDict(extra="forbid")
-
-
-class AlarmModel(_Answer):
-    code: int
-    subcode: int
-    text: str
-
-
-class TcpSpeedModel(_Answer):
-    command: float
-    feedback: float
-
-
-class TcpModel(_Answer):
-    command: list[float] = Field(
-        description="TCP of the active tool in base coordinates: x, y, z (m), rx, ry, rz "
-        "(rad, R = Rz·Ry·Rx), from the command"
-    )
-    feedback: list[float] = Field(description="the same from the encoder feedback")
-    speed_mm_s: TcpSpeedModel
-
-
-class GroupModel(_Answer):
-    name: str
-    joint_names: list[str]
-    command_rad: list[float]
-    feedback_rad: list[float]
-    command_pulse: list[int]
-    queue: int = Field(description="increments queued for the group")
-    tool: int
-    tcp: TcpModel | None = Field(default=None, description="null: no kinematic chain")
-
-
-class LatenessModel(_Answer):
+class LatenessModel(Answer):
     p50: float
     p99: float
     max: float
 
 
-class TickModel(_Answer):
+class TickModel(Answer):
     period_ms: float
     count: int
     overruns: int
     lateness_ms: LatenessModel
 
 
-class FsuModel(_Answer):
-    joint_speed_pct: int | None
-    tcp_speed_mm_s: float | None
-
-
-class PortsModel(_Answer):
+class PortsModel(Answer):
     motion: int | None
     state: int | None
     io: int | None
 
 
-class StateModel(_Answer):
-    mode: Literal["play", "teach"]
-    remote: bool
-    servo: bool
-    estop: bool
-    hold: bool
-    alarms: list[AlarmModel]
-    motion_ready: bool
-    groups: list[GroupModel]
-    tick: TickModel
-    fsu: FsuModel = Field(
-        default_factory=lambda: FsuModel(joint_speed_pct=None, tcp_speed_mm_s=None),
-        description="the FSU speed limits in force (null: off)",
+def state_model_for(snapshot_type: type[ControllerSnapshot]) -> type[Answer]:
+    """The schema of ``GET /api/state`` for a snapshot type: its fields, types and
+    docstrings (:func:`~pymotoros.runtime.snapshot_document.document_model`), then what
+    the runtime adds (the loop's ``tick``, the listening ``ports``). Built once per type."""
+    known = _STATE_MODELS.get(snapshot_type)
+    if known is not None:
+        return known
+    model: type[Answer] = create_model(
+        "StateModel",
+        __base__=document_model(snapshot_type),
+        tick=(TickModel, Field(description="the interpolation loop's counters")),
+        ports=(
+            PortsModel,
+            Field(description="MotoROS's ports that accept connections (null: not listening)"),
+        ),
     )
-    pfl: Literal["off", "idle", "stop", "escape"] = Field(
-        default="off", description="the PFL function: off (not in this cell), idle, stop, escape"
-    )
-    events: list[dict[str, Any]] = Field(
-        default_factory=list,
-        description='scenario events fired: {"t": seconds since boot, "action": ..., params}',
-    )
-    motoros: str = Field(
-        default="running",
-        description="MotoROS's start-up: running, what it waits for, or why it halted",
-    )
-    ports: PortsModel = Field(
-        default_factory=lambda: PortsModel(motion=None, state=None, io=None),
-        description="MotoROS's ports that accept connections (null: not listening)",
-    )
+    _STATE_MODELS[snapshot_type] = model
+    return model
+
+
+_STATE_MODELS: dict[type, type[Answer]] = {}
+
+
+StateModel = state_model_for(ControllerSnapshot)
+"""``GET /api/state``'s schema, derived from :class:`ControllerSnapshot`."""
 
 
 class ErrorModel(BaseModel):
@@ -239,10 +197,11 @@ class IoValueModel(BaseModel):
 
 def state_model(
     snapshot: ControllerSnapshot, tick: TickStats, ports: Ports = (None, None, None)
-) -> StateModel:
+) -> Answer:
     """The ``GET /api/state`` document as its model (the one builder is
     :func:`~pymotoros.runtime.pendant.document.state_document`)."""
-    return StateModel.model_validate(state_document(snapshot, tick, ports))
+    model = state_model_for(type(snapshot))
+    return model.model_validate(state_document(snapshot, tick, ports))
 
 
 # --------------------------------------------------------------------------- errors
@@ -332,10 +291,13 @@ def create_http_app(
         listening = ports() if ports is not None else (None, None, None)
         return state_document(controller.snapshot(), tick_stats(), listening)
 
+    # the schema of the document this controller's snapshot type gives (a field a
+    # subclass adds is in it too)
+    answer = state_model_for(type(controller.snapshot()))
     install_pendant(app, controller, tick_stats, ports, clients, after_ticks, actions=actions)
-    _install_state_routes(app, state, reset_tick_stats)
+    _install_state_routes(app, state, reset_tick_stats, answer)
     for spec in actions_by_name(actions).values():
-        _install_action(app, spec, controller, state)
+        _install_action(app, spec, controller, state, answer)
     _install_read_io(app, controller)
     return app
 
@@ -365,14 +327,17 @@ def _new_app(observers: Observers | None) -> FastAPI:
 
 
 def _install_state_routes(
-    app: FastAPI, state: StateFn, reset_tick_stats: Callable[[], None] | None
+    app: FastAPI,
+    state: StateFn,
+    reset_tick_stats: Callable[[], None] | None,
+    answer: type[Answer] = StateModel,
 ) -> None:
-    @app.get("/api/state", response_model=StateModel, tags=["state"])
+    @app.get("/api/state", response_model=answer, tags=["state"])
     async def get_state() -> dict[str, Any]:
         """Operator state, alarms, groups (command/feedback positions, queue, tool), loop timing."""
         return state()
 
-    @app.post("/api/tick/reset", response_model=StateModel, tags=["state"])
+    @app.post("/api/tick/reset", response_model=answer, tags=["state"])
     async def reset_tick() -> dict[str, Any]:
         """Forget the loop's lateness samples and overrun count (e.g. after a warm-up)."""
         if reset_tick_stats is not None:
@@ -381,7 +346,11 @@ def _install_state_routes(
 
 
 def _install_action(
-    app: FastAPI, spec: ActionSpec, controller: SimulatedController, state: StateFn
+    app: FastAPI,
+    spec: ActionSpec,
+    controller: SimulatedController,
+    state: StateFn,
+    answer: type[Answer] = StateModel,
 ) -> None:
     """``spec.method spec.path``: the body (and the path's parameters) checked by the
     declaration, then the action."""
@@ -418,7 +387,7 @@ def _install_action(
         spec.path,
         endpoint,
         methods=[spec.method],
-        response_model=StateModel,
+        response_model=answer,
         responses=_ERRORS,
         tags=[spec.tag],
         summary=spec.doc.split(":")[0].rstrip("."),

@@ -7,13 +7,18 @@ status monitor reads and the results of its incremental-move calls.
 
 Adding a fault means one module here (with its test), its declaration in
 ``controller/actions.py`` (which gives it its control-API endpoint, its scenario action
-and its place in the pendant's list) and the state it shows in the controller's
-snapshot.
+and its place in the pendant's list; its call reaches the module through
+``target.safety``) and the state it shows: a field of :class:`SafetySnapshot`, filled
+by :meth:`SafetyUnit.snapshot`, in this file. The controller's snapshot carries that
+part, and ``GET /api/state``, its schema, ``/ws/state`` and ``pymotoros status --api``
+show each of its fields with no other edit (docs/architecture.md counts the files).
 """
 
 from __future__ import annotations
 
 from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import Final, Literal
 
 from pymotoros.controller.io_image import IoImage
 from pymotoros.controller.safety.fsu import (
@@ -40,10 +45,35 @@ __all__ = [
     "FsuLimits",
     "IncrementLimiter",
     "PflFunction",
+    "PflPhase",
     "PflRefusedError",
     "PflStatus",
+    "SafetySnapshot",
     "SafetyUnit",
 ]
+
+PflPhase = Literal["off", "idle", "stop", "escape"]
+"""The PFL function as the operator sees it ("off": no PFL in this cell)."""
+
+
+_NO_FSU_LIMITS: Final = FsuLimits(None, None)
+
+
+@dataclass(frozen=True, slots=True)
+class SafetySnapshot:
+    """What the safety functions show the operator, one field each: the controller's
+    snapshot carries it and the state document lists its fields at its top level
+    (``"fsu"``, ``"pfl"``). A new function adds its field here, with a docstring (the
+    OpenAPI schema's description), and fills it in :meth:`SafetyUnit.snapshot`."""
+
+    fsu: FsuLimits = _NO_FSU_LIMITS
+    """The FSU speed limits in force (null: that limit is off)."""
+    pfl: PflPhase = "off"
+    """The PFL function: off (not in this cell), idle, stop (81702 on) or escape (81703
+    on, retreating after a clamping)."""
+
+
+_PFL_PHASES: dict[str, PflPhase] = {"idle": "idle", "stop": "stop", "escape": "escape"}
 
 
 class SafetyUnit:
@@ -64,6 +94,14 @@ class SafetyUnit:
             io, servos, enabled=pfl_enabled, why_disabled=pfl_why_disabled, period_ms=period_ms
         )
         self.fsu = FsuFunction(axes, servos, fsu_boot_pct)
+
+    def snapshot(self) -> SafetySnapshot:
+        """Each function's state, frozen, for the controller's snapshot."""
+        pfl = self.pfl
+        phase: PflPhase = "off"
+        if pfl.enabled:
+            phase = _PFL_PHASES[pfl.phase]
+        return SafetySnapshot(fsu=self.fsu.active, pfl=phase)
 
     def tick(self, now_ms: int) -> bool:
         """One interpolation period, before MotoROS's IncMove; True if it moved the servos."""

@@ -57,7 +57,12 @@ from fastapi.staticfiles import StaticFiles
 from pydantic import BaseModel, ConfigDict, Field
 
 from pymotoros.controller.actions import CONTROL_ACTIONS, ActionSpec, actions_by_name
-from pymotoros.controller.api import MOTOROS_FIRST_OUTPUT, ControllerSnapshot
+from pymotoros.controller.api import (
+    MOTOROS_FIRST_OUTPUT,
+    ControllerSnapshot,
+    JobPosition,
+    NotReadyInfo,
+)
 from pymotoros.controller.scenario import parse_scenario
 from pymotoros.errors import ConfigError, KinematicsError
 from pymotoros.kinematics import chain_for
@@ -68,6 +73,7 @@ from pymotoros.runtime.pendant.document import (
     errors_document,
     state_document,
 )
+from pymotoros.runtime.snapshot_document import document_encoder
 from pymotoros.runtime.target import SimulatedController
 from pymotoros.runtime.ticker import TickStats
 
@@ -301,15 +307,11 @@ class PendantDocument:
         if snapshot.eco is not None:
             out["eco"] = snapshot.eco
         reason = snapshot.not_ready
-        if reason is not None:
-            out["not_ready"] = {
-                "subcode": reason.subcode,
-                "name": reason.name,
-                "meaning": reason.meaning,
-                "why": reason.why,
-            }
+        if reason is not None:  # the declared shapes (NotReadyInfo, JobPosition)
+            out["not_ready"] = document_encoder(NotReadyInfo)(reason)
         if snapshot.jobs is not None:
-            out["jobs"] = [{"job": j.job, "line": j.line} for j in snapshot.jobs]
+            job = document_encoder(JobPosition)
+            out["jobs"] = [job(j) for j in snapshot.jobs]
         if snapshot.motoros_outputs is not None:
             out["outputs"] = [
                 {"name": f"OT#{MOTOROS_FIRST_OUTPUT + i}", "value": bit}

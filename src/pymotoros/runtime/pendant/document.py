@@ -1,13 +1,18 @@
 """The state document, built straight from the controller's frozen snapshot: the one
 builder of ``GET /api/state``, ``/ws/state`` and the pendant.
 
+The document is derived from the snapshot's declaration
+(:mod:`pymotoros.runtime.snapshot_document`): a field added to
+:class:`~pymotoros.controller.api.ControllerSnapshot` or one of its parts appears here
+and in the control API's ``StateModel`` (the OpenAPI schema, derived from the same
+declaration) with no other edit. The runtime adds what only it knows: the loop's
+``tick`` statistics and the listening ``ports``.
+
 The feed sends this document 25 times a second, on the event loop that also runs the
 4 ms interpolation ticks, so every microsecond it takes is taken from the loop's idle
-time. It is therefore built without pydantic: plain dicts and lists, filled once from
-:class:`~pymotoros.controller.api.ControllerSnapshot`, then JSON-encoded once for every
-tab. ``GET /api/state`` answers the same dict; the control API's ``StateModel`` is its
-OpenAPI schema only (FastAPI checks each answer against it, and a test holds the two
-equal key for key).
+time. It is therefore built without pydantic: plain dicts and lists, by an encoder
+compiled once per snapshot type, then JSON-encoded once for every tab. ``GET
+/api/state`` answers the same dict; FastAPI checks it against ``StateModel``.
 
 The 3D view needs each joint's position only (not the orientations
 :meth:`pymotoros.kinematics.Chain.joint_frames` also computes): :class:`Skeleton` runs
@@ -24,8 +29,9 @@ import numpy as np
 import orjson
 import pinocchio as pin
 
-from pymotoros.controller.api import ControllerSnapshot, PendantMode, TcpSnapshot
+from pymotoros.controller.api import AlarmInfo, ControllerSnapshot
 from pymotoros.kinematics import Chain
+from pymotoros.runtime.snapshot_document import document_encoder
 from pymotoros.runtime.ticker import TickStats
 
 __all__ = ["END_FRAMES", "Skeleton", "encode", "state_document"]
@@ -64,71 +70,24 @@ class Skeleton:
         return out
 
 
-def _tcp(tcp: TcpSnapshot | None) -> dict[str, Any] | None:
-    if tcp is None:
-        return None
-    return {
-        "command": list(tcp.command),
-        "feedback": list(tcp.feedback),
-        "speed_mm_s": {"command": tcp.command_speed_mm_s, "feedback": tcp.feedback_speed_mm_s},
-    }
-
-
-def _alarms(alarms: Sequence[Any]) -> list[dict[str, Any]]:
-    return [{"code": a.code, "subcode": a.subcode, "text": a.text} for a in alarms]
-
-
 def state_document(
     snapshot: ControllerSnapshot, tick: TickStats, ports: Ports, tick_count: int | None = None
 ) -> dict[str, Any]:
-    """``GET /api/state``'s document (``state_model(...).model_dump()``), without pydantic;
-    ``tick_count``, when given, replaces ``tick.count`` (the feed's percentiles are
-    refreshed less often than the count advances)."""
+    """``GET /api/state``'s document: the snapshot's own document
+    (:func:`~pymotoros.runtime.snapshot_document.document_encoder` of its type), then
+    the loop's ``tick`` and the listening ``ports``; ``tick_count``, when given,
+    replaces ``tick.count`` (the feed's percentiles are refreshed less often than the
+    count advances)."""
+    doc = document_encoder(type(snapshot))(snapshot)
     late = tick.lateness_ms
-    return {
-        "mode": "play" if snapshot.mode is PendantMode.PLAY else "teach",
-        "remote": snapshot.remote,
-        "servo": snapshot.servo,
-        "estop": snapshot.estop,
-        "hold": snapshot.hold,
-        "alarms": _alarms(snapshot.alarms),
-        "motion_ready": snapshot.motion_ready,
-        "groups": [
-            {
-                "name": g.name,
-                "joint_names": list(g.joint_names),
-                "command_rad": list(g.command_rad),
-                "feedback_rad": list(g.feedback_rad),
-                "command_pulse": list(g.command_pulse),
-                "queue": g.queue,
-                "tool": g.tool,
-                "tcp": _tcp(g.tcp),
-            }
-            for g in snapshot.groups
-        ],
-        "tick": {
-            "period_ms": tick.period_ms,
-            "count": tick.count if tick_count is None else tick_count,
-            "overruns": tick.overruns,
-            "lateness_ms": {"p50": late.p50, "p99": late.p99, "max": late.max},
-        },
-        "fsu": {
-            "joint_speed_pct": snapshot.fsu_joint_speed_pct,
-            "tcp_speed_mm_s": snapshot.fsu_tcp_speed_mm_s,
-        },
-        "pfl": snapshot.pfl,
-        "events": [
-            {
-                "t": e.t,
-                "action": e.action,
-                **dict(e.params),
-                **({"error": e.error} if e.error else {}),
-            }
-            for e in snapshot.events
-        ],
-        "motoros": snapshot.motoros,
-        "ports": {"motion": ports[0], "state": ports[1], "io": ports[2]},
+    doc["tick"] = {
+        "period_ms": tick.period_ms,
+        "count": tick.count if tick_count is None else tick_count,
+        "overruns": tick.overruns,
+        "lateness_ms": {"p50": late.p50, "p99": late.p99, "max": late.max},
     }
+    doc["ports"] = {"motion": ports[0], "state": ports[1], "io": ports[2]}
+    return doc
 
 
 def encode(doc: dict[str, Any]) -> str:
@@ -143,5 +102,7 @@ def encode(doc: dict[str, Any]) -> str:
 
 
 def errors_document(snapshot: ControllerSnapshot) -> list[dict[str, Any]]:
-    """The operator errors (not alarms) with code, subcode and text, as the pendant lists them."""
-    return _alarms(snapshot.errors)
+    """The operator errors (not alarms) with code, subcode and text, as the pendant lists
+    them: the alarms' shape, from the same declaration."""
+    encode = document_encoder(AlarmInfo)
+    return [encode(e) for e in snapshot.errors]
