@@ -32,6 +32,9 @@ from pymotoros.protocol.constants import TCP_PORT_IO, TCP_PORT_MOTION, TCP_PORT_
 _F = TypeVar("_F", bound=Callable[..., Any])
 
 EXIT_USAGE: Final = 2
+"""Bad arguments: click's own usage errors, an IO address out of range, an unknown pose."""
+EXIT_CONNECTION: Final = 3
+"""No connection, connection lost, or no answer in time."""
 
 PORT: Final = click.IntRange(1, 65535)
 

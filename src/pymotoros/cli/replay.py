@@ -25,6 +25,7 @@ from typing import Final
 import click
 
 from pymotoros.cli.options import (
+    EXIT_CONNECTION,
     EXIT_USAGE,
     BadInput,
     InputFile,
@@ -52,7 +53,6 @@ from pymotoros.protocol.constants import (
 
 EXIT_MATCH: Final = 0
 EXIT_DIFFERS: Final = 1
-EXIT_CONNECTION: Final = 3
 
 STARTUP_TIMEOUT_S: Final = 30.0
 """How long the in-process twin may take until MotoROS listens (its start-up checks)."""

@@ -33,6 +33,8 @@ from pymotoros.cli.cartesian import (
 )
 from pymotoros.cli.live import FrameWriter, alarm_line, not_ready_reason, twin_alarm_texts
 from pymotoros.cli.options import (
+    EXIT_CONNECTION,
+    EXIT_USAGE,
     InputFile,
     NumbersCommand,
     deg_option,
@@ -71,10 +73,6 @@ from pymotoros.protocol.constants import (
 EXIT_OK: Final = 0
 EXIT_REFUSED: Final = 1
 """The robot refused or failed (NOT_READY, INVALID, IO result code, a move that did not finish)."""
-EXIT_USAGE: Final = 2
-"""Bad arguments: click's own usage errors, an IO address out of range, an unknown pose."""
-EXIT_CONNECTION: Final = 3
-"""No connection, connection lost, or no answer in time."""
 EXIT_INTERRUPTED: Final = 130
 """Ctrl-C (SIGINT): a moving robot was stopped with STOP_MOTION first (128 + signal 2)."""
 EXIT_TERMINATED: Final = 143

@@ -25,6 +25,7 @@ from typing import TYPE_CHECKING, Any, Final
 import click
 
 from pymotoros.cli.options import (
+    EXIT_USAGE,
     BadInput,
     InputFile,
     config_option,
@@ -67,8 +68,6 @@ if TYPE_CHECKING:
     from pymotoros.client.planning import JointTrajectory
     from pymotoros.client.streaming import MoveResult
     from pymotoros.trajectory.plot import RecordedRun
-
-EXIT_USAGE: Final = 2
 
 CHECK_EXIT_HELP: Final = (
     "\b\nExit codes:\n"

@@ -77,7 +77,7 @@ def prefix_fits(data: bytes, order: ByteOrder) -> bool:
     recording tells its byte order, and how the client guesses a wrong ``--controller``."""
     if len(data) < PREFIX_SIZE:
         return False
-    (length,) = (_PREFIX_BE if order == ">" else _PREFIX_LE).unpack_from(data)
+    length: int = (_PREFIX_BE if order == ">" else _PREFIX_LE).unpack_from(data)[0]
     return MIN_LENGTH_PREFIX <= length <= MAX_LENGTH_PREFIX
 
 
