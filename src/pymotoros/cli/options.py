@@ -254,6 +254,13 @@ def json_option(what: str = "the result") -> Callable[[_F], _F]:
     return click.option("--json", "as_json", is_flag=True, help=f"Print {what} as JSON.")
 
 
+def enable_option(func: _F) -> _F:
+    """``--enable``: START_TRAJ_MODE before the motion (``move``, ``run``)."""
+    return click.option(
+        "--enable", "enable_first", is_flag=True, help="Enter trajectory mode first."
+    )(func)
+
+
 def output_option(what: str, *, required: bool = False) -> Callable[[_F], _F]:
     """``-o/--output``: its directory must exist (checked before any work)."""
     return click.option(

@@ -46,10 +46,7 @@ from pymotoros.client.replay import (
 from pymotoros.controller.cell import CellConfig, default_cell, load_cell
 from pymotoros.errors import ConfigError
 from pymotoros.models import ControllerType
-from pymotoros.protocol.constants import (
-    ByteOrder,
-    Port,
-)
+from pymotoros.protocol.constants import ByteOrder, Port
 
 EXIT_MATCH: Final = 0
 EXIT_DIFFERS: Final = 1

@@ -30,6 +30,7 @@ from pymotoros.cli.options import (
     InputFile,
     config_option,
     controller_option,
+    enable_option,
     json_option,
     model_options,
     number_list,
@@ -435,7 +436,7 @@ async def _stream_file(
 @click.argument("traj", metavar="TRAJ", type=_TRAJ)
 @robot_options
 @click.option("--force", is_flag=True, help="Send even if `pymotoros check` finds a problem.")
-@click.option("--enable", "enable_first", is_flag=True, help="Enter trajectory mode first.")
+@enable_option
 @json_option()
 def run(traj: Path, force: bool, enable_first: bool, as_json: bool, **kwargs: Any) -> None:
     """Stream exactly the points of a trajectory file to the robot (no re-timing).
