@@ -46,9 +46,12 @@ def test_front_door_exports_what_users_need() -> None:
 
 
 def test_the_names_are_declared_once() -> None:
-    """The ``TYPE_CHECKING`` imports are the one declaration (issue 19): the run-time map
-    from name to module and ``__all__`` are read from them, every line an explicit
-    re-export (``X as X``) that type checkers see."""
+    """``_EXPORTS`` is the one declaration (issue 19): the run-time map from name to
+    module and ``__all__`` derive from it, no name is lent by two modules, and the
+    ``TYPE_CHECKING`` imports that type checkers read say exactly the same, every line an
+    explicit re-export (``X as X``)."""
+    lent = [name for names in pymotoros._EXPORTS.values() for name in names]
+    assert len(lent) == len(set(lent)), "a name is lent to the front door twice"
     tree = ast.parse(Path(pymotoros.__file__).read_text(encoding="utf-8"))
     block = next(
         node

@@ -21,15 +21,14 @@ Every name is imported on first use (PEP 562): ``import pymotoros`` runs first f
 any sub-package, and the sans-I/O codec (``pymotoros.protocol``) must load neither
 asyncio nor socket. The in-memory twin for tests is :mod:`pymotoros.testing`.
 
-The names are declared once, by the ``TYPE_CHECKING`` imports below: type checkers read
-them (``X as X`` is an explicit re-export), and at run time :func:`_exports` reads the
-same lines to know which module defines each name, and ``__all__`` follows.
+The names are declared once, in the table ``_EXPORTS`` (module -> names): ``__all__`` and
+the lazy look-up follow from it. The ``TYPE_CHECKING`` imports repeat it for type
+checkers, and a test holds them equal.
 """
 
 from __future__ import annotations
 
 import importlib
-import re
 from typing import TYPE_CHECKING, Any, Final
 
 if TYPE_CHECKING:
@@ -105,21 +104,85 @@ if TYPE_CHECKING:
     from pymotoros.trajectory import read_trajectory_file as read_trajectory_file
     from pymotoros.trajectory import write_trajectory_file as write_trajectory_file
 
-_IMPORT: Final = re.compile(r"^    from (pymotoros[\w.]*) import (\w+) as \2$", re.MULTILINE)
-"""One line of the declaration above: ``from MODULE import NAME as NAME``."""
+_EXPORTS: Final[dict[str, tuple[str, ...]]] = {
+    "pymotoros.client.connection": ("Ports",),
+    "pymotoros.client.errors": (
+        "AxisDeviation",
+        "BusyTimeoutError",
+        "ClientError",
+        "CommandFailedError",
+        "ConnectError",
+        "ConnectionLostError",
+        "GroupError",
+        "InvalidRequestError",
+        "IoAddressError",
+        "IoError",
+        "ModelMismatchError",
+        "MotionIncompleteError",
+        "MotionTimeoutError",
+        "MoveStoppedError",
+        "NotReadyError",
+        "ReplyError",
+        "RequestTimeoutError",
+        "SpeedLimitError",
+        "StartPositionError",
+    ),
+    "pymotoros.client.motion_port": ("MotionReadiness",),
+    "pymotoros.client.planning": (
+        "JointLimits",
+        "JointTrajectory",
+        "PlanningError",
+        "TrajectoryPoint",
+        "plan_joint_move",
+    ),
+    "pymotoros.client.robot": ("RobotClient", "connect"),
+    "pymotoros.client.srdf": ("NamedPose", "NamedPoseError", "parse_srdf"),
+    "pymotoros.client.state": ("JointState", "Mode", "RobotState", "Status"),
+    "pymotoros.client.streaming": ("FollowingReport", "FollowingSample", "MoveResult"),
+    "pymotoros.client.sync": ("SyncRobotClient",),
+    "pymotoros.client.timing": ("ClientClock",),
+    "pymotoros.controller": ("CellConfig", "VirtualController", "default_cell", "load_cell"),
+    "pymotoros.controller.scenario": ("Scenario", "load_scenario", "parse_scenario"),
+    "pymotoros.errors": (
+        "ConfigError",
+        "JobError",
+        "KinematicsError",
+        "LocalProtocolError",
+        "ProtocolError",
+        "PymotorosError",
+        "RemoteProtocolError",
+        "TrajectoryRejectedError",
+    ),
+    "pymotoros.kinematics": ("Chain", "chain_for"),
+    "pymotoros.models": (
+        "AxisModel",
+        "ControllerModel",
+        "ControllerType",
+        "DhLink",
+        "GroupModel",
+        "RobotModel",
+        "controller_model",
+        "robot_model",
+    ),
+    "pymotoros.trajectory": (
+        "CheckReport",
+        "Trajectory",
+        "check_trajectory",
+        "plan_waypoints",
+        "read_trajectory_file",
+        "write_trajectory_file",
+    ),
+}
+"""The front door's one declaration: each defining module and the names it lends to it.
 
+A literal, not read from the ``TYPE_CHECKING`` imports above at run time: those are for
+type checkers only (``X as X`` is an explicit re-export), and ``tests/test_front_door.py``
+holds them equal to this table, so the two cannot drift."""
 
-def _exports() -> dict[str, str]:
-    """Name -> defining module, read from this file's ``TYPE_CHECKING`` block (the one
-    declaration). Read as text, not imported (that would load every sub-package) nor
-    parsed with :mod:`ast` (milliseconds at every ``import pymotoros``)."""
-    with open(__file__, encoding="utf-8") as file:  # not pathlib: it costs an import
-        source = file.read()
-    block = source.split("\nif TYPE_CHECKING:\n", 1)[1].split("\n\n", 1)[0]
-    return {name: module for module, name in _IMPORT.findall(block)}
-
-
-_WHERE: Final = _exports()
+_WHERE: Final[dict[str, str]] = {
+    name: module for module, names in _EXPORTS.items() for name in names
+}
+"""Name -> defining module, for :func:`__getattr__`."""
 __all__ = sorted([*_WHERE, "__version__"])
 
 

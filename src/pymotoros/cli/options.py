@@ -32,6 +32,9 @@ from pymotoros.protocol.constants import TCP_PORT_IO, TCP_PORT_MOTION, TCP_PORT_
 _F = TypeVar("_F", bound=Callable[..., Any])
 
 EXIT_USAGE: Final = 2
+"""Bad arguments: click's own usage errors, an IO address out of range, an unknown pose."""
+EXIT_CONNECTION: Final = 3
+"""No connection, connection lost, or no answer in time."""
 
 PORT: Final = click.IntRange(1, 65535)
 
@@ -249,6 +252,13 @@ def deg_option(what: str) -> Callable[[_F], _F]:
 
 def json_option(what: str = "the result") -> Callable[[_F], _F]:
     return click.option("--json", "as_json", is_flag=True, help=f"Print {what} as JSON.")
+
+
+def enable_option(func: _F) -> _F:
+    """``--enable``: START_TRAJ_MODE before the motion (``move``, ``run``)."""
+    return click.option(
+        "--enable", "enable_first", is_flag=True, help="Enter trajectory mode first."
+    )(func)
 
 
 def output_option(what: str, *, required: bool = False) -> Callable[[_F], _F]:

@@ -25,6 +25,7 @@ from typing import Final
 import click
 
 from pymotoros.cli.options import (
+    EXIT_CONNECTION,
     EXIT_USAGE,
     BadInput,
     InputFile,
@@ -45,14 +46,10 @@ from pymotoros.client.replay import (
 from pymotoros.controller.cell import CellConfig, default_cell, load_cell
 from pymotoros.errors import ConfigError
 from pymotoros.models import ControllerType
-from pymotoros.protocol.constants import (
-    ByteOrder,
-    Port,
-)
+from pymotoros.protocol.constants import ByteOrder, Port
 
 EXIT_MATCH: Final = 0
 EXIT_DIFFERS: Final = 1
-EXIT_CONNECTION: Final = 3
 
 STARTUP_TIMEOUT_S: Final = 30.0
 """How long the in-process twin may take until MotoROS listens (its start-up checks)."""

@@ -33,9 +33,12 @@ from pymotoros.cli.cartesian import (
 )
 from pymotoros.cli.live import FrameWriter, alarm_line, not_ready_reason, twin_alarm_texts
 from pymotoros.cli.options import (
+    EXIT_CONNECTION,
+    EXIT_USAGE,
     InputFile,
     NumbersCommand,
     deg_option,
+    enable_option,
     group_option,
     json_option,
     robot_options,
@@ -71,10 +74,6 @@ from pymotoros.protocol.constants import (
 EXIT_OK: Final = 0
 EXIT_REFUSED: Final = 1
 """The robot refused or failed (NOT_READY, INVALID, IO result code, a move that did not finish)."""
-EXIT_USAGE: Final = 2
-"""Bad arguments: click's own usage errors, an IO address out of range, an unknown pose."""
-EXIT_CONNECTION: Final = 3
-"""No connection, connection lost, or no answer in time."""
 EXIT_INTERRUPTED: Final = 130
 """Ctrl-C (SIGINT): a moving robot was stopped with STOP_MOTION first (128 + signal 2)."""
 EXIT_TERMINATED: Final = 143
@@ -836,7 +835,7 @@ def _report_move(result: MoveResult, req: MoveRequest, goal: MoveGoal, robot: An
 @deg_option("J1 ... Jn, results and limit errors")
 @scale_options
 @group_option(multiple=True)
-@click.option("--enable", "enable_first", is_flag=True, help="Enter trajectory mode first.")
+@enable_option
 @json_option()
 @click.option(
     "--pose",
@@ -988,11 +987,23 @@ def _say_value(as_json: bool, key: str, number: int, value: int, text: str) -> N
         click.echo(text)
 
 
+_group_flag = click.option(
+    "--group", "as_group", is_flag=True, help="ADDRESS is a group (byte) address."
+)
+_address_json = click.option(
+    "--json", "as_json", is_flag=True, help='Print {"address": A, "value": V}.'
+)
+_number_json = click.option(
+    "--json", "as_json", is_flag=True, help='Print {"number": N, "value": V}.'
+)
+"""The options the read and write commands of ``io`` and ``mreg`` share."""
+
+
 @io.command("read", epilog=EXIT_CODES_HELP)
 @robot_options
 @click.argument("address", type=click.IntRange(0))
-@click.option("--group", "as_group", is_flag=True, help="ADDRESS is a group (byte) address.")
-@click.option("--json", "as_json", is_flag=True, help='Print {"address": A, "value": V}.')
+@_group_flag
+@_address_json
 def io_read(address: int, as_group: bool, as_json: bool, **kwargs: Any) -> None:
     """Read the IO bit (or group) at ADDRESS."""
     read = RobotClient.read_io_group if as_group else RobotClient.read_io_bit
@@ -1004,8 +1015,8 @@ def io_read(address: int, as_group: bool, as_json: bool, **kwargs: Any) -> None:
 @robot_options
 @click.argument("address", type=click.IntRange(0))
 @click.argument("value", type=click.IntRange(0))
-@click.option("--group", "as_group", is_flag=True, help="ADDRESS is a group (byte) address.")
-@click.option("--json", "as_json", is_flag=True, help='Print {"address": A, "value": V}.')
+@_group_flag
+@_address_json
 def io_write(address: int, value: int, as_group: bool, as_json: bool, **kwargs: Any) -> None:
     """Write VALUE (0/1, or 0..255 with --group) to the IO bit (or group) at ADDRESS."""
     write = RobotClient.write_io_group if as_group else RobotClient.write_io_bit
@@ -1024,7 +1035,7 @@ def mreg() -> None:
 @mreg.command("read", epilog=EXIT_CODES_HELP)
 @robot_options
 @click.argument("number", type=click.IntRange(0))
-@click.option("--json", "as_json", is_flag=True, help='Print {"number": N, "value": V}.')
+@_number_json
 def mreg_read(number: int, as_json: bool, **kwargs: Any) -> None:
     """Read M-register NUMBER."""
     value = _on_io_port(kwargs, lambda client: client.read_mregister(number))
@@ -1035,7 +1046,7 @@ def mreg_read(number: int, as_json: bool, **kwargs: Any) -> None:
 @robot_options
 @click.argument("number", type=click.IntRange(0))
 @click.argument("value", type=click.IntRange(0))
-@click.option("--json", "as_json", is_flag=True, help='Print {"number": N, "value": V}.')
+@_number_json
 def mreg_write(number: int, value: int, as_json: bool, **kwargs: Any) -> None:
     """Write VALUE (0..65535) to M-register NUMBER."""
     _on_io_port(kwargs, lambda client: client.write_mregister(number, value))

@@ -24,11 +24,11 @@ from typing import TYPE_CHECKING, Any
 
 import click
 
+from pymotoros.cli.options import controller_option, robot_option
 from pymotoros.cli.ports_file import CellLabel, write_ports_file
 from pymotoros.controller import VirtualController
 from pymotoros.controller.cell import CellConfig, cell_from_file, default_cell
 from pymotoros.errors import ConfigError
-from pymotoros.models import ROBOTS, ControllerType
 from pymotoros.models.cell import PORT_KINDS, CellFile, CellPorts, read_cell_file
 from pymotoros.protocol.constants import TCP_PORT_IO, TCP_PORT_MOTION, TCP_PORT_STATE
 from pymotoros.runtime.app import DEFAULT_HTTP_PORT, SimulatorApp, SimulatorConfig
@@ -205,20 +205,8 @@ def _cell(
     show_default=True,
     help="Control API port.",
 )
-@click.option(
-    "--controller",
-    "controller_name",
-    default="yrc1000",
-    show_default=True,
-    help=f"Controller model: {', '.join(t.value for t in ControllerType)} (FS100 is big-endian).",
-)
-@click.option(
-    "--robot",
-    "robot_name",
-    default="hc10",
-    show_default=True,
-    help=f"Robot model: {', '.join(sorted(ROBOTS))}.",
-)
+@controller_option("controller_name")
+@robot_option("robot_name")
 @click.option(
     "--config",
     "config_path",

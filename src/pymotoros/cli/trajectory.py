@@ -25,10 +25,12 @@ from typing import TYPE_CHECKING, Any, Final
 import click
 
 from pymotoros.cli.options import (
+    EXIT_USAGE,
     BadInput,
     InputFile,
     config_option,
     controller_option,
+    enable_option,
     json_option,
     model_options,
     number_list,
@@ -67,8 +69,6 @@ if TYPE_CHECKING:
     from pymotoros.client.planning import JointTrajectory
     from pymotoros.client.streaming import MoveResult
     from pymotoros.trajectory.plot import RecordedRun
-
-EXIT_USAGE: Final = 2
 
 CHECK_EXIT_HELP: Final = (
     "\b\nExit codes:\n"
@@ -436,7 +436,7 @@ async def _stream_file(
 @click.argument("traj", metavar="TRAJ", type=_TRAJ)
 @robot_options
 @click.option("--force", is_flag=True, help="Send even if `pymotoros check` finds a problem.")
-@click.option("--enable", "enable_first", is_flag=True, help="Enter trajectory mode first.")
+@enable_option
 @json_option()
 def run(traj: Path, force: bool, enable_first: bool, as_json: bool, **kwargs: Any) -> None:
     """Stream exactly the points of a trajectory file to the robot (no re-timing).

@@ -15,7 +15,6 @@ import asyncio
 import contextlib
 import logging
 import socket
-import struct
 from collections.abc import Awaitable, Callable
 from dataclasses import dataclass
 from typing import Final, TypeAlias
@@ -24,9 +23,6 @@ from pymotoros.client.errors import ConnectError, ConnectionLostError, RequestTi
 from pymotoros.client.recorder import active_flow
 from pymotoros.errors import RemoteProtocolError
 from pymotoros.protocol.constants import (
-    HEADER_SIZE,
-    MAX_LENGTH_PREFIX,
-    PREFIX_SIZE,
     TCP_PORT_IO,
     TCP_PORT_MOTION,
     TCP_PORT_STATE,
@@ -34,7 +30,7 @@ from pymotoros.protocol.constants import (
     CommType,
     Port,
 )
-from pymotoros.protocol.framing import FrameDecoder, decode_reply, encode
+from pymotoros.protocol.framing import FrameDecoder, decode_reply, encode, prefix_fits
 from pymotoros.protocol.messages import (
     IoErrorReply,
     Message,
@@ -107,11 +103,8 @@ def reply_matches(request: WireMessage, reply: WireMessage, expected: type | Non
 
 def _order_hint(data: bytes, order: ByteOrder) -> str:
     """A hint when the bytes would make sense in the other byte order."""
-    if len(data) < PREFIX_SIZE:
-        return ""
     other = ByteOrder.BIG if order is ByteOrder.LITTLE else ByteOrder.LITTLE
-    (length,) = struct.unpack(f"{other.value}i", data[:PREFIX_SIZE])
-    if HEADER_SIZE <= length <= MAX_LENGTH_PREFIX:
+    if prefix_fits(data, other):
         return (
             "; the bytes read well in the other byte order: check --controller "
             "(the FS100 is big-endian, every other controller little-endian)"

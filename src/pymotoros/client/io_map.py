@@ -83,20 +83,19 @@ def check_group_address(controller: ControllerModel, address: int, *, write: boo
         raise _refuse(address, IoResultCode(exc.result_code), text) from None
 
 
+def _refuse_value(address: int, text: str) -> IoAddressError:
+    """A value MotoROS would refuse with WRITE_VALUE_INVALID; ``text`` says the range."""
+    return _refuse(address, IoResultCode.WRITE_VALUE_INVALID, text)
+
+
 def check_bit_value(address: int, value: int) -> None:
     if bit_value_result(value):
-        raise _refuse(
-            address, IoResultCode.WRITE_VALUE_INVALID, f"IO bit {address}: value must be 0 or 1"
-        )
+        raise _refuse_value(address, f"IO bit {address}: value must be 0 or 1")
 
 
 def check_group_value(address: int, value: int) -> None:
     if group_value_result(value):
-        raise _refuse(
-            address,
-            IoResultCode.WRITE_VALUE_INVALID,
-            f"IO group {address}: value must be 0..{GROUP_MAX}",
-        )
+        raise _refuse_value(address, f"IO group {address}: value must be 0..{GROUP_MAX}")
 
 
 def normalise_mregister(number: int, *, write: bool) -> int:
@@ -116,8 +115,4 @@ def normalise_mregister(number: int, *, write: bool) -> int:
 
 def check_mregister_value(number: int, value: int) -> None:
     if mregister_value_result(value):
-        raise _refuse(
-            number,
-            IoResultCode.WRITE_VALUE_INVALID,
-            f"M-register {number}: value must be 0..{M_REGISTER_MAX}",
-        )
+        raise _refuse_value(number, f"M-register {number}: value must be 0..{M_REGISTER_MAX}")

@@ -14,24 +14,8 @@ from pymotoros.client.link import Link
 from pymotoros.client.motion_commands import expect_reply
 from pymotoros.models import ControllerModel
 from pymotoros.protocol.constants import IoResultCode, Port
-from pymotoros.protocol.messages import (
-    IoErrorReply,
-    Message,
-    MotoMotionReply,
-    MotoReadIoBit,
-    MotoReadIoBitReply,
-    MotoReadIoGroup,
-    MotoReadIoGroupReply,
-    MotoReadMRegister,
-    MotoReadMRegisterReply,
-    MotoWriteIoBit,
-    MotoWriteIoBitReply,
-    MotoWriteIoGroup,
-    MotoWriteIoGroupReply,
-    MotoWriteMRegister,
-    MotoWriteMRegisterReply,
-    WireMessage,
-)
+from pymotoros.protocol.messages import IoErrorReply, Message, MotoMotionReply, WireMessage
+from pymotoros.protocol.messages import io as io_wire
 
 
 class IoPort:
@@ -42,9 +26,10 @@ class IoPort:
         self._controller = controller
 
     async def _request(
-        self, message: Message, expected: type[Message], address: int, what: str, *, io_only: bool
+        self, message: Message, address: int, what: str, *, io_only: bool
     ) -> WireMessage:
         conn = self._link.need(Port.IO) if io_only else self._link.io_or_motion()
+        expected = io_wire.IO_REPLIES[type(message)]
         reply = await conn.request(message, expected, timeout_s=self._link.timeout_s)
         if isinstance(reply, IoErrorReply):
             raise reply_error(reply.result, reply.subcode, int(message.MSG_TYPE))
@@ -60,45 +45,42 @@ class IoPort:
         if check:
             io_map.check_bit_address(self._controller, address, write=False)
         reply = await self._request(
-            MotoReadIoBit(address), MotoReadIoBitReply, address, "IO read", io_only=False
+            io_wire.MotoReadIoBit(address), address, "IO read", io_only=False
         )
-        return expect_reply(reply, MotoReadIoBitReply).value
+        return expect_reply(reply, io_wire.MotoReadIoBitReply).value
 
     async def write_io_bit(self, address: int, value: int, *, check: bool = True) -> None:
         """Write one IO bit (general outputs, network inputs, interface panel only)."""
         if check:
             io_map.check_bit_address(self._controller, address, write=True)
             io_map.check_bit_value(address, value)
-        await self._request(
-            MotoWriteIoBit(address, value), MotoWriteIoBitReply, address, "IO write", io_only=False
-        )
+        message = io_wire.MotoWriteIoBit(address, value)
+        await self._request(message, address, "IO write", io_only=False)
 
     async def read_io_group(self, address: int, *, check: bool = True) -> int:
         """Read 8 bits; ``address`` is the byte number (1001 = bits 10010..10017)."""
         if check:
             io_map.check_group_address(self._controller, address, write=False)
         reply = await self._request(
-            MotoReadIoGroup(address), MotoReadIoGroupReply, address, "IO group read", io_only=False
+            io_wire.MotoReadIoGroup(address), address, "IO group read", io_only=False
         )
-        return expect_reply(reply, MotoReadIoGroupReply).value
+        return expect_reply(reply, io_wire.MotoReadIoGroupReply).value
 
     async def write_io_group(self, address: int, value: int, *, check: bool = True) -> None:
         """Write 8 bits (0..255, bit 0 first) to byte ``address``."""
         if check:
             io_map.check_group_address(self._controller, address, write=True)
             io_map.check_group_value(address, value)
-        message = MotoWriteIoGroup(address, value)
-        await self._request(
-            message, MotoWriteIoGroupReply, address, "IO group write", io_only=False
-        )
+        message = io_wire.MotoWriteIoGroup(address, value)
+        await self._request(message, address, "IO group write", io_only=False)
 
     async def read_mregister(self, number: int, *, check: bool = True) -> int:
         """Read M-register ``number`` (0..999; IO port only)."""
         n = io_map.normalise_mregister(number, write=False) if check else number
         reply = await self._request(
-            MotoReadMRegister(n), MotoReadMRegisterReply, number, "M-register read", io_only=True
+            io_wire.MotoReadMRegister(n), number, "M-register read", io_only=True
         )
-        return expect_reply(reply, MotoReadMRegisterReply).value
+        return expect_reply(reply, io_wire.MotoReadMRegisterReply).value
 
     async def write_mregister(self, number: int, value: int, *, check: bool = True) -> None:
         """Write M-register ``number`` (0..559) with 0..65535 (IO port only)."""
@@ -106,7 +88,5 @@ class IoPort:
         if check:
             n = io_map.normalise_mregister(number, write=True)
             io_map.check_mregister_value(number, value)
-        message = MotoWriteMRegister(n, value)
-        await self._request(
-            message, MotoWriteMRegisterReply, number, "M-register write", io_only=True
-        )
+        message = io_wire.MotoWriteMRegister(n, value)
+        await self._request(message, number, "M-register write", io_only=True)

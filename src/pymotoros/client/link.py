@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import asyncio
 from collections.abc import Callable
+from dataclasses import KW_ONLY, dataclass, field
 
 from pymotoros.client.connection import Connector, FrameConnection, Ports
 from pymotoros.client.errors import ClientError, ConnectionLostError
@@ -17,30 +18,22 @@ from pymotoros.protocol.constants import ByteOrder, Port
 from pymotoros.protocol.messages import WireMessage
 
 
+@dataclass(eq=False, repr=False)
 class Link:
     """Host, ports and byte order, and the motion, state and IO connections once open."""
 
-    def __init__(
-        self,
-        host: str,
-        ports: Ports,
-        order: ByteOrder,
-        *,
-        timeout_s: float,
-        connect_timeout_s: float,
-        connector: Connector | None = None,
-    ) -> None:
-        self.host = host
-        self.ports = ports
-        self.order = order
-        self.timeout_s = timeout_s
-        self.connect_timeout_s = connect_timeout_s
-        self.connector = connector
-        self.motion: FrameConnection | None = None
-        self.state: FrameConnection | None = None
-        self.io: FrameConnection | None = None
-        self.loop: asyncio.AbstractEventLoop | None = None
-        """The event loop the connections live on (set by :meth:`open`)."""
+    host: str
+    ports: Ports
+    order: ByteOrder
+    _: KW_ONLY
+    timeout_s: float
+    connect_timeout_s: float
+    connector: Connector | None = None
+    motion: FrameConnection | None = field(default=None, init=False)
+    state: FrameConnection | None = field(default=None, init=False)
+    io: FrameConnection | None = field(default=None, init=False)
+    loop: asyncio.AbstractEventLoop | None = field(default=None, init=False)
+    """The event loop the connections live on (set by :meth:`open`)."""
 
     async def open(
         self,

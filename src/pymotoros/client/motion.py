@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import asyncio
 from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass, field
 from pathlib import Path
 
 from pymotoros.client.connection import DEFAULT_REQUEST_TIMEOUT_S
@@ -39,26 +40,18 @@ JointGoal = Sequence[float] | Mapping[int, Sequence[float]] | Mapping[str, Seque
 """A joint goal: positions for one group, or ``{group: positions}`` for several."""
 
 
+@dataclass(eq=False, repr=False)
 class Motion:
     """Joint moves of one client: planning, streaming, and stopping a running move."""
 
-    def __init__(
-        self,
-        link: Link,
-        view: StateView,
-        commands: MotionCommands,
-        streamer: TrajectoryStreamer,
-        robot: RobotModel,
-        controller: ControllerModel,
-    ) -> None:
-        self._link = link
-        self._view = view
-        self._commands = commands
-        self._streamer = streamer
-        self._robot = robot
-        self._controller = controller
-        self._moving: asyncio.Task[object] | None = None
-        self._stop_requested = False
+    _link: Link
+    _view: StateView
+    _commands: MotionCommands
+    _streamer: TrajectoryStreamer
+    _robot: RobotModel
+    _controller: ControllerModel
+    _moving: asyncio.Task[object] | None = field(default=None, init=False)
+    _stop_requested: bool = field(default=False, init=False)
 
     def limits(self, group: int | str = 0) -> JointLimits:
         """Planning limits of ``group`` from the robot model."""

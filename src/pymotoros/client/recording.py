@@ -38,23 +38,14 @@ import dpkt
 import dpkt.pcapng
 
 from pymotoros.errors import PymotorosError, RemoteProtocolError
-from pymotoros.protocol.constants import (
-    HEADER_SIZE,
-    MAX_LENGTH_PREFIX,
-    PREFIX_SIZE,
-    TCP_PORT_IO,
-    TCP_PORT_MOTION,
-    TCP_PORT_STATE,
-    ByteOrder,
-    CommType,
-    Port,
-)
+from pymotoros.protocol.constants import PREFIX_SIZE, STANDARD_PORTS, ByteOrder, CommType, Port
 from pymotoros.protocol.framing import (
     REQUEST_CLASSES,
     Frame,
     FrameDecoder,
     decode_reply,
     decode_request,
+    prefix_fits,
 )
 from pymotoros.protocol.messages import WireMessage
 
@@ -68,13 +59,6 @@ __all__ = [
     "read_recording",
 ]
 
-STANDARD_PORTS: Final[Mapping[int, Port]] = {
-    TCP_PORT_MOTION: Port.MOTION,
-    TCP_PORT_STATE: Port.STATE,
-    TCP_PORT_IO: Port.IO,
-}
-"""The MotoROS port numbers (reference §1.1): a connection to one of them is that port."""
-
 _SEQ_MOD: Final = 1 << 32
 """TCP sequence numbers wrap at 2**32."""
 
@@ -84,9 +68,6 @@ _IO_ONLY: Final = frozenset(REQUEST_CLASSES[Port.IO]) - frozenset(REQUEST_CLASSE
 
 _Framed: TypeAlias = tuple[int, float, Frame]
 """(position in the file of the chunk that completed the frame, its time, the frame)."""
-
-_PREFIX_LE: Final = struct.Struct("<i")
-_PREFIX_BE: Final = struct.Struct(">i")
 
 
 class RecordingError(PymotorosError, ValueError):
@@ -372,13 +353,7 @@ def _connections(
 
 def _byte_order(data: bytes) -> ByteOrder | None:
     """The byte order in which ``data`` starts with a legal length prefix, if one does."""
-    if len(data) < PREFIX_SIZE:
-        return None
-    for order, prefix in ((ByteOrder.LITTLE, _PREFIX_LE), (ByteOrder.BIG, _PREFIX_BE)):
-        (length,) = prefix.unpack_from(data)
-        if HEADER_SIZE <= length <= MAX_LENGTH_PREFIX:
-            return order
-    return None
+    return next((o for o in (ByteOrder.LITTLE, ByteOrder.BIG) if prefix_fits(data, o)), None)
 
 
 def _frames(

@@ -10,6 +10,7 @@ model, since a plan made for another robot is a crash waiting to happen.
 from __future__ import annotations
 
 from collections.abc import AsyncIterator, Awaitable, Callable, Sequence
+from dataclasses import dataclass
 from typing import Final
 
 from pymotoros.client.errors import GroupError, ModelMismatchError
@@ -33,20 +34,14 @@ far below any real difference between two robot models."""
 _DH_FIELDS: Final = ("theta", "d", "a", "alpha")
 
 
+@dataclass(eq=False, repr=False)
 class StateView:
     """The state stream as the client's users see it, checked against the robot model."""
 
-    def __init__(
-        self,
-        link: Link,
-        tracker: StateTracker,
-        robot: RobotModel,
-        dh_parameters: Callable[[], Awaitable[tuple[tuple[DhLink, ...], ...]]],
-    ) -> None:
-        self._link = link
-        self._tracker = tracker
-        self._robot = robot
-        self._dh_parameters = dh_parameters
+    _link: Link
+    _tracker: StateTracker
+    _robot: RobotModel
+    _dh_parameters: Callable[[], Awaitable[tuple[tuple[DhLink, ...], ...]]]
 
     @property
     def state(self) -> RobotState:

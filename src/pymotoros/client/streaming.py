@@ -32,7 +32,7 @@ import collections
 import itertools
 import logging
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass, field
+from dataclasses import KW_ONLY, dataclass, field
 from typing import Final
 
 from pymotoros.client.errors import (
@@ -243,6 +243,7 @@ class _Pacing:
         return max(0.0, min(spare, self.last_segment, BUSY_RELAXED_MAX_S))
 
 
+@dataclass(eq=False, repr=False)
 class TrajectoryStreamer:
     """Streams trajectories to one controller and watches the robot follow them.
 
@@ -254,20 +255,12 @@ class TrajectoryStreamer:
     around itself.
     """
 
-    def __init__(
-        self,
-        port: MotionPort,
-        states: StateSource,
-        robot: RobotModel,
-        controller: ControllerModel,
-        *,
-        clock: ClientClock = REAL_TIME,
-    ) -> None:
-        self.port = port
-        self.states = states
-        self.robot = robot
-        self.controller = controller
-        self.clock = clock
+    port: MotionPort
+    states: StateSource
+    robot: RobotModel
+    controller: ControllerModel
+    _: KW_ONLY
+    clock: ClientClock = REAL_TIME
 
     # ------------------------------------------------------------------ sending
 

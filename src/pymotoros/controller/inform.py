@@ -28,6 +28,7 @@ from pymotoros.controller.io_image import IoImage
 from pymotoros.controller.signals import universal_output
 from pymotoros.errors import JobError
 from pymotoros.models import IoArea
+from pymotoros.models.toml_file import read_text_file
 
 logger = logging.getLogger(__name__)
 
@@ -184,12 +185,9 @@ def parse_job(text: str, source: str = "<job>") -> Job:
 def load_job(path: Path | str) -> Job:
     """Read and parse a ``.JBI`` file."""
     p = Path(path)
-    try:
-        text = p.read_text(encoding="ascii")
-    except OSError as exc:
-        raise JobError(f"{p}: cannot read the job file ({exc.strerror})") from exc
-    except UnicodeDecodeError as exc:
-        raise JobError(f"{p}: not an ASCII JBI file ({exc.reason})") from exc
+    text = read_text_file(
+        p, "job file", encoding="ascii", not_text="not an ASCII JBI file", error=JobError
+    )
     return parse_job(text, str(p))
 
 

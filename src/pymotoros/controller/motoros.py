@@ -24,6 +24,8 @@ tests and the pendant.
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 from pymotoros.controller.incmove_task import IncMoveTask
 from pymotoros.controller.readiness import Readiness
 from pymotoros.controller.skillsnd import SkillListeners
@@ -31,6 +33,7 @@ from pymotoros.controller.trajectory import TrajectoryPoints
 from pymotoros.motion import GroupAxes, GroupInterpolator
 
 
+@dataclass(eq=False, repr=False)
 class MotoRos:
     """MotoROS's flags and per-group state, read (and for tests, changed) through one object.
 
@@ -38,17 +41,10 @@ class MotoRos:
     method, so the motion-ready flag it shows is never stale.
     """
 
-    def __init__(
-        self,
-        readiness: Readiness,
-        inc_move: IncMoveTask,
-        trajectory: TrajectoryPoints,
-        skills: SkillListeners,
-    ) -> None:
-        self._readiness = readiness
-        self._inc_move = inc_move
-        self._trajectory = trajectory
-        self._skills = skills
+    _readiness: Readiness
+    _inc_move: IncMoveTask
+    _trajectory: TrajectoryPoints
+    _skills: SkillListeners
 
     # ---------------------------------------------------------------- readiness
     @property

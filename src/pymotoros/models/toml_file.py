@@ -12,23 +12,41 @@ from __future__ import annotations
 
 import math
 import tomllib
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from pathlib import Path
+from typing import TypeVar
 
-from pymotoros.errors import ConfigError
+from pymotoros.errors import ConfigError, PymotorosError
 
-__all__ = ["TomlTable", "read_toml"]
+__all__ = ["TomlTable", "read_text_file", "read_toml"]
+
+_T = TypeVar("_T")
+
+
+def read_text_file(
+    p: Path,
+    what: str,
+    *,
+    encoding: str = "utf-8",
+    not_text: str = "",
+    error: Callable[[str], PymotorosError] = ConfigError,
+) -> str:
+    """The text of a file a user wrote by hand (a TOML file, a JBI job), or ``error``
+    with the path and what went wrong; ``what`` names it (``"cell file"``), ``not_text``
+    replaces "the WHAT is not UTF-8 text" when the bytes do not decode."""
+    try:
+        return p.read_text(encoding=encoding)
+    except OSError as exc:
+        raise error(f"{p}: cannot read the {what} ({exc.strerror or exc})") from exc
+    except UnicodeDecodeError as exc:
+        problem = not_text or f"the {what} is not UTF-8 text"
+        raise error(f"{p}: {problem} ({exc.reason})") from exc
 
 
 def read_toml(path: str | Path, what: str) -> dict[str, object]:
     """The parsed TOML file ``path``; ``what`` names it in errors (``"cell file"``)."""
     p = Path(path)
-    try:
-        text = p.read_text(encoding="utf-8")
-    except OSError as exc:
-        raise ConfigError(f"{p}: cannot read the {what} ({exc.strerror or exc})") from exc
-    except UnicodeDecodeError as exc:
-        raise ConfigError(f"{p}: the {what} is not UTF-8 text ({exc.reason})") from exc
+    text = read_text_file(p, what)
     try:
         return tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
@@ -58,21 +76,21 @@ class TomlTable:
         self.used.add(name)
         return self.data.get(name)
 
-    def string(self, name: str, default: str) -> str:
+    def _typed(self, name: str, default: _T, kind: type[_T], described: str) -> _T:
+        """The value at ``name`` if it is a ``kind`` (``described`` in the error), or
+        ``default`` when the key is absent."""
         v = self.get(name)
         if v is None:
             return default
-        if not isinstance(v, str):
-            raise self.error(name, f"must be a string, not {v!r}")
+        if not isinstance(v, kind):
+            raise self.error(name, f"must be {described}, not {v!r}")
         return v
 
+    def string(self, name: str, default: str) -> str:
+        return self._typed(name, default, str, "a string")
+
     def boolean(self, name: str, default: bool) -> bool:
-        v = self.get(name)
-        if v is None:
-            return default
-        if not isinstance(v, bool):
-            raise self.error(name, f"must be true or false, not {v!r}")
-        return v
+        return self._typed(name, default, bool, "true or false")
 
     def integer(self, name: str, default: int, lo: int, hi: int) -> int:
         v = self.optional_integer(name, lo, hi)
@@ -102,12 +120,7 @@ class TomlTable:
         return TomlTable({} if v is None else v, self.key(name), self.source)
 
     def array(self, name: str) -> list[object]:
-        v = self.get(name)
-        if v is None:
-            return []
-        if not isinstance(v, list):
-            raise self.error(name, f"must be an array, not {v!r}")
-        return v
+        return self._typed(name, [], list, "an array")
 
     def finish(self) -> None:
         """Refuse the first key (in sorted order) that nothing has read."""

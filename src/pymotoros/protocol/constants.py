@@ -14,6 +14,7 @@ and logs use it so that nobody has to look up what 5006 means.
 from __future__ import annotations
 
 import enum
+from collections.abc import Mapping
 from typing import Final, Self
 
 
@@ -116,6 +117,13 @@ TCP_PORT_STATE: Final = 50241
 
 TCP_PORT_IO: Final = 50242
 """IO server: one client (since MotoROS 1.6.0)."""
+
+STANDARD_PORTS: Final[Mapping[int, Port]] = {
+    TCP_PORT_MOTION: Port.MOTION,
+    TCP_PORT_STATE: Port.STATE,
+    TCP_PORT_IO: Port.IO,
+}
+"""The MotoROS port numbers (reference §1.1): a connection to one of them is that port."""
 
 
 # --------------------------------------------------------------------------- header codes

@@ -54,6 +54,7 @@ __all__ = [
     "encode",
     "encode_frame",
     "header_problem",
+    "prefix_fits",
 ]
 
 MIN_LENGTH_PREFIX: Final = HEADER_SIZE
@@ -69,6 +70,15 @@ _HEAD_LE: Final = struct.Struct("<iiii")
 _HEAD_BE: Final = struct.Struct(">iiii")
 _PREFIX_LE: Final = struct.Struct("<i")
 _PREFIX_BE: Final = struct.Struct(">i")
+
+
+def prefix_fits(data: bytes, order: ByteOrder) -> bool:
+    """Whether ``data`` starts with a legal length prefix when read in ``order``: how a
+    recording tells its byte order, and how the client guesses a wrong ``--controller``."""
+    if len(data) < PREFIX_SIZE:
+        return False
+    length: int = (_PREFIX_BE if order == ">" else _PREFIX_LE).unpack_from(data)[0]
+    return MIN_LENGTH_PREFIX <= length <= MAX_LENGTH_PREFIX
 
 
 class Frame(NamedTuple):

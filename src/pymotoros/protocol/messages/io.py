@@ -6,6 +6,8 @@ them on both); M-registers and the error reply exist on the IO port only.
 
 from __future__ import annotations
 
+from collections.abc import Mapping
+from types import MappingProxyType
 from typing import ClassVar, Final, NamedTuple, Self
 
 from pymotoros.protocol.constants import ByteOrder, MsgType, Port
@@ -234,3 +236,17 @@ class IoErrorReply(Message, _ErrorReply):
         if len(body) != BODY_SIZE_MOTION_REPLY:
             raise _size_error(cls, body, BODY_SIZE_MOTION_REPLY)
         return _tnew(cls, _pick(cls._STRUCTS, order).unpack_from(body))
+
+
+IO_REPLIES: Final[Mapping[type[Message], type[Message]]] = MappingProxyType(
+    {
+        MotoReadIoBit: MotoReadIoBitReply,
+        MotoWriteIoBit: MotoWriteIoBitReply,
+        MotoReadIoGroup: MotoReadIoGroupReply,
+        MotoWriteIoGroup: MotoWriteIoGroupReply,
+        MotoReadMRegister: MotoReadMRegisterReply,
+        MotoWriteMRegister: MotoWriteMRegisterReply,
+    }
+)
+"""The reply type to each IO request (§1.4): what the client waits for. Not in
+``__all__``: the registry of :mod:`pymotoros.protocol.messages` lists message classes."""
