@@ -38,6 +38,7 @@ from pymotoros.models import (
 )
 from pymotoros.models.cell import combine_groups, group_parts, rename_groups
 from pymotoros.models.s1cxg import S1cxgTable, parse_s1cxg
+from pymotoros.models.workspace import EMPTY_WORKSPACE, Workspace, workspace_from_dict
 from pymotoros.protocol.constants import MAX_TOOL_NUMBER
 
 logger = logging.getLogger(__name__)
@@ -127,6 +128,8 @@ class CellConfig:
     """``[[peripherals]]``: inputs that follow other bits like devices (docs/cell.md)."""
     """What MotoROS's start-up checks read: software version, conveyor tracking, set-up
     parameters (``[controller]``, ``[controller.parameters]``)."""
+    workspace: Workspace = EMPTY_WORKSPACE
+    """``[workspace]``: obstacles the robot may touch (docs/workspace.md)."""
 
     def tool(self, group_index: int, number: int) -> ToolConfig:
         """Tool file ``number`` of a group: its own ``[[groups.tools]]`` entry, else the
@@ -373,6 +376,8 @@ def cell_from_dict(
 
     initial = _initial(top.table("initial"), groups, numbers)
     peripherals = _peripherals(top, ctrl)
+    top.used.add("workspace")  # obstacles: models/workspace.py
+    workspace = workspace_from_dict(data.get("workspace"), source, [g.name for g in groups])
     top.finish()
     for w in warnings:
         logger.warning("%s: %s", source, w)
@@ -392,6 +397,7 @@ def cell_from_dict(
         source=source,
         startup=startup,
         peripherals=peripherals,
+        workspace=workspace,
     )
 
 

@@ -59,6 +59,7 @@ from pymotoros.controller.processes import Scheduler
 from pymotoros.controller.readiness import Readiness
 from pymotoros.controller.registers import RegisterOutputs
 from pymotoros.controller.safety import DEFAULT_RETREAT_MS, PFL_STOP_MS, SafetyUnit
+from pymotoros.controller.safety.contact import workspace_contact
 from pymotoros.controller.safety.startup import MotoRosStartup, setup_validation
 from pymotoros.controller.scenario import FiredEvent, Scenario, perform
 from pymotoros.controller.scenario_player import ScenarioPlayer
@@ -118,6 +119,7 @@ class VirtualController:
             scenarios=self._scenarios,
             peripherals=Peripherals(ctx.io, cell.peripherals),
             scheduler=self._scheduler,
+            contact=workspace_contact(ctx, self._safety.pfl, self._keys),
         )
         # The tick runs every 4 ms for every twin: callers reach the cycle's tick
         # directly, without the facade's call in between (tick() below documents it).

@@ -19,6 +19,7 @@ from typing import Final
 from pymotoros.errors import ConfigError
 from pymotoros.models.controllers import DEFAULT_CONTROLLER, ControllerModel, controller_model
 from pymotoros.models.robots import DEFAULT_ROBOT, GroupKind, GroupModel, RobotModel, robot_model
+from pymotoros.models.workspace import EMPTY_WORKSPACE, Workspace, workspace_from_dict
 
 
 @dataclass(frozen=True, slots=True)
@@ -36,6 +37,8 @@ class CellModels:
     """``controller.fsu_speed_limit_pct``: the FSU joint-speed limit at boot (each axis
     executes at most this share of its maximum increment per tick); None: no FSU.
     The offline check (``pymotoros check --config``) predicts its effect."""
+    workspace: Workspace = EMPTY_WORKSPACE
+    """``[workspace]``: obstacles around the robot (models/workspace.py)."""
 
 
 def rename_groups(groups: Sequence[GroupModel]) -> tuple[GroupModel, ...]:
@@ -182,8 +185,15 @@ def cell_models_from_dict(data: Mapping[str, object], *, source: str = "<cell>")
         controllers=first.controllers,
         pfl=any(robot_model(r).pfl for r in robots),
     )
+    workspace = workspace_from_dict(data.get("workspace"), source, [g.name for g in groups])
     return CellModels(
-        str(name), ctrl, robot, robots, tuple(warnings), fsu_speed_limit_pct(data, source)
+        str(name),
+        ctrl,
+        robot,
+        robots,
+        tuple(warnings),
+        fsu_speed_limit_pct(data, source),
+        workspace,
     )
 
 

@@ -1,0 +1,222 @@
+"""Contact with the workspace: the twin's robot touching an obstacle of the cell.
+
+The real robot meets a table with its body, and the controller notices through its
+motor currents: an HC robot's PFL function stops it (a contact; a clamping when a link
+is pinned between two things, and the robot backs off), any other arm's collision
+detection raises alarm 4315 COLLISION DETECT and cuts servo power. The twin has no
+currents, so it checks the commanded position against the cell's obstacles
+(:class:`~pymotoros.kinematics.collision.CollisionWorld`) after each tick's increments
+and answers the way the controller would, through the existing paths: the PFL function
+(:mod:`pymotoros.controller.safety.pfl`) or the operator machine (alarm, servo off).
+So the robot never passes into an obstacle by more than one tick's travel.
+
+Cost: nothing at all for a cell without obstacles (no function is built). Otherwise the
+check is not run every tick: after a check that found ``clearance`` metres between the
+robot and the nearest obstacle, no point of the robot can touch anything before it has
+moved that far, and each tick's travel is bounded by Σ |Δq| × reach (per joint, the
+longest lever it moves, :meth:`CollisionWorld.joint_reach`): a few multiplications per
+tick, a full check only when that bound has used up the clearance.
+"""
+
+from __future__ import annotations
+
+import logging
+from collections import Counter
+from collections.abc import Callable, Sequence
+from operator import mul
+from typing import Final
+
+from pymotoros.controller.context import MotoRosContext
+from pymotoros.controller.machine import Event
+from pymotoros.controller.operator_keys import OperatorKeys
+from pymotoros.controller.safety.pfl import DEFAULT_RETREAT_MS, PflFunction
+from pymotoros.controller.servo import SLOTS, ServoGroup
+from pymotoros.kinematics.collision import CollisionWorld, Contact
+from pymotoros.models.robots import Frame
+from pymotoros.motion import GroupAxes, from_pulses
+
+logger = logging.getLogger(__name__)
+
+COLLISION_ALARM: Final = 4315
+"""YRC1000 / DX200 alarm 4315 COLLISION DETECT: the collision detection function
+(shock sensor) stopped the robot (Yaskawa's alarm list, see docs/fidelity.md)."""
+COLLISION_ALARM_TEXT: Final = "COLLISION DETECT"
+DEEPER_M: Final = 1e-6
+"""A link already touching an obstacle counts as a new contact only when it goes at
+least this much deeper: moving out of a contact after the stop is allowed."""
+
+ContactKey = tuple[str, str, str]
+
+
+class ContactFunction:
+    """Checks the commanded position against the workspace; reacts to a new contact."""
+
+    def __init__(
+        self,
+        world: CollisionWorld,
+        servos: Sequence[ServoGroup],
+        axes: Sequence[GroupAxes],
+        *,
+        tool: Callable[[int], Frame],
+        react: Callable[[Sequence[Contact], int], None],
+    ) -> None:
+        self.world = world
+        self._servos = tuple(servos)
+        self._axes = tuple(axes)
+        self._tool = tool
+        self._react = react
+        self._watch: list[tuple[ServoGroup, tuple[float, ...]]] = []
+        self._refresh_weights()
+        self._budget = -1.0  # check at the first motion
+        self._touching: dict[ContactKey, float] = {}
+        self.contacts: tuple[Contact, ...] = ()
+        """The contacts found by the latest check (empty: the robot touches nothing)."""
+        self.checks = 0
+        """Full checks so far (the benchmark counts them)."""
+
+    def _refresh_weights(self) -> None:
+        """Per group and controller slot: metres of travel per pulse, at most."""
+        watch = []
+        for g, (servo, axes) in enumerate(zip(self._servos, self._axes, strict=True)):
+            reach = self.world.joint_reach(g)
+            if not reach:
+                continue
+            weights = [0.0] * SLOTS
+            for k in range(axes.num_axes):
+                slot = axes.ros_to_slot[k]
+                weights[slot] = reach[k] / float(axes.pulses_per_unit[slot])
+            watch.append((servo, tuple(weights)))
+        self._watch = watch
+
+    def workspace_changed(self) -> None:
+        """The obstacles changed (added, moved, removed): check at the next tick."""
+        self._budget = -1.0
+        self._touching = {}
+        self._refresh_weights()
+
+    def tick(self, now_ms: int) -> None:
+        """After this tick's increments reached the servos."""
+        travel = 0.0
+        for servo, weights in self._watch:
+            travel += sum(map(mul, map(abs, servo.last_increment), weights))
+        budget = self._budget - travel
+        if budget > 0.0:
+            self._budget = budget
+            return
+        self.check(now_ms)
+
+    def check(self, now_ms: int) -> None:
+        """A full check at the commanded position; reacts to a new or deeper contact."""
+        self.checks += 1
+        world = self.world
+        qs = []
+        for g, (servo, axes) in enumerate(zip(self._servos, self._axes, strict=True)):
+            world.set_tool(g, self._tool(g))
+            qs.append(from_pulses(servo.command, axes)[: axes.num_axes])
+        clearance, contacts = world.probe(qs)
+        self._budget = clearance
+        touching = self._touching
+        new = [
+            c
+            for c in contacts
+            if c.distance_m < touching.get((c.group, c.link, c.obstacle), 1.0) - DEEPER_M
+        ]
+        self._touching = {(c.group, c.link, c.obstacle): c.distance_m for c in contacts}
+        self.contacts = tuple(contacts)
+        if new:
+            for c in new:
+                logger.warning(
+                    "workspace contact: %s %s touches %s (%.1f mm deep)",
+                    c.group,
+                    c.link,
+                    c.obstacle,
+                    -c.distance_m * 1000.0,
+                )
+            self._react(contacts, now_ms)
+
+
+def is_clamping(contacts: Sequence[Contact]) -> bool:
+    """A link pinned between two obstacles (touching two or more at once)."""
+    per_link = Counter((c.group, c.link) for c in contacts if not c.self_collision)
+    return any(n >= 2 for n in per_link.values())
+
+
+class ContactResponse:
+    """What the controller does about a contact: PFL on an HC robot, else alarm 4315."""
+
+    def __init__(
+        self,
+        pfl: PflFunction,
+        *,
+        group_names: Sequence[str],
+        raise_alarm: Callable[[int, int, str], None],
+        servo_off: Callable[[], None],
+        alarm_active: Callable[[int], bool],
+    ) -> None:
+        self._pfl = pfl
+        self._groups = tuple(group_names)
+        self._raise_alarm = raise_alarm
+        self._servo_off = servo_off
+        self._alarm_active = alarm_active
+
+    def __call__(self, contacts: Sequence[Contact], now_ms: int) -> None:
+        pfl = self._pfl
+        if pfl.enabled:
+            if pfl.busy:  # already stopping or backing off
+                return
+            clamping = is_clamping(contacts)
+            pfl.event(
+                "clamping" if clamping else "contact",
+                now_ms,
+                moving=True,
+                retreat_ms=DEFAULT_RETREAT_MS if clamping else 0,
+            )
+            return
+        if self._alarm_active(COLLISION_ALARM):
+            return
+        first = contacts[0]
+        subcode = self._groups.index(first.group) + 1 if first.group in self._groups else 0
+        # the alarm stops the job (IncMove is refused from the next tick on), then the
+        # collision detection function cuts servo power
+        self._raise_alarm(COLLISION_ALARM, subcode, COLLISION_ALARM_TEXT)
+        self._servo_off()
+
+
+def workspace_contact(
+    ctx: MotoRosContext, pfl: PflFunction, keys: OperatorKeys
+) -> ContactFunction | None:
+    """The contact function of a cell, or None when there is nothing to touch (no
+    obstacles, or no group with collision shapes): then the tick does nothing extra."""
+    cell = ctx.cell
+    if not cell.workspace.obstacles:
+        return None
+    world = CollisionWorld(cell.groups, cell.robots, cell.workspace)
+    if not any(world.joint_reach(g) for g in range(ctx.num_groups)):
+        return None
+    interps = ctx.interpolators
+
+    def tool(g: int) -> Frame:
+        t = cell.tool(g, interps[g].tool)
+        return Frame(t.tcp_m, t.rpy_rad)
+
+    def servo_off() -> None:
+        keys.fire(Event.SERVO_OFF)
+
+    response = ContactResponse(
+        pfl,
+        group_names=[g.name for g in cell.groups],
+        raise_alarm=keys.raise_alarm,
+        servo_off=servo_off,
+        alarm_active=lambda code: any(a.code == code for a in ctx.machine.state.alarms),
+    )
+    return ContactFunction(world, ctx.servos, ctx.axes, tool=tool, react=response)
+
+
+__all__ = [
+    "COLLISION_ALARM",
+    "COLLISION_ALARM_TEXT",
+    "ContactFunction",
+    "ContactResponse",
+    "is_clamping",
+    "workspace_contact",
+]
