@@ -67,6 +67,7 @@ from pymotoros.controller.skillsnd import SkillListeners
 from pymotoros.controller.state_view import FEEDBACK_FIELDS, StateView
 from pymotoros.controller.tool_point import TcpTracker
 from pymotoros.controller.trajectory import DhTable, TrajectoryPoints
+from pymotoros.kinematics.collision import Contact
 from pymotoros.models import robot_model
 from pymotoros.protocol.constants import IoResultCode, MotionCommand
 
@@ -408,6 +409,13 @@ class VirtualController:
     def safety(self) -> SafetyUnit:
         """The cell's safety functions (PFL, FSU), for the control API and tests."""
         return self._safety
+
+    @property
+    def workspace_contacts(self) -> tuple[Contact, ...]:
+        """What the robot touched at the latest workspace check (empty: nothing, or a cell
+        without obstacles)."""
+        contact = self._cycle.contact
+        return contact.contacts if contact is not None else ()
 
     def pfl_event(
         self, event: str, *, retreat_ms: int = DEFAULT_RETREAT_MS, stop_ms: int = PFL_STOP_MS

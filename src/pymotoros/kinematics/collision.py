@@ -18,9 +18,9 @@ only when the robot may have moved as far as its last clearance (see
 :meth:`CollisionWorld.joint_reach`).
 
 Self-collision: pairs of links of one group that are not neighbours in the chain and
-do not already touch at the zero pose (the rule MoveIt's setup assistant applies to
-build its "disabled collisions" list: such pairs touch by construction of the simple
-shapes, not because the arm is folded onto itself).
+do not already touch (within :data:`SELF_NEIGHBOUR_M`) at the zero pose (the rule
+MoveIt's setup assistant applies to build its "disabled collisions" list: such pairs
+touch by construction of the simple shapes, not because the arm is folded onto itself).
 """
 
 from __future__ import annotations
@@ -55,6 +55,10 @@ clearance a probe returns is then exact near the robot, so the twin's next probe
 not due for at least this much travel."""
 TOUCH_M: Final = 0.0
 """A signed distance at or below this is a contact (the shapes touch or overlap)."""
+SELF_NEIGHBOUR_M: Final = 0.005
+"""Two links closer than this at the zero pose count as neighbours for self-collision:
+their capsules meet at a shared joint (the MH5's T link sits 80 mm past B, exactly its
+two radii), not because the arm is folded onto itself."""
 _MIN_SEGMENT_M: Final = 1e-9
 
 
@@ -234,7 +238,7 @@ class GroupBody:
                 b = parts[j]
                 if abs(a.order - b.order) < 2:
                     continue
-                if _distance(a.geometry, a.world, b.geometry, b.world) > TOUCH_M:
+                if _distance(a.geometry, a.world, b.geometry, b.world) > SELF_NEIGHBOUR_M:
                     out.append((i, j))
         return out
 
@@ -386,7 +390,7 @@ class CollisionWorld:
                 a, b = parts[i], parts[j]
                 d = _distance(a.geometry, a.world, b.geometry, b.world)
                 if d <= TOUCH_M:
-                    out.append(Contact(b.name, a.name, body.name, d, self_collision=True))
+                    out.append(Contact(a.name, b.name, body.name, d, self_collision=True))
         return out
 
     def all_contacts(self, qs: Sequence[Sequence[float] | FloatArray]) -> list[Contact]:
