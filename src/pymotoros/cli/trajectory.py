@@ -126,13 +126,22 @@ class Loaded:
         return None if self.cell is None else self.cell.fsu_speed_limit_pct
 
     def check(self, current: list[float] | None = None) -> CheckReport:
-        return check_trajectory(
+        report = check_trajectory(
             self.trajectory,
             self.robot,
             self.controller,
             current=current,
             fsu_speed_limit_pct=self.fsu_pct,
         )
+        if self.cell is not None and self.cell.workspace.obstacles and report.accepted:
+            # the cell's obstacles: every contact along the motion (docs/workspace.md);
+            # imported here: Pinocchio and Coal load only for a cell with obstacles
+            from pymotoros.kinematics.collision import world_for_cell
+            from pymotoros.trajectory.collisions import find_collisions
+
+            world = world_for_cell(self.cell)
+            report.collisions = find_collisions(self.trajectory, self.cell, report.per_group, world)
+        return report
 
     def render(self, report: CheckReport) -> str:
         return render(report, self.trajectory, self.robot, self.controller, self.cell)
@@ -241,6 +250,7 @@ def render(
         lines.append(f"warning [{w.kind}] point {w.point}: {w.text}")
     if not report.warnings:
         lines.append("no warnings")
+    lines.extend(c.text() for c in report.collisions)
     return "\n".join(lines)
 
 

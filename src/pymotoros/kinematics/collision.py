@@ -36,6 +36,7 @@ import numpy.typing as npt
 import pinocchio as pin
 
 from pymotoros.kinematics.chain import Chain
+from pymotoros.models.cell import CellModels
 from pymotoros.models.link_shapes import link_name, link_radii
 from pymotoros.models.robots import Frame, GroupModel
 from pymotoros.models.workspace import (
@@ -379,8 +380,9 @@ class CollisionWorld:
         """Every link touching an obstacle at joints ``qs``."""
         return self.probe(qs)[1]
 
-    def self_contacts(self, qs: Sequence[Sequence[float] | FloatArray]) -> list[Contact]:
-        """Every pair of non-neighbouring links of one group that touch at ``qs``."""
+    def self_distances(self, qs: Sequence[Sequence[float] | FloatArray]) -> list[Contact]:
+        """The distance of every pair checked for self-collision at ``qs`` (one
+        :class:`Contact` each, whether or not they touch)."""
         out: list[Contact] = []
         for body, q in zip(self.bodies, qs, strict=False):
             if body is None:
@@ -389,13 +391,22 @@ class CollisionWorld:
             for i, j in body.pairs:
                 a, b = parts[i], parts[j]
                 d = _distance(a.geometry, a.world, b.geometry, b.world)
-                if d <= TOUCH_M:
-                    out.append(Contact(a.name, b.name, body.name, d, self_collision=True))
+                out.append(Contact(a.name, b.name, body.name, d, self_collision=True))
         return out
+
+    def self_contacts(self, qs: Sequence[Sequence[float] | FloatArray]) -> list[Contact]:
+        """Every pair of non-neighbouring links of one group that touch at ``qs``."""
+        return [c for c in self.self_distances(qs) if c.distance_m <= TOUCH_M]
 
     def all_contacts(self, qs: Sequence[Sequence[float] | FloatArray]) -> list[Contact]:
         """Obstacle contacts and self-collisions at ``qs``."""
         return [*self.contacts(qs), *self.self_contacts(qs)]
 
 
-__all__ = ["NEAR_M", "CollisionWorld", "Contact", "GroupBody"]
+def world_for_cell(cell: CellModels) -> CollisionWorld:
+    """The collision world of a cell file as the client reads it (its groups in cell
+    order, its ``[workspace]``)."""
+    return CollisionWorld(cell.robot.groups, cell.robots, cell.workspace)
+
+
+__all__ = ["NEAR_M", "CollisionWorld", "Contact", "GroupBody", "world_for_cell"]
