@@ -70,3 +70,41 @@ def test_the_example_cell_with_a_table_and_a_fixture(tmp_path: Path) -> None:
     result = invoke("check", str(traj), "--config", str(EXAMPLE_CELL), "--json")
     assert result.exit_code == EXIT_REFUSED, result.output
     assert "fixture" in {c["obstacle"] for c in json.loads(result.stdout)["collisions"]}
+
+
+def test_plan_avoid_goes_around_and_passes_the_check(tmp_path: Path) -> None:
+    cell = tmp_path / "cell.toml"
+    cell.write_text(CELL)
+    way = tmp_path / "way.csv"
+    way.write_text("-0.8,0.6,0,0,0,0\n0.8,0.6,0,0,0,0\n")
+    direct = _plan(tmp_path, cell, "-0.8,0.6,0,0,0,0", "0.8,0.6,0,0,0,0")
+    assert invoke("check", str(direct), "--config", str(cell)).exit_code == EXIT_REFUSED
+    out = tmp_path / "around.csv"
+    result = invoke("plan", str(way), "--config", str(cell), "--avoid", "-o", str(out))
+    assert result.exit_code == 0, result.output
+    checked = invoke("check", str(out), "--config", str(cell), "--json")
+    assert checked.exit_code == EXIT_OK, checked.output
+    assert json.loads(checked.stdout)["collisions"] == []
+
+
+def test_plan_avoid_refuses_a_blocked_goal_in_one_line(tmp_path: Path) -> None:
+    cell = tmp_path / "cell.toml"
+    cell.write_text(CELL)
+    way = tmp_path / "way.csv"
+    way.write_text("0,0,0,0,0,0\n0,1.0,0,0,0,0\n")
+    result = invoke(
+        "plan", str(way), "--config", str(cell), "--avoid", "-o", str(tmp_path / "o.csv")
+    )
+    assert result.exit_code == EXIT_REFUSED
+    assert result.stderr == (
+        "refused: waypoint 1 is in collision: obstacle 'ball' (R1 link_2_l touches it)\n"
+    )
+    assert not (tmp_path / "o.csv").exists()
+
+
+def test_plan_avoid_needs_a_cell(tmp_path: Path) -> None:
+    way = tmp_path / "way.csv"
+    way.write_text("0,0,0,0,0,0\n0.1,0,0,0,0,0\n")
+    result = invoke("plan", str(way), "--avoid", "-o", str(tmp_path / "o.csv"))
+    assert result.exit_code == 2
+    assert "--avoid needs --config" in result.output

@@ -338,6 +338,12 @@ def check(
     required=True,
     help="Trajectory file to write (.csv, .json, .yaml).",
 )
+@click.option(
+    "--avoid",
+    is_flag=True,
+    help="Go around the obstacles of the --config cell's [workspace] (OMPL); the result "
+    "passes `pymotoros check --config`. A goal that cannot be reached is refused (exit 1).",
+)
 def plan(
     waypoints: Path,
     robot_name: str,
@@ -347,6 +353,7 @@ def plan(
     accel_scale: float,
     sample_s: float,
     output: Path,
+    avoid: bool,
 ) -> None:
     """Time waypoints (one row per waypoint, every joint of the robot, rad; an optional
     header row) within the robot's limits, and write the trajectory."""
@@ -379,14 +386,17 @@ def plan(
                 if number == 1:
                     continue  # header
                 raise ConfigError(f"{waypoints.name} line {number}: not all numbers") from None
-        result = plan_waypoints(
-            rows,
-            robot,
-            controller,
-            velocity_scaling=speed_scale,
-            acceleration_scaling=accel_scale,
-            sample_s=sample_s,
-        )
+        if avoid:  # around the cell's obstacles (trajectory/avoid.py)
+            result = _plan_avoiding(rows, cell_path, speed_scale, accel_scale, sample_s)
+        else:
+            result = plan_waypoints(
+                rows,
+                robot,
+                controller,
+                velocity_scaling=speed_scale,
+                acceleration_scaling=accel_scale,
+                sample_s=sample_s,
+            )
         write_trajectory_file(result, output)
     except ConfigError as exc:
         raise click.BadParameter(str(exc)) from None
@@ -394,6 +404,34 @@ def plan(
         f"wrote {output}: {len(result.times)} points, {result.duration:.3f} s "
         f"(formats: {', '.join(FORMATS)})"
     )
+
+
+def _plan_avoiding(
+    rows: list[list[float]],
+    cell_path: Path | None,
+    speed_scale: float,
+    accel_scale: float,
+    sample_s: float,
+) -> Trajectory:
+    """``plan --avoid``: the cell's obstacles are needed; a blocked goal is one line, exit 1."""
+    from pymotoros.kinematics.collision import world_for_cell
+    from pymotoros.trajectory.avoid import PathBlockedError, plan_avoiding
+
+    if cell_path is None:
+        raise click.UsageError("--avoid needs --config CELL.toml: the cell names the obstacles")
+    cell = load_cell_models(cell_path)
+    try:
+        return plan_avoiding(
+            rows,
+            cell,
+            world_for_cell(cell),
+            velocity_scaling=speed_scale,
+            acceleration_scaling=accel_scale,
+            sample_s=sample_s,
+        )
+    except PathBlockedError as exc:
+        click.echo(f"refused: {exc}", err=True)
+        sys.exit(EXIT_REFUSED)
 
 
 # --------------------------------------------------------------------------- run

@@ -382,15 +382,34 @@ class CollisionWorld:
 
     def self_distances(self, qs: Sequence[Sequence[float] | FloatArray]) -> list[Contact]:
         """The distance of every pair checked for self-collision at ``qs`` (one
-        :class:`Contact` each, whether or not they touch)."""
+        :class:`Contact` each, touching or not): exact within :data:`NEAR_M`, else the
+        lower bound of their bounding spheres."""
         out: list[Contact] = []
         for body, q in zip(self.bodies, qs, strict=False):
             if body is None:
                 continue
             parts = body.place(q)
+            centers = [p.world.translation for p in parts]
+            transforms: dict[int, Any] = {}
             for i, j in body.pairs:
                 a, b = parts[i], parts[j]
-                d = _distance(a.geometry, a.world, b.geometry, b.world)
+                gap = float(np.linalg.norm(centers[i] - centers[j])) - a.bound - b.bound
+                if gap > NEAR_M:
+                    out.append(Contact(a.name, b.name, body.name, gap, self_collision=True))
+                    continue
+                for k in (i, j):
+                    if k not in transforms:
+                        transforms[k] = coal.Transform3s(parts[k].world)
+                d = float(
+                    coal.distance(
+                        a.geometry,
+                        transforms[i],
+                        b.geometry,
+                        transforms[j],
+                        _DISTANCE,
+                        coal.DistanceResult(),
+                    )
+                )
                 out.append(Contact(a.name, b.name, body.name, d, self_collision=True))
         return out
 
