@@ -161,3 +161,33 @@ def test_an_obstacle_in_another_groups_frame() -> None:
     assert world.contacts([[0.0] * 6, [0.0] * 6]) == []
     assert {c.group for c in world.contacts([[0.0] * 6, tilted])} == {"R2"}
     assert world.contacts([tilted, [0.0] * 6]) == []
+
+
+def test_lever_arms_grown_by_the_travel_bound_the_motion() -> None:
+    world = _world("hc10", [{"name": "far", "sphere": 0.1, "xyz": [5, 5, 5]}])
+    world.set_tool(0, Frame((0.0, 0.0, 0.15)))
+    body = world.bodies[0]
+    assert body is not None
+    rng = np.random.default_rng(11)
+    for _ in range(40):
+        q = rng.uniform(-2.0, 2.0, 6)
+        body.place(q)
+        levers = np.array(world.lever_arms(0))
+        assert np.all(levers <= np.array(world.joint_reach(0)) + 1e-9)
+        before = [np.array(p.center) for p in body.all_parts]
+        dq = rng.uniform(-0.02, 0.02, 6)
+        after = [np.array(p.center) for p in body.place(q + dq)]
+        moved = max(float(np.linalg.norm(a - b)) for a, b in zip(after, before, strict=True))
+        bound = float(np.dot(np.abs(dq), levers))
+        assert moved <= bound + moved * float(np.sum(np.abs(dq)))  # levers grow with travel
+
+
+def test_turning_s_changes_no_self_distance_of_a_single_arm() -> None:
+    world = _world("gp7", [])
+    assert world.self_invariant_joints(0) == (0,)
+    q = np.array([0.0, 0.8, -0.5, 0.3, 1.0, 0.0])
+    d0 = [c.distance_m for c in world.self_distances([q])]
+    q[0] = 1.7
+    assert [c.distance_m for c in world.self_distances([q])] == pytest.approx(d0, abs=1e-9)
+    sda = _world("sda10f", [])
+    assert sda.self_invariant_joints(0) == ()  # its base link is the torso beside the arm

@@ -97,3 +97,29 @@ def test_the_report_carries_collisions_into_json_and_exit_code() -> None:
     assert entry["obstacle"] == "ball"
     assert entry["link"] == "link_2_l"
     assert math.isfinite(entry["time_s"])
+
+
+@pytest.mark.parametrize(
+    "rows",
+    [
+        ([-0.8, 0.6, 0.0, 0.0, 0.0, 0.0], [0.8, 0.6, 0.0, 0.0, 0.0, 0.0]),
+        ([0.0] * 6, [0.3, 1.0, 0.2, 0.5, -1.0, 0.0], [-0.5, 0.2, 0.0, 0.0, 0.0, 0.0]),
+        ([0.0] * 6, [-1.13, -2.4, 5.66, -2.15, 1.49, 1.0]),
+    ],
+)
+def test_skipping_ticks_finds_what_checking_every_tick_finds(rows: tuple[list[float], ...]) -> None:
+    from pymotoros.trajectory.collisions import joint_paths
+
+    cell = _cell(BALL, {"name": "post", "cylinder": [0.05, 1.5], "xyz": [0.5, -0.4, 0.75]})
+    traj = _plan(cell, *rows)
+    report = check_against_cell(traj, cell)
+    world = world_for_cell(cell)
+    found = {(c.link, c.obstacle, round(c.time_s, 6)) for c in _collisions(cell, traj)}
+    times, paths = joint_paths(traj, cell, report.per_group)
+    every: set[tuple[str, str, float]] = set()
+    before: set[tuple[str, str]] = set()
+    for k in range(len(times)):
+        now = {(c.link, c.obstacle) for c in world.all_contacts([paths[0][k]])}
+        every.update((link, obstacle, round(float(times[k]), 6)) for link, obstacle in now - before)
+        before = now
+    assert found == every

@@ -128,6 +128,8 @@ class _Part:
     local: Any
     bound: float
     world: Any = None
+    center: Any = None
+    """The world position of the part's centre (set with ``world``)."""
 
 
 class GroupBody:
@@ -177,9 +179,32 @@ class GroupBody:
             parts.append(_Part(i, i, name, *_segment(zero, end, radii[i])))
             self.lengths.append(float(np.linalg.norm(end)))
         self.parts = parts
+        self.base_round = self._base_round(group)
+        """The base link's shapes lie on the first joint's axis (rotating about it changes
+        no distance to them)."""
+        self.origins: list[Any] = [np.zeros(3) for _ in range(n)]
+        """Per joint, its origin in the workspace frame at the latest :meth:`place`."""
         self._tool_key: tuple[float, ...] | None = None
         self.tool_part: _Part | None = None
         self.pairs = self._self_pairs()
+
+    def _base_round(self, group: GroupModel) -> bool:
+        first = self.model.jointPlacements[1]
+        axis = np.array(first.rotation, dtype=float) @ np.array(
+            group.axes[0].geometry.axis if group.axes[0].geometry else (0.0, 0.0, 1.0)
+        )
+        origin = np.array(first.translation, dtype=float)
+        for part in self.parts:
+            if part.joint:
+                continue
+            center = np.array(part.local.translation, dtype=float)
+            direction = np.array(part.local.rotation, dtype=float)[:, 2]
+            off = center - origin
+            if float(np.linalg.norm(off - np.dot(off, axis) * axis)) > _MIN_SEGMENT_M:
+                return False
+            if float(np.linalg.norm(np.cross(direction, axis))) > _MIN_SEGMENT_M:
+                return False
+        return True
 
     # --- the tool -------------------------------------------------------------------
 
@@ -215,13 +240,30 @@ class GroupBody:
         base = None if self._identity_base else self.base
         joint = -1
         frame = None
+        origins = self.origins
         for part in parts:  # parts are in joint order: each joint's placement read once
             if part.joint != joint:
                 joint = part.joint
                 frame = omi[joint] if joint else None
+                if frame is not None:
+                    origins[joint - 1] = (frame if base is None else base * frame).translation
             m = frame * part.local if frame is not None else part.local
-            part.world = m if base is None else base * m
+            part.world = m = m if base is None else base * m
+            part.center = m.translation
         return parts
+
+    def lever_arms(self) -> list[float]:
+        """Per joint, the farthest any point of the links it moves lies from it, at the
+        latest :meth:`place`: how far (m) they move per radian of that joint now. While
+        the arm moves by ``d`` metres these grow by at most ``d``."""
+        parts = self.all_parts
+        centers = np.array([p.center for p in parts], dtype=float)
+        origins = np.array(self.origins, dtype=float)
+        bounds = np.array([p.bound for p in parts], dtype=float)
+        joints = np.array([p.joint for p in parts])
+        dist = np.sqrt(((centers[None, :, :] - origins[:, None, :]) ** 2).sum(axis=2)) + bounds
+        moved = joints[None, :] >= np.arange(1, self.num_joints + 1)[:, None]
+        return [float(x) for x in np.where(moved, dist, 0.0).max(axis=1)]
 
     def reach(self) -> list[float]:
         """Per joint, an upper bound of the distance from its axis to any point of the
@@ -323,6 +365,18 @@ class CollisionWorld:
         if body is not None:
             body.set_tool(tool)
 
+    def lever_arms(self, group_index: int) -> list[float]:
+        """:meth:`GroupBody.lever_arms` of a group at its latest probe ([] without shapes)."""
+        body = self.bodies[group_index]
+        return body.lever_arms() if body is not None else []
+
+    def self_invariant_joints(self, group_index: int) -> tuple[int, ...]:
+        """Joints (ROS index) whose motion changes no self-collision distance of a group:
+        the first joint when the base link is round about its axis (every single arm we
+        model: turning S turns the whole arm over a base that looks the same)."""
+        body = self.bodies[group_index]
+        return (0,) if body is not None and body.base_round else ()
+
     def joint_reach(self, group_index: int) -> list[float]:
         """Per joint of a group, how far (m) a point of the robot moves per radian at most
         (0 for a group without shapes): Σ |Δq| × reach bounds any point's travel."""
@@ -349,7 +403,7 @@ class CollisionWorld:
         placed = self._place(qs)
         if not placed:
             return math.inf, []
-        centers = np.array([p.world.translation for _, p in placed], dtype=float)
+        centers = np.array([p.center for _, p in placed], dtype=float)
         bounds = np.array([p.bound for _, p in placed], dtype=float)
         # broad phase: each part's bounding sphere against each obstacle's bounding box,
         # in the box's own axes (a lower bound of the true distance)
@@ -389,7 +443,7 @@ class CollisionWorld:
             if body is None:
                 continue
             parts = body.place(q)
-            centers = [p.world.translation for p in parts]
+            centers = [p.center for p in parts]
             transforms: dict[int, Any] = {}
             for i, j in body.pairs:
                 a, b = parts[i], parts[j]

@@ -9,10 +9,10 @@ self-collision, the other link), the link and the time.
 Cost: a full check of the pose does not run every tick. After a check finds the
 robot ``c`` metres from the nearest obstacle, no point of it can touch anything before
 the increments have moved it that far; the travel per tick is bounded by
-Σ |Δq| × reach (:meth:`~pymotoros.kinematics.collision.CollisionWorld.joint_reach`),
-summed once for the whole motion, so the next check is found by a binary search. Two
-links of one arm approach each other at most twice as fast. Only ticks in contact are
-checked one by one.
+Σ |Δq| × lever (:meth:`~pymotoros.kinematics.collision.CollisionWorld.lever_arms`),
+with each joint's lever arm at the last check (grown by the clearance), so the next
+check is found by a binary search over the summed travel. Two links of one arm approach
+each other at most twice as fast. Only ticks in contact are checked one by one.
 """
 
 from __future__ import annotations
@@ -56,6 +56,8 @@ class CollisionModel(Protocol):
     def probe(self, qs: Sequence[F64Array]) -> tuple[float, Sequence[ContactLike]]: ...
     def self_distances(self, qs: Sequence[F64Array]) -> Sequence[ContactLike]: ...
     def joint_reach(self, group_index: int) -> list[float]: ...
+    def lever_arms(self, group_index: int) -> list[float]: ...
+    def self_invariant_joints(self, group_index: int) -> tuple[int, ...]: ...
 
 
 MIN_STEP_M: Final = 1e-6
@@ -124,15 +126,49 @@ def joint_paths(
     return np.concatenate(([float(traj.times[0])], time_s)), paths
 
 
-def _travel(world: CollisionModel, paths: Sequence[F64Array]) -> F64Array:
-    """Cumulative bound of how far any point of the robot has moved, per tick (m)."""
-    total = np.zeros(len(paths[0]))
-    for g, q in enumerate(paths):
-        reach = world.joint_reach(g)
-        if reach:
-            step = np.abs(np.diff(q, axis=0)) @ np.asarray(reach, dtype=float)
-            total[1:] += np.cumsum(step)
-    return total
+class _Travel:
+    """How far any point of the robot can have moved since a tick (m): per tick, each
+    group's |Δq| weighted by the lever arm of each joint at the last check."""
+
+    def __init__(self, world: CollisionModel, paths: Sequence[F64Array]) -> None:
+        self._world = world
+        self._steps = [np.abs(np.diff(q, axis=0)) for q in paths]
+        self._reach = [np.asarray(world.joint_reach(g), dtype=float) for g in range(len(paths))]
+        self.ticks = len(paths[0])
+
+    def next_check(self, k: int, step: float, *, for_self: bool) -> int:
+        """The first tick after ``k`` at which the robot may have moved ``step`` metres
+        (with the lever arms of the check just made at ``k``); ``for_self``: only the
+        motion that can change a distance between two of its own links."""
+        weights = []
+        for g, reach in enumerate(self._reach):
+            if len(reach):
+                levers = np.asarray(self._world.lever_arms(g), dtype=float)
+                w = np.minimum(reach, levers + step)
+                if for_self:
+                    w[list(self._world.self_invariant_joints(g))] = 0.0
+                weights.append((g, w))
+        done = 0.0
+        start = k
+        window = _WINDOW
+        while start < self.ticks - 1:
+            end = min(self.ticks - 1, start + window)
+            window *= 2
+            per_tick = np.zeros(end - start)
+            for g, w in weights:
+                per_tick += self._steps[g][start:end] @ w
+            total = done + np.cumsum(per_tick)
+            j = int(np.searchsorted(total, step, side="left"))
+            if j < len(total):
+                return start + j + 1
+            done = float(total[-1])
+            start = end
+        return self.ticks
+
+
+_WINDOW: Final = 64
+"""Ticks of travel summed first when looking for the next check (doubled each round):
+near an obstacle the next check is a few ticks away, far from all of them thousands."""
 
 
 def find_collisions(
@@ -144,25 +180,36 @@ def find_collisions(
     """Every contact along the motion, in time order (see the module docstring);
     ``world`` holds the cell's robot groups (in cell order) and obstacles."""
     times, paths = joint_paths(traj, cell, per_group)
-    travel = _travel(world, paths)
-    open_: dict[tuple[str, str, str], list[Any]] = {}
+    travel = _Travel(world, paths)
+    open_obstacles: dict[tuple[str, str, str], list[Any]] = {}
+    open_self: dict[tuple[str, str, str], list[Any]] = {}
     done: list[Collision] = []
-    k = 0
     n = len(times)
-    while k < n:
+    next_obstacle = next_self = 0
+    while min(next_obstacle, next_self) < n:
+        k = min(next_obstacle, next_self)
         qs = [p[k] for p in paths]
-        clearance, contacts = world.probe(qs)
-        self_clearance, self_hits = _self_probe(world, qs)
-        hits = [*contacts, *self_hits]
-        _track(open_, done, hits, float(times[k]))
-        step = min(clearance, self_clearance / 2.0)
-        if step <= MIN_STEP_M or hits:
-            k += 1
-            continue
-        k = max(k + 1, int(np.searchsorted(travel, travel[k] + step, side="left")))
+        now = float(times[k])
+        if k == next_obstacle:
+            clearance, contacts = world.probe(qs)
+            _track(open_obstacles, done, contacts, now)
+            next_obstacle = (
+                k + 1
+                if contacts or clearance <= MIN_STEP_M
+                else travel.next_check(k, clearance, for_self=False)
+            )
+        if k == next_self:
+            self_clearance, self_hits = _self_probe(world, qs)
+            _track(open_self, done, self_hits, now)
+            next_self = (
+                k + 1
+                if self_hits or self_clearance <= MIN_STEP_M
+                else travel.next_check(k, self_clearance, for_self=True)
+            )
     end = float(times[-1]) if n else 0.0
-    for (group, link, obstacle), (start, depth, is_self) in open_.items():
-        done.append(Collision(start, obstacle, link, group, depth, is_self, end))
+    for open_ in (open_obstacles, open_self):
+        for (group, link, obstacle), (start, depth, is_self) in open_.items():
+            done.append(Collision(start, obstacle, link, group, depth, is_self, end))
     done.sort(key=lambda c: (c.time_s, c.group, c.link, c.obstacle))
     return done
 

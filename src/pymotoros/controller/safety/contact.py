@@ -13,8 +13,9 @@ So the robot never passes into an obstacle by more than one tick's travel.
 Cost: nothing at all for a cell without obstacles (no function is built). Otherwise the
 check is not run every tick: after a check that found ``clearance`` metres between the
 robot and the nearest obstacle, no point of the robot can touch anything before it has
-moved that far, and each tick's travel is bounded by Σ |Δq| × reach (per joint, the
-longest lever it moves, :meth:`CollisionWorld.joint_reach`): a few multiplications per
+moved that far, and each tick's travel is bounded by Σ |Δq| × lever (per joint, the
+farthest point it moves at the last check, grown by that clearance, and never more than
+its reach in any pose, :meth:`CollisionWorld.joint_reach`): a few multiplications per
 tick, a full check only when that bound has used up the clearance.
 """
 
@@ -23,6 +24,7 @@ from __future__ import annotations
 import logging
 from collections import Counter
 from collections.abc import Callable, Sequence
+from dataclasses import dataclass
 from operator import mul
 from typing import Final
 
@@ -33,7 +35,7 @@ from pymotoros.controller.safety.pfl import DEFAULT_RETREAT_MS, PflFunction
 from pymotoros.controller.servo import SLOTS, ServoGroup
 from pymotoros.kinematics.collision import CollisionWorld, Contact
 from pymotoros.models.robots import Frame
-from pymotoros.motion import GroupAxes, from_pulses
+from pymotoros.motion import GroupAxes
 
 logger = logging.getLogger(__name__)
 
@@ -46,6 +48,22 @@ DEEPER_M: Final = 1e-6
 least this much deeper: moving out of a contact after the stop is allowed."""
 
 ContactKey = tuple[str, str, str]
+
+
+@dataclass(slots=True)
+class _Watched:
+    """One group the contact function follows."""
+
+    group: int
+    servo: ServoGroup
+    slots: tuple[int, ...]
+    """The controller slot of each joint (ROS order)."""
+    ppu: tuple[float, ...]
+    """Pulses per radian of each joint."""
+    reach: tuple[float, ...]
+    """Per joint, the farthest any point it moves can be from it (any pose)."""
+    weights: tuple[float, ...] = (0.0,) * SLOTS
+    """Per controller slot: metres of travel per pulse, at most, until the next check."""
 
 
 class ContactFunction:
@@ -65,7 +83,7 @@ class ContactFunction:
         self._axes = tuple(axes)
         self._tool = tool
         self._react = react
-        self._watch: list[tuple[ServoGroup, tuple[float, ...]]] = []
+        self._watch: list[_Watched] = []
         self._refresh_weights()
         self._budget = -1.0  # check at the first motion
         self._touching: dict[ContactKey, float] = {}
@@ -75,17 +93,16 @@ class ContactFunction:
         """Full checks so far (the benchmark counts them)."""
 
     def _refresh_weights(self) -> None:
-        """Per group and controller slot: metres of travel per pulse, at most."""
+        """Per group: its servo, the slot and pulses per radian of each joint, and the
+        joint's global reach (the bound that holds in any pose)."""
         watch = []
         for g, (servo, axes) in enumerate(zip(self._servos, self._axes, strict=True)):
             reach = self.world.joint_reach(g)
             if not reach:
                 continue
-            weights = [0.0] * SLOTS
-            for k in range(axes.num_axes):
-                slot = axes.ros_to_slot[k]
-                weights[slot] = reach[k] / float(axes.pulses_per_unit[slot])
-            watch.append((servo, tuple(weights)))
+            slots = tuple(axes.ros_to_slot[k] for k in range(axes.num_axes))
+            ppu = tuple(float(axes.pulses_per_unit[s]) for s in slots)
+            watch.append(_Watched(g, servo, slots, ppu, tuple(reach)))
         self._watch = watch
 
     def workspace_changed(self) -> None:
@@ -97,8 +114,8 @@ class ContactFunction:
     def tick(self, now_ms: int) -> None:
         """After this tick's increments reached the servos."""
         travel = 0.0
-        for servo, weights in self._watch:
-            travel += sum(map(mul, map(abs, servo.last_increment), weights))
+        for watched in self._watch:
+            travel += sum(map(mul, map(abs, watched.servo.last_increment), watched.weights))
         budget = self._budget - travel
         if budget > 0.0:
             self._budget = budget
@@ -109,12 +126,21 @@ class ContactFunction:
         """A full check at the commanded position; reacts to a new or deeper contact."""
         self.checks += 1
         world = self.world
-        qs = []
-        for g, (servo, axes) in enumerate(zip(self._servos, self._axes, strict=True)):
-            world.set_tool(g, self._tool(g))
-            qs.append(from_pulses(servo.command, axes)[: axes.num_axes])
+        qs: list[list[float]] = [[] for _ in self._servos]
+        for w in self._watch:
+            world.set_tool(w.group, self._tool(w.group))
+            command = w.servo.command
+            qs[w.group] = [command[s] / p for s, p in zip(w.slots, w.ppu, strict=True)]
         clearance, contacts = world.probe(qs)
         self._budget = clearance
+        margin = max(clearance, 0.0)
+        for w in self._watch:
+            # the lever arms now, grown by the most the arm can move before the next check
+            levers = world.lever_arms(w.group)
+            weights = [0.0] * SLOTS
+            for k, slot in enumerate(w.slots):
+                weights[slot] = min(w.reach[k], levers[k] + margin) / w.ppu[k]
+            w.weights = tuple(weights)
         touching = self._touching
         new = [
             c
