@@ -130,6 +130,13 @@ class _Part:
     world: Any = None
     center: Any = None
     """The world position of the part's centre (set with ``world``)."""
+    radius: float = 0.0
+    half: float = 0.0
+    """Half the capsule's segment (0 for a sphere)."""
+
+    def __post_init__(self) -> None:
+        self.radius = float(self.geometry.radius)
+        self.half = float(getattr(self.geometry, "halfLength", 0.0))
 
 
 class GroupBody:
@@ -184,6 +191,13 @@ class GroupBody:
         no distance to them)."""
         self.origins: list[Any] = [np.zeros(3) for _ in range(n)]
         """Per joint, its origin in the workspace frame at the latest :meth:`place`."""
+        self.frames: list[Any] = [pin.SE3.Identity() for _ in range(n)]
+        """Per joint, its frame in the workspace frame at the latest :meth:`place`."""
+        self._joint_axes = np.array(
+            [a.geometry.axis if a.geometry is not None else (0.0, 0.0, 1.0) for a in group.axes],
+            dtype=float,
+        )
+        self._linear = np.array([a.linear for a in group.axes])
         self._tool_key: tuple[float, ...] | None = None
         self.tool_part: _Part | None = None
         self.pairs = self._self_pairs()
@@ -246,24 +260,47 @@ class GroupBody:
                 joint = part.joint
                 frame = omi[joint] if joint else None
                 if frame is not None:
-                    origins[joint - 1] = (frame if base is None else base * frame).translation
+                    placed = frame if base is None else base * frame
+                    origins[joint - 1] = placed.translation
+                    self.frames[joint - 1] = placed
             m = frame * part.local if frame is not None else part.local
             part.world = m = m if base is None else base * m
             part.center = m.translation
         return parts
 
     def lever_arms(self) -> list[float]:
-        """Per joint, the farthest any point of the links it moves lies from it, at the
-        latest :meth:`place`: how far (m) they move per radian of that joint now. While
-        the arm moves by ``d`` metres these grow by at most ``d``."""
-        parts = self.all_parts
-        centers = np.array([p.center for p in parts], dtype=float)
+        """Per joint, the farthest any point of the links it moves lies from its axis, at
+        the latest :meth:`place`: how far (m) they move per radian of that joint now.
+        While the arm moves by ``d`` metres these grow by at most ``d``."""
+        return [float(x) for x in self.part_levers(self.all_parts).max(axis=0)]
+
+    def part_levers(self, parts: Sequence[_Part]) -> FloatArray:
+        """(parts × joints): the farthest point of each part from each joint's axis that
+        moves it (0 for a joint after the part), at the latest :meth:`place`."""
+        n = self.num_joints
+        rotations = [np.asarray(f.rotation, dtype=float) for f in self.frames]
+        axes = np.array([r @ a for r, a in zip(rotations, self._joint_axes, strict=True)])
         origins = np.array(self.origins, dtype=float)
-        bounds = np.array([p.bound for p in parts], dtype=float)
+        centers = np.array([p.center for p in parts], dtype=float)
+        halves = np.array([p.half for p in parts], dtype=float)
+        along = np.array(
+            [
+                np.asarray(p.world.rotation, dtype=float)[:, 2] if p.half else (0.0, 0.0, 0.0)
+                for p in parts
+            ]
+        )
+        ends = np.stack(
+            [centers + halves[:, None] * along, centers - halves[:, None] * along], axis=1
+        )  # (P, 2, 3)
+        diff = ends[:, :, None, :] - origins[None, None, :, :]  # (P, 2, n, 3)
+        axial = np.einsum("pend,nd->pen", diff, axes)
+        square = np.einsum("pend,pend->pen", diff, diff) - axial * axial
+        levers = np.sqrt(np.maximum(square, 0.0)).max(axis=1)  # (P, n)
+        levers += np.array([p.radius for p in parts], dtype=float)[:, None]
+        levers[:, self._linear] = 1.0  # a linear axis moves every point 1 m per metre
         joints = np.array([p.joint for p in parts])
-        dist = np.sqrt(((centers[None, :, :] - origins[:, None, :]) ** 2).sum(axis=2)) + bounds
-        moved = joints[None, :] >= np.arange(1, self.num_joints + 1)[:, None]
-        return [float(x) for x in np.where(moved, dist, 0.0).max(axis=1)]
+        moved = joints[:, None] >= np.arange(1, n + 1)[None, :]
+        return np.where(moved, levers, 0.0)
 
     def reach(self) -> list[float]:
         """Per joint, an upper bound of the distance from its axis to any point of the
@@ -351,6 +388,8 @@ class CollisionWorld:
             rotations.append(np.array(m.rotation, dtype=float))
             halves.append(_half_extents(obstacle.shape))
         self._obstacles = placed
+        self._last_placed: list[tuple[GroupBody, _Part]] = []
+        self._last_clearances = np.zeros(0)
         self._centers = np.array([p.center for p in placed], dtype=float).reshape(-1, 3)
         self._rotations = np.array(rotations, dtype=float).reshape(-1, 3, 3)
         self._halves = np.array(halves, dtype=float).reshape(-1, 3)
@@ -428,7 +467,26 @@ class CollisionWorld:
             gaps[i, j] = d
             if d <= TOUCH_M:
                 contacts.append(Contact(obst.obstacle.name, part.name, body.name, d))
-        return float(gaps.min()), contacts
+        self._last_placed = placed
+        self._last_clearances = gaps.min(axis=1)
+        return float(self._last_clearances.min()), contacts
+
+    def part_budgets(self) -> list[tuple[int, FloatArray, FloatArray]]:
+        """After :meth:`probe`, per group with shapes: (group index, each moving part's
+        clearance c (m), its levers (parts × joints): how far it moves per radian of each
+        joint now). Levers grow by at most the distance moved, so a part cannot touch
+        anything while Σ_k |Δq_k| × (lever_k + c) stays below its c: finer than one
+        clearance and one lever for the whole arm, because the part nearest an obstacle
+        (a forearm above the table) is seldom the one that moves most."""
+        out = []
+        for g, body in enumerate(self.bodies):
+            if body is None:
+                continue
+            rows = [i for i, (b, _) in enumerate(self._last_placed) if b is body]
+            parts = [self._last_placed[i][1] for i in rows]
+            clear = self._last_clearances[rows]
+            out.append((g, clear, body.part_levers(parts)))
+        return out
 
     def contacts(self, qs: Sequence[Sequence[float] | FloatArray]) -> list[Contact]:
         """Every link touching an obstacle at joints ``qs``."""

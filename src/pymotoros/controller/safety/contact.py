@@ -24,9 +24,12 @@ from __future__ import annotations
 import logging
 from collections import Counter
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass
-from operator import mul
+from dataclasses import dataclass, field
+from operator import add, mul
 from typing import Final
+
+import numpy as np
+import numpy.typing as npt
 
 from pymotoros.controller.context import MotoRosContext
 from pymotoros.controller.machine import Event
@@ -64,6 +67,12 @@ class _Watched:
     """Per joint, the farthest any point it moves can be from it (any pose)."""
     weights: tuple[float, ...] = (0.0,) * SLOTS
     """Per controller slot: metres of travel per pulse, at most, until the next check."""
+    moved: list[int] = field(default_factory=lambda: [0] * SLOTS)
+    """Per controller slot: pulses travelled (summed absolute increments) since the check."""
+    clearances: npt.NDArray[np.float64] | None = None
+    """Each moving part's clearance at the last check (m)."""
+    levers: npt.NDArray[np.float64] | None = None
+    """Each moving part's metres per radian of each joint (ROS order) since the last check."""
 
 
 class ContactFunction:
@@ -85,7 +94,7 @@ class ContactFunction:
         self._react = react
         self._watch: list[_Watched] = []
         self._refresh_weights()
-        self._budget = -1.0  # check at the first motion
+        self._clearance = -1.0  # check at the first motion
         self._touching: dict[ContactKey, float] = {}
         self.contacts: tuple[Contact, ...] = ()
         """The contacts found by the latest check (empty: the robot touches nothing)."""
@@ -107,20 +116,30 @@ class ContactFunction:
 
     def workspace_changed(self) -> None:
         """The obstacles changed (added, moved, removed): check at the next tick."""
-        self._budget = -1.0
+        self._clearance = -1.0
         self._touching = {}
         self._refresh_weights()
 
     def tick(self, now_ms: int) -> None:
         """After this tick's increments reached the servos."""
         travel = 0.0
-        for watched in self._watch:
-            travel += sum(map(mul, map(abs, watched.servo.last_increment), watched.weights))
-        budget = self._budget - travel
-        if budget > 0.0:
-            self._budget = budget
+        for w in self._watch:
+            w.moved = moved = list(map(add, w.moved, map(abs, w.servo.last_increment)))
+            travel += sum(map(mul, moved, w.weights))
+        if travel < self._clearance or self._parts_clear():
             return
         self.check(now_ms)
+
+    def _parts_clear(self) -> bool:
+        """The finer test, part by part (:meth:`CollisionWorld.part_budgets`): no part
+        has moved as far as its own clearance."""
+        for w in self._watch:
+            if w.levers is None or w.clearances is None:
+                return False
+            joints = np.array(w.moved, dtype=float)[list(w.slots)] / np.array(w.ppu)
+            if np.any(w.levers @ joints >= w.clearances):
+                return False
+        return True
 
     def check(self, now_ms: int) -> None:
         """A full check at the commanded position; reacts to a new or deeper contact."""
@@ -128,18 +147,26 @@ class ContactFunction:
         world = self.world
         qs: list[list[float]] = [[] for _ in self._servos]
         for w in self._watch:
-            world.set_tool(w.group, self._tool(w.group))
+            world.set_tool(w.group, self._tool(w.group))  # cached: the same tool is no work
             command = w.servo.command
             qs[w.group] = [command[s] / p for s, p in zip(w.slots, w.ppu, strict=True)]
         clearance, contacts = world.probe(qs)
-        self._budget = clearance
+        self._clearance = clearance
         margin = max(clearance, 0.0)
+        budgets = {g: (clear, levers) for g, clear, levers in world.part_budgets()}
         for w in self._watch:
+            w.moved = [0] * SLOTS
+            if w.group not in budgets:
+                w.clearances = w.levers = None
+                continue
+            clear, levers = budgets[w.group]
             # the lever arms now, grown by the most the arm can move before the next check
-            levers = world.lever_arms(w.group)
+            w.clearances = clear
+            w.levers = np.where(levers > 0.0, levers + np.maximum(clear, 0.0)[:, None], 0.0)
+            widest = levers.max(axis=0)
             weights = [0.0] * SLOTS
             for k, slot in enumerate(w.slots):
-                weights[slot] = min(w.reach[k], levers[k] + margin) / w.ppu[k]
+                weights[slot] = min(w.reach[k], float(widest[k]) + margin) / w.ppu[k]
             w.weights = tuple(weights)
         touching = self._touching
         new = [
@@ -221,9 +248,14 @@ def workspace_contact(
         return None
     interps = ctx.interpolators
 
+    frames: dict[tuple[int, int], Frame] = {}
+
     def tool(g: int) -> Frame:
-        t = cell.tool(g, interps[g].tool)
-        return Frame(t.tcp_m, t.rpy_rad)
+        key = (g, interps[g].tool)
+        if key not in frames:
+            t = cell.tool(g, key[1])
+            frames[key] = Frame(t.tcp_m, t.rpy_rad)
+        return frames[key]
 
     def servo_off() -> None:
         keys.fire(Event.SERVO_OFF)
