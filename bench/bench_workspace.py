@@ -149,7 +149,16 @@ def bench_check(rounds: int) -> None:
         traj = plan_waypoints(way, cell.robot, cell.controller, velocity_scaling=0.5)
     print(f"--- check of a {traj.duration:.1f} s trajectory past 10 obstacles")
     world = world_for_cell(cell)
+    probes = [0]
+    probe = world.probe
+
+    def counted(qs: Any) -> Any:
+        probes[0] += 1
+        return probe(qs)
+
+    world.probe = counted  # type: ignore[method-assign]
     for r in range(rounds):
+        probes[0] = 0
         t0 = time.perf_counter()
         report = check_against_cell(traj, cell)
         t1 = time.perf_counter()
@@ -157,7 +166,7 @@ def bench_check(rounds: int) -> None:
         t2 = time.perf_counter()
         print(
             f"round {r + 1}: MotoROS check {t1 - t0:.3f} s, collisions {t2 - t1:.3f} s "
-            f"({report.increments} increments, {len(found)} collisions)"
+            f"({report.increments} increments, {probes[0]} full checks, {len(found)} collisions)"
         )
 
 
