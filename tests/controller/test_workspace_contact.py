@@ -179,3 +179,53 @@ def test_over_tcp(tmp_path: Path, robot: str, ball: list[float], reason: NotRead
         if robot == "gp7":
             assert [a["code"] for a in state["alarms"]] == [COLLISION_ALARM]
             assert state["servo"] is False
+
+
+async def test_an_obstacle_put_at_run_time_stops_the_robot_and_shows_in_the_state() -> None:
+    cell = cell_from_dict(_cell("hc10", []))
+    async with twin(cell=cell) as (robot, the_twin):
+        controller = the_twin.controller
+        assert controller._cycle.contact is None
+        controller.put_obstacle({"name": "person", "sphere": 0.1, "xyz": HC10_BALL})
+        await robot.enable()
+        with pytest.raises(NotReadyError) as info:
+            await robot.move_joints(GOAL, speed_scale=0.5)
+        assert info.value.reason is NotReadySubcode.PFL_ACTIVE
+        state = controller.workspace_state()
+        assert state["obstacles"] == [
+            {"name": "person", "sphere": 0.1, "xyz": HC10_BALL, "rpy_deg": [0.0, 0.0, 0.0]}
+        ]
+        contacts = state["contacts"]
+        assert isinstance(contacts, list)
+        assert [(c["obstacle"], c["link"]) for c in contacts] == [("person", "link_2_l")]
+        # the person steps aside: the move goes through where they stood
+        controller.remove_obstacle("person")
+        assert controller._cycle.contact is None
+        await the_twin.sleep(1.0)
+        await robot.enable()
+        await robot.move_joints(GOAL, speed_scale=0.5)
+        assert _joints(controller)[1] == pytest.approx(1.0, abs=1e-3)
+
+
+async def test_moving_an_obstacle_by_name_moves_the_check_with_it() -> None:
+    cell = cell_from_dict(_cell("gp7", [_ball([3.0, 3.0, 3.0])]))
+    async with twin(cell=cell) as (robot, the_twin):
+        controller = the_twin.controller
+        await robot.enable()
+        await robot.move_joints([0.0, 0.2, 0.0, 0.0, 0.0, 0.0], speed_scale=0.5)
+        controller.put_obstacle({"name": "ball", "sphere": 0.1, "xyz": GP7_BALL})
+        assert [o.name for o in controller.obstacles] == ["ball"]
+        with pytest.raises(NotReadyError) as info:
+            await robot.move_joints(GOAL, speed_scale=0.5)
+        assert info.value.reason is NotReadySubcode.ALARM
+
+
+def test_a_bad_obstacle_at_run_time_names_its_key() -> None:
+    from pymotoros.errors import ConfigError
+
+    controller = VirtualController(cell_from_dict(_cell("hc10", [])))
+    with pytest.raises(ConfigError, match=r"^obstacle\.box: must be three"):
+        controller.put_obstacle({"name": "t", "box": [1, 1], "xyz": [0, 0, 0]})
+    with pytest.raises(ConfigError, match="no obstacle named 'nope'"):
+        controller.remove_obstacle("nope")
+    assert controller.obstacles == ()

@@ -38,6 +38,7 @@ from pymotoros.controller.safety.pfl import DEFAULT_RETREAT_MS, PflFunction
 from pymotoros.controller.servo import SLOTS, ServoGroup
 from pymotoros.kinematics.collision import CollisionWorld, Contact
 from pymotoros.models.robots import Frame
+from pymotoros.models.workspace import Workspace
 from pymotoros.motion import GroupAxes
 
 logger = logging.getLogger(__name__)
@@ -236,14 +237,16 @@ class ContactResponse:
 
 
 def workspace_contact(
-    ctx: MotoRosContext, pfl: PflFunction, keys: OperatorKeys
+    ctx: MotoRosContext, pfl: PflFunction, keys: OperatorKeys, workspace: Workspace | None = None
 ) -> ContactFunction | None:
-    """The contact function of a cell, or None when there is nothing to touch (no
-    obstacles, or no group with collision shapes): then the tick does nothing extra."""
+    """The contact function of a cell with ``workspace`` (default: the cell file's), or
+    None when there is nothing to touch (no obstacles, or no group with collision
+    shapes): then the tick does nothing extra."""
     cell = ctx.cell
-    if not cell.workspace.obstacles:
+    workspace = workspace if workspace is not None else cell.workspace
+    if not workspace.obstacles:
         return None
-    world = CollisionWorld(cell.groups, cell.robots, cell.workspace)
+    world = CollisionWorld(cell.groups, cell.robots, workspace)
     if not any(world.joint_reach(g) for g in range(ctx.num_groups)):
         return None
     interps = ctx.interpolators
