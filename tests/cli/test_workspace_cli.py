@@ -108,3 +108,16 @@ def test_plan_avoid_needs_a_cell(tmp_path: Path) -> None:
     result = invoke("plan", str(way), "--avoid", "-o", str(tmp_path / "o.csv"))
     assert result.exit_code == 2
     assert "--avoid needs --config" in result.output
+
+
+def test_run_with_the_cell_refuses_a_colliding_trajectory_before_connecting(
+    tmp_path: Path,
+) -> None:
+    cell = tmp_path / "cell.toml"
+    cell.write_text(CELL)
+    traj = _plan(tmp_path, cell, "0,0,0,0,0,0", "0,1.0,0,0,0,0")
+    # no simulator runs: the check stops the command before it connects
+    result = invoke("run", str(traj), "--config", str(cell), "--timeout", "0.5")
+    assert result.exit_code == EXIT_REFUSED
+    assert "collision at" in result.stderr
+    assert "not started: fix the trajectory or give --force" in result.stderr
