@@ -229,3 +229,22 @@ def test_a_bad_obstacle_at_run_time_names_its_key() -> None:
     with pytest.raises(ConfigError, match="no obstacle named 'nope'"):
         controller.remove_obstacle("nope")
     assert controller.obstacles == ()
+
+
+async def test_an_obstacle_put_against_a_robot_at_rest_is_no_contact_until_it_moves_in() -> None:
+    cell = cell_from_dict(_cell("gp7", []))
+    async with twin(cell=cell) as (robot, the_twin):
+        controller = the_twin.controller
+        await robot.enable()
+        await robot.move_joints([0.0, 0.4, 0.0, 0.0, 0.0, 0.0], speed_scale=0.5)
+        # a box pressed against the wrist from the front while the arm stands still
+        controller.put_obstacle({"name": "box", "box": [0.2, 0.6, 0.6], "xyz": [0.8, 0.0, 0.55]})
+        assert controller.workspace_contacts  # touching, at rest
+        await the_twin.sleep(0.1)
+        assert not controller.snapshot().alarms
+        # backing away is allowed; leaning further in is a collision
+        await robot.move_joints([0.0, 0.1, 0.0, 0.0, 0.0, 0.0], speed_scale=0.5)
+        assert not controller.snapshot().alarms
+        with pytest.raises(NotReadyError):
+            await robot.move_joints([0.0, 0.6, 0.0, 0.0, 0.0, 0.0], speed_scale=0.5)
+        assert [a.code for a in controller.snapshot().alarms] == [COLLISION_ALARM]

@@ -95,12 +95,13 @@ class ContactFunction:
         self._react = react
         self._watch: list[_Watched] = []
         self._refresh_weights()
-        self._clearance = -1.0  # check at the first motion
+        self._clearance = -1.0
         self._touching: dict[ContactKey, float] = {}
         self.contacts: tuple[Contact, ...] = ()
         """The contacts found by the latest check (empty: the robot touches nothing)."""
         self.checks = 0
         """Full checks so far (the benchmark counts them)."""
+        self.check(0, react=False)  # what the robot already touches at rest is no contact
 
     def _refresh_weights(self) -> None:
         """Per group: its servo, the slot and pulses per radian of each joint, and the
@@ -116,10 +117,11 @@ class ContactFunction:
         self._watch = watch
 
     def workspace_changed(self) -> None:
-        """The obstacles changed (added, moved, removed): check at the next tick."""
-        self._clearance = -1.0
-        self._touching = {}
+        """The obstacles changed (added, moved, removed). Checked at once without a
+        reaction: an obstacle put against a robot at rest is a contact only when the
+        robot moves into it (PFL and collision detection feel a moving arm)."""
         self._refresh_weights()
+        self.check(0, react=False)
 
     def tick(self, now_ms: int) -> None:
         """After this tick's increments reached the servos."""
@@ -142,7 +144,7 @@ class ContactFunction:
                 return False
         return True
 
-    def check(self, now_ms: int) -> None:
+    def check(self, now_ms: int, *, react: bool = True) -> None:
         """A full check at the commanded position; reacts to a new or deeper contact."""
         self.checks += 1
         world = self.world
@@ -177,7 +179,7 @@ class ContactFunction:
         ]
         self._touching = {(c.group, c.link, c.obstacle): c.distance_m for c in contacts}
         self.contacts = tuple(contacts)
-        if new:
+        if new and react:
             for c in new:
                 logger.warning(
                     "workspace contact: %s %s touches %s (%.1f mm deep)",
