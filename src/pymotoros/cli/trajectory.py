@@ -55,7 +55,8 @@ EXIT_USAGE: Final = 2
 CHECK_EXIT_HELP: Final = (
     "\b\nExit codes:\n"
     f"  {EXIT_OK}  all clear\n"
-    f"  {EXIT_REFUSED}  MotoROS would refuse a point (the message names it and says what to do)\n"
+    f"  {EXIT_REFUSED}  MotoROS would refuse a point (the message names it and says what to do),\n"
+    "     or the motion hits an obstacle of the --config cell or the arm itself\n"
     f"  {EXIT_USAGE}  bad usage or a trajectory file that cannot be read\n"
     f"  {EXIT_WARNINGS}  MotoROS accepts it, but the robot should not do it (warnings)"
 )
@@ -277,7 +278,8 @@ def check(
     Runs MotoROS 1.9.12's validation and interpolation exactly (the twin's engine),
     then checks what MotoROS never does: joint limits between points, per-tick
     increments and accelerations, feed rate, start margin; with --config, also what
-    the cell's FSU joint-speed limit does to the motion.
+    the cell's FSU joint-speed limit does to the motion and every collision with the
+    obstacles of its [workspace] (docs/workspace.md).
     """
     reject_models_with_config(cell_path, "robot_name", "controller_name")
     loaded = load_models(traj, robot_name, controller_name, cell_path)
