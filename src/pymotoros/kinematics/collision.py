@@ -128,15 +128,22 @@ class _Part:
     local: Any
     bound: float
     world: Any = None
+    """The placement in the workspace frame at the latest place (computed when asked:
+    :meth:`GroupBody.world_of`)."""
     center: Any = None
-    """The world position of the part's centre (set with ``world``)."""
+    """The world position of the part's centre at the latest place."""
     radius: float = 0.0
     half: float = 0.0
     """Half the capsule's segment (0 for a sphere)."""
+    local_ends: Any = None
+    """The segment's two end points in the joint's frame, homogeneous (2 × 4)."""
 
     def __post_init__(self) -> None:
         self.radius = float(self.geometry.radius)
         self.half = float(getattr(self.geometry, "halfLength", 0.0))
+        center = np.asarray(self.local.translation, dtype=float)
+        along = np.asarray(self.local.rotation, dtype=float)[:, 2] * self.half
+        self.local_ends = np.array([[*(center + along), 1.0], [*(center - along), 1.0]])
 
 
 class GroupBody:
@@ -189,10 +196,16 @@ class GroupBody:
         self.base_round = self._base_round(group)
         """The base link's shapes lie on the first joint's axis (rotating about it changes
         no distance to them)."""
-        self.origins: list[Any] = [np.zeros(3) for _ in range(n)]
-        """Per joint, its origin in the workspace frame at the latest :meth:`place`."""
         self.frames: list[Any] = [pin.SE3.Identity() for _ in range(n)]
         """Per joint, its frame in the workspace frame at the latest :meth:`place`."""
+        self._homogeneous = np.tile(np.eye(4), (n + 1, 1, 1))
+        """Per joint (0: the base link), its frame as a 4 × 4 matrix at the latest place."""
+        self._homogeneous[0] = np.asarray(self.base.homogeneous, dtype=float)
+        self._stack_parts: list[_Part] = []
+        self._part_joints = np.zeros(0, dtype=int)
+        self._local_ends = np.zeros((0, 2, 4))
+        self.ends = np.zeros((0, 2, 3))
+        """Every part's segment end points in the workspace frame at the latest place."""
         self._joint_axes = np.array(
             [a.geometry.axis if a.geometry is not None else (0.0, 0.0, 1.0) for a in group.axes],
             dtype=float,
@@ -247,26 +260,44 @@ class GroupBody:
     # --- placement ------------------------------------------------------------------
 
     def place(self, q: Sequence[float] | FloatArray) -> list[_Part]:
-        """Every part's world placement at joints ``q`` (ROS order); returns the parts."""
+        """Every part's position at joints ``q`` (ROS order); returns the parts.
+
+        One placement is read per joint (Pinocchio's per-call cost dominates here); the
+        parts' end points and centres follow in one numpy product.
+        """
         pin.forwardKinematics(self.model, self.data, np.asarray(q, dtype=float))
         omi = self.data.oMi
-        parts = self.all_parts
         base = None if self._identity_base else self.base
-        joint = -1
-        frame = None
-        origins = self.origins
-        for part in parts:  # parts are in joint order: each joint's placement read once
-            if part.joint != joint:
-                joint = part.joint
-                frame = omi[joint] if joint else None
-                if frame is not None:
-                    placed = frame if base is None else base * frame
-                    origins[joint - 1] = placed.translation
-                    self.frames[joint - 1] = placed
-            m = frame * part.local if frame is not None else part.local
-            part.world = m = m if base is None else base * m
-            part.center = m.translation
+        frames = self.frames
+        stack = self._homogeneous
+        for j in range(1, self.num_joints + 1):
+            frame = omi[j] if base is None else base * omi[j]
+            frames[j - 1] = frame
+            stack[j] = frame.homogeneous
+        parts = self.all_parts
+        if self._stack_parts is not parts:
+            self._restack(parts)
+        ends = np.einsum("pij,pej->pei", stack[self._part_joints], self._local_ends)[:, :, :3]
+        self.ends = ends
+        centers = ends.mean(axis=1)
+        for part, center in zip(parts, centers, strict=True):
+            part.center = center
+            part.world = None
         return parts
+
+    def _restack(self, parts: list[_Part]) -> None:
+        self._stack_parts = parts
+        self._part_joints = np.array([p.joint for p in parts])
+        self._local_ends = np.array([p.local_ends for p in parts], dtype=float)
+
+    def world_of(self, part: _Part) -> Any:
+        """The part's placement (SE3) at the latest :meth:`place` (for Coal)."""
+        if part.world is None:
+            m = self.frames[part.joint - 1] * part.local if part.joint else part.local
+            if part.joint == 0 and not self._identity_base:
+                m = self.base * m
+            part.world = m
+        return part.world
 
     def lever_arms(self) -> list[float]:
         """Per joint, the farthest any point of the links it moves lies from its axis, at
@@ -278,20 +309,11 @@ class GroupBody:
         """(parts × joints): the farthest point of each part from each joint's axis that
         moves it (0 for a joint after the part), at the latest :meth:`place`."""
         n = self.num_joints
-        rotations = [np.asarray(f.rotation, dtype=float) for f in self.frames]
-        axes = np.array([r @ a for r, a in zip(rotations, self._joint_axes, strict=True)])
-        origins = np.array(self.origins, dtype=float)
-        centers = np.array([p.center for p in parts], dtype=float)
-        halves = np.array([p.half for p in parts], dtype=float)
-        along = np.array(
-            [
-                np.asarray(p.world.rotation, dtype=float)[:, 2] if p.half else (0.0, 0.0, 0.0)
-                for p in parts
-            ]
-        )
-        ends = np.stack(
-            [centers + halves[:, None] * along, centers - halves[:, None] * along], axis=1
-        )  # (P, 2, 3)
+        stack = self._homogeneous[1:]
+        axes = np.einsum("nij,nj->ni", stack[:, :3, :3], self._joint_axes)
+        origins = stack[:, :3, 3]
+        index = {id(p): i for i, p in enumerate(self._stack_parts)}
+        ends = self.ends[[index[id(p)] for p in parts]]  # (P, 2, 3)
         diff = ends[:, :, None, :] - origins[None, None, :, :]  # (P, 2, n, 3)
         axial = np.einsum("pend,nd->pen", diff, axes)
         square = np.einsum("pend,pend->pen", diff, diff) - axial * axial
@@ -318,7 +340,8 @@ class GroupBody:
                 b = parts[j]
                 if abs(a.order - b.order) < 2:
                     continue
-                if _distance(a.geometry, a.world, b.geometry, b.world) > SELF_NEIGHBOUR_M:
+                d = _distance(a.geometry, self.world_of(a), b.geometry, self.world_of(b))
+                if d > SELF_NEIGHBOUR_M:
                     out.append((i, j))
         return out
 
@@ -457,7 +480,7 @@ class CollisionWorld:
             d = float(
                 coal.distance(
                     part.geometry,
-                    coal.Transform3s(part.world),
+                    coal.Transform3s(body.world_of(part)),
                     obst.geometry,
                     obst.transform,
                     _DISTANCE,
@@ -511,7 +534,7 @@ class CollisionWorld:
                     continue
                 for k in (i, j):
                     if k not in transforms:
-                        transforms[k] = coal.Transform3s(parts[k].world)
+                        transforms[k] = coal.Transform3s(body.world_of(parts[k]))
                 d = float(
                     coal.distance(
                         a.geometry,
