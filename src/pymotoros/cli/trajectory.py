@@ -73,7 +73,8 @@ if TYPE_CHECKING:
 CHECK_EXIT_HELP: Final = (
     "\b\nExit codes:\n"
     f"  {EXIT_OK}  all clear\n"
-    f"  {EXIT_REFUSED}  MotoROS would refuse a point (the message names it and says what to do)\n"
+    f"  {EXIT_REFUSED}  MotoROS would refuse a point (the message names it and says what to do),\n"
+    "     or the motion hits an obstacle of the --config cell or the arm itself\n"
     f"  {EXIT_USAGE}  bad usage or a trajectory file that cannot be read\n"
     f"  {EXIT_WARNINGS}  MotoROS accepts it, but the robot should not do it (warnings)"
 )
@@ -113,13 +114,22 @@ class Loaded:
         return None if self.cell is None else self.cell.fsu_speed_limit_pct
 
     def check(self, current: list[float] | None = None) -> CheckReport:
-        return check_trajectory(
+        report = check_trajectory(
             self.trajectory,
             self.robot,
             self.controller,
             current=current,
             fsu_speed_limit_pct=self.fsu_pct,
         )
+        if self.cell is not None and self.cell.workspace.obstacles and report.accepted:
+            # the cell's obstacles: every contact along the motion (docs/workspace.md);
+            # imported here: Pinocchio and Coal load only for a cell with obstacles
+            from pymotoros.kinematics.collision import world_for_cell
+            from pymotoros.trajectory.collisions import find_collisions
+
+            world = world_for_cell(self.cell)
+            report.collisions = find_collisions(self.trajectory, self.cell, report.per_group, world)
+        return report
 
     def render(self, report: CheckReport) -> str:
         return render(report, self.trajectory, self.robot, self.controller, self.cell)
@@ -213,6 +223,7 @@ def render(
         lines.append(f"warning [{w.kind}] point {w.point}: {w.text}")
     if not report.warnings:
         lines.append("no warnings")
+    lines.extend(c.text() for c in report.collisions)
     return "\n".join(lines)
 
 
@@ -239,7 +250,8 @@ def check(
     Runs MotoROS 1.9.12's validation and interpolation exactly (the twin's engine),
     then checks what MotoROS never does: joint limits between points, per-tick
     increments and accelerations, feed rate, start margin; with --config, also what
-    the cell's FSU joint-speed limit does to the motion.
+    the cell's FSU joint-speed limit does to the motion and every collision with the
+    obstacles of its [workspace] (docs/workspace.md).
     """
     reject_models_with_config(cell_path, "robot_name", "controller_name")
     loaded = load_models(traj, robot_name, controller_name, cell_path)
@@ -320,6 +332,12 @@ def _plan_models(
     help="Approximate seconds between points.",
 )
 @output_option("Trajectory file to write (.csv, .json, .yaml)", required=True)
+@click.option(
+    "--avoid",
+    is_flag=True,
+    help="Go around the obstacles of the --config cell's [workspace] (OMPL); the result "
+    "passes `pymotoros check --config`. A goal that cannot be reached is refused (exit 1).",
+)
 def plan(
     waypoints: Path,
     robot_name: str,
@@ -329,6 +347,7 @@ def plan(
     accel_scale: float,
     sample_s: float,
     output: Path,
+    avoid: bool,
 ) -> None:
     """Time waypoints (one row per waypoint, every joint of the robot, rad; an optional
     header row) within the robot's limits, and write the trajectory."""
@@ -338,14 +357,17 @@ def plan(
     try:
         robot, controller = _plan_models(robot_name, controller_name, cell_path, speed_scale)
         rows = read_waypoints(waypoints, sum(g.num_axes for g in robot.groups))
-        result = plan_waypoints(
-            rows,
-            robot,
-            controller,
-            velocity_scaling=speed_scale,
-            acceleration_scaling=accel_scale,
-            sample_s=sample_s,
-        )
+        if avoid:  # around the cell's obstacles (trajectory/avoid.py)
+            result = _plan_avoiding(rows, cell_path, speed_scale, accel_scale, sample_s)
+        else:
+            result = plan_waypoints(
+                rows,
+                robot,
+                controller,
+                velocity_scaling=speed_scale,
+                acceleration_scaling=accel_scale,
+                sample_s=sample_s,
+            )
         write_trajectory_file(result, output)
     except ConfigError as exc:
         raise BadInput(str(exc)) from None
@@ -355,6 +377,34 @@ def plan(
         f"wrote {output}: {len(result.times)} points, {result.duration:.3f} s "
         f"(formats: {', '.join(FORMATS)})"
     )
+
+
+def _plan_avoiding(
+    rows: list[list[float]],
+    cell_path: Path | None,
+    speed_scale: float,
+    accel_scale: float,
+    sample_s: float,
+) -> Trajectory:
+    """``plan --avoid``: the cell's obstacles are needed; a blocked goal is one line, exit 1."""
+    from pymotoros.kinematics.collision import world_for_cell
+    from pymotoros.trajectory.avoid import PathBlockedError, plan_avoiding
+
+    if cell_path is None:
+        raise click.UsageError("--avoid needs --config CELL.toml: the cell names the obstacles")
+    cell = load_cell_models(cell_path)
+    try:
+        return plan_avoiding(
+            rows,
+            cell,
+            world_for_cell(cell),
+            velocity_scaling=speed_scale,
+            acceleration_scaling=accel_scale,
+            sample_s=sample_s,
+        )
+    except PathBlockedError as exc:
+        click.echo(f"refused: {exc}", err=True)
+        sys.exit(EXIT_REFUSED)
 
 
 # --------------------------------------------------------------------------- run

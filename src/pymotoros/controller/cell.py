@@ -44,6 +44,7 @@ from pymotoros.models.cell import (
 )
 from pymotoros.models.s1cxg import S1cxgTable, parse_s1cxg
 from pymotoros.models.toml_file import TomlTable
+from pymotoros.models.workspace import EMPTY_WORKSPACE, Workspace
 from pymotoros.protocol.constants import MAX_TOOL_NUMBER
 
 logger = logging.getLogger(__name__)
@@ -136,6 +137,8 @@ class CellConfig:
     model_groups: tuple[str, ...] = ()
     """Each group's name in its robot model (empty: the group's own name), see
     :attr:`pymotoros.models.cell.CellModels.model_groups`."""
+    workspace: Workspace = EMPTY_WORKSPACE
+    """``[workspace]``: obstacles the robot may touch (docs/workspace.md)."""
 
     def tool(self, group_index: int, number: int) -> ToolConfig:
         """Tool file ``number`` of a group: its own ``[[groups.tools]]`` entry, else the
@@ -216,6 +219,8 @@ def cell_from_file(cell_file: CellFile) -> CellConfig:
     numbers = {t.number for t in tools}.union(t.number for gt in group_tools for t in gt)
     initial = _initial(top.table("initial"), groups, numbers)
     peripherals = _peripherals(top, ctrl)
+    top.used.add("workspace")  # obstacles: read by models/cell.py (models/workspace.py)
+    workspace = models.workspace
     top.finish()
     for w in models.warnings:
         logger.warning("%s: %s", cell_file.source, w)
@@ -236,6 +241,7 @@ def cell_from_file(cell_file: CellFile) -> CellConfig:
         startup=startup,
         peripherals=peripherals,
         model_groups=models.model_groups,
+        workspace=workspace,
     )
 
 

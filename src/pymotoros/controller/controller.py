@@ -26,7 +26,7 @@ It is pure and deterministic: no sockets, no clock but its own, randomness only 
 
 from __future__ import annotations
 
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Mapping, Sequence
 
 from pymotoros.controller import signals
 from pymotoros.controller.alarms import Alarm
@@ -69,7 +69,10 @@ from pymotoros.controller.skillsnd import SkillListeners
 from pymotoros.controller.state_view import FEEDBACK_FIELDS, StateView
 from pymotoros.controller.tool_point import TcpTracker
 from pymotoros.controller.trajectory import DhTable, TrajectoryPoints
+from pymotoros.controller.workspace_runtime import WorkspaceRuntime
+from pymotoros.kinematics.collision import Contact
 from pymotoros.models import robot_model
+from pymotoros.models.workspace import Obstacle
 from pymotoros.protocol.constants import IoResultCode, MotionCommand
 
 __all__ = ["FEEDBACK_FIELDS", "MAX_ALARM_CODE", "SnapshotObserver", "VirtualController"]
@@ -122,6 +125,7 @@ class VirtualController:
             peripherals=Peripherals(ctx.io, cell.peripherals),
             scheduler=self._scheduler,
         )
+        self._workspace = WorkspaceRuntime(ctx, self._safety.pfl, self._keys, self._cycle)
         # The tick runs every 4 ms for every twin: callers reach the cycle's tick
         # directly, without the facade's call in between (tick() below documents it).
         self.tick = self._cycle.tick  # type: ignore[method-assign]
@@ -419,6 +423,31 @@ class VirtualController:
     def safety(self) -> SafetyUnit:
         """The cell's safety functions (PFL, FSU), for the control API and tests."""
         return self._safety
+
+    @property
+    def workspace_contacts(self) -> tuple[Contact, ...]:
+        """What the robot touched at the latest workspace check (empty: nothing, or a cell
+        without obstacles)."""
+        contact = self._cycle.contact
+        return contact.contacts if contact is not None else ()
+
+    @property
+    def obstacles(self) -> tuple[Obstacle, ...]:
+        """The cell's obstacles now (the cell file's, then as put and removed)."""
+        return self._workspace.obstacles
+
+    def put_obstacle(self, entry: Mapping[str, object]) -> Obstacle:
+        """Add an obstacle or move the one of that name (the cell file's keys; a bad one
+        is a ConfigError naming its key). The contact check follows from the next tick."""
+        return self._workspace.put(entry)
+
+    def remove_obstacle(self, name: str) -> None:
+        """Remove the obstacle ``name`` (ConfigError when there is none)."""
+        self._workspace.remove(name)
+
+    def workspace_state(self) -> dict[str, object]:
+        """``{"obstacles": [...], "contacts": [...]}``: the state document's workspace."""
+        return self._workspace.state()
 
     def pfl_event(
         self, event: str, *, retreat_ms: int = DEFAULT_RETREAT_MS, stop_ms: int = PFL_STOP_MS

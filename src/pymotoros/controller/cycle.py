@@ -9,6 +9,8 @@ tick, in this order:
 3. the INFORM job (every task as far as it goes);
 4. the MotoROS status monitor on its 10 ms boundaries, and the eco-mode idle timer;
 5. the IncMove task (one increment per group to the servos), idle servos otherwise;
+   the workspace contact check of the new commanded position (only in a cell with
+   obstacles);
 6. the AddToIncQueue tasks (interpolation into the queues);
 7. the outputs that follow the servos (S1CxG registers), the scenario's events, the
    simulated peripherals;
@@ -26,6 +28,7 @@ from pymotoros.controller.processes import Scheduler
 from pymotoros.controller.readiness import Readiness
 from pymotoros.controller.registers import RegisterOutputs
 from pymotoros.controller.safety import SafetyUnit
+from pymotoros.controller.safety.contact import ContactFunction
 from pymotoros.controller.safety.startup import MotoRosStartup
 from pymotoros.controller.scenario_player import ScenarioPlayer
 
@@ -46,6 +49,7 @@ class TickCycle:
         scenarios: ScenarioPlayer,
         peripherals: Peripherals,
         scheduler: Scheduler,
+        contact: ContactFunction | None = None,
     ) -> None:
         self._ctx = ctx
         self._startup = startup
@@ -59,6 +63,8 @@ class TickCycle:
         self._peripherals = peripherals
         self._has_peripherals = peripherals.active
         self._scheduler = scheduler
+        self.contact = contact
+        """The workspace contact check (None: a cell without obstacles, nothing to do)."""
 
     def tick(self) -> None:
         """Advance controller time by exactly one interpolation period.
@@ -91,6 +97,8 @@ class TickCycle:
         if not moved and not safety_moved:
             for servo in ctx.servos:
                 servo.idle()
+        elif self.contact is not None:
+            self.contact.tick(now)
         inc_move.fill_tick()
         if self._registers.active:  # S1CxG register outputs: only when configured
             self._refresh_registers()

@@ -29,6 +29,7 @@ from pymotoros.models.cell_tools import CellTool, cell_tools
 from pymotoros.models.controllers import DEFAULT_CONTROLLER, ControllerModel, controller_model
 from pymotoros.models.robots import DEFAULT_ROBOT, GroupKind, GroupModel, RobotModel, robot_model
 from pymotoros.models.toml_file import TomlTable, read_toml
+from pymotoros.models.workspace import EMPTY_WORKSPACE, Workspace, workspace_from_dict
 
 
 @dataclass(frozen=True, slots=True)
@@ -53,6 +54,9 @@ class CellModels:
     tools: tuple[tuple[CellTool, ...], ...] = ()
     """Per group, its tool files (``[[tools]]``, ``[[groups.tools]]``): the TCPs the
     client's Cartesian operations use (:mod:`pymotoros.models.cell_tools`)."""
+
+    workspace: Workspace = EMPTY_WORKSPACE
+    """``[workspace]``: obstacles around the robot (models/workspace.py)."""
 
 
 PORT_KINDS: Final = ("motion", "state", "io", "http")
@@ -218,6 +222,7 @@ def _models(data: Mapping[str, object], source: str, parts: Sequence[GroupPart])
         controllers=first.controllers,
         pfl=any(robot_model(r).pfl for r in robots),
     )
+    workspace = workspace_from_dict(data.get("workspace"), source, [g.name for g in groups])
     return CellModels(
         str(name),
         ctrl,
@@ -227,6 +232,7 @@ def _models(data: Mapping[str, object], source: str, parts: Sequence[GroupPart])
         fsu_speed_limit_pct(data, source),
         tuple(p.group.name for p in parts[: len(groups)]),
         cell_tools(data, source, groups),
+        workspace,
     )
 
 

@@ -32,6 +32,7 @@ from pymotoros.models.rules import TrajPoint as RulesPoint
 from pymotoros.motion import GroupAxes, interpolate_arrays, to_pulses
 from pymotoros.motion.numerics import c_int_array
 from pymotoros.protocol.constants import InvalidSubcode
+from pymotoros.trajectory.collisions import Collision
 from pymotoros.trajectory.files import Trajectory
 
 I64Array = npt.NDArray[np.int64]
@@ -106,10 +107,13 @@ class CheckReport:
     per_group: dict[str, tuple[I64Array, I64Array]] = field(default_factory=dict, repr=False)
     """Group name → (time_ms, increments) per tick as MotoROS executes them: its queue
     entries, a partial step joined with the next as IncMove joins them (:func:`per_tick`)."""
+    collisions: list[Collision] = field(default_factory=list)
+    """Contacts with the cell's obstacles or itself along the motion (``--config`` with a
+    ``[workspace]``, trajectory/collisions.py): a crash, so the exit code is 1."""
 
     @property
     def exit_code(self) -> int:
-        if not self.accepted:
+        if not self.accepted or self.collisions:
             return EXIT_REFUSED
         return EXIT_WARNINGS if self.warnings else EXIT_OK
 
@@ -137,6 +141,7 @@ class CheckReport:
             "duration_s": self.duration_s,
             "increments": self.increments,
             "start_margin_pulses": self.start_margin_pulses,
+            "collisions": [c.to_json() for c in self.collisions],
         }
 
 
