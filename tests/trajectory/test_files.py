@@ -186,3 +186,14 @@ def test_bad_json_and_partial_groups() -> None:
 def test_non_finite_values_are_refused() -> None:
     with pytest.raises(TrajectoryFileError, match="point 1: a position"):
         Trajectory(("a",), np.array([0.0, 1.0]), np.array([[0.0], [np.nan]]), np.zeros((2, 1)))
+
+
+@pytest.mark.parametrize("value", ["true", '"0.5"', "null"])
+def test_a_position_that_is_not_a_json_number_is_refused(value: str) -> None:
+    """``true`` and ``"0.5"`` pass ``float()``; a trajectory file's values are numbers only
+    (found by the bad-file Hypothesis test: ``true`` was read as 1.0 rad)."""
+    good = to_json(_sample(HC10.groups[0].joint_names))
+    head, sep, tail = good.partition('"positions": [')
+    bad = head + sep + value + tail[tail.index(","):]
+    with pytest.raises(TrajectoryFileError, match="not all numbers"):
+        parse_json(bad)

@@ -26,6 +26,7 @@ import click
 from click.shell_completion import CompletionItem
 
 from pymotoros.cli.settings import cell_option, envvar
+from pymotoros.errors import PymotorosError
 from pymotoros.models import DEFAULT_CONTROLLER, DEFAULT_ROBOT, ROBOTS, ControllerType
 from pymotoros.protocol.constants import TCP_PORT_IO, TCP_PORT_MOTION, TCP_PORT_STATE
 
@@ -39,9 +40,10 @@ EXIT_CONNECTION: Final = 3
 PORT: Final = click.IntRange(1, 65535)
 
 
-class BadInput(click.ClickException):
+class BadInput(PymotorosError, click.ClickException):  # noqa: N818 (a name the CLI uses)
     """A file or value that cannot be used, told in one line without a usage banner
-    (``error: …`` is what the robot commands print; click prints ``Error: …``): exit 2."""
+    (``error: …`` is what the robot commands print; click prints ``Error: …``): exit 2.
+    A :class:`~pymotoros.errors.PymotorosError` too, so that the one tree holds."""
 
     exit_code = EXIT_USAGE
 

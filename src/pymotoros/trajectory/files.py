@@ -205,9 +205,12 @@ def parse_csv(text: str, robot: RobotModel, name: str = "CSV") -> Trajectory:
 def _floats(value: Any, count: int, where: str) -> list[float]:
     if not isinstance(value, list) or len(value) != count:
         raise TrajectoryFileError(f"{where}: needs a list of {count} numbers, got {value!r}")
+    # true/false and "0.5" would pass float(): a JSON or YAML number is an int or a float
+    if not all(isinstance(v, int | float) and not isinstance(v, bool) for v in value):
+        raise TrajectoryFileError(f"{where}: not all numbers: {value!r:.200}")
     try:
         return [float(v) for v in value]
-    except (TypeError, ValueError, OverflowError):  # OverflowError: an int beyond a double
+    except OverflowError:  # an int beyond a double
         raise TrajectoryFileError(f"{where}: not all numbers: {value!r:.200}") from None
 
 
