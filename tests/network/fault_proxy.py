@@ -75,8 +75,11 @@ class FaultProxy:
         self._vanished = False
         self._changed = asyncio.Event()
         self.port = 0
+        self.loop: asyncio.AbstractEventLoop | None = None
+        """The loop the proxy runs on (set by :meth:`start`)."""
 
     async def start(self) -> FaultProxy:
+        self.loop = asyncio.get_running_loop()
         self._server = await asyncio.start_server(self._accept, "127.0.0.1", 0)
         self.port = self._server.sockets[0].getsockname()[1]
         return self
