@@ -245,6 +245,20 @@ def _cell(
     help="Tick every 4 ms even while no client is connected (by default an unobserved "
     "twin runs its ticks in batches of 100 ms, caught up before anyone looks).",
 )
+@click.option(
+    "--token",
+    envvar="PYMOTOROS_TOKEN",
+    default=None,
+    metavar="TOKEN",
+    help="Require 'Authorization: Bearer TOKEN' on every /api route, /metrics and the "
+    "/ws/state feed (also PYMOTOROS_TOKEN); needed to serve the control API beyond "
+    "loopback. The MotoROS ports stay open, as on a real controller.",
+)
+@click.option(
+    "--insecure-http",
+    is_flag=True,
+    help="Serve the control API beyond loopback without a token (a warning is logged).",
+)
 @click.pass_context
 def sim(
     ctx: click.Context,
@@ -261,6 +275,8 @@ def sim(
     record_path: Path | None = None,
     realtime: bool = False,
     no_idle_batching: bool = False,
+    token: str | None = None,
+    insecure_http: bool = False,
 ) -> None:
     """Run the virtual controller (MotoROS on 50240/50241/50242, control API on --http-port).
 
@@ -268,6 +284,7 @@ def sim(
     robot commands. Port 0 lets the OS choose; the ready line (and --ports-file) tells
     which ports were taken.
     """
+    token = check_http_access(host, token, insecure_http)  # runtime/access.py
     if len(config_path) > 1:
         from pymotoros.cli.sim_cells import run_cells
 
@@ -283,6 +300,7 @@ def sim(
             ports_file=ports_file,
             record_path=record_path,
             idle_batching=False if no_idle_batching else None,
+            token=token,
         )
         return
     config_file = config_path[0] if config_path else None
@@ -307,6 +325,7 @@ def sim(
         io_port=io_port,
         http_port=http_port,
         byte_order=order,
+        token=token,
     )
     if realtime:
         from pymotoros.runtime.realtime import request_realtime
@@ -322,6 +341,27 @@ def sim(
         port_hint="let the OS choose with --motion-port 0 --state-port 0 --io-port 0 "
         "--http-port 0 --ports-file FILE",
     )
+
+
+def check_http_access(host: str, token: str | None, insecure: bool) -> str | None:
+    """The token to serve with; a usage error (exit 2) for a control API beyond loopback
+    without one, unless ``--insecure-http`` (then a warning)."""
+    from pymotoros.runtime.access import loopback_or_token
+    from pymotoros.runtime.tcp import is_loopback
+
+    token = token or None
+    if is_loopback(host):
+        return token
+    refusal = loopback_or_token(host, token, insecure)
+    if refusal is not None:
+        raise click.UsageError(refusal)
+    if token is None:
+        logging.getLogger(__name__).warning(
+            "--insecure-http: the control API on %s has no token; anybody who reaches it "
+            "can E-stop, move and force IO",
+            host,
+        )
+    return token
 
 
 def serve(

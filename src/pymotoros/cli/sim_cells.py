@@ -90,6 +90,7 @@ def run_cells(
     ports_file: Path | None,
     record_path: Path | None = None,
     idle_batching: bool | None = None,
+    token: str | None = None,
 ) -> None:
     """Load every cell, check their ports, serve them until SIGINT/SIGTERM."""
     _refuse_single_cell_options(ctx, scenario_path)
@@ -109,6 +110,7 @@ def run_cells(
                 io_port=ports.io or 0,
                 http_port=ports.http or 0,
                 byte_order=cell.controller.byte_order,  # FS100 speaks big-endian
+                token=token,  # one token for every cell's control API
             )
             cells.append(FleetCell(name, VirtualController(cell), config))
             titles.append(cell.name)

@@ -249,6 +249,8 @@ class Fleet:
             )
             for c in cells
         )
+        for cell, app in zip(cells, self.apps, strict=True):
+            app.metrics_cell = cell.name  # GET /metrics labels each family with its cell
         self._stop = asyncio.Event()
         self._supervisor: asyncio.Task[None] | None = None
         self._started = False
