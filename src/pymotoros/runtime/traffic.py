@@ -33,10 +33,10 @@ class Traffic:
         self.requests[msg_type] = self.requests.get(msg_type, 0) + 1
 
     def reply(self, message: Message) -> None:
-        if type(message) is MotoMotionReply:
-            key = (message.command, message.result)
-            if message.result:
-                refusal = (message.result, message.subcode)
+        if type(message) is MotoMotionReply:  # the motion port's every reply: kept lean
+            key = message[2:4]  # (command, result): the tuple's own fields, no properties
+            if key[1]:
+                refusal = message[3:5]  # (result, subcode)
                 self.refusals[refusal] = self.refusals.get(refusal, 0) + 1
         else:
             code = getattr(message, "result_code", None)
