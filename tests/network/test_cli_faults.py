@@ -12,8 +12,10 @@ import concurrent.futures
 import threading
 from collections.abc import Coroutine, Iterator
 from contextlib import contextmanager
+from pathlib import Path
 from typing import Any, TypeVar
 
+import pytest
 from click.testing import CliRunner
 
 from pymotoros.cli.main import cli
@@ -57,9 +59,25 @@ def proxies_on_a_thread(twin: RunningTwin) -> Iterator[tuple[FaultProxy, FaultPr
         thread.stop()
 
 
-def test_move_exits_3_with_what_was_lost_when_the_state_stream_stalls(
-    pymotoros_twin: RunningTwin,
+def planned_trajectory(tmp_path: Path) -> Path:
+    """A slow out-and-back trajectory from the twin's home, timed by ``pymotoros plan``."""
+    way = tmp_path / "way.csv"
+    way.write_text("s,l,u,r,b,t\n0,0,0,0,0,0\n0.4,0.2,0.3,0,-0.5,0\n0,0,0,0,0,0\n")
+    out = tmp_path / "traj.yaml"
+    result = CliRunner().invoke(cli, ["plan", str(way), "--speed-scale", "0.1", "-o", str(out)])
+    assert result.exit_code == 0, result.output
+    return out
+
+
+@pytest.mark.parametrize("command", ["move", "run"])
+def test_move_and_run_exit_3_with_what_was_lost_when_the_state_stream_stalls(
+    pymotoros_twin: RunningTwin, tmp_path: Path, command: str
 ) -> None:
+    what = (
+        ["move", "--speed-scale", "0.05", "0.3", "-0.2", "0.2", "0", "0.1", "0"]
+        if command == "move"
+        else ["run", str(planned_trajectory(tmp_path))]
+    )
     with proxies_on_a_thread(pymotoros_twin) as (motion, state, io):
         stalled = concurrent.futures.Future[None]()
 
@@ -72,28 +90,10 @@ def test_move_exits_3_with_what_was_lost_when_the_state_stream_stalls(
             stalled.set_result(None)
 
         watcher = asyncio.run_coroutine_threadsafe(stall_after_points(), motion_loop(motion))
+        ports = ["--motion-port", str(motion.port), "--state-port", str(state.port)]
         result = CliRunner().invoke(
             cli,
-            [
-                "move",
-                "--host",
-                "127.0.0.1",
-                "--motion-port",
-                str(motion.port),
-                "--state-port",
-                str(state.port),
-                "--io-port",
-                str(io.port),
-                "--enable",
-                "--speed-scale",
-                "0.05",
-                "0.3",
-                "-0.2",
-                "0.2",
-                "0",
-                "0.1",
-                "0",
-            ],
+            [*what, "--host", "127.0.0.1", *ports, "--io-port", str(io.port), "--enable"],
             catch_exceptions=False,
         )
         watcher.result(timeout=5)
