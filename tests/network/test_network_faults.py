@@ -162,6 +162,34 @@ async def test_latency_and_jitter_moves_still_complete(pymotoros_twin: RunningTw
         assert restart == result.stream.points
 
 
+async def test_busy_retries_send_no_point_twice_and_skip_none(
+    pymotoros_twin: RunningTwin,
+) -> None:
+    """Points 4 ms apart fill MotoROS's queue (0.8 s): the rest go through BUSY retries.
+    (No added latency here: a round trip longer than 4 ms never lets the queue fill.)"""
+    async with (
+        proxied(pymotoros_twin) as proxies,
+        client_through(proxies) as client,
+    ):
+        await client.start_trajectory_mode()
+        start = await client.current_positions(0)
+        trajectory = client.plan(start, GOAL, speed_scale=0.1, sample_period=0.004)
+        result = await client.execute(trajectory)
+        assert distance(result.final_positions, GOAL) < 1e-3
+    link = proxies.motion.links[0]
+    busy = [
+        rep
+        for req, rep in exchange(link)
+        if isinstance(req, JointTrajPtFull)
+        and isinstance(rep, MotoMotionReply)
+        and rep.result == ResultCode.BUSY
+    ]
+    assert busy, "the queue never filled: no BUSY to retry"
+    assert result.stream.busy_replies == len(busy)
+    accepted = assert_no_point_twice_or_skipped(link)
+    assert len(accepted) == len(trajectory.points)
+
+
 async def test_bytes_one_at_a_time_moves_still_complete(pymotoros_twin: RunningTwin) -> None:
     async with proxied(pymotoros_twin, one_byte=True) as proxies:
         async with client_through(proxies) as client:
@@ -193,9 +221,11 @@ async def test_stalled_state_stream_stops_the_move_within_its_bound(
             await move
         noticed = time.monotonic() - stalled_at
         error = caught.value
-        assert noticed < DEFAULT_STATE_STALL_S + 0.5
+        # noticed at the bound (the silence measured then), then the STOP_MOTION round
+        # trip; the margins are for a loaded CI machine
+        assert noticed < DEFAULT_STATE_STALL_S + 1.0
         assert error.silent_s is not None
-        assert error.silent_s >= DEFAULT_STATE_STALL_S
+        assert DEFAULT_STATE_STALL_S <= error.silent_s < DEFAULT_STATE_STALL_S + 0.5
         assert error.stopped
         link = motion.links[0]
         assert error.accepted_points == len(assert_no_point_twice_or_skipped(link))
