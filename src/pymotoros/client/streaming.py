@@ -543,6 +543,12 @@ class TrajectoryStreamer:
                 cancel_later.append(grace)
 
         watchdog = StallWatchdog(self.states, self.state_stall_s, on_stall)
+
+        def disarm() -> None:
+            watchdog.close()
+            for handle in cancel_later:
+                handle.cancel()
+
         try:
             stats = await self.send_points(
                 trajectory,
@@ -558,12 +564,14 @@ class TrajectoryStreamer:
                 trajectory, groups, monitor, goal_tolerance=goal_tolerance, timeout_s=timeout_s
             )
         except _StreamStalledError:
+            disarm()  # nothing may cancel the stop below
             raise await self._stream_lost(
                 groups, self._stalled_for, accepted_count, trajectory
             ) from None
         except asyncio.CancelledError:
             if task is None or not self._stalled():  # a cancel that is not the watchdog's
                 raise
+            disarm()
             task.uncancel()
             raise await self._stream_lost(
                 groups, self._stalled_for, accepted_count, trajectory
@@ -571,14 +579,13 @@ class TrajectoryStreamer:
         except ConnectionLostError as exc:
             if self.states.error is None or isinstance(exc, StateStreamLostError):
                 raise  # the motion port went: nothing can be stopped from here
+            disarm()
             lost = await self._stream_lost(groups, None, accepted_count, trajectory)
             if not lost.stopped and self._motion_gone:
                 raise  # both went together (the controller closed): the plain loss says it
             raise lost from exc
         finally:
-            watchdog.close()
-            for handle in cancel_later:
-                handle.cancel()
+            disarm()
             remove()
         return MoveResult(
             trajectory, final, stats, monitor.report, self.clock.now() - started, groups

@@ -29,6 +29,10 @@ DEFAULT_STATE_STALL_S: Final = 1.0
 """Seconds without a state message after which a move is stopped (MotoROS sends ~40 Hz)."""
 
 
+def _nothing() -> None:
+    """A listener already removed."""
+
+
 class StallWatchdog:
     """Calls ``on_stall(silence_s)`` once when ``states`` is silent for ``bound_s``."""
 
@@ -68,4 +72,5 @@ class StallWatchdog:
         if self._timer is not None:
             self._timer.cancel()
             self._timer = None
-        self._remove()
+        remove, self._remove = self._remove, _nothing
+        remove()
