@@ -14,5 +14,7 @@ from pymotoros.controller.api import (
 __all__ = ["SimulatedController"]
 
 
-class SimulatedController(MotoRosController, OperatorPanel, FaultInjection, SafetyPanel, Protocol):
+class SimulatedController(
+    MotoRosController, OperatorPanel, FaultInjection, SafetyPanel, Protocol
+):
     """``VirtualController`` satisfies this: the servers use one side, the HTTP API the rest."""
