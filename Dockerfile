@@ -1,15 +1,19 @@
 # One pymotoros twin per container (issue 13): run a fleet with the tools you already
-# have (docker compose, a CI service container, a Kubernetes Deployment), one twin each.
+# have (docker compose, a CI service container, a Kubernetes Deployment: deploy/k8s/),
+# one twin each.
 #
 #   docker build -t pymotoros .
-#   docker run --rm -p 50240-50242:50240-50242 -p 8080:8080 pymotoros
-#   docker run --rm -v $PWD/examples/cells:/cells pymotoros --config /cells/hc10_yrc1000.toml
+#   docker run --rm -e PYMOTOROS_TOKEN=change-me -p 50240-50242:50240-50242 -p 8080:8080 pymotoros
+#   docker run --rm -e PYMOTOROS_TOKEN=change-me -v $PWD/examples/cells:/cells pymotoros --config /cells/hc10_yrc1000.toml
 #
 # The ready line (`pymotoros sim ready motion=... state=... io=... http=...`) is the
-# first line on stdout; the control API's GET /api/state is the health check.
+# first line on stdout; GET /healthz (never guarded) is the health check.
 # `--host 0.0.0.0`: a container's loopback is unreachable from `docker run -p`, so the
-# twin listens on every interface of its own network namespace (the sim warns: the
-# control API has no authentication; publish its port only where you trust the network).
+# twin listens on every interface of its own network namespace. The control API (E-stop,
+# modes, forced IO, the pendant's buttons) then needs a token (issue 23): the container
+# refuses to start without PYMOTOROS_TOKEN (or --token), naming it; every /api route,
+# /metrics and /ws/state take `Authorization: Bearer TOKEN`. The MotoROS ports stay open,
+# as on a real controller: publish them only where you trust the network.
 # Linted by hadolint and checked against the CLI by tests/test_dockerfile.py.
 FROM python:3.11-slim
 
@@ -23,5 +27,5 @@ RUN python -m pip install --no-cache-dir . \
 USER 65534:65534
 EXPOSE 50240 50241 50242 8080
 HEALTHCHECK --interval=10s --timeout=3s --start-period=20s \
-    CMD ["python", "-c", "import urllib.request; urllib.request.urlopen('http://127.0.0.1:8080/api/state', timeout=2)"]
+    CMD ["python", "-c", "import urllib.request; urllib.request.urlopen('http://127.0.0.1:8080/healthz', timeout=2)"]
 ENTRYPOINT ["pymotoros", "sim", "--host", "0.0.0.0"]

@@ -8,7 +8,9 @@ Docker engine: linted by hadolint, and its contract held against the package its
 - its ENTRYPOINT is ``pymotoros sim`` with options the CLI accepts, bound to a
   non-loopback address (``docker run -p`` cannot reach a container's loopback);
 - its HEALTHCHECK runs a program the image has (the base image's python) against an
-  endpoint the control API serves, on the port the sim listens on.
+  endpoint the control API serves, on the port the sim listens on, and that needs no token;
+- bound beyond loopback, it refuses to start without a token (issue 23), naming
+  PYMOTOROS_TOKEN's option, and starts with one.
 """
 
 from __future__ import annotations
@@ -26,7 +28,7 @@ from pathlib import Path
 import click
 import pytest
 
-from pymotoros.cli.sim import sim
+from pymotoros.cli.sim import check_http_access, sim
 from pymotoros.protocol.constants import TCP_PORT_IO, TCP_PORT_MOTION, TCP_PORT_STATE
 from pymotoros.runtime.app import DEFAULT_HTTP_PORT
 
@@ -171,8 +173,17 @@ def test_the_healthcheck_uses_what_the_image_has() -> None:
     url = re.search(r"http://127\.0\.0\.1:(\d+)(/[\w/]*)", script)
     assert url, script
     assert int(url[1]) == DEFAULT_HTTP_PORT
-    assert url[2] == "/api/state"
+    assert url[2] == "/healthz"  # open even when the control API needs its token
     assert "timeout" in script  # a hung twin fails the check instead of hanging it
+
+
+def test_the_entrypoint_needs_a_token_for_its_control_api() -> None:
+    argv = exec_form(only("ENTRYPOINT"))
+    host = sim.make_context("sim", argv[2:]).params["host"]
+    with pytest.raises(click.UsageError, match="--token"):
+        check_http_access(host, None, insecure=False)
+    assert check_http_access(host, "from-a-secret", insecure=False) == "from-a-secret"
+    assert "PYMOTOROS_TOKEN" in DOCKERFILE.read_text()
 
 
 def test_it_runs_as_an_unprivileged_user() -> None:

@@ -142,9 +142,12 @@ class RepeatableOption(click.Option):
         return super().type_cast_value(ctx, value)
 
 
-def simulator_config(host: str, ports: Sequence[int], cell: CellConfig) -> SimulatorConfig:
+def simulator_config(
+    host: str, ports: Sequence[int], cell: CellConfig, token: str | None = None
+) -> SimulatorConfig:
     """Where one cell listens (``ports``: motion, state, io, http; 0: the OS chooses),
-    in its controller's byte order (FS100 speaks big-endian, reference §1.1)."""
+    in its controller's byte order (FS100 speaks big-endian, reference §1.1), and the
+    control API's bearer token (None: open, loopback only)."""
     motion, state, io, http = ports
     return SimulatorConfig(
         host=host,
@@ -153,6 +156,7 @@ def simulator_config(host: str, ports: Sequence[int], cell: CellConfig) -> Simul
         io_port=io,
         http_port=http,
         byte_order=cell.controller.byte_order,
+        token=token,
     )
 
 
@@ -255,6 +259,20 @@ def _cell(
     help="Tick every 4 ms even while no client is connected (by default an unobserved "
     "twin runs its ticks in batches of 100 ms, caught up before anyone looks).",
 )
+@click.option(
+    "--token",
+    envvar="PYMOTOROS_TOKEN",
+    default=None,
+    metavar="TOKEN",
+    help="Require 'Authorization: Bearer TOKEN' on every /api route, /metrics and the "
+    "/ws/state feed (also PYMOTOROS_TOKEN); needed to serve the control API beyond "
+    "loopback. The MotoROS ports stay open, as on a real controller.",
+)
+@click.option(
+    "--insecure-http",
+    is_flag=True,
+    help="Serve the control API beyond loopback without a token (a warning is logged).",
+)
 @click.pass_context
 def sim(
     ctx: click.Context,
@@ -271,6 +289,8 @@ def sim(
     record_path: Path | None = None,
     realtime: bool = False,
     no_idle_batching: bool = False,
+    token: str | None = None,
+    insecure_http: bool = False,
 ) -> None:
     """Run the virtual controller (MotoROS on 50240/50241/50242, control API on --http-port).
 
@@ -278,6 +298,7 @@ def sim(
     robot commands. Port 0 lets the OS choose; the ready line (and --ports-file) tells
     which ports were taken.
     """
+    token = check_http_access(host, token, insecure_http)  # runtime/access.py
     if len(config_path) > 1:
         from pymotoros.cli.sim_cells import run_cells
 
@@ -290,6 +311,7 @@ def sim(
             ports_file=ports_file,
             record_path=record_path,
             idle_batching=False if no_idle_batching else None,
+            token=token,
         )
         return
     config_file = config_path[0] if config_path else None
@@ -301,7 +323,7 @@ def sim(
     _request_realtime(realtime)
     app = SimulatorApp(
         controller,
-        simulator_config(host, ports, cell),
+        simulator_config(host, ports, cell, token),
         idle_batching=False if no_idle_batching else None,
     )
     recorder = open_recorder(record_path, [app])  # before the coroutine: it may refuse
@@ -342,6 +364,27 @@ def _request_realtime(realtime: bool) -> None:
         from pymotoros.runtime.realtime import request_realtime
 
         request_realtime()  # a warning line if refused; the twin runs on either way
+
+
+def check_http_access(host: str, token: str | None, insecure: bool) -> str | None:
+    """The token to serve with; a usage error (exit 2) for a control API beyond loopback
+    without one, unless ``--insecure-http`` (then a warning)."""
+    from pymotoros.runtime.access import loopback_or_token
+    from pymotoros.runtime.tcp import is_loopback
+
+    token = token or None
+    if is_loopback(host):
+        return token
+    refusal = loopback_or_token(host, token, insecure)
+    if refusal is not None:
+        raise click.UsageError(refusal)
+    if token is None:
+        logging.getLogger(__name__).warning(
+            "--insecure-http: the control API on %s has no token; anybody who reaches it "
+            "can E-stop, move and force IO",
+            host,
+        )
+    return token
 
 
 def serve(

@@ -82,6 +82,7 @@ def run_cells(
     ports_file: Path | None,
     record_path: Path | None = None,
     idle_batching: bool | None = None,
+    token: str | None = None,
 ) -> None:
     """Load every cell, check their ports, serve them until SIGINT/SIGTERM."""
     _refuse_single_cell_options(ctx, scenario_path)
@@ -94,7 +95,7 @@ def run_cells(
         labels: list[CellLabel] = []
         for name, path, cell_file in zip(names, paths, files, strict=True):
             cell = cell_from_file(cell_file)
-            cells.append(_fleet_cell(name, cell, cell_file.ports, host))
+            cells.append(_fleet_cell(name, cell, cell_file.ports, host, token))
             labels.append(CellLabel.of(name, cell, path))
         fleet = Fleet(cells, idle_batching=idle_batching)
     except ConfigError as exc:
@@ -109,9 +110,12 @@ def run_cells(
     )
 
 
-def _fleet_cell(name: str, cell: CellConfig, ports: CellPorts, host: str) -> FleetCell:
-    """One cell of the fleet: its controller, on its file's ports (else 0, the OS chooses)."""
-    config = simulator_config(host, [ports.get(kind) or 0 for kind in PORT_KINDS], cell)
+def _fleet_cell(
+    name: str, cell: CellConfig, ports: CellPorts, host: str, token: str | None
+) -> FleetCell:
+    """One cell of the fleet: its controller, on its file's ports (else 0, the OS chooses),
+    behind the one token every cell's control API shares."""
+    config = simulator_config(host, [ports.get(kind) or 0 for kind in PORT_KINDS], cell, token)
     return FleetCell(name, VirtualController(cell), config)
 
 

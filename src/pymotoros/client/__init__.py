@@ -27,6 +27,7 @@ from pymotoros.client.errors import (
     RequestTimeoutError,
     SpeedLimitError,
     StartPositionError,
+    StateStreamLostError,
 )
 from pymotoros.client.motion_port import MotionPort, MotionReadiness, StateSource
 from pymotoros.client.planning import (
@@ -87,6 +88,7 @@ __all__ = [
     "SpeedLimitError",
     "StartPositionError",
     "StateSource",
+    "StateStreamLostError",
     "Status",
     "StreamStats",
     "SyncRobotClient",

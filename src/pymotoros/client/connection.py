@@ -312,6 +312,8 @@ class FrameConnection:
                         self._pending = None
                         if not future.done():
                             future.cancel()
+                        elif not future.cancelled():
+                            future.exception()  # failed while sending: raised above, retrieved
         except TimeoutError:
             raise RequestTimeoutError(
                 f"no reply to {type(message).__name__} from {self} within {timeout_s:g} s"

@@ -6,6 +6,8 @@
      +-- ClientError
           +-- ConnectError              (ConnectionError) a port could not be opened
           +-- ConnectionLostError       (ConnectionError) the peer closed or the socket broke
+          |    +-- StateStreamLostError  the state stream stalled or closed during a move:
+          |                              streaming stopped, STOP_MOTION sent, what was lost
           +-- RequestTimeoutError       (TimeoutError) no reply / no state within the timeout
           +-- MotionTimeoutError        (TimeoutError) the robot did not finish a move in time
           +-- MotionIncompleteError     the robot came to rest away from the goal
@@ -61,6 +63,37 @@ class ConnectError(ClientError, ConnectionError):
 
 class ConnectionLostError(ClientError, ConnectionError):
     """The connection closed while the client was using it; every waiter gets this at once."""
+
+
+class StateStreamLostError(ConnectionLostError):
+    """The state stream stalled (or closed) while a trajectory was streamed or followed.
+
+    Streaming more points blind would move a robot nobody watches, so the client stops
+    sending, asks for STOP_MOTION on the motion port (which may still answer) and raises
+    this, saying what it knows: the last position the stream reported, how many points
+    the robot had accepted, and whether the stop was acknowledged. Exit code 3 in the CLI.
+    """
+
+    def __init__(
+        self,
+        message: str,
+        *,
+        silent_s: float | None,
+        positions: tuple[float, ...],
+        accepted_points: int,
+        total_points: int,
+        stopped: bool,
+    ) -> None:
+        super().__init__(message)
+        self.silent_s = silent_s
+        """How long the stream had been silent (None: it closed instead)."""
+        self.positions = positions
+        """The last position the state stream reported (joints of the moved groups)."""
+        self.accepted_points = accepted_points
+        """Points the controller accepted (SUCCESS) before streaming stopped."""
+        self.total_points = total_points
+        self.stopped = stopped
+        """True when STOP_MOTION was answered with SUCCESS."""
 
 
 class RequestTimeoutError(ClientError, TimeoutError):

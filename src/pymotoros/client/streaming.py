@@ -41,6 +41,8 @@ from pymotoros.client.errors import (
     MotionIncompleteError,
     MotionTimeoutError,
     ReplyError,
+    RequestTimeoutError,
+    StateStreamLostError,
     reply_error,
 )
 from pymotoros.client.motion_port import MotionPort, StateSource
@@ -48,6 +50,7 @@ from pymotoros.client.planning import JointTrajectory, TrajectoryPoint
 from pymotoros.client.preflight import speed_deviations, start_deviations
 from pymotoros.client.state import RobotState
 from pymotoros.client.timing import REAL_TIME, ClientClock
+from pymotoros.client.watchdog import DEFAULT_STATE_STALL_S, StallWatchdog
 from pymotoros.models import ControllerModel, GroupModel, RobotModel
 from pymotoros.models.rules import START_TOLERANCE_PULSES
 from pymotoros.protocol.constants import InvalidSubcode, MotionCommand, MsgType, ResultCode
@@ -55,6 +58,7 @@ from pymotoros.protocol.messages import (
     JointTrajPtExData,
     JointTrajPtFull,
     MotoJointTrajPtFullEx,
+    MotoMotionCtrl,
     MotoMotionReply,
 )
 
@@ -93,6 +97,9 @@ DEFAULT_SETTLE_TIMEOUT_S: Final = 5.0
 
 STALL_TIMEOUT_S: Final = 2.0
 """Past the planned duration, a robot that makes no progress for this long has stopped."""
+
+STOP_TIMEOUT_S: Final = 1.0
+"""How long STOP_MOTION may take after the state stream was lost."""
 
 LAG_WARNING_S: Final = 0.25
 """A robot this far behind the plan is being slowed (a safety speed limit, HOLD…)."""
@@ -261,6 +268,13 @@ class TrajectoryStreamer:
     controller: ControllerModel
     _: KW_ONLY
     clock: ClientClock = REAL_TIME
+    state_stall_s: float = DEFAULT_STATE_STALL_S
+    """Seconds of state-stream silence after which :meth:`execute` stops the move
+    (STOP_MOTION) and raises :class:`StateStreamLostError` (see ``client.watchdog``)."""
+    _stalled_for: float | None = field(default=None, init=False)
+    _motion_gone: bool = field(default=False, init=False)
+    _in_flight: int | None = field(default=None, init=False)
+    """Sequence of the point sent and not yet answered, while there is one."""
 
     # ------------------------------------------------------------------ sending
 
@@ -305,7 +319,11 @@ class TrajectoryStreamer:
             lost = self.states.error
             if lost is not None:  # the state stream is gone: the move could not be watched
                 raise ConnectionLostError(str(lost))
+            if self._stalled_for is not None:  # never send a point blind
+                raise _StreamStalledError
+            self._in_flight = message.sequence
             reply = await self.port.request_motion(message)
+            self._in_flight = None
             if reply.result != ResultCode.BUSY:
                 if first_busy is not None:
                     stats.max_busy_wait_s = max(stats.max_busy_wait_s, clock.now() - first_busy)
@@ -495,10 +513,38 @@ class TrajectoryStreamer:
         monitor = FollowingMonitor(trajectory, groups, on_sample=on_progress, clock=self.clock)
         remove = self.states.add_listener(monitor.listen)
         started = self.clock.now()
+        accepted_count = 0
+        task = asyncio.current_task()
+        waiting = False
+        cancel_later: list[asyncio.TimerHandle] = []
+        self._stalled_for = None
+        self._in_flight = None
 
         def accepted(index: int) -> None:
+            nonlocal accepted_count
+            accepted_count = index + 1
             if index == 1:
                 monitor.start()
+
+        def on_stall(silence: float) -> None:
+            # While sending, the next point is simply not sent (a point in flight keeps its
+            # reply, so the count of accepted points stays exact); while waiting, the wait
+            # is cancelled.
+            self._stalled_for = silence
+            if task is None:
+                return
+            if waiting:
+                task.cancel()
+            else:  # a point whose reply never comes (the motion port went quiet too)
+                grace = asyncio.get_running_loop().call_later(STOP_TIMEOUT_S, task.cancel)
+                cancel_later.append(grace)
+
+        watchdog = StallWatchdog(self.states, self.state_stall_s, on_stall)
+
+        def disarm() -> None:
+            watchdog.close()
+            for handle in cancel_later:
+                handle.cancel()
 
         try:
             stats = await self.send_points(
@@ -508,15 +554,100 @@ class TrajectoryStreamer:
                 check_speed=check_speed,
                 on_accepted=accepted,
             )
+            accepted_count = stats.points
             monitor.start()
+            waiting = True
             final = await self.wait_for_completion(
                 trajectory, groups, monitor, goal_tolerance=goal_tolerance, timeout_s=timeout_s
             )
+        except _StreamStalledError:
+            disarm()  # nothing may cancel the stop below
+            raise await self._stream_lost(
+                groups, self._stalled_for, accepted_count, trajectory
+            ) from None
+        except asyncio.CancelledError:
+            if task is None or not self._stalled():  # a cancel that is not the watchdog's
+                raise
+            disarm()
+            task.uncancel()
+            raise await self._stream_lost(
+                groups, self._stalled_for, accepted_count, trajectory
+            ) from None
+        except ConnectionLostError as exc:
+            if self.states.error is None or isinstance(exc, StateStreamLostError):
+                raise  # the motion port went: nothing can be stopped from here
+            disarm()
+            lost = await self._stream_lost(groups, None, accepted_count, trajectory)
+            if not lost.stopped and self._motion_gone:
+                raise  # both went together (the controller closed): the plain loss says it
+            raise lost from exc
         finally:
+            disarm()
             remove()
         return MoveResult(
             trajectory, final, stats, monitor.report, self.clock.now() - started, groups
         )
+
+    def _stalled(self) -> bool:
+        """Has the watchdog tripped during the current :meth:`execute`? (set by its callback)"""
+        return self._stalled_for is not None
+
+    async def _stream_lost(
+        self,
+        groups: Sequence[int],
+        silent_s: float | None,
+        accepted: int,
+        trajectory: JointTrajectory,
+    ) -> StateStreamLostError:
+        """Stop the robot (STOP_MOTION, if the motion port still answers) and say what was lost."""
+        stopped = False
+        self._motion_gone = False
+        stop_note = "STOP_MOTION acknowledged"
+        try:
+            reply = await self.port.request_motion(
+                MotoMotionCtrl(groups[0], 0, int(MotionCommand.STOP_MOTION)),
+                timeout_s=STOP_TIMEOUT_S,
+            )
+            stopped = reply.result == ResultCode.SUCCESS
+            if not stopped:
+                stop_note = f"STOP_MOTION refused (result {reply.result}, subcode {reply.subcode})"
+        except (ConnectionLostError, RequestTimeoutError) as exc:
+            self._motion_gone = isinstance(exc, ConnectionLostError)
+            stop_note = f"STOP_MOTION could not be sent ({exc}): stop the robot on the pendant"
+        positions = _joined_positions(self.states.state, groups) or ()
+        where = ", ".join(f"{v:.4f}" for v in positions) or "unknown"
+        if silent_s is None:
+            what = f"the state stream closed ({self.states.error})"
+        else:
+            what = (
+                f"the state stream stalled: no state message for {silent_s:.2f} s "
+                f"(bound {self.state_stall_s:g} s)"
+            )
+        total = len(trajectory.points)
+        unanswered = (
+            ""
+            if self._in_flight is None
+            else f" (point {self._in_flight} was sent and never answered: it may be queued too)"
+        )
+        message = (
+            f"{what}; streaming stopped with {accepted} of {total} points accepted by the "
+            f"robot{unanswered}; {stop_note}; last known position [{where}]. Check the network "
+            "to the "
+            "controller, then reconnect and move again from the current position"
+        )
+        logger.error("%s", message)
+        return StateStreamLostError(
+            message,
+            silent_s=silent_s,
+            positions=positions,
+            accepted_points=accepted,
+            total_points=total,
+            stopped=stopped,
+        )
+
+
+class _StreamStalledError(Exception):
+    """Internal: the watchdog saw the state stream stall while points were being sent."""
 
 
 def _message_type(groups: Sequence[int]) -> int:

@@ -36,9 +36,11 @@ from pymotoros.protocol.constants import (
     TCP_PORT_STATE,
     ByteOrder,
 )
+from pymotoros.runtime.access import install_access
 from pymotoros.runtime.clock import Clock, LoopClock, precise_clock
 from pymotoros.runtime.http_api import create_http_app
 from pymotoros.runtime.io_server import IoServer
+from pymotoros.runtime.metrics import install_metrics
 from pymotoros.runtime.motion_server import MotionServer
 from pymotoros.runtime.observers import Observers
 from pymotoros.runtime.served import Served
@@ -86,6 +88,8 @@ class SimulatorConfig:
     byte_order: ByteOrder = ByteOrder.LITTLE
     state_period: float = STATE_PERIOD_S
     state_message_gap: float = STATE_MESSAGE_GAP_S
+    token: str | None = None
+    """The control API's bearer token (``pymotoros sim --token``): None leaves it open."""
 
 
 @dataclass(frozen=True, slots=True)
@@ -115,6 +119,9 @@ class SimulatorApp(Served):
         super().__init__()
         self.controller = controller
         self.config = config or SimulatorConfig()
+        self.metrics_cell: str | None = None
+        """The cell's name as a ``cell`` label of ``GET /metrics`` (set when a process
+        runs several cells, runtime/fleet.py)."""
         self.clock: Clock = clock or LoopClock()
         # Real time: the interpolation loop sleeps on a precise timer (a timerfd in the
         # selector, or a timer thread; issue 13) instead of spinning the last
@@ -183,11 +190,17 @@ class SimulatorApp(Served):
             raise RuntimeError("this SimulatorApp has already served; create a new one")
         self._started = True
         cfg = self.config
-        if not is_loopback(cfg.host):
+        if not is_loopback(cfg.host) and not cfg.token:
             logger.warning(
                 "listening on %s: the simulator is reachable from the network and has no "
                 "authentication (the control API and the web pendant at / can press E-stop, "
                 "move the robot and force IO)",
+                cfg.host,
+            )
+        elif not is_loopback(cfg.host):
+            logger.info(
+                "listening on %s: the control API needs its token; the MotoROS ports are "
+                "open to anyone who reaches them, as on a real controller",
                 cfg.host,
             )
         # Bind everything first: a port in use is a plain OSError, before any task starts.
@@ -330,6 +343,8 @@ class SimulatorApp(Served):
             after_ticks=self.ticker.wait_ticks,
             observers=self.observers if self.idle_batching else None,
         )
+        install_metrics(app, self)  # GET /metrics (runtime/metrics.py)
+        install_access(app, self.config.token, ready=lambda: self.motoros_listening)
         config = uvicorn.Config(
             app,
             log_level="warning",

@@ -213,6 +213,8 @@ class Fleet(Served):
             )
             for c in cells
         )
+        for cell, app in zip(cells, self.apps, strict=True):
+            app.metrics_cell = cell.name  # GET /metrics labels each family with its cell
         self._started = False
 
     def _nobody_observes(self) -> bool:

@@ -123,6 +123,7 @@ class MotionServer(FramedService):
         if type(message) is not MotoMotionReply or message.data is not _NO_DATA:
             await super().send(conn, message)  # not one of _reply's (equal is not enough:
             return  # -0.0 == 0.0 in a key, but not on the wire)
+        self.traffic.reply(message)
         data = self._encoded.get(message)
         if data is None:
             if len(self._encoded) >= ENCODED_REPLIES:

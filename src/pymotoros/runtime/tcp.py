@@ -31,6 +31,7 @@ from pymotoros.runtime.connections import (
     peer_name,
 )
 from pymotoros.runtime.log_limit import LogLimiter, loop_later, loop_time
+from pymotoros.runtime.traffic import Traffic
 
 __all__ = ["Connection", "FramedService", "TcpService", "bind_socket", "is_loopback"]
 
@@ -337,6 +338,8 @@ class FramedService(TcpService):
         super().__init__(capacity, motion_queued)
         self._order = order
         self._bad_prefix_reply = bad_prefix_reply
+        self.traffic = Traffic()
+        """Requests and replies counted for ``GET /metrics`` (plain ints, runtime/traffic.py)."""
         # Log as the concrete server's module (pymotoros.runtime.motion_server …), so that
         # a user filtering by logger sees its protocol events where they belong.
         self._log = logging.getLogger(type(self).__module__)
@@ -373,9 +376,11 @@ class FramedService(TcpService):
                         conn.peer,
                         frame.msg_type,
                     )
+                self.traffic.request(frame.msg_type)
                 yield frame
 
     async def send(self, conn: Connection, message: Message) -> None:
         """One write per message: common clients read one reply per ``recv()`` (clients §1.3)."""
+        self.traffic.reply(message)
         conn.write(encode(message, self._order))
         await conn.writer.drain()

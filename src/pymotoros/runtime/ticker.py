@@ -177,6 +177,31 @@ class Ticker:
             batched=self.batched,
         )
 
+    def lateness_since(self, mark: int) -> tuple[np.ndarray, int, int]:
+        """Lateness samples (s) taken after sample number ``mark``, for a scrape.
+
+        Returns ``(samples, new_mark, lost)``: the samples still in the ring, the mark to
+        pass next time and how many were overwritten before being read (more than a
+        window between two reads). A ``mark`` beyond the count (after :meth:`reset_stats`)
+        reads from the start. Off the hot path: the loop only fills its ring.
+        """
+        total = self._samples
+        if mark > total:
+            mark = 0
+        size = len(self._lateness)
+        fresh = total - mark
+        lost = max(0, fresh - size)
+        fresh -= lost
+        if fresh == 0:
+            return self._lateness[:0].copy(), total, lost
+        end = total % size
+        start = (total - fresh) % size
+        if start < end:
+            samples = self._lateness[start:end].copy()
+        else:
+            samples = np.concatenate((self._lateness[start:], self._lateness[:end]))
+        return samples, total, lost
+
     def reset_stats(self) -> None:
         """Forget lateness and counters of overruns (e.g. after start-up, in a benchmark)."""
         self._samples = 0

@@ -62,6 +62,8 @@ class FsuFunction:
         self._tcp: float | None = None
         self._joint_clip: tuple[tuple[int, ...], ...] | None = None
         self._set_joint(boot_joint_speed_pct)
+        self.switches = 0
+        """Limit switches at run time since boot (``GET /metrics``)."""
 
     @property
     def active(self) -> FsuLimits:
@@ -85,6 +87,7 @@ class FsuFunction:
             logger.info("FSU limits off")
             self._set_joint(None)
             self._tcp = None
+            self.switches += 1
             return
         if joint_speed_pct is None and tcp_speed_mm_s is None:
             raise ValueError("FSU: give joint_speed_pct, tcp_speed_mm_s or off=true")
@@ -101,6 +104,7 @@ class FsuFunction:
         if tcp_speed_mm_s is not None:
             logger.info("FSU TCP-speed limit %g mm/s", tcp_speed_mm_s)
             self._tcp = float(tcp_speed_mm_s)
+        self.switches += 1
 
     def _set_joint(self, pct: int | None) -> None:
         self._joint_pct = pct

@@ -1,0 +1,84 @@
+"""The web pendant of a twin started with ``--token``, in a real headless browser: the
+page asks for the token once (a prompt), keeps it in ``sessionStorage``, and then the
+live feed and the buttons work; a reload asks nothing (issue 23, item 5)."""
+
+from __future__ import annotations
+
+import json
+import shutil
+import urllib.request
+from collections.abc import Iterator
+from typing import Any
+
+import pytest
+from client_sim import Sim, running_sim
+
+webdriver = pytest.importorskip("selenium.webdriver", reason="selenium is not installed")
+from selenium.common.exceptions import NoAlertPresentException  # noqa: E402
+from selenium.webdriver.chrome.options import Options  # noqa: E402
+from selenium.webdriver.chrome.service import Service  # noqa: E402
+from selenium.webdriver.common.by import By  # noqa: E402
+from selenium.webdriver.remote.webdriver import WebDriver  # noqa: E402
+from selenium.webdriver.support import expected_conditions  # noqa: E402
+from selenium.webdriver.support.ui import WebDriverWait  # noqa: E402
+
+CHROMIUM = shutil.which("chromium") or shutil.which("chromium-browser")
+CHROMEDRIVER = shutil.which("chromedriver")
+WAIT_S = 20.0
+TOKEN = "browser-test-token"  # noqa: S105 - a test token
+
+pytestmark = [
+    pytest.mark.timeout(180),
+    pytest.mark.skipif(
+        CHROMIUM is None or CHROMEDRIVER is None,
+        reason="chromium and chromium-driver are not installed (.ci/run installs them)",
+    ),
+]
+
+
+@pytest.fixture(scope="module")
+def sim() -> Iterator[Sim]:
+    with running_sim("--token", TOKEN) as sim:
+        yield sim
+
+
+@pytest.fixture(scope="module")
+def browser() -> Iterator[WebDriver]:
+    options = Options()
+    options.binary_location = str(CHROMIUM)
+    for arg in ("--headless=new", "--no-sandbox", "--disable-dev-shm-usage", "--disable-gpu"):
+        options.add_argument(arg)
+    driver = webdriver.Chrome(options=options, service=Service(str(CHROMEDRIVER)))
+    try:
+        yield driver
+    finally:
+        driver.quit()
+
+
+def api_state(sim: Sim) -> dict[str, Any]:
+    request = urllib.request.Request(
+        f"http://127.0.0.1:{sim.http}/api/state", headers={"Authorization": f"Bearer {TOKEN}"}
+    )
+    with urllib.request.urlopen(request, timeout=10) as response:  # noqa: S310
+        result: dict[str, Any] = json.loads(response.read())
+        return result
+
+
+def test_the_pendant_asks_once_and_keeps_the_token(sim: Sim, browser: WebDriver) -> None:
+    wait = WebDriverWait(browser, WAIT_S, poll_frequency=0.05)
+    browser.get(f"http://127.0.0.1:{sim.http}/")
+    alert = wait.until(expected_conditions.alert_is_present(), "the token prompt")
+    assert "token" in alert.text
+    alert.send_keys(TOKEN)
+    alert.accept()
+    wait.until(lambda d: d.find_element(By.ID, "link").text == "live", "the live feed")
+    stored = browser.execute_script('return sessionStorage.getItem("pymotoros-token")')
+    assert stored == TOKEN
+    assert api_state(sim)["hold"] is False
+    browser.find_element(By.ID, "btn-hold").click()  # a POST through the token
+    wait.until(lambda _: api_state(sim)["hold"] is True, "HOLD pressed from the page")
+    # a reload in the same tab asks nothing: the session keeps the token
+    browser.refresh()
+    wait.until(lambda d: d.find_element(By.ID, "link").text == "live", "the feed again")
+    with pytest.raises(NoAlertPresentException):
+        browser.switch_to.alert.text  # noqa: B018 - raises when no prompt is open
