@@ -29,6 +29,7 @@ from pymotoros.client.state_view import StateView
 from pymotoros.client.streaming import (
     DEFAULT_BUSY_TIMEOUT_S,
     DEFAULT_GOAL_TOLERANCE,
+    ExecuteOptions,
     FollowingSample,
     MoveResult,
     TrajectoryStreamer,
@@ -114,16 +115,12 @@ class Motion:
         task = asyncio.current_task()
         self._moving = task
         self._stop_requested = False
+        # in the signature's order, which is ExecuteOptions' field order
+        options = ExecuteOptions(
+            busy_timeout_s, goal_tolerance, timeout_s, check_speed, on_progress
+        )
         try:
-            return await self._streamer.execute(
-                trajectory,
-                groups,
-                busy_timeout_s=busy_timeout_s,
-                goal_tolerance=goal_tolerance,
-                timeout_s=timeout_s,
-                check_speed=check_speed,
-                on_progress=on_progress,
-            )
+            return await self._streamer.execute(trajectory, groups, options)
         except asyncio.CancelledError:
             if not self._stop_requested or task is None:
                 raise
