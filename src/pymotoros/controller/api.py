@@ -14,13 +14,13 @@ done-callback (servers). Nothing here knows about asyncio or the wall clock.
 
 from __future__ import annotations
 
-import enum
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from types import MappingProxyType
 from typing import TYPE_CHECKING, Final, Protocol, Unpack
 
 from pymotoros.protocol.constants import IoResultCode, ResultCode
+from pymotoros.protocol.constants import PendantMode as PendantMode  # its old home
 
 if TYPE_CHECKING:
     from pymotoros.controller.cell import CellConfig
@@ -133,11 +133,6 @@ class StatusData:
     in_motion: int
     mode: int
     motion_possible: int
-
-
-class PendantMode(enum.Enum):
-    TEACH = "teach"
-    PLAY = "play"
 
 
 @dataclass(frozen=True, slots=True)
