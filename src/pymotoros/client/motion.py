@@ -29,6 +29,7 @@ from pymotoros.client.state_view import StateView
 from pymotoros.client.streaming import (
     DEFAULT_BUSY_TIMEOUT_S,
     DEFAULT_GOAL_TOLERANCE,
+    ExecuteOptions,
     FollowingSample,
     MoveResult,
     TrajectoryStreamer,
@@ -109,21 +110,23 @@ class Motion:
         The trajectory's joints are those of ``groups`` one after the other; one group
         goes as JOINT_TRAJ_PT_FULL, several as JOINT_TRAJ_PT_FULL_EX.
         """
+        # in the signature's order, which is ExecuteOptions' field order
+        options = ExecuteOptions(
+            busy_timeout_s, goal_tolerance, timeout_s, check_speed, on_progress
+        )
+        return await self._execute(trajectory, groups, options)
+
+    async def _execute(
+        self, trajectory: JointTrajectory, groups: Sequence[int], options: ExecuteOptions
+    ) -> MoveResult:
+        """:meth:`execute` once its keywords are bundled (the moves here call it directly)."""
         self._link.need(Port.STATE)  # completion is judged from the state stream
         groups = tuple(self._view.group_index(g) for g in groups)
         task = asyncio.current_task()
         self._moving = task
         self._stop_requested = False
         try:
-            return await self._streamer.execute(
-                trajectory,
-                groups,
-                busy_timeout_s=busy_timeout_s,
-                goal_tolerance=goal_tolerance,
-                timeout_s=timeout_s,
-                check_speed=check_speed,
-                on_progress=on_progress,
-            )
+            return await self._streamer.execute(trajectory, groups, options)
         except asyncio.CancelledError:
             if not self._stop_requested or task is None:
                 raise
@@ -187,14 +190,8 @@ class Motion:
         trajectory = self.plan(
             start, target, groups=groups, speed_scale=speed_scale, accel_scale=accel_scale
         )
-        return await self.execute(
-            trajectory,
-            groups=groups,
-            on_progress=on_progress,
-            goal_tolerance=goal_tolerance,
-            busy_timeout_s=busy_timeout_s,
-            timeout_s=timeout_s,
-        )
+        options = ExecuteOptions(busy_timeout_s, goal_tolerance, timeout_s, on_progress=on_progress)
+        return await self._execute(trajectory, groups, options)
 
     def named_pose(
         self, name: str, *, srdf: str | Path | None = None, group: int | str = 0

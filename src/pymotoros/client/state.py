@@ -11,7 +11,6 @@ the state connection wakes every waiter with :class:`ConnectionLostError`.
 from __future__ import annotations
 
 import asyncio
-import enum
 import logging
 import time
 from collections.abc import AsyncIterator, Callable, Mapping
@@ -20,7 +19,7 @@ from types import MappingProxyType
 from typing import Final
 
 from pymotoros.client.errors import ConnectionLostError, RequestTimeoutError
-from pymotoros.protocol.constants import StatusMode, ValidFields
+from pymotoros.protocol.constants import PendantMode, StatusMode, ValidFields
 from pymotoros.protocol.messages import (
     JointFeedback,
     MotoJointFeedbackEx,
@@ -38,11 +37,9 @@ DEFAULT_STATE_TIMEOUT_S: Final = 2.0
 """No state message for this long means the state stream is dead (MotoROS sends ~40 Hz)."""
 
 
-class Mode(enum.Enum):
-    """ROBOT_STATUS ``mode`` as the client reports it (decoded by ``StatusMode.is_play``, §2.6)."""
-
-    TEACH = "teach"
-    PLAY = "play"
+Mode = PendantMode
+"""ROBOT_STATUS ``mode`` as the client reports it (decoded by ``StatusMode.is_play``, §2.6):
+the same enum the twin's pendant uses."""
 
 
 @dataclass(frozen=True, slots=True)

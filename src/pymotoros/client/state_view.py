@@ -21,7 +21,6 @@ from pymotoros.client.state import (
     Listener,
     RobotState,
     StateTracker,
-    Status,
 )
 from pymotoros.models import ROBOTS, RobotModel
 from pymotoros.protocol.constants import Port
@@ -47,11 +46,6 @@ class StateView:
     def state(self) -> RobotState:
         """The latest state snapshot (empty until the first state message)."""
         return self._tracker.state
-
-    @property
-    def status(self) -> Status | None:
-        """The latest ROBOT_STATUS (None before the first)."""
-        return self._tracker.state.status
 
     def feedback(self, group: int = 0) -> JointState | None:
         """The latest joint feedback of ``group`` (None before the first)."""

@@ -115,6 +115,18 @@ ARRIVED_PROGRESS: Final = 0.999
 """Progress from which the following monitor counts the robot as arrived (no lag)."""
 
 
+@dataclass(frozen=True, slots=True)
+class ExecuteOptions:
+    """How one whole move is streamed and judged, as :meth:`RobotClient.execute` was
+    asked: one bundle handed down from the public method, not its keywords copied."""
+
+    busy_timeout_s: float = DEFAULT_BUSY_TIMEOUT_S
+    goal_tolerance: float = DEFAULT_GOAL_TOLERANCE
+    timeout_s: float | None = None
+    check_speed: bool = True
+    on_progress: Callable[[FollowingSample], None] | None = None
+
+
 @dataclass(slots=True)
 class StreamStats:
     """What streaming one trajectory took."""
@@ -501,16 +513,13 @@ class TrajectoryStreamer:
         self,
         trajectory: JointTrajectory,
         groups: Sequence[int],
-        *,
-        busy_timeout_s: float = DEFAULT_BUSY_TIMEOUT_S,
-        goal_tolerance: float = DEFAULT_GOAL_TOLERANCE,
-        timeout_s: float | None = None,
-        check_speed: bool = True,
-        on_progress: Callable[[FollowingSample], None] | None = None,
+        options: ExecuteOptions = ExecuteOptions(),
     ) -> MoveResult:
         """Stream ``trajectory``, follow the robot, and wait until it settled at the goal."""
         groups = tuple(groups)
-        monitor = FollowingMonitor(trajectory, groups, on_sample=on_progress, clock=self.clock)
+        monitor = FollowingMonitor(
+            trajectory, groups, on_sample=options.on_progress, clock=self.clock
+        )
         remove = self.states.add_listener(monitor.listen)
         started = self.clock.now()
         accepted_count = 0
@@ -550,15 +559,19 @@ class TrajectoryStreamer:
             stats = await self.send_points(
                 trajectory,
                 groups,
-                busy_timeout_s=busy_timeout_s,
-                check_speed=check_speed,
+                busy_timeout_s=options.busy_timeout_s,
+                check_speed=options.check_speed,
                 on_accepted=accepted,
             )
             accepted_count = stats.points
             monitor.start()
             waiting = True
             final = await self.wait_for_completion(
-                trajectory, groups, monitor, goal_tolerance=goal_tolerance, timeout_s=timeout_s
+                trajectory,
+                groups,
+                monitor,
+                goal_tolerance=options.goal_tolerance,
+                timeout_s=options.timeout_s,
             )
         except _StreamStalledError:
             disarm()  # nothing may cancel the stop below

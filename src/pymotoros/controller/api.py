@@ -14,17 +14,18 @@ done-callback (servers). Nothing here knows about asyncio or the wall clock.
 
 from __future__ import annotations
 
-import enum
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from types import MappingProxyType
-from typing import TYPE_CHECKING, Final, Protocol
+from typing import TYPE_CHECKING, Final, Protocol, Unpack
 
 from pymotoros.protocol.constants import IoResultCode, ResultCode
+from pymotoros.protocol.constants import PendantMode as PendantMode  # its old home
 
 if TYPE_CHECKING:
     from pymotoros.controller.cell import CellConfig
     from pymotoros.controller.safety import SafetySnapshot, SafetyUnit
+    from pymotoros.controller.safety.fsu import FsuRequest
     from pymotoros.controller.scenario import Scenario
 
 
@@ -132,11 +133,6 @@ class StatusData:
     in_motion: int
     mode: int
     motion_possible: int
-
-
-class PendantMode(enum.Enum):
-    TEACH = "teach"
-    PLAY = "play"
 
 
 @dataclass(frozen=True, slots=True)
@@ -446,12 +442,6 @@ class SafetyPanel(Protocol):
         """A PFL "contact" or "clamping" (retreating ``retreat_ms``) now."""
         ...
 
-    def set_fsu(
-        self,
-        *,
-        joint_speed_pct: int | None = None,
-        tcp_speed_mm_s: float | None = None,
-        off: bool = False,
-    ) -> None:
-        """Switch the FSU speed limits at run time."""
+    def set_fsu(self, **request: Unpack[FsuRequest]) -> None:
+        """Switch the FSU speed limits at run time (the arguments: :class:`FsuRequest`)."""
         ...

@@ -27,6 +27,7 @@ It is pure and deterministic: no sockets, no clock but its own, randomness only 
 from __future__ import annotations
 
 from collections.abc import Callable, Mapping, Sequence
+from typing import Unpack
 
 from pymotoros.controller import signals
 from pymotoros.controller.alarms import Alarm
@@ -62,6 +63,7 @@ from pymotoros.controller.processes import Scheduler
 from pymotoros.controller.readiness import Readiness
 from pymotoros.controller.registers import RegisterOutputs
 from pymotoros.controller.safety import DEFAULT_RETREAT_MS, PFL_STOP_MS, SafetyUnit
+from pymotoros.controller.safety.fsu import FsuRequest
 from pymotoros.controller.safety.startup import MotoRosStartup, setup_validation
 from pymotoros.controller.scenario import FiredEvent, Scenario, perform
 from pymotoros.controller.scenario_player import ScenarioPlayer
@@ -461,17 +463,9 @@ class VirtualController:
             retreat_ms=retreat_ms if event == "clamping" else 0,
         )
 
-    def set_fsu(
-        self,
-        *,
-        joint_speed_pct: int | None = None,
-        tcp_speed_mm_s: float | None = None,
-        off: bool = False,
-    ) -> None:
+    def set_fsu(self, **request: Unpack[FsuRequest]) -> None:
         """Switch the FSU speed limits at run time (ValueError for a bad request)."""
-        self._safety.fsu.set(
-            joint_speed_pct=joint_speed_pct, tcp_speed_mm_s=tcp_speed_mm_s, off=off
-        )
+        self._safety.fsu.set(**request)
 
     # ================================================================== internals
 

@@ -285,6 +285,15 @@ class StatusMode(_Described):
         return mode == cls.PLAY
 
 
+class PendantMode(enum.Enum):
+    """The pendant's mode key in words, as the operator turns it (the twin's controller)
+    and as a client reads it back from ROBOT_STATUS ``mode`` (:class:`StatusMode`).
+    One enum for both sides: ``pymotoros.client.Mode`` is this class."""
+
+    TEACH = "teach"
+    PLAY = "play"
+
+
 @enum.unique
 class IoResultCode(_Described):
     """``resultCode`` in IO reply bodies (§1.7, §6.1). Never a MOTION_REPLY subcode."""

@@ -14,6 +14,7 @@ with it).
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from importlib.resources import files
 from pathlib import Path
 from typing import Final
@@ -56,9 +57,15 @@ def assets_directory() -> Path:
     return path
 
 
-def _self_only(page: HTMLResponse) -> HTMLResponse:
-    page.headers["Content-Security-Policy"] = CONTENT_SECURITY_POLICY
-    return page
+def _serve_page(app: FastAPI, url: str, render: Callable[[], HTMLResponse]) -> None:
+    """A GET route (outside the schema) answering ``render()`` under our CSP."""
+
+    async def page() -> HTMLResponse:
+        response = render()
+        response.headers["Content-Security-Policy"] = CONTENT_SECURITY_POLICY
+        return response
+
+    app.add_api_route(url, page, methods=["GET"], include_in_schema=False)
 
 
 def install_offline_docs(app: FastAPI) -> None:
@@ -75,30 +82,29 @@ def install_offline_docs(app: FastAPI) -> None:
     openapi_url = app.openapi_url or "/openapi.json"
     favicon = f"{ASSETS_URL}/favicon.png"
 
-    @app.get(DOCS_URL, include_in_schema=False)
-    async def docs() -> HTMLResponse:
-        return _self_only(
-            get_swagger_ui_html(
-                openapi_url=openapi_url,
-                title=f"{app.title} - docs",
-                swagger_js_url=f"{ASSETS_URL}/swagger-ui-bundle.js",
-                swagger_css_url=f"{ASSETS_URL}/swagger-ui.css",
-                swagger_favicon_url=favicon,
-                swagger_ui_parameters=dict(SWAGGER_UI_PARAMETERS),
-            )
-        )
-
-    @app.get(REDOC_URL, include_in_schema=False)
-    async def redoc() -> HTMLResponse:
-        return _self_only(
-            get_redoc_html(
-                openapi_url=openapi_url,
-                title=f"{app.title} - ReDoc",
-                redoc_js_url=f"{ASSETS_URL}/redoc.standalone.js",
-                redoc_favicon_url=favicon,
-                with_google_fonts=False,
-            )
-        )
+    _serve_page(
+        app,
+        DOCS_URL,
+        lambda: get_swagger_ui_html(
+            openapi_url=openapi_url,
+            title=f"{app.title} - docs",
+            swagger_js_url=f"{ASSETS_URL}/swagger-ui-bundle.js",
+            swagger_css_url=f"{ASSETS_URL}/swagger-ui.css",
+            swagger_favicon_url=favicon,
+            swagger_ui_parameters=dict(SWAGGER_UI_PARAMETERS),
+        ),
+    )
+    _serve_page(
+        app,
+        REDOC_URL,
+        lambda: get_redoc_html(
+            openapi_url=openapi_url,
+            title=f"{app.title} - ReDoc",
+            redoc_js_url=f"{ASSETS_URL}/redoc.standalone.js",
+            redoc_favicon_url=favicon,
+            with_google_fonts=False,
+        ),
+    )
 
 
 __all__ = [

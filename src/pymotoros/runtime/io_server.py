@@ -11,8 +11,10 @@ from __future__ import annotations
 
 import contextlib
 import logging
+from collections.abc import Callable
+from typing import Final
 
-from pymotoros.controller.api import MotoRosController
+from pymotoros.controller.api import IoRead, MotoRosController
 from pymotoros.protocol.constants import (
     ByteOrder,
     InvalidSubcode,
@@ -45,6 +47,40 @@ from pymotoros.runtime.tcp import Connection, FramedService
 __all__ = ["IoServer", "handle_io_request", "log_rejection"]
 
 logger = logging.getLogger(__name__)
+
+_Reads = MotoReadIoBit | MotoReadIoGroup | MotoReadMRegister
+_Writes = MotoWriteIoBit | MotoWriteIoGroup | MotoWriteMRegister
+
+_ReadRow = tuple[str, Callable[[MotoRosController, int], IoRead], Callable[[int, int], Message]]
+_WriteRow = tuple[
+    str, Callable[[MotoRosController, int, int], IoResultCode], Callable[[int], Message]
+]
+
+_READS: Final[dict[type[_Reads], _ReadRow]] = {
+    MotoReadIoBit: ("read bit", lambda c, a: c.read_io_bit(a), MotoReadIoBitReply),
+    MotoReadIoGroup: ("read group", lambda c, a: c.read_io_group(a), MotoReadIoGroupReply),
+    MotoReadMRegister: (
+        "read M-register",
+        lambda c, n: c.read_mregister(n),
+        MotoReadMRegisterReply,
+    ),
+}
+"""Each read request: its name in the refusal log, the controller's read, the reply type."""
+
+_WRITES: Final[dict[type[_Writes], _WriteRow]] = {
+    MotoWriteIoBit: ("write bit", lambda c, a, v: c.write_io_bit(a, v), MotoWriteIoBitReply),
+    MotoWriteIoGroup: (
+        "write group",
+        lambda c, a, v: c.write_io_group(a, v),
+        MotoWriteIoGroupReply,
+    ),
+    MotoWriteMRegister: (
+        "write M-register",
+        lambda c, n, v: c.write_mregister(n, v),
+        MotoWriteMRegisterReply,
+    ),
+}
+"""Each write request: its name in the refusal log, the controller's write, the reply type."""
 
 
 def _log_io_refusal(
@@ -111,32 +147,17 @@ def handle_io_request(
     Refusals are logged to ``log`` (the port's server's logger) within ``conn``'s
     allowance (runtime/log_limit.py) when given.
     """
-    if isinstance(msg, MotoReadIoBit):
-        read = controller.read_io_bit(msg.io_address)
-        _log_io_refusal(port, "read bit", msg.io_address, read.result_code, 0, conn, log)
-        return MotoReadIoBitReply(read.value, int(read.result_code))
-    if isinstance(msg, MotoWriteIoBit):
-        code = controller.write_io_bit(msg.io_address, msg.io_value)
-        _log_io_refusal(port, "write bit", msg.io_address, code, msg.io_value, conn, log)
-        return MotoWriteIoBitReply(int(code))
-    if isinstance(msg, MotoReadIoGroup):
-        read = controller.read_io_group(msg.io_address)
-        _log_io_refusal(port, "read group", msg.io_address, read.result_code, 0, conn, log)
-        return MotoReadIoGroupReply(read.value, int(read.result_code))
-    if isinstance(msg, MotoWriteIoGroup):
-        code = controller.write_io_group(msg.io_address, msg.io_value)
-        _log_io_refusal(port, "write group", msg.io_address, code, msg.io_value, conn, log)
-        return MotoWriteIoGroupReply(int(code))
-    if isinstance(msg, MotoReadMRegister):
-        read = controller.read_mregister(msg.register_number)
-        _log_io_refusal(
-            port, "read M-register", msg.register_number, read.result_code, 0, conn, log
-        )
-        return MotoReadMRegisterReply(read.value, int(read.result_code))
-    if isinstance(msg, MotoWriteMRegister):
-        code = controller.write_mregister(msg.register_number, msg.value)
-        _log_io_refusal(port, "write M-register", msg.register_number, code, msg.value, conn, log)
-        return MotoWriteMRegisterReply(int(code))
+    if isinstance(msg, _Reads):
+        what, read_from, read_reply = _READS[type(msg)]
+        read = read_from(controller, msg[0])
+        _log_io_refusal(port, what, msg[0], read.result_code, 0, conn, log)
+        return read_reply(read.value, int(read.result_code))
+    if isinstance(msg, _Writes):
+        what, write_to, write_reply = _WRITES[type(msg)]
+        target, value = msg
+        code = write_to(controller, target, value)
+        _log_io_refusal(port, what, target, code, value, conn, log)
+        return write_reply(int(code))
     return None
 
 

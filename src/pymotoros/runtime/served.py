@@ -9,7 +9,6 @@ ended it if it crashed.
 from __future__ import annotations
 
 import asyncio
-from types import TracebackType
 
 __all__ = ["Served"]
 
@@ -42,10 +41,5 @@ class Served:
         if task is not None and not task.done():
             await task
 
-    async def __aexit__(
-        self,
-        exc_type: type[BaseException] | None,
-        exc: BaseException | None,
-        tb: TracebackType | None,
-    ) -> None:
+    async def __aexit__(self, *exc_info: object) -> None:
         await self.stop()

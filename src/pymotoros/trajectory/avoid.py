@@ -23,7 +23,7 @@ from __future__ import annotations
 import logging
 import math
 from collections.abc import Sequence
-from typing import Any, Final
+from typing import Any, Final, Unpack
 
 import numpy as np
 import numpy.typing as npt
@@ -37,7 +37,7 @@ from pymotoros.trajectory.collisions import (
     find_collisions,
 )
 from pymotoros.trajectory.files import Trajectory
-from pymotoros.trajectory.planning import plan_waypoints
+from pymotoros.trajectory.planning import PlanTiming, plan_waypoints
 
 F64Array = npt.NDArray[np.float64]
 
@@ -229,22 +229,15 @@ def plan_avoiding(
     cell: CellModels,
     world: CollisionModel,
     *,
-    velocity_scaling: float = 1.0,
-    acceleration_scaling: float = 1.0,
-    sample_s: float | None = None,
     time_limit_s: float = DEFAULT_TIME_LIMIT_S,
+    **timing: Unpack[PlanTiming],
 ) -> Trajectory:
     """A timed trajectory through ``waypoints`` around the cell's obstacles, checked at
-    the controller's increments (see the module docstring)."""
+    the controller's increments (see the module docstring). ``timing``: as
+    :func:`plan_waypoints` (velocity_scaling, acceleration_scaling, sample_s)."""
     way = avoid_waypoints(waypoints, cell, world, time_limit_s=time_limit_s)
-    options: dict[str, Any] = {
-        "velocity_scaling": velocity_scaling,
-        "acceleration_scaling": acceleration_scaling,
-    }
-    if sample_s is not None:
-        options["sample_s"] = sample_s
     for _ in range(MAX_REFINEMENTS):
-        traj = plan_waypoints(way, cell.robot, cell.controller, **options)
+        traj = plan_waypoints(way, cell.robot, cell.controller, **timing)
         report = check_against_cell(traj, cell)
         hits = find_collisions(traj, cell, report.per_group, world) if report.accepted else []
         if not hits:

@@ -18,7 +18,7 @@ from __future__ import annotations
 import logging
 import math
 from collections.abc import Sequence
-from typing import Any, Final
+from typing import Any, Final, TypedDict
 
 import numpy as np
 import numpy.typing as npt
@@ -52,6 +52,18 @@ _MAX_STRETCHES: Final = 8
 """Time stretches tried to bring the cubics within the limits (one or two suffice)."""
 _GRIDPOINTS_PER_SEGMENT: Final = 50
 """toppra's discretisation per waypoint segment (its constraints hold at gridpoints)."""
+
+
+class PlanTiming(TypedDict, total=False):
+    """The timing keywords of :func:`plan_waypoints`, declared once so that a planner
+    built on it (``trajectory/avoid.py``) passes them through without a copy."""
+
+    velocity_scaling: float
+    """0 < s ≤ 1: the share of each joint's maximum speed (default 1)."""
+    acceleration_scaling: float
+    """0 < s ≤ 1: the share of each joint's maximum acceleration (default 1)."""
+    sample_s: float
+    """Seconds between the trajectory's points (default :data:`DEFAULT_SAMPLE_S`)."""
 
 
 def _monotone_path(ss: F64Array, way: F64Array) -> Any:

@@ -19,6 +19,7 @@ from __future__ import annotations
 import logging
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
+from typing import TypedDict
 
 from pymotoros.controller.servo import ServoGroup
 from pymotoros.models.fsu import fsu_joint_clip
@@ -30,6 +31,19 @@ IncrementLimiter = Callable[[float, int, Sequence[int], Sequence[int]], Sequence
 """TCP-speed hook: ``(tcp_speed_mm_s, group index, commanded pulses, intended increment)
 -> per-slot maximum |increment| (pulses) for this tick``. The controller fills it from its
 kinematics (``controller.tool_point.TcpTracker``)."""
+
+
+class FsuRequest(TypedDict, total=False):
+    """The keyword arguments of a run-time FSU switch (:meth:`FsuFunction.set`), declared
+    once so that the controller's protocol and its facade pass them on without a copy."""
+
+    joint_speed_pct: int | None
+    """Each axis at most this share (1..100 %) of its maximum speed; None: unchanged."""
+    tcp_speed_mm_s: float | None
+    """The TCP at most this fast (> 0 mm/s); None: unchanged."""
+    off: bool
+    """Clear every limit (not together with a limit)."""
+
 
 TCP_NEEDS_KINEMATICS = (
     "the FSU TCP-speed limit (tcp_speed_mm_s) needs the robot's kinematics model, which "
