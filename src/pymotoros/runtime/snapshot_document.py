@@ -51,6 +51,7 @@ from pymotoros.controller.api import (
     snapshot_names,
 )
 from pymotoros.controller.safety import FsuLimits
+from pymotoros.models.workspace import Obstacle
 
 __all__ = [
     "FORMS",
@@ -101,6 +102,24 @@ def _event(e: FiredEventInfo) -> dict[str, Any]:
     return doc
 
 
+class ObstacleModel(Answer):
+    """An obstacle in the cell file's keys (exactly one of box, cylinder, sphere)."""
+
+    name: str
+    box: list[float] | None = Field(None, description="full sizes x, y, z (m)")
+    cylinder: list[float] | None = Field(None, description="radius, length (m); axis along z")
+    sphere: float | None = Field(None, description="radius (m)")
+    xyz: list[float] = Field(description="centre (m) in the frame")
+    rpy_deg: list[float] = Field(description="orientation, fixed axes X, Y, Z (degrees)")
+    frame: str | None = Field(
+        None, description="the group whose base_link the pose is in (absent: the workspace's)"
+    )
+
+
+def _obstacle(o: Obstacle) -> dict[str, Any]:
+    return o.as_dict()
+
+
 @dataclass(frozen=True, slots=True)
 class Form:
     """A type whose JSON shape is not its fields': how to encode it, and its schema."""
@@ -112,6 +131,7 @@ class Form:
 FORMS: Final[Mapping[type, Form]] = {
     TcpSnapshot: Form(_tcp, TcpModel),
     FiredEventInfo: Form(_event, dict[str, Any]),
+    Obstacle: Form(_obstacle, ObstacleModel),
 }
 
 
