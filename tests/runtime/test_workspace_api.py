@@ -63,7 +63,11 @@ def test_obstacles_are_put_moved_and_removed_by_name(
     ("body", "status", "words"),
     [
         ({"name": "t", "box": [1, 1], "xyz": [0, 0, 0]}, 422, "box: must hold 3 numbers, not 2"),
-        ({"name": "t", "box": [1, -1, 1], "xyz": [0, 0, 0]}, 422, "box: [1] must be > 0 and <= 100 m, not -1"),
+        (
+            {"name": "t", "box": [1, -1, 1], "xyz": [0, 0, 0]},
+            422,
+            "box: [1] must be > 0 and <= 100 m",
+        ),
         ({"name": "t", "sphere": "big", "xyz": [0, 0, 0]}, 422, "sphere: must be a number"),
         ({"name": "t", "sphere": 0.1}, 422, "xyz: Field required"),
         ({"name": "t", "xyz": [0, 0, 0]}, 400, "an obstacle has exactly one of box, cylinder"),
