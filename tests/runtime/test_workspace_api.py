@@ -39,6 +39,10 @@ def test_obstacles_are_put_moved_and_removed_by_name(
         [0.6, 0.0, -0.03],
     )
     assert table["rpy_deg"] == [0.0, 0.0, 0.0]
+    assert set(table) == {"name", "box", "xyz", "rpy_deg"}  # only the keys it has
+    again = api.post("/api/workspace", json=table)  # what the state shows posts back
+    assert again.status_code == 200, again.text
+    assert again.json()["workspace"]["obstacles"] == [table]
     moved = {**TABLE, "xyz": [0.7, 0.1, -0.03], "rpy_deg": [0, 0, 90]}
     r = api.post("/api/workspace", json=moved)
     (table,) = r.json()["workspace"]["obstacles"]  # the same one, moved: not a second
