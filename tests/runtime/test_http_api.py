@@ -23,7 +23,7 @@ async def test_state_document_has_exactly_the_contract_keys(api: httpx.AsyncClie
     doc = r.json()
     assert set(doc) == {
         "mode", "remote", "servo", "estop", "hold", "alarms", "motion_ready", "groups", "tick",
-        "fsu", "pfl", "events", "motoros", "ports",
+        "fsu", "pfl", "events", "motoros", "workspace", "ports",
     }  # fmt: skip
     assert doc["mode"] == "play"
     assert set(doc["groups"][0]) == {

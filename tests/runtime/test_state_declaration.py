@@ -132,5 +132,5 @@ def test_the_documents_keys_keep_their_place() -> None:
     doc = document_encoder(ControllerSnapshot)(VirtualController().snapshot())
     assert _keys(doc) == [
         "mode", "remote", "servo", "estop", "hold", "alarms", "motion_ready", "groups",
-        "fsu", "pfl", "events", "motoros",
+        "fsu", "pfl", "events", "motoros", "workspace",
     ]  # fmt: skip

@@ -63,7 +63,7 @@ from pymotoros.client.state import RobotState
 from pymotoros.client.streaming import FollowingSample, MoveResult
 from pymotoros.errors import ConfigError, PymotorosError
 from pymotoros.models import GroupModel
-from pymotoros.models.cell import CellModels
+from pymotoros.models.cell import CellModels, load_cell_models
 from pymotoros.protocol.constants import (
     MAX_TOOL_NUMBER,
     TCP_PORT_IO,
@@ -213,6 +213,11 @@ def _exit_code(exc: BaseException) -> int:
 
 class InputError(PymotorosError, ValueError):
     """A value the user typed that cannot be right (NaN, beyond a limit): exit code 2."""
+
+
+class MoveBlockedError(PymotorosError):
+    """The planned move hits an obstacle of the cell (or the arm itself): exit code 1,
+    nothing sent."""
 
 
 def fail(exc: BaseException, *, debug: bool) -> NoReturn:
@@ -647,6 +652,7 @@ class MoveRequest:
     frame: str = "base"
     tcp_speed_mm_s: float = 250.0
     tool: int | None = None
+    force: bool = False
 
     @property
     def cartesian(self) -> bool:
@@ -769,13 +775,52 @@ async def _settled_where(
     return _where(client, goal.groups, goal.models, goal.goal, deg, what)
 
 
+def _refuse_collisions(
+    cell: Path | CellModels | None, planned: JointTrajectory, goal: MoveGoal
+) -> None:
+    """With a ``--config`` cell that has obstacles, the planned joint move is checked as
+    ``pymotoros check --config`` checks a file (at the controller's increments): a
+    collision refuses it before anything is sent (``--force`` skips this)."""
+    if cell is None:
+        return
+    models = cell if isinstance(cell, CellModels) else load_cell_models(cell)
+    if not models.workspace.obstacles:
+        return
+    import numpy as np  # only for a cell with obstacles
+
+    from pymotoros.cli.trajectory import Loaded
+    from pymotoros.trajectory.files import Trajectory
+
+    names = tuple(n for g in goal.groups for n in models.robot.groups[g].joint_names)
+    traj = Trajectory(
+        names,
+        np.array([p.time for p in planned.points], dtype=float),
+        np.array([p.positions for p in planned.points], dtype=float),
+        np.array([p.velocities for p in planned.points], dtype=float),
+    )
+    collisions = Loaded(traj, models.robot, models.controller, models).check().collisions
+    if collisions:
+        first = collisions[0]
+        more = f" (and {len(collisions) - 1} more)" if len(collisions) > 1 else ""
+        raise MoveBlockedError(
+            f"not started: the planned move would hit: {first.text()}{more}; plan around it "
+            "(`pymotoros plan --avoid --config`), move the obstacle, or give --force"
+        )
+
+
 async def _move_watched(
-    client: RobotClient, req: MoveRequest, goal: MoveGoal, timeout_s: float
+    client: RobotClient,
+    req: MoveRequest,
+    goal: MoveGoal,
+    timeout_s: float,
+    cell: Path | CellModels | None = None,
 ) -> MoveResult:
     """The move with its progress line; on Ctrl-C/SIGTERM STOP_MOTION, and a refusal
     mid-move says where the robot came to rest."""
     try:
         planned = None if req.cartesian else await _joint_plan(client, req, goal)
+        if planned is not None and not req.force:
+            _refuse_collisions(cell, planned, goal)
         duration = None if planned is None else planned.duration
         with progress_bar("moving", client, goal.groups, duration_s=duration, deg=req.deg) as bar:
             if planned is None:
@@ -868,6 +913,12 @@ def _report_move(result: MoveResult, req: MoveRequest, goal: MoveGoal, robot: An
     help="Maximum TCP speed of a straight-line move, mm/s.",
 )
 @tool_option
+@click.option(
+    "--force",
+    is_flag=True,
+    help="Move even if the --config cell's obstacles are in the planned move's way "
+    "(checked as `pymotoros check --config` does; joint moves only).",
+)
 def move(**kwargs: Any) -> None:
     """Move to joint positions J1 ... Jn (rad, or deg with --deg) or to a named pose.
 
@@ -876,6 +927,8 @@ def move(**kwargs: Any) -> None:
     several --group options the values are the groups' joints one group after the
     other, sent as one JOINT_TRAJ_PT_FULL_EX trajectory. --named moves every group the
     pose sets (all groups for home) unless --group names some, and says which.
+    With a --config cell that has obstacles, a joint move that would hit one is refused
+    before anything moves (exit 1), unless --force.
     Ctrl-C or SIGTERM stops the robot (STOP_MOTION) and exits with 130 or 143.
     """
     target = _target(kwargs)
@@ -892,7 +945,7 @@ def move(**kwargs: Any) -> None:
             if req.enable_first:
                 await client.start_trajectory_mode()
             _say_groups(client, req, goal)
-            return await _move_watched(client, req, goal, target.timeout_s)
+            return await _move_watched(client, req, goal, target.timeout_s, target.cell)
 
     result = run(target, work, stoppable=True)
     _report_move(result, req, goal, target.client().robot)

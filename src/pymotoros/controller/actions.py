@@ -40,6 +40,7 @@ from typing import Any, Final, Literal, Protocol
 from pymotoros.controller.api import FaultInjection, OperatorPanel, PendantMode, SafetyPanel
 from pymotoros.controller.safety.pfl import MAX_RETREAT_MS
 from pymotoros.errors import PymotorosError
+from pymotoros.models.workspace import MAX_SIZE_M, SHAPE_KEYS, Obstacle
 
 __all__ = [
     "CONTROL_ACTIONS",
@@ -91,6 +92,15 @@ class ActionTarget(OperatorPanel, FaultInjection, SafetyPanel, Protocol):
     functions. ``VirtualController`` implements it; the runtime's
     ``SimulatedController`` includes it, so a method a new action needs is declared here,
     once."""
+
+    def put_obstacle(self, entry: Mapping[str, object]) -> Obstacle:
+        """Add an obstacle or move the one of that name (the cell file's keys; a bad one
+        is a ConfigError naming its key)."""
+        ...
+
+    def remove_obstacle(self, name: str) -> None:
+        """Remove the obstacle ``name`` (ConfigError naming the known ones if none)."""
+        ...
 
 
 Params = Mapping[str, Any]
@@ -313,7 +323,27 @@ def _fsu_something(p: Params) -> ActionParamError | None:
     return None
 
 
+def _one_shape(p: Params) -> ActionParamError | None:
+    given = [k for k in SHAPE_KEYS if p.get(k) is not None]
+    if len(given) != 1:
+        problem = "gives none" if not given else f"gives {' and '.join(given)}"
+        return ActionParamError(
+            "", f"an obstacle has exactly one of box, cylinder, sphere; it {problem}"
+        )
+    return None
+
+
 # --------------------------------------------------------------------------- calls
+
+
+def _put_obstacle(target: ActionTarget, p: Params) -> None:
+    target.put_obstacle({k: v for k, v in p.items() if v is not None})
+
+
+def _obstacle_name(value: object) -> str | None:
+    if not isinstance(value, str) or not value.strip() or "/" in value:
+        return "must be a non-empty name without '/'"
+    return None
 
 
 def _pfl(target: ActionTarget, p: Params) -> None:
@@ -354,6 +384,33 @@ def with_scenario_of(actions: Sequence[ActionSpec]) -> tuple[ActionSpec, ...]:
 def _on(doc: str) -> tuple[Param, ...]:
     return (Param("on", "bool", doc),)
 
+
+_OBSTACLE_NAME = Param("name", "str", "the obstacle's name", max_length=64, check=_obstacle_name)
+_SIZE: Final[dict[str, Any]] = {"unit": "m", "required": False, "gt": 0, "le": MAX_SIZE_M}
+_OBSTACLE_PARAMS: Final = (
+    _OBSTACLE_NAME,
+    Param("box", "numbers", "a box: full sizes [x, y, z]", length=3, **_SIZE),
+    Param("cylinder", "numbers", "a cylinder: [radius, length], axis along z", length=2, **_SIZE),
+    Param("sphere", "number", "a sphere: its radius", **_SIZE),
+    Param(
+        "xyz", "numbers", "the centre [x, y, z]", unit="m", length=3, ge=-MAX_SIZE_M, le=MAX_SIZE_M
+    ),
+    Param(
+        "rpy_deg",
+        "numbers",
+        "orientation [roll, pitch, yaw] (fixed axes X, Y, Z)",
+        unit="deg",
+        length=3,
+        required=False,
+    ),
+    Param(
+        "frame",
+        "str",
+        "the group whose base_link the pose is given in (default: the workspace frame)",
+        required=False,
+        max_length=16,
+    ),
+)
 
 _CODE = Param("code", "int", "alarm number, e.g. 4107", ge=0, le=9999)
 _SUBCODE = Param("subcode", "int", "alarm subcode", required=False, default=0, ge=0)
@@ -511,6 +568,25 @@ CONTROL_ACTIONS: Final[tuple[ActionSpec, ...]] = (
         ),
         rules=(_fsu_something,),
         tag="safety",
+    ),
+    ActionSpec(
+        "obstacle",
+        "/api/workspace",
+        "Put an obstacle into the cell, or move/reshape the one of that name (the cell "
+        "file's [[workspace.obstacles]] keys): the twin stops a robot that touches it.",
+        _put_obstacle,
+        _OBSTACLE_PARAMS,
+        rules=(_one_shape,),
+        tag="safety",
+    ),
+    ActionSpec(
+        "remove_obstacle",
+        "/api/workspace/{name}",
+        "Remove the obstacle of that name from the cell.",
+        lambda t, p: t.remove_obstacle(p["name"]),
+        (_OBSTACLE_NAME,),
+        tag="safety",
+        method="DELETE",
     ),
     ActionSpec(
         "drop_motion",

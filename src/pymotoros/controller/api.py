@@ -19,6 +19,7 @@ from dataclasses import dataclass, field
 from types import MappingProxyType
 from typing import TYPE_CHECKING, Final, Protocol, Unpack
 
+from pymotoros.models.workspace import Obstacle
 from pymotoros.protocol.constants import IoResultCode, ResultCode
 from pymotoros.protocol.constants import PendantMode as PendantMode  # its old home
 
@@ -182,6 +183,36 @@ class JobPosition:
     line: int
 
 
+@dataclass(frozen=True, slots=True)
+class ContactInfo:
+    """A robot link touching an obstacle at the latest workspace check (docs/workspace.md)."""
+
+    obstacle: str
+    """The obstacle's name (for a self-collision: the other link)."""
+    link: str
+    """The robot link that touches it."""
+    group: str
+    """The link's control group."""
+    depth_mm: float
+    """How far the link's shape overlaps the obstacle (mm)."""
+    self_collision: bool = False
+
+
+def _no_obstacles() -> tuple[Obstacle, ...]:
+    return ()
+
+
+@dataclass(frozen=True, slots=True)
+class WorkspaceSnapshot:
+    """The cell's obstacles now and what the robot touches (issue 21)."""
+
+    obstacles: tuple[Obstacle, ...] = field(default_factory=_no_obstacles)
+    """Each obstacle in the cell file's keys: name, one of box/cylinder/sphere, xyz (m),
+    rpy_deg, and frame when it is given in another group's frame."""
+    contacts: tuple[ContactInfo, ...] = ()
+    """What the robot touches now (empty: nothing)."""
+
+
 MOTOROS_FIRST_OUTPUT: Final = 889
 """OT#889..896: the outputs INIT_ROS and MotoROS use (motoros-1.9.12.md)."""
 MOTOROS_OUTPUT_COUNT: Final = 8
@@ -258,6 +289,8 @@ class ControllerSnapshot:
     "error" when the controller refused it}."""
     motoros: str = "running"
     """MotoROS's start-up: "running", what it waits for, or why it halted (§2.1, §8)."""
+    workspace: WorkspaceSnapshot = field(default_factory=WorkspaceSnapshot)
+    """The cell's obstacles (as put and removed at run time) and the contacts now."""
     # What a pendant shows beyond the control API's document (its ``pendant`` extras);
     # None where a controller (a test double) does not model it.
     period_ms: int | None = field(default=None, metadata=OMIT)

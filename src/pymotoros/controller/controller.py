@@ -305,6 +305,7 @@ class VirtualController:
             errors=tuple(e.info for e in s.errors),
             safety=self._safety.snapshot(),
             motoros=self._startup.phase,
+            workspace=self._workspace.snapshot(),
             events=tuple(
                 FiredEventInfo(f.t, f.action, tuple(f.params.items()), f.error)
                 for f in self._scenarios.fired

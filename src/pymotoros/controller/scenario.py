@@ -10,9 +10,9 @@ A scenario is a list of events (TOML ``[[events]]`` tables, or the JSON body of
 * actions: every action of :data:`pymotoros.controller.actions.CONTROL_ACTIONS` that a
   scenario may carry (``estop``, ``hold``, ``mode``, ``remote``, ``servo``, ``eco``,
   ``alarm``, ``error``, ``reset``, ``io``, ``io_failure``, ``pfl``, ``fsu``,
-  ``drop_motion``), whose parameters are the keys of the matching control-API body,
-  checked by the same declaration, so a value the control API refuses is refused here
-  with the same words.
+  ``obstacle``, ``remove_obstacle``, ``drop_motion``), whose parameters are the keys
+  of the matching control-API body, checked by the same declaration, so a value the
+  control API refuses is refused here with the same words.
 
 :func:`parse_scenario` is pure and refuses a bad scenario naming the event and the key
 (a misspelt key is named with the nearest valid one). :class:`ScenarioDriver` fires the

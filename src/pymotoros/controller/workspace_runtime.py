@@ -14,6 +14,7 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 
+from pymotoros.controller.api import ContactInfo, WorkspaceSnapshot
 from pymotoros.controller.context import MotoRosContext
 from pymotoros.controller.cycle import TickCycle
 from pymotoros.controller.operator_keys import OperatorKeys
@@ -58,6 +59,24 @@ class WorkspaceRuntime:
             "obstacles": [o.as_dict() for o in self.workspace.obstacles],
             "contacts": [c.as_dict() for c in contacts],
         }
+
+    def snapshot(self) -> WorkspaceSnapshot:
+        """The snapshot's part: the obstacles now and the latest check's contacts."""
+        contact = self._cycle.contact
+        contacts = contact.contacts if contact is not None else ()
+        return WorkspaceSnapshot(
+            self.workspace.obstacles,
+            tuple(
+                ContactInfo(
+                    c.obstacle,
+                    c.link,
+                    c.group,
+                    round(-c.distance_m * 1000.0, 3),
+                    c.self_collision,
+                )
+                for c in contacts
+            ),
+        )
 
     def _set(self, workspace: Workspace) -> None:
         self.workspace = workspace

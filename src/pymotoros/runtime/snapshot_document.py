@@ -51,6 +51,7 @@ from pymotoros.controller.api import (
     snapshot_names,
 )
 from pymotoros.controller.safety import FsuLimits
+from pymotoros.models.workspace import Obstacle
 
 __all__ = [
     "FORMS",
@@ -101,6 +102,13 @@ def _event(e: FiredEventInfo) -> dict[str, Any]:
     return doc
 
 
+def _obstacle(o: Obstacle) -> dict[str, Any]:
+    # the cell file's keys, only those the obstacle has (one shape; frame when given), so
+    # what GET /api/state shows can be posted back to POST /api/workspace as it is; the
+    # schema is therefore an object (as for a fired event), the keys in the field's doc
+    return o.as_dict()
+
+
 @dataclass(frozen=True, slots=True)
 class Form:
     """A type whose JSON shape is not its fields': how to encode it, and its schema."""
@@ -112,6 +120,7 @@ class Form:
 FORMS: Final[Mapping[type, Form]] = {
     TcpSnapshot: Form(_tcp, TcpModel),
     FiredEventInfo: Form(_event, dict[str, Any]),
+    Obstacle: Form(_obstacle, dict[str, Any]),
 }
 
 

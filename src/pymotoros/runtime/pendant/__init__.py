@@ -73,6 +73,7 @@ from pymotoros.runtime.pendant.document import (
     errors_document,
     state_document,
 )
+from pymotoros.runtime.pendant.workspace_view import WorkspaceView
 from pymotoros.runtime.snapshot_document import document_encoder
 from pymotoros.runtime.target import SimulatedController
 from pymotoros.runtime.ticker import TickStats
@@ -255,6 +256,7 @@ class PendantDocument:
         self._clients = clients
         self._skeletons: list[Skeleton | None] = []
         cell = controller.snapshot().cell
+        self._workspace = WorkspaceView(cell)
         for group in cell.groups if cell is not None else ():
             try:
                 self._skeletons.append(Skeleton(chain_for(group)))
@@ -299,7 +301,9 @@ class PendantDocument:
                 "feedback": skeleton.points(group["feedback_rad"]),
                 "command": skeleton.points(group["command_rad"]),
             }
+            group["capsules"] = self._workspace.capsules(i, group["feedback_rad"])
         doc["pendant"] = captured.extras
+        doc["pendant"]["workspace"] = self._workspace.obstacles(captured.snapshot.workspace)
         return doc
 
     def _extras(self, snapshot: ControllerSnapshot) -> dict[str, Any]:

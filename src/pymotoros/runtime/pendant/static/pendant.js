@@ -240,6 +240,76 @@
     return [w / 2 + xr * f, h / 2 - up * f, depth];
   }
 
+  // The workspace (GET /api/pendant/state: pendant.workspace, groups[].capsules), in the
+  // workspace frame: obstacles as translucent solids, red while the robot touches them,
+  // and the robot's collision capsules (the shapes the twin's contact check uses).
+  const OBSTACLE = { fill: "rgba(90,140,200,0.30)", line: "#6f9fd8" };
+  const TOUCHED = { fill: "rgba(235,50,50,0.55)", line: "#ff4040" };
+  const CAPSULE = "rgba(120,210,150,0.28)";
+  const RING = 24;                  // segments of a drawn circle
+
+  function place(o, p) {            // a point of the obstacle's own frame → workspace frame
+    const r = o.rot;
+    return [o.xyz[0] + r[0] * p[0] + r[1] * p[1] + r[2] * p[2],
+            o.xyz[1] + r[3] * p[0] + r[4] * p[1] + r[5] * p[2],
+            o.xyz[2] + r[6] * p[0] + r[7] * p[1] + r[8] * p[2]];
+  }
+
+  function ring(radius, z, plane) { // a circle in the obstacle's frame (plane: "xy", "xz", "yz")
+    const pts = [];
+    for (let i = 0; i < RING; i++) {
+      const a = 2 * Math.PI * i / RING, u = radius * Math.cos(a), w = radius * Math.sin(a);
+      pts.push(plane === "xz" ? [u, 0, w] : plane === "yz" ? [0, u, w] : [u, w, z]);
+    }
+    return pts;
+  }
+
+  function obstacleFaces(o) {       // closed polygons in the obstacle's frame
+    if (o.shape === "box") {
+      const [x, y, z] = o.size.map((s) => s / 2);
+      const c = (i, j, k) => [i * x, j * y, k * z];
+      return [[c(-1, -1, -1), c(1, -1, -1), c(1, 1, -1), c(-1, 1, -1)], [c(-1, -1, 1), c(1, -1, 1), c(1, 1, 1), c(-1, 1, 1)],
+              [c(-1, -1, -1), c(1, -1, -1), c(1, -1, 1), c(-1, -1, 1)], [c(-1, 1, -1), c(1, 1, -1), c(1, 1, 1), c(-1, 1, 1)],
+              [c(-1, -1, -1), c(-1, 1, -1), c(-1, 1, 1), c(-1, -1, 1)], [c(1, -1, -1), c(1, 1, -1), c(1, 1, 1), c(1, -1, 1)]];
+    }
+    if (o.shape === "cylinder") {
+      const [r, len] = o.size, faces = [ring(r, -len / 2, "xy"), ring(r, len / 2, "xy")];
+      for (let i = 0; i < RING; i += RING / 4) {
+        const a = 2 * Math.PI * i / RING, p = [r * Math.cos(a), r * Math.sin(a)];
+        faces.push([[p[0], p[1], -len / 2], [p[0], p[1], len / 2]]);
+      }
+      return faces;
+    }
+    return [ring(o.size[0], 0, "xy"), ring(o.size[0], 0, "xz"), ring(o.size[0], 0, "yz")];
+  }
+
+  function drawObstacle(ctx, o, v, w, h) {
+    const look = o.contact ? TOUCHED : OBSTACLE;
+    ctx.fillStyle = look.fill; ctx.strokeStyle = look.line; ctx.lineWidth = o.contact ? 2 : 1;
+    if (o.shape === "sphere") {     // its outline: a disc of the projected radius
+      const c = project(o.xyz, v, w, h), f = h * 1.2 / Math.max(0.1, c[2]);
+      ctx.beginPath(); ctx.arc(c[0], c[1], o.size[0] * f, 0, 2 * Math.PI); ctx.fill();
+    }
+    for (const face of obstacleFaces(o)) {
+      const pts = face.map((p) => project(place(o, p), v, w, h));
+      ctx.beginPath(); ctx.moveTo(pts[0][0], pts[0][1]);
+      for (const q of pts.slice(1)) ctx.lineTo(q[0], q[1]);
+      if (pts.length > 2) { ctx.closePath(); if (o.shape !== "sphere") ctx.fill(); }
+      ctx.stroke();
+    }
+    const c = project(o.xyz, v, w, h);
+    ctx.fillStyle = look.line; ctx.fillText(o.name, c[0] + 4, c[1] - 4);
+  }
+
+  function drawCapsules(ctx, capsules, shift, v, w, h) {
+    ctx.strokeStyle = CAPSULE; ctx.lineCap = "round";
+    for (const k of capsules) {     // [ax, ay, az, bx, by, bz, radius]: a thick round-capped line
+      const a = project(shift([k[0], k[1], k[2]]), v, w, h), b = project(shift([k[3], k[4], k[5]]), v, w, h);
+      ctx.lineWidth = Math.max(1, 2 * k[6] * h * 1.2 / Math.max(0.1, (a[2] + b[2]) / 2));
+      ctx.beginPath(); ctx.moveTo(a[0], a[1]); ctx.lineTo(b[0], b[1]); ctx.stroke();
+    }
+  }
+
   function draw3d() {
     const c = $("view3d"), ctx = c.getContext("2d"), v = state.view, w = c.width, h = c.height;
     ctx.clearRect(0, 0, w, h);
@@ -249,10 +319,17 @@
       const d = project([-1, i * 0.25, 0], v, w, h), e = project([1, i * 0.25, 0], v, w, h);
       ctx.beginPath(); ctx.moveTo(a[0], a[1]); ctx.lineTo(b[0], b[1]); ctx.moveTo(d[0], d[1]); ctx.lineTo(e[0], e[1]); ctx.stroke();
     }
+    const obstacles = (state.last && state.last.pendant && state.last.pendant.workspace) || [];
+    for (const o of obstacles) drawObstacle(ctx, o, v, w, h);
     const groups = (state.last && state.last.groups) || [];
+    state.scene = {                 // what the view shows (for the browser test)
+      obstacles: obstacles.map((o) => ({ name: o.name, shape: o.shape, contact: o.contact, color: (o.contact ? TOUCHED : OBSTACLE).fill })),
+      capsules: groups.reduce((n, g) => n + (g.capsules ? g.capsules.length : 0), 0),
+    };
     groups.forEach((g, gi) => {
       if (!g.frames) return;
       const shift = (p) => [p[0], p[1] + gi * 1.5, p[2]];          // groups side by side
+      if (g.capsules) drawCapsules(ctx, g.capsules, shift, v, w, h);
       for (const [pts, color, width] of [[g.frames.command, "rgba(200,200,200,0.35)", 9], [g.frames.feedback, "#f5a623", 11]]) {
         const all = [[0, 0, 0]].concat(pts).map((p) => project(shift(p), v, w, h));
         ctx.lineCap = "round"; ctx.lineJoin = "round";

@@ -1,0 +1,142 @@
+"""Issue 21 item 7: the web pendant draws the workspace, in a real headless browser.
+
+Obstacles put through the control API appear in the 3D view beside the robot's
+collision capsules; an obstacle the robot touches turns red (read from the page's
+``window.pendant.scene`` and from the canvas's pixels). Screenshots go to a temporary
+directory, or to ``$PYMOTOROS_SCREENSHOT_DIR`` when it is set.
+"""
+
+from __future__ import annotations
+
+import os
+import urllib.request
+from base64 import b64encode
+from collections.abc import Iterator
+from pathlib import Path
+from typing import Any
+
+import pytest
+from client_sim import Sim, running_sim
+from test_pendant_browser import (
+    CHROMEDRIVER,
+    CHROMIUM,
+    SCREENSHOT_DIR_ENV,
+    _canvas_png,
+    _wait,
+    browser,
+)
+
+from pymotoros.models.link_shapes import LINK_RADII_M
+
+webdriver = pytest.importorskip("selenium.webdriver", reason="selenium is not installed")
+
+from selenium.webdriver.common.by import By  # noqa: E402
+from selenium.webdriver.remote.webdriver import WebDriver  # noqa: E402
+
+__all__ = ["browser"]  # the module-scoped Chromium of test_pendant_browser
+
+TABLE = {"name": "table", "box": [1.2, 0.8, 0.05], "xyz": [0.6, 0.0, -0.03]}
+POST = {"name": "post", "cylinder": [0.05, 1.5], "xyz": [0.5, -0.5, 0.75]}
+CRATE = {"name": "crate", "sphere": 0.12, "xyz": [0.0, 0.0, 0.975]}
+"""Around the HC10's elbow at its zero pose (where the simulator boots): a contact."""
+SCENE_JS = "return window.pendant.scene || null"
+RED_PIXELS_JS = """
+const done = arguments[arguments.length - 1];
+const img = new Image();
+img.onload = () => {
+  const c = document.createElement("canvas");
+  c.width = img.width; c.height = img.height;
+  const ctx = c.getContext("2d"); ctx.drawImage(img, 0, 0);
+  const d = ctx.getImageData(0, 0, c.width, c.height).data;
+  let red = 0;
+  for (let i = 0; i < d.length; i += 4) if (d[i] > 150 && d[i + 1] < 90 && d[i + 2] < 90) red++;
+  done(red);
+};
+img.src = "data:image/png;base64," + arguments[0];
+"""
+MIN_RED_PIXELS = 200
+"""A touched obstacle filled red covers far more than this; the robot and the grid have
+no red at all."""
+
+pytestmark = [
+    pytest.mark.timeout(180),
+    pytest.mark.skipif(
+        CHROMIUM is None or CHROMEDRIVER is None,
+        reason="chromium and chromium-driver are not installed (.ci/run installs them)",
+    ),
+]
+
+
+@pytest.fixture(scope="module")
+def sim() -> Iterator[Sim]:
+    with running_sim("--robot", "hc10") as sim:
+        yield sim
+
+
+@pytest.fixture
+def screenshot_dir(tmp_path: Path) -> Path:
+    chosen = os.environ.get(SCREENSHOT_DIR_ENV)
+    return Path(chosen) if chosen else tmp_path
+
+
+def _red_pixels(driver: WebDriver, png: bytes) -> int:
+    return int(driver.execute_async_script(RED_PIXELS_JS, b64encode(png).decode()))
+
+
+def _scene(driver: WebDriver) -> dict[str, Any] | None:
+    scene: dict[str, Any] | None = driver.execute_script(SCENE_JS)
+    return scene
+
+
+def _obstacle(driver: WebDriver, name: str) -> dict[str, Any] | None:
+    scene = _scene(driver)
+    found = [o for o in (scene or {}).get("obstacles", []) if o["name"] == name]
+    return found[0] if found else None
+
+
+def test_the_pendant_draws_obstacles_capsules_and_a_contact_in_red(
+    sim: Sim, browser: WebDriver, screenshot_dir: Path
+) -> None:
+    sim.api("/api/workspace", TABLE)
+    sim.api("/api/workspace", POST)
+    browser.get(f"http://127.0.0.1:{sim.http}/")
+    _wait(browser, lambda d: d.find_element(By.ID, "link").text == "live", "the live feed")
+    _wait(browser, lambda d: len((_scene(d) or {}).get("obstacles", [])) == 2, "two obstacles")
+    scene = _scene(browser)
+    assert scene is not None
+    assert [(o["name"], o["shape"], o["contact"]) for o in scene["obstacles"]] == [
+        ("table", "box", False),
+        ("post", "cylinder", False),
+    ]
+    assert scene["capsules"] == len(LINK_RADII_M["hc10"])  # base link and six links
+    calm = _canvas_png(browser)
+    assert _red_pixels(browser, calm) == 0
+    assert browser.save_screenshot(str(screenshot_dir / "pendant-workspace.png"))
+
+    # the crate appears on the elbow: the twin reports a contact, the page draws it red
+    state = sim.api("/api/workspace", CRATE)
+    assert [o["name"] for o in state["workspace"]["obstacles"]] == ["table", "post", "crate"]
+    crate = _wait(
+        browser,
+        lambda d: (o := _obstacle(d, "crate")) is not None and o["contact"] and o,
+        "the crate drawn as touched",
+    )
+    assert crate["color"].startswith("rgba(235,50,50")
+    table = _obstacle(browser, "table")
+    assert table is not None
+    assert not table["contact"]  # only what is touched turns red
+    assert {c["obstacle"] for c in sim.api("/api/state")["workspace"]["contacts"]} == {"crate"}
+    _wait(
+        browser,
+        lambda d: _red_pixels(d, _canvas_png(d)) > MIN_RED_PIXELS,
+        "red in the 3D view",
+    )
+    assert browser.save_screenshot(str(screenshot_dir / "pendant-workspace-contact.png"))
+
+    # removed: gone from the scene
+    request = urllib.request.Request(
+        f"http://127.0.0.1:{sim.http}/api/workspace/crate", method="DELETE"
+    )
+    with urllib.request.urlopen(request, timeout=10) as response:  # noqa: S310
+        assert response.status == 200
+    _wait(browser, lambda d: _obstacle(d, "crate") is None, "the crate gone from the view")
