@@ -24,6 +24,7 @@ from pymotoros.protocol.constants import IoResultCode, ResultCode
 from pymotoros.protocol.constants import PendantMode as PendantMode  # its old home
 
 if TYPE_CHECKING:
+    from pymotoros.controller.alarms import Alarm
     from pymotoros.controller.cell import CellConfig
     from pymotoros.controller.safety import SafetySnapshot, SafetyUnit
     from pymotoros.controller.safety.fsu import FsuRequest
@@ -425,6 +426,11 @@ class OperatorPanel(Protocol):
         ...
 
     def raise_alarm(self, code: int, subcode: int, text: str) -> None: ...
+
+    def alarm_history(self) -> tuple[Alarm, ...]:
+        """The last alarms and operator errors raised, oldest first (``GET /metrics``
+        counts the new ones)."""
+        ...
 
     def reset(self) -> None:
         """The pendant's RESET key: clears alarms and errors whose cause is gone."""

@@ -49,6 +49,7 @@ from prometheus_client.registry import Collector
 from pymotoros.protocol.constants import MotionCommand, MsgType
 
 if TYPE_CHECKING:
+    from pymotoros.controller.alarms import Alarm
     from pymotoros.runtime.app import SimulatorApp
 
 __all__ = ["LATENESS_BUCKETS_S", "TwinCollector", "install_metrics"]
@@ -112,7 +113,7 @@ class TwinCollector(Collector):
 
     @property
     def cell(self) -> str | None:
-        return self._cell if self._cell is not None else getattr(self._app, "metrics_cell", None)
+        return self._cell if self._cell is not None else self._app.metrics_cell
 
     def _labels(self, *names: str) -> list[str]:
         return ["cell", *names] if self.cell is not None else list(names)
@@ -129,9 +130,8 @@ class TwinCollector(Collector):
         ticks = CounterMetricFamily(
             "pymotoros_ticks", "Interpolation ticks the controller ran.", labels=labels()
         )
-        # The controller's own count (VirtualController); else the loop's, which a benchmark
-        # may reset (counted on from there).
-        ticks.add_metric(values(), float(getattr(controller, "tick_count", app.ticker.count)))
+        # The controller's own count, from its snapshot (the runtime's one view of it).
+        ticks.add_metric(values(), float(controller.snapshot().tick_count))
         yield ticks
 
         yield from self._loop_families()
@@ -224,17 +224,13 @@ class TwinCollector(Collector):
         active = GaugeMetricFamily("pymotoros_alarms_active", "Alarms active now.", labels=labels())
         active.add_metric(values(), float(len(snapshot.alarms)))
         yield active
-        history = getattr(controller, "alarm_history", None)
-        if history is not None:
-            self._count_alarms(history())
-            total = CounterMetricFamily(
-                "pymotoros_alarms", "Alarms and operator errors raised.", labels=labels()
-            )
-            total.add_metric(values(), float(self._alarms_total))
-            yield total
-        safety = getattr(controller, "safety", None)
-        if safety is None:
-            return
+        self._count_alarms(controller.alarm_history())
+        total = CounterMetricFamily(
+            "pymotoros_alarms", "Alarms and operator errors raised.", labels=labels()
+        )
+        total.add_metric(values(), float(self._alarms_total))
+        yield total
+        safety = controller.safety
         pfl = CounterMetricFamily(
             "pymotoros_pfl_events", "PFL contacts and clampings since boot.", labels=labels()
         )
@@ -243,13 +239,13 @@ class TwinCollector(Collector):
         fsu = CounterMetricFamily(
             "pymotoros_fsu_switches", "FSU limit switches at run time.", labels=labels()
         )
-        fsu.add_metric(values(), float(getattr(safety.fsu, "switches", 0)))
+        fsu.add_metric(values(), float(safety.fsu.switches))
         yield fsu
 
-    def _count_alarms(self, entries: tuple[object, ...]) -> None:
+    def _count_alarms(self, entries: tuple[Alarm, ...]) -> None:
         """Count alarms raised since the last scrape (the history keeps the last 100)."""
         last_ms, at_last = self._alarms_seen
-        times = [int(getattr(alarm, "raised_at_ms", 0)) for alarm in entries]
+        times = [alarm.raised_at_ms for alarm in entries]
         fresh = sum(1 for t in times if t > last_ms)
         fresh += max(0, sum(1 for t in times if t == last_ms) - at_last)
         newest = max(times, default=last_ms)

@@ -24,8 +24,13 @@
     return asking;
   }
   window.fetch = async function (input, init) {
+    const sentWith = token();
     const resp = await withToken(input, init);
-    if (resp.status === 401 && await ask()) return withToken(input, init);
+    if (resp.status !== 401) return resp;
+    // A request sent before the token was typed (several start at once) retries with
+    // it; only a request that failed with the current token asks again.
+    if (token() && token() !== sentWith) return withToken(input, init);
+    if (await ask()) return withToken(input, init);
     return resp;
   };
   const RealWebSocket = window.WebSocket;
