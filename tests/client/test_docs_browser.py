@@ -17,11 +17,10 @@ from urllib.parse import urlsplit
 
 import pytest
 from client_sim import Sim, running_sim
+from headless import headless_chromium
 
 webdriver = pytest.importorskip("selenium.webdriver", reason="selenium is not installed")
 
-from selenium.webdriver.chrome.options import Options  # noqa: E402
-from selenium.webdriver.chrome.service import Service  # noqa: E402
 from selenium.webdriver.remote.webdriver import WebDriver  # noqa: E402
 from selenium.webdriver.support.ui import WebDriverWait  # noqa: E402
 
@@ -49,26 +48,10 @@ def sim() -> Iterator[Sim]:
 
 @pytest.fixture(scope="module")
 def browser() -> Iterator[WebDriver]:
-    options = Options()
-    options.binary_location = str(CHROMIUM)
-    for arg in (
-        "--headless=new",
-        "--no-sandbox",
-        "--disable-dev-shm-usage",
-        "--disable-gpu",
-        "--window-size=1300,1000",
-        f"--proxy-server={DEAD_PROXY}",  # loopback bypasses the proxy; nothing else gets out
-        "--disable-background-networking",
-        "--disable-component-update",
-        "--no-first-run",
-    ):
-        options.add_argument(arg)
-    options.set_capability("goog:loggingPrefs", {"performance": "ALL", "browser": "ALL"})
-    driver = webdriver.Chrome(options=options, service=Service(str(CHROMEDRIVER)))
-    try:
+    with headless_chromium(
+        window="1300,1000", logs={"performance": "ALL", "browser": "ALL"}
+    ) as driver:
         yield driver
-    finally:
-        driver.quit()
 
 
 def _requests_that_left(driver: WebDriver) -> list[str]:

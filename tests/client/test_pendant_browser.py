@@ -26,13 +26,12 @@ from urllib.parse import urlsplit
 
 import pytest
 from client_sim import Sim, running_sim
+from headless import headless_chromium
 
 from pymotoros.client import NotReadyError, SyncRobotClient
 
 webdriver = pytest.importorskip("selenium.webdriver", reason="selenium is not installed")
 
-from selenium.webdriver.chrome.options import Options  # noqa: E402
-from selenium.webdriver.chrome.service import Service  # noqa: E402
 from selenium.webdriver.common.by import By  # noqa: E402
 from selenium.webdriver.remote.webdriver import WebDriver  # noqa: E402
 from selenium.webdriver.support.ui import WebDriverWait  # noqa: E402
@@ -104,26 +103,8 @@ def sim() -> Iterator[Sim]:
 
 @pytest.fixture(scope="module")
 def browser() -> Iterator[WebDriver]:
-    options = Options()
-    options.binary_location = str(CHROMIUM)
-    for arg in (
-        "--headless=new",
-        "--no-sandbox",
-        "--disable-dev-shm-usage",
-        "--disable-gpu",
-        "--window-size=1500,1150",
-        f"--proxy-server={DEAD_PROXY}",  # loopback bypasses the proxy; nothing else gets out
-        "--disable-background-networking",
-        "--disable-component-update",
-        "--no-first-run",
-    ):
-        options.add_argument(arg)
-    options.set_capability("goog:loggingPrefs", {"performance": "ALL"})
-    driver = webdriver.Chrome(options=options, service=Service(str(CHROMEDRIVER)))
-    try:
+    with headless_chromium(window="1500,1150", logs={"performance": "ALL"}) as driver:
         yield driver
-    finally:
-        driver.quit()
 
 
 def _requested_urls(driver: WebDriver) -> list[str]:
