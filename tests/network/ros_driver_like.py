@@ -33,7 +33,7 @@ Connection (``simple_message/src/socket/tcp_client.cpp``, ``simple_socket.cpp``,
 ``smpl_msg_connection.cpp``):
 
 * ``makeConnect`` refuses while connected, otherwise closes the stale socket and opens a
-  fresh one (industrial_core PR #263; before it a dropped TcpClient never reconnected);
+  fresh one (industrial_core PR #263; before it a dropped TcpClient could not reconnect);
 * any failed send, a receive error or a receive of 0 bytes marks the connection down;
   a send while down fails at once ("Not connected");
 * a reply is read as a 4-byte length then that many bytes, **with no timeout**: the
@@ -221,7 +221,11 @@ class SimpleMessageConnection:
         return True
 
     async def receive(self, port: Port) -> WireMessage | None:
-        """SmplMsgConnection::receiveMsg: length, then the message; waits as long as it takes."""
+        """SmplMsgConnection::receiveMsg: length, then the message; waits as long as it takes.
+
+        The driver polls every :data:`SOCKET_POLL_S` and polls again on a timeout, so
+        it never gives up on its own; awaiting the bytes with no timeout is the same.
+        """
         if not self.connected or self._reader is None:
             self.recorder.note("not connected, bytes not received")
             self.connected = False

@@ -127,7 +127,8 @@ async def cell_with_driver(twin: RunningTwin) -> AsyncIterator[Cell]:
     """Start the proxies, the operator's view and the stand-in driver (state node first,
     as a launch file does), and wait until the driver is connected and has a joint state."""
     async with contextlib.AsyncExitStack() as stack:
-        motion_proxy = await GatedProxy(twin.host, twin.motion).start()
+        motion_proxy = GatedProxy(twin.host, twin.motion)
+        await motion_proxy.start()
         stack.push_async_callback(motion_proxy.close)
         state_proxy = await FaultProxy(twin.host, twin.state).start()
         stack.push_async_callback(state_proxy.close)
