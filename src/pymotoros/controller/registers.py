@@ -25,7 +25,7 @@ import numpy.typing as npt
 
 from pymotoros.controller.cell import CellConfig
 from pymotoros.controller.io_image import IoImage
-from pymotoros.controller.servo import ServoGroup
+from pymotoros.controller.servo import ServoGroup, ServoState
 from pymotoros.controller.tool_point import TcpTracker
 from pymotoros.kinematics import matrix_to_pose
 from pymotoros.models.s1cxg import Quantity, S1cxgTable, Source, unit_scale
@@ -116,10 +116,28 @@ class _Plan:
         return words
 
 
-class RegisterOutputs:
-    """Writes every group's S1CxG outputs into the M-registers each tick."""
+_Captured = tuple[int, bool, list[tuple[_Plan, ServoGroup, ServoState, int]]]
+"""A tick's inputs: tick count, drives powered, and per plan (servo, its state, tool)."""
 
-    def __init__(self, cell: CellConfig, io: IoImage, tcp: TcpTracker, period_ms: int) -> None:
+
+class RegisterOutputs:
+    """Every group's S1CxG outputs in the M-registers, as they are after the latest tick.
+
+    ``lazy`` (the default): :meth:`refresh` keeps the tick's inputs and the words are
+    computed when an M-register is next read or written (:meth:`materialise`, which the
+    IO image calls first on every M-register access). ``lazy=False`` computes them in
+    every tick, as the controller does; both give the same words to every reader (the
+    eager path is kept to show it: tests/controller/test_register_outputs_lazy.py)."""
+
+    def __init__(
+        self,
+        cell: CellConfig,
+        io: IoImage,
+        tcp: TcpTracker,
+        period_ms: int,
+        *,
+        lazy: bool = True,
+    ) -> None:
         self._plans = [
             _Plan(cell, g, table)
             for g, table in enumerate(cell.s1cxg)
@@ -130,6 +148,11 @@ class RegisterOutputs:
         self._period_s = period_ms / _MS_PER_S
         self._quiet_feedback = cell.servo.noise_pulses == 0
         """Without encoder noise a group at rest has constant outputs (see refresh)."""
+        self.lazy = lazy and bool(self._plans)
+        self._pending: _Captured | None = None
+        """The latest tick's inputs, not yet written (lazy only)."""
+        if self.lazy:
+            io.before_mregister_access(self.materialise)
 
     @property
     def active(self) -> bool:
@@ -201,20 +224,51 @@ class RegisterOutputs:
     def refresh(
         self, servos: Sequence[ServoGroup], tools: Sequence[int], tick: int, powered: bool
     ) -> None:
-        """Compute and write every output from the servos' state now.
+        """The tick's step: write every output from the servos' state now, or (lazy)
+        keep that state, a few tuples per group, for :meth:`materialise`.
+
+        Only the latest tick's words can ever be read (each tick writes every output
+        register again), so a lazy tick replaces the inputs it kept before."""
+        if self.lazy:
+            self._pending = (
+                tick,
+                powered,
+                [
+                    (plan, servos[plan.index], servos[plan.index].state(), tools[plan.index])
+                    for plan in self._plans
+                ],
+            )
+            return
+        for plan in self._plans:
+            self._write(plan, servos[plan.index], tools[plan.index], tick, powered)
+
+    def materialise(self) -> None:
+        """Write the words of the latest tick's kept inputs (lazy; nothing if written).
+
+        Called before any M-register access, so a client's write lands on the tick's
+        words and stays until the next tick, and every reader sees what an eager tick
+        would have left."""
+        pending = self._pending
+        if pending is None:
+            return
+        self._pending = None
+        tick, powered, groups = pending
+        for plan, servo, state, tool in groups:
+            self._write(plan, servo.as_of(state), tool, tick, powered)
+
+    def _write(self, plan: _Plan, servo: ServoGroup, tool: int, tick: int, powered: bool) -> None:
+        """Compute and write one group's outputs from ``servo``'s state.
 
         A group at rest (no increment in the feedback window, no feedback noise) has the
-        same values as at its previous tick: its words are rewritten from the last
-        computation (a client may have written over them) instead of recomputed."""
-        for plan in self._plans:
-            servo = servos[plan.index]
-            tool = tools[plan.index]
-            key = None
-            if self._quiet_feedback and servo.settled():
-                key = (tool, tuple(servo.command[: plan.num_axes]))
-                if key == plan.rest_key and plan.rest_words is not None:
-                    self._mreg[plan.registers] = plan.rest_words
-                    continue
-            words = plan.words(self.values(plan, servo, tool, tick, powered))
-            self._mreg[plan.registers] = words
-            plan.rest_key, plan.rest_words = key, words if key is not None else None
+        same values whenever its tool and command are the same: its words are rewritten
+        from the last computation (a client may have written over them) instead of
+        recomputed."""
+        key = None
+        if self._quiet_feedback and servo.settled():
+            key = (tool, tuple(servo.command[: plan.num_axes]))
+            if key == plan.rest_key and plan.rest_words is not None:
+                self._mreg[plan.registers] = plan.rest_words
+                return
+        words = plan.words(self.values(plan, servo, tool, tick, powered))
+        self._mreg[plan.registers] = words
+        plan.rest_key, plan.rest_words = key, words if key is not None else None
