@@ -59,6 +59,7 @@ class TickCycle:
         self._drive_power = drive_power
         self._inc_move = inc_move
         self._registers = registers
+        self._has_registers = registers.active
         self._scenarios = scenarios
         self._peripherals = peripherals
         self._has_peripherals = peripherals.active
@@ -100,8 +101,10 @@ class TickCycle:
         elif self.contact is not None:
             self.contact.tick(now)
         inc_move.fill_tick()
-        if self._registers.active:  # S1CxG register outputs: only when configured
-            self._refresh_registers()
+        if self._has_registers:  # S1CxG register outputs: only when configured
+            self._registers.step(
+                ctx.servos, ctx.interpolators, clock.tick_count, machine.state.drives_powered
+            )
         if self._scenarios.loaded:
             self._scenarios.tick(now, moved)
         if self._has_peripherals:
@@ -109,12 +112,3 @@ class TickCycle:
         scheduler = self._scheduler
         if scheduler.busy:
             scheduler.advance()
-
-    def _refresh_registers(self) -> None:
-        ctx = self._ctx
-        self._registers.refresh(
-            ctx.servos,
-            [i.tool for i in ctx.interpolators],
-            ctx.clock.tick_count,
-            ctx.machine.state.drives_powered,
-        )

@@ -18,7 +18,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
-from typing import Final
+from typing import Final, Protocol
 
 import numpy as np
 import numpy.typing as npt
@@ -116,8 +116,15 @@ class _Plan:
         return words
 
 
-_Captured = tuple[int, bool, list[tuple[_Plan, ServoGroup, ServoState, int]]]
-"""A tick's inputs: tick count, drives powered, and per plan (servo, its state, tool)."""
+_Captured = tuple[int, bool, Sequence[ServoGroup], list[tuple[ServoState, int]]]
+"""A tick's inputs: tick count, drives powered, the servos, and per plan (in order) its
+servo's state and its group's tool."""
+
+
+class HasTool(Protocol):
+    """A group's interpolator: the tool selected for what it executes."""
+
+    tool: int
 
 
 class RegisterOutputs:
@@ -148,6 +155,7 @@ class RegisterOutputs:
         self._period_s = period_ms / _MS_PER_S
         self._quiet_feedback = cell.servo.noise_pulses == 0
         """Without encoder noise a group at rest has constant outputs (see refresh)."""
+        self._groups = [plan.index for plan in self._plans]
         self.lazy = lazy and bool(self._plans)
         self._pending: _Captured | None = None
         """The latest tick's inputs, not yet written (lazy only)."""
@@ -221,24 +229,28 @@ class RegisterOutputs:
             dtype=np.float64,
         )
 
-    def refresh(
-        self, servos: Sequence[ServoGroup], tools: Sequence[int], tick: int, powered: bool
+    def step(
+        self,
+        servos: Sequence[ServoGroup],
+        interpolators: Sequence[HasTool],
+        tick: int,
+        powered: bool,
     ) -> None:
-        """The tick's step: write every output from the servos' state now, or (lazy)
-        keep that state, a few tuples per group, for :meth:`materialise`.
+        """The tick's step: (lazy) keep the servos' state and the tools now, a few tuples
+        per group, for :meth:`materialise`; else :meth:`refresh`.
 
         Only the latest tick's words can ever be read (each tick writes every output
         register again), so a lazy tick replaces the inputs it kept before."""
         if self.lazy:
-            self._pending = (
-                tick,
-                powered,
-                [
-                    (plan, servos[plan.index], servos[plan.index].state(), tools[plan.index])
-                    for plan in self._plans
-                ],
-            )
-            return
+            kept = [(servos[g].state(), interpolators[g].tool) for g in self._groups]
+            self._pending = (tick, powered, servos, kept)
+        else:
+            self.refresh(servos, [i.tool for i in interpolators], tick, powered)
+
+    def refresh(
+        self, servos: Sequence[ServoGroup], tools: Sequence[int], tick: int, powered: bool
+    ) -> None:
+        """Compute and write every output from the servos' state now (the eager tick)."""
         for plan in self._plans:
             self._write(plan, servos[plan.index], tools[plan.index], tick, powered)
 
@@ -252,9 +264,9 @@ class RegisterOutputs:
         if pending is None:
             return
         self._pending = None
-        tick, powered, groups = pending
-        for plan, servo, state, tool in groups:
-            self._write(plan, servo.as_of(state), tool, tick, powered)
+        tick, powered, servos, kept = pending
+        for plan, (state, tool) in zip(self._plans, kept, strict=True):
+            self._write(plan, servos[plan.index].as_of(state), tool, tick, powered)
 
     def _write(self, plan: _Plan, servo: ServoGroup, tool: int, tick: int, powered: bool) -> None:
         """Compute and write one group's outputs from ``servo``'s state.
