@@ -1,13 +1,26 @@
-"""The S1CxG register output functions, refreshed every interpolation period.
+"""The S1CxG register output functions: the M-registers as they are after each tick.
 
 The rules (which value goes to which register, in which unit and size) are in
 :mod:`pymotoros.models.s1cxg`, with :func:`~pymotoros.models.s1cxg.write_outputs` as the
-reference. This module compiles a group's table once into index and scale arrays and
-then, each tick, gathers the values from the servo model and the kinematics into one
-vector and writes every register word with a few numpy operations (the reference path
-costs a Python call per output; tests check both give the same words). Nothing runs for
-a cell without an S1CxG table, so the 4 ms tick pays nothing unless the feature is used
-(docs/benchmarks.md gives the cost when it is).
+reference. This module compiles a group's table once into index and scale arrays; to
+write the words it gathers the values from the servo model and the kinematics into one
+vector and computes every register word with a few numpy operations (the reference path
+costs a Python call per output; tests check both give the same words). That costs tens
+of microseconds while the arm moves (two forward kinematics and more per group), which
+is why it is not done in the tick.
+
+A real controller writes the words every interpolation period. Here the tick only keeps
+what that would read at its place in the tick (each table's servo state, a few short
+tuples from :meth:`~pymotoros.controller.servo.ServoGroup.state`, the tool, the tick
+count, drive power): every M-register access goes through the IO image, which calls
+:meth:`RegisterOutputs.materialise` first, and that computes the latest tick's words
+from what it kept. Only the latest tick's words can be seen, since each tick rewrites
+them all, so a reader sees bit for bit what a controller writing every tick would show,
+even when the servos moved after the tick's step (an E-stop's brake sag, a scenario); a
+client's write between ticks lands on those words and stays until the next tick. Several
+reads between two ticks compute once. ``RegisterOutputs(..., lazy=False)``
+(``VirtualController(lazy_registers=False)``) keeps the computation in every tick, to
+compare. Nothing runs for a cell without an S1CxG table.
 
 TCP speed, here and in the snapshot, is the distance the TCP travels over one step of the
 joints divided by its time (:meth:`~pymotoros.kinematics.Chain.tcp_speed`): the command's
@@ -130,11 +143,12 @@ class HasTool(Protocol):
 class RegisterOutputs:
     """Every group's S1CxG outputs in the M-registers, as they are after the latest tick.
 
-    ``lazy`` (the default): :meth:`refresh` keeps the tick's inputs and the words are
-    computed when an M-register is next read or written (:meth:`materialise`, which the
-    IO image calls first on every M-register access). ``lazy=False`` computes them in
-    every tick, as the controller does; both give the same words to every reader (the
-    eager path is kept to show it: tests/controller/test_register_outputs_lazy.py)."""
+    ``lazy`` (the default): the tick's :meth:`step` keeps the tick's inputs and the words
+    are computed when an M-register is next read or written (:meth:`materialise`, which
+    the IO image calls first on every M-register access). ``lazy=False``: :meth:`step`
+    computes them in every tick (:meth:`refresh`), as the controller does; both give the
+    same words to every reader (the eager path is kept to show it:
+    tests/controller/test_register_outputs_lazy.py)."""
 
     def __init__(
         self,
@@ -154,7 +168,7 @@ class RegisterOutputs:
         self._tcp = tcp
         self._period_s = period_ms / _MS_PER_S
         self._quiet_feedback = cell.servo.noise_pulses == 0
-        """Without encoder noise a group at rest has constant outputs (see refresh)."""
+        """Without encoder noise a group at rest has constant outputs (see _write)."""
         self._groups = [plan.index for plan in self._plans]
         self.lazy = lazy and bool(self._plans)
         self._pending: _Captured | None = None
@@ -274,7 +288,8 @@ class RegisterOutputs:
         A group at rest (no increment in the feedback window, no feedback noise) has the
         same values whenever its tool and command are the same: its words are rewritten
         from the last computation (a client may have written over them) instead of
-        recomputed."""
+        recomputed. Those words are a function of (tool, command) alone, so it does not
+        matter at which tick, eager or lazy, they were computed."""
         key = None
         if self._quiet_feedback and servo.settled():
             key = (tool, tuple(servo.command[: plan.num_axes]))
