@@ -324,32 +324,41 @@ def test_a_lazy_tick_computes_nothing_until_a_register_is_read(
 
     monkeypatch.setattr(RegisterOutputs, "values", counted)
     conv = _Conversation(_example(feedback_noise_pulses=2), lazy=True, seed=3)
-    conv.vc.tick()
-    conv.move()  # reads nothing: its ticks draw no reads only by chance, so check below
+    conv.move()
+    vc = conv.vc
+    assert vc.has_queued_motion()
     calls.clear()
-    conv.vc.run_ticks(100)
+    vc.run_ticks(100)  # moving, nobody reads
     assert calls == []
-    first = conv.vc.read_mregister(60).value
-    assert len(calls) == 1  # one group, computed once for the latest tick
-    assert conv.vc.read_mregister(60).value == first
-    assert conv.vc.read_mregister(61).value is not None
-    assert len(calls) == 1  # further reads before the next tick: no recomputation
-    conv.vc.tick()
-    conv.vc.write_mregister(60, 1234)
-    assert len(calls) == 2  # the write lands on the tick's words
-    assert conv.vc.read_mregister(60).value == 1234
+    first = [vc.read_mregister(n).value for n in (60, 61, 30)]
+    assert len(calls) == 1  # one table, computed once, for the latest tick
+    assert [vc.read_mregister(n).value for n in (60, 61, 30)] == first
+    assert len(calls) == 1  # more reads before the next tick: nothing recomputed
+    vc.tick()
+    assert vc.write_mregister(60, 1234) == 0
+    assert len(calls) == 2  # the write lands on the tick's words ...
+    assert vc.read_mregister(60).value == 1234  # ... and is read back until the next tick
+    vc.tick()
+    assert vc.read_mregister(60).value != 1234
+    assert len(calls) == 3
 
 
 def test_a_read_between_ticks_sees_the_last_tick_not_the_sag_after_it() -> None:
     """E-stop between ticks moves the servos (brake sag); the registers still show the
-    last tick's values until the next tick, as a controller writing them every tick."""
-    for lazy in (False, True):
-        vc = VirtualController(_example(brake_sag_pulses=200), lazy_registers=lazy)
-        vc.run_ticks(30)
-        before = _image(vc) if not lazy else None
+    last tick's values until the next tick, as a controller writing them every tick. The
+    lazy controller reads nothing before the E-stop, so its words come from what the
+    tick kept."""
+    cell = _example(brake_sag_pulses=200)
+    eager = VirtualController(cell, lazy_registers=False)
+    lazy = VirtualController(cell, lazy_registers=True)
+    for vc in (eager, lazy):
+        vc.run_ticks(300)
+        assert vc.snapshot().servo
+    before = _image(eager)
+    for vc in (eager, lazy):
         vc.press_estop(True)
-        after = _image(vc)
-        if before is not None:
-            assert after == before
+    assert _image(eager) == before
+    assert _image(lazy) == before
+    for vc in (eager, lazy):
         vc.tick()
-        assert _image(vc) != after  # the sag shows from the next tick on
+    assert _image(lazy) == _image(eager) != before  # the sag shows from the next tick on
