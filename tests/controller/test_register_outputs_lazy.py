@@ -21,6 +21,7 @@ from pymotoros.controller import Outcome, Pending, PointData, VirtualController,
 from pymotoros.controller.cell import CellConfig
 from pymotoros.controller.registers import RegisterOutputs
 from pymotoros.controller.scenario import parse_scenario
+from pymotoros.controller.servo import ServoGroup
 from pymotoros.models.controllers import M_REGISTER_BASE, M_REGISTER_COUNT
 from pymotoros.protocol.constants import ResultCode
 
@@ -362,3 +363,41 @@ def test_a_read_between_ticks_sees_the_last_tick_not_the_sag_after_it() -> None:
     for vc in (eager, lazy):
         vc.tick()
     assert _image(lazy) == _image(eager) != before  # the sag shows from the next tick on
+
+
+def test_a_servo_state_reads_later_as_the_servo_read_then() -> None:
+    """ServoGroup.state / as_of: what the lazy outputs compute from, with noise, folds,
+    idle ticks and a brake shift after the state was taken."""
+    rng = random.Random(5)
+    servo = ServoGroup([100, -200, 300], period_ms=4, lag_ticks=3, noise_pulses=4, seed=9)
+    settled = 0
+    for tick in range(400):
+        if rng.random() < 0.4:
+            servo.apply(tuple(rng.randrange(-50, 50) for _ in range(8)))
+        else:
+            servo.idle()
+        if rng.random() < 0.02:
+            servo.shift([rng.randrange(-5, 5) for _ in range(8)])
+        if rng.random() < 0.1:
+            servo.command  # noqa: B018 - folds, as a state read does
+        powered = rng.random() < 0.8
+        seen = (
+            list(servo.command),
+            servo.feedback(tick, powered),
+            servo.speed(),
+            tuple(servo.last_increment),
+            servo.settled(),
+        )
+        settled += seen[4]
+        state = servo.state()
+        for _ in range(rng.randrange(0, 3)):  # the servo goes on after the state was taken
+            servo.apply(tuple(rng.randrange(-50, 50) for _ in range(8)))
+        past = servo.as_of(state)
+        assert (
+            list(past.command),
+            past.feedback(tick, powered),
+            past.speed(),
+            tuple(past.last_increment),
+            past.settled(),
+        ) == seen
+    assert settled > 3  # at rest too
