@@ -12,7 +12,8 @@ tick, in this order:
    the workspace contact check of the new commanded position (only in a cell with
    obstacles);
 6. the AddToIncQueue tasks (interpolation into the queues);
-7. the outputs that follow the servos (S1CxG registers), the scenario's events, the
+7. the outputs that follow the servos (S1CxG registers: what they read is kept here,
+   their words are computed when an M-register is read), the scenario's events, the
    simulated peripherals;
 8. commands that were waiting (START_TRAJ_MODE polls …), whose Pending completes here.
 """
