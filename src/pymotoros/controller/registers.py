@@ -264,7 +264,9 @@ class RegisterOutputs:
     def refresh(
         self, servos: Sequence[ServoGroup], tools: Sequence[int], tick: int, powered: bool
     ) -> None:
-        """Compute and write every output from the servos' state now (the eager tick)."""
+        """Compute and write every output from the servos' state now (the eager tick;
+        inputs kept by an earlier lazy step are dropped: these words are newer)."""
+        self._pending = None
         for plan in self._plans:
             self._write(plan, servos[plan.index], tools[plan.index], tick, powered)
 
