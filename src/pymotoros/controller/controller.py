@@ -85,7 +85,12 @@ SnapshotObserver = Callable[[ControllerSnapshot], None]
 class VirtualController:
     """A controller running MotoROS: MotoRosController for servers, OperatorPanel for operators."""
 
-    def __init__(self, cell: CellConfig | None = None, *, seed: int = 0) -> None:
+    def __init__(
+        self, cell: CellConfig | None = None, *, seed: int = 0, lazy_registers: bool = True
+    ) -> None:
+        """``lazy_registers=False``: the S1CxG register outputs are computed in every tick
+        instead of when an M-register is read or written (same words either way; see
+        :class:`~pymotoros.controller.registers.RegisterOutputs`)."""
         self.cell = cell = cell if cell is not None else default_cell()
         self.seed = seed
         parts = assemble(cell, seed=seed, on_skill=lambda slave, text: self._on_skill(slave, text))
@@ -122,7 +127,9 @@ class VirtualController:
             readiness=self._readiness,
             drive_power=self._power,
             inc_move=self._inc_move,
-            registers=RegisterOutputs(cell, ctx.io, self._tcp, ctx.clock.period_ms),
+            registers=RegisterOutputs(
+                cell, ctx.io, self._tcp, ctx.clock.period_ms, lazy=lazy_registers
+            ),
             scenarios=self._scenarios,
             peripherals=Peripherals(ctx.io, cell.peripherals),
             scheduler=self._scheduler,

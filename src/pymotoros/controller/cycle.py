@@ -12,7 +12,8 @@ tick, in this order:
    the workspace contact check of the new commanded position (only in a cell with
    obstacles);
 6. the AddToIncQueue tasks (interpolation into the queues);
-7. the outputs that follow the servos (S1CxG registers), the scenario's events, the
+7. the outputs that follow the servos (S1CxG registers: what they read is kept here,
+   their words are computed when an M-register is read), the scenario's events, the
    simulated peripherals;
 8. commands that were waiting (START_TRAJ_MODE polls …), whose Pending completes here.
 """
@@ -59,6 +60,7 @@ class TickCycle:
         self._drive_power = drive_power
         self._inc_move = inc_move
         self._registers = registers
+        self._has_registers = registers.active
         self._scenarios = scenarios
         self._peripherals = peripherals
         self._has_peripherals = peripherals.active
@@ -100,8 +102,10 @@ class TickCycle:
         elif self.contact is not None:
             self.contact.tick(now)
         inc_move.fill_tick()
-        if self._registers.active:  # S1CxG register outputs: only when configured
-            self._refresh_registers()
+        if self._has_registers:  # S1CxG register outputs: only when configured
+            self._registers.step(
+                ctx.servos, ctx.interpolators, clock.tick_count, machine.state.drives_powered
+            )
         if self._scenarios.loaded:
             self._scenarios.tick(now, moved)
         if self._has_peripherals:
@@ -109,12 +113,3 @@ class TickCycle:
         scheduler = self._scheduler
         if scheduler.busy:
             scheduler.advance()
-
-    def _refresh_registers(self) -> None:
-        ctx = self._ctx
-        self._registers.refresh(
-            ctx.servos,
-            [i.tool for i in ctx.interpolators],
-            ctx.clock.tick_count,
-            ctx.machine.state.drives_powered,
-        )

@@ -10,6 +10,11 @@ Two kinds of access:
 A write that changes one of the signals the status monitor reads raises
 :attr:`IoImage.monitor_dirty`, so the 10 ms monitor can skip its work while nothing
 it reads has changed.
+
+Every read or write of an M-register, by anybody, first calls the hooks given to
+:meth:`IoImage.before_mregister_access`: the S1CxG register outputs
+(:mod:`pymotoros.controller.registers`) keep the inputs of the latest tick and write
+their words only then, so a tick pays nothing for words nobody reads.
 """
 
 from __future__ import annotations
@@ -35,6 +40,7 @@ class IoImage:
         "_bytes",
         "_controller",
         "_mreg",
+        "_mregister_hooks",
         "changes",
         "fail_reads",
         "fail_writes",
@@ -47,6 +53,7 @@ class IoImage:
         highest = max(r.last for r in controller.io_ranges)
         self._bytes = bytearray(highest // 10 + 1)
         self._mreg = array("H", bytes(2 * M_REGISTER_COUNT))
+        self._mregister_hooks: list[Callable[[], None]] = []
         self.monitor_dirty = True
         """Set when a signal the status monitor reads changes; the monitor clears it."""
         self.changes = 0
@@ -77,12 +84,30 @@ class IoImage:
                 self.monitored_changes += 1
 
     def set_mregister(self, index: int, value: int) -> None:
+        self._sync_mregisters()
         self._mreg[index] = value
 
+    def mregister(self, index: int) -> int:
+        """M-register ``index`` (0..999) now; no range check."""
+        self._sync_mregisters()
+        return self._mreg[index]
+
     def mregister_buffer(self) -> array[int]:
-        """M000..M999 as the live 16-bit array (for the register output functions, which
-        write many words per tick in one vectorised assignment)."""
+        """M000..M999 as the live 16-bit array, up to date now (for the register output
+        functions, which write many words in one vectorised assignment). Words computed
+        on demand reach it only through the accessors: read M-registers with
+        :meth:`mregister` or :meth:`read_mregister`, not by keeping this array."""
+        self._sync_mregisters()
         return self._mreg
+
+    def before_mregister_access(self, hook: Callable[[], None]) -> None:
+        """Call ``hook()`` before any M-register is read or written from now on: it brings
+        words computed on demand (the register outputs) into the image first."""
+        self._mregister_hooks.append(hook)
+
+    def _sync_mregisters(self) -> None:
+        for hook in self._mregister_hooks:
+            hook()
 
     def readable_range(self, address: int) -> IoRange | None:
         """The IO range holding ``address``, or None if no readable range holds it."""
@@ -111,7 +136,7 @@ class IoImage:
 
     def read_mregister(self, number: int) -> IoRead:
         code = rules.mregister_address_result(number, write=False)
-        return self._client_read(code, lambda: self._mreg[rules.m_register_index(number)])
+        return self._client_read(code, lambda: self.mregister(rules.m_register_index(number)))
 
     def write_mregister(self, number: int, value: int) -> IoResultCode:
         code = rules.mregister_address_result(number, write=True)

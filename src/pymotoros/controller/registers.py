@@ -1,13 +1,26 @@
-"""The S1CxG register output functions, refreshed every interpolation period.
+"""The S1CxG register output functions: the M-registers as they are after each tick.
 
 The rules (which value goes to which register, in which unit and size) are in
 :mod:`pymotoros.models.s1cxg`, with :func:`~pymotoros.models.s1cxg.write_outputs` as the
-reference. This module compiles a group's table once into index and scale arrays and
-then, each tick, gathers the values from the servo model and the kinematics into one
-vector and writes every register word with a few numpy operations (the reference path
-costs a Python call per output; tests check both give the same words). Nothing runs for
-a cell without an S1CxG table, so the 4 ms tick pays nothing unless the feature is used
-(docs/benchmarks.md gives the cost when it is).
+reference. This module compiles a group's table once into index and scale arrays; to
+write the words it gathers the values from the servo model and the kinematics into one
+vector and computes every register word with a few numpy operations (the reference path
+costs a Python call per output; tests check both give the same words). That costs tens
+of microseconds while the arm moves (two forward kinematics and more per group), which
+is why it is not done in the tick.
+
+A real controller writes the words every interpolation period. Here the tick only keeps
+what that would read at its place in the tick (each table's servo state, a few short
+tuples from :meth:`~pymotoros.controller.servo.ServoGroup.state`, the tool, the tick
+count, drive power): every M-register access goes through the IO image, which calls
+:meth:`RegisterOutputs.materialise` first, and that computes the latest tick's words
+from what it kept. Only the latest tick's words can be seen, since each tick rewrites
+them all, so a reader sees bit for bit what a controller writing every tick would show,
+even when the servos moved after the tick's step (an E-stop's brake sag, a scenario); a
+client's write between ticks lands on those words and stays until the next tick. Several
+reads between two ticks compute once. ``RegisterOutputs(..., lazy=False)``
+(``VirtualController(lazy_registers=False)``) keeps the computation in every tick, to
+compare. Nothing runs for a cell without an S1CxG table.
 
 TCP speed, here and in the snapshot, is the distance the TCP travels over one step of the
 joints divided by its time (:meth:`~pymotoros.kinematics.Chain.tcp_speed`): the command's
@@ -18,14 +31,14 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
-from typing import Final
+from typing import Final, Protocol
 
 import numpy as np
 import numpy.typing as npt
 
 from pymotoros.controller.cell import CellConfig
 from pymotoros.controller.io_image import IoImage
-from pymotoros.controller.servo import ServoGroup
+from pymotoros.controller.servo import ServoGroup, ServoState
 from pymotoros.controller.tool_point import TcpTracker
 from pymotoros.kinematics import matrix_to_pose
 from pymotoros.models.s1cxg import Quantity, S1cxgTable, Source, unit_scale
@@ -116,10 +129,36 @@ class _Plan:
         return words
 
 
-class RegisterOutputs:
-    """Writes every group's S1CxG outputs into the M-registers each tick."""
+_Captured = tuple[int, bool, Sequence[ServoGroup], list[tuple[ServoState, int]]]
+"""A tick's inputs: tick count, drives powered, the servos, and per plan (in order) its
+servo's state and its group's tool."""
 
-    def __init__(self, cell: CellConfig, io: IoImage, tcp: TcpTracker, period_ms: int) -> None:
+
+class HasTool(Protocol):
+    """A group's interpolator: the tool selected for what it executes."""
+
+    tool: int
+
+
+class RegisterOutputs:
+    """Every group's S1CxG outputs in the M-registers, as they are after the latest tick.
+
+    ``lazy`` (the default): the tick's :meth:`step` keeps the tick's inputs and the words
+    are computed when an M-register is next read or written (:meth:`materialise`, which
+    the IO image calls first on every M-register access). ``lazy=False``: :meth:`step`
+    computes them in every tick (:meth:`refresh`), as the controller does; both give the
+    same words to every reader (the eager path is kept to show it:
+    tests/controller/test_register_outputs_lazy.py)."""
+
+    def __init__(
+        self,
+        cell: CellConfig,
+        io: IoImage,
+        tcp: TcpTracker,
+        period_ms: int,
+        *,
+        lazy: bool = True,
+    ) -> None:
         self._plans = [
             _Plan(cell, g, table)
             for g, table in enumerate(cell.s1cxg)
@@ -129,7 +168,13 @@ class RegisterOutputs:
         self._tcp = tcp
         self._period_s = period_ms / _MS_PER_S
         self._quiet_feedback = cell.servo.noise_pulses == 0
-        """Without encoder noise a group at rest has constant outputs (see refresh)."""
+        """Without encoder noise a group at rest has constant outputs (see _write)."""
+        self._groups = [plan.index for plan in self._plans]
+        self.lazy = lazy and bool(self._plans)
+        self._pending: _Captured | None = None
+        """The latest tick's inputs, not yet written (lazy only)."""
+        if self.lazy:
+            io.before_mregister_access(self.materialise)
 
     @property
     def active(self) -> bool:
@@ -198,23 +243,61 @@ class RegisterOutputs:
             dtype=np.float64,
         )
 
+    def step(
+        self,
+        servos: Sequence[ServoGroup],
+        interpolators: Sequence[HasTool],
+        tick: int,
+        powered: bool,
+    ) -> None:
+        """The tick's step: (lazy) keep the servos' state and the tools now, a few tuples
+        per group, for :meth:`materialise`; else :meth:`refresh`.
+
+        Only the latest tick's words can ever be read (each tick writes every output
+        register again), so a lazy tick replaces the inputs it kept before."""
+        if self.lazy:
+            kept = [(servos[g].state(), interpolators[g].tool) for g in self._groups]
+            self._pending = (tick, powered, servos, kept)
+        else:
+            self.refresh(servos, [i.tool for i in interpolators], tick, powered)
+
     def refresh(
         self, servos: Sequence[ServoGroup], tools: Sequence[int], tick: int, powered: bool
     ) -> None:
-        """Compute and write every output from the servos' state now.
+        """Compute and write every output from the servos' state now (the eager tick;
+        inputs kept by an earlier lazy step are dropped: these words are newer)."""
+        self._pending = None
+        for plan in self._plans:
+            self._write(plan, servos[plan.index], tools[plan.index], tick, powered)
+
+    def materialise(self) -> None:
+        """Write the words of the latest tick's kept inputs (lazy; nothing if written).
+
+        Called before any M-register access, so a client's write lands on the tick's
+        words and stays until the next tick, and every reader sees what an eager tick
+        would have left."""
+        pending = self._pending
+        if pending is None:
+            return
+        self._pending = None
+        tick, powered, servos, kept = pending
+        for plan, (state, tool) in zip(self._plans, kept, strict=True):
+            self._write(plan, servos[plan.index].as_of(state), tool, tick, powered)
+
+    def _write(self, plan: _Plan, servo: ServoGroup, tool: int, tick: int, powered: bool) -> None:
+        """Compute and write one group's outputs from ``servo``'s state.
 
         A group at rest (no increment in the feedback window, no feedback noise) has the
-        same values as at its previous tick: its words are rewritten from the last
-        computation (a client may have written over them) instead of recomputed."""
-        for plan in self._plans:
-            servo = servos[plan.index]
-            tool = tools[plan.index]
-            key = None
-            if self._quiet_feedback and servo.settled():
-                key = (tool, tuple(servo.command[: plan.num_axes]))
-                if key == plan.rest_key and plan.rest_words is not None:
-                    self._mreg[plan.registers] = plan.rest_words
-                    continue
-            words = plan.words(self.values(plan, servo, tool, tick, powered))
-            self._mreg[plan.registers] = words
-            plan.rest_key, plan.rest_words = key, words if key is not None else None
+        same values whenever its tool and command are the same: its words are rewritten
+        from the last computation (a client may have written over them) instead of
+        recomputed. Those words are a function of (tool, command) alone, so it does not
+        matter at which tick, eager or lazy, they were computed."""
+        key = None
+        if self._quiet_feedback and servo.settled():
+            key = (tool, tuple(servo.command[: plan.num_axes]))
+            if key == plan.rest_key and plan.rest_words is not None:
+                self._mreg[plan.registers] = plan.rest_words
+                return
+        words = plan.words(self.values(plan, servo, tool, tick, powered))
+        self._mreg[plan.registers] = words
+        plan.rest_key, plan.rest_words = key, words if key is not None else None

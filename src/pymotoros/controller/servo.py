@@ -37,6 +37,10 @@ state client reading (bench/bench_tick_spikes.py: 12 collections in 10,000 ticks
 
 _MASK64: Final = (1 << 64) - 1
 
+ServoState = tuple[tuple[int, ...], tuple[Sequence[int], ...], tuple[Sequence[int], ...], int]
+"""What :meth:`ServoGroup.state` captures: command, unfolded increments, feedback window,
+quiet ticks (immutable: later ticks do not change it)."""
+
 # Salts of the deterministic noise and brake sag. Their values carry no meaning beyond
 # keeping the hashed streams apart: changing one changes every simulated encoder
 # jitter and sag, so recorded runs and tests that pin them would no longer match.
@@ -191,6 +195,30 @@ class ServoGroup:
             for k in range(SLOTS):
                 out[k] += _mix(base + k) % span - self._noise_pulses
         return out
+
+    def state(self) -> ServoState:
+        """Everything :meth:`feedback`, :meth:`speed`, :meth:`settled` and
+        :meth:`last_increment` read, as it is now: a few short tuples (well under a
+        microsecond), so a tick can keep it and a reader compute from it later, exactly as
+        it would have then (the S1CxG register outputs, computed only when read)."""
+        return (tuple(self._command), tuple(self._unfolded), tuple(self._history), self._quiet)
+
+    def as_of(self, state: ServoState) -> ServoGroup:
+        """A copy of this servo (same lag, noise and seed) put back in ``state``: its
+        methods give what this servo's gave when ``state`` was taken."""
+        command, unfolded, history, quiet = state
+        past = ServoGroup.__new__(ServoGroup)
+        past._command = list(command)
+        past._unfolded = list(unfolded)
+        past._history = deque(history, maxlen=self._window)
+        past._quiet = quiet
+        past._window = self._window
+        past._weights = self._weights
+        past._noise_pulses = self._noise_pulses
+        past._seed = self._seed
+        past.period_ms = self.period_ms
+        past.recorder = None
+        return past
 
     @property
     def last_increment(self) -> Sequence[int]:
