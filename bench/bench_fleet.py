@@ -41,8 +41,10 @@ cell and of the median cell; the first and last cell's p99 (mean over processes)
 tickers' overruns; CPU per cell (the cells' processes' utime + stime from /proc, % of one
 core, divided by the cells) and of the client processes in all; the machine's busy and
 steal share from /proc/stat over the window (steal: time a hypervisor gave to other
-guests while this VM wanted the CPU); the 1-minute load average at the end; and the
-traffic per cell (points accepted, requests and state bytes per second).
+guests while this VM wanted the CPU); the 1-minute load average at the end; the traffic
+per cell (points accepted, requests and state bytes per second: a twin that falls behind
+accepts fewer points and answers fewer BUSY retries); and how long the processes took to
+print their ready lines.
 
 Bounded: every server listens on 127.0.0.1 port 0; each arrangement's processes are
 started, measured for ``--warmup + --duration`` s and stopped (SIGTERM, then SIGKILL after
@@ -576,7 +578,7 @@ def measure(name: str, setup: Setup) -> dict[str, Any]:
 HEADER: Final = (
     "arrangement  cells  lateness p50 / p99 / max ms  p99 worst/median cell  "
     "p99 first/last  overruns  CPU/cell %  clients %  busy %  steal %  load  "
-    "per cell: points/s  req/s  state kB/s"
+    "per cell: points/s  req/s  state kB/s  started in s"
 )
 
 
@@ -588,7 +590,7 @@ def row(r: dict[str, Any]) -> str:
         f"{r['p99_first']:6.3f} / {r['p99_last']:6.3f}  {r['overruns']:8d}  "
         f"{r['cpu_per_cell']:10.1f}  {r['cpu_clients']:9.0f}  {r['busy']:6.0f}  "
         f"{r['steal']:7.1f}  {r['load']:4.1f}  {r['points']:18.1f}  {r['requests']:5.0f}  "
-        f"{r['state_kb']:10.1f}"
+        f"{r['state_kb']:10.1f}  {r['started_s']:12.1f}"
     )
 
 
