@@ -2,16 +2,20 @@
 the floor under the same load (issue 22, item 4; prints numbers, not a test).
 
     python bench/bench_fleet.py                         # the recorded run (~3 minutes)
-    python bench/bench_fleet.py --duration 5 --warmup 2 # a quick look (~1.5 minutes)
+    python bench/bench_fleet.py --duration 5 --warmup 2 # a quick look (the check run)
     python bench/bench_fleet.py --arrangements 16x1 floor16x1 --duration 60
     python bench/bench_fleet.py --realtime              # the same with `sim --realtime`
+    python bench/bench_fleet.py --client-nice 0         # clients at the cells' priority
 
-Every arrangement holds the same number of cells (16 by default) and carries the same
-load: each cell has one motion client streaming a trajectory (JOINT_TRAJ_PT_FULL every
+Every default arrangement holds 16 cells, and every arrangement carries the same load
+per cell: each cell has one motion client streaming a trajectory (JOINT_TRAJ_PT_FULL every
 100 ms of trajectory time, BUSY retries every 5 ms as the ROS driver does) and one state
 client, run by the same ``--client-procs`` client processes (default 2, at
-``--client-nice``, default 0: default scheduling), started spread over 0.8 s as
-independent users would. Arrangements (``--arrangements``):
+``--client-nice``, default 19 as in the recorded fleet figures of issue 13 and as
+docs/fleet.md advises for the load you control; 0 for clients that compete at the
+cells' priority), started spread over 0.8 s as independent users would. The cells run
+with default scheduling (``--realtime``: each served process asks for SCHED_FIFO as
+``pymotoros sim --realtime`` does). Arrangements (``--arrangements``):
 
 * ``PxC`` (e.g. ``16x1``, ``4x4``, ``2x8``): P processes of C HC10/YRC1000 cells each,
   served as ``pymotoros sim`` serves them (one cell: a :class:`SimulatorApp`, the command
@@ -612,7 +616,13 @@ def main() -> None:
     parser.add_argument("--duration", type=float, default=20.0, help="seconds measured each")
     parser.add_argument("--warmup", type=float, default=3.0, help="seconds before (>= 1)")
     parser.add_argument("--client-procs", type=int, default=2, help="client processes")
-    parser.add_argument("--client-nice", type=int, default=0, help="their niceness")
+    parser.add_argument(
+        "--client-nice",
+        type=int,
+        default=19,
+        help="their niceness (default %(default)s, as issue 13's recorded fleet figures; "
+        "0: the clients compete with the cells at the same priority)",
+    )
     parser.add_argument(
         "--realtime", action="store_true", help="every served process as `sim --realtime`"
     )
