@@ -40,6 +40,13 @@ cell. In a process of several cells a cell ticks after the cells before it, so i
 lateness adds their ticks' time: "first/last" shows the first cell's (the loop's own
 lateness, what ``GET /api/state`` reports) and the last cell's p99.
 
+"probe p99": beside every twin arrangement (unless ``--no-probe``) one more process
+runs a do-nothing 4 ms ticker that no client talks to (a floor process of one cell,
+left unconnected): the floor under exactly that arrangement's load, twins' work
+included, at the cost of one more waker (~1.5 % of a core) among the 16 cells. The
+``floor`` arrangement is the floor with the twins' wake-ups and client load but none of
+their work; the probe is the floor with all of it.
+
 Per arrangement: lateness p50/p99/max over all cells' ticks pooled; p99 of the worst
 cell and of the median cell; the first and last cell's p99 (mean over processes); the
 tickers' overruns; CPU per cell (the cells' processes' utime + stime from /proc, % of one
@@ -492,6 +499,7 @@ class Setup:
     client_procs: int
     client_nice: int
     realtime: bool
+    probe: bool
     tmp: Path
 
 
@@ -507,10 +515,15 @@ def measure(name: str, setup: Setup) -> dict[str, Any]:
     rt = ["--rt"] if setup.realtime else []
     servers: list[Child] = []
     loaders: list[Child] = []
+    probe: Child | None = None
+    probe_path = setup.tmp / f"{name}-probe.npy"
     t_start = time.monotonic()
     try:
         for path in samples:
             servers.append(Child(me("--serve", kind, str(per), str(capacity), str(path), *rt)))
+        if setup.probe and kind == "twin":  # one do-nothing ticker, nobody connected to it
+            probe = Child(me("--serve", "floor", "1", str(capacity), str(probe_path), *rt))
+            probe.line(READY_TIMEOUT_S)
         ports: list[tuple[int, int]] = []
         for server in servers:
             for _ in range(per):
@@ -529,7 +542,8 @@ def measure(name: str, setup: Setup) -> dict[str, Any]:
             if loader.line(READY_TIMEOUT_S) != "streaming":
                 raise SystemExit("a client process did not start")
         time.sleep(setup.warmup)
-        for child in (*servers, *loaders):
+        probes = [probe] if probe is not None else []
+        for child in (*servers, *probes, *loaders):
             child.proc.send_signal(signal.SIGUSR1)
         jiffies0 = machine_jiffies()
         cpu0 = [cpu_seconds(c.pid) for c in servers], [cpu_seconds(c.pid) for c in loaders]
@@ -540,9 +554,12 @@ def measure(name: str, setup: Setup) -> dict[str, Any]:
         jiffies1 = machine_jiffies()
         load = os.getloadavg()[0]
         server_stats = [s.stats() for s in servers]
+        for child in probes:
+            child.stats()
         traffic = [c.stats() for c in loaders]
     finally:
-        for group in (loaders, servers):  # the clients first: the servers then see EOFs
+        # the clients first: the servers then see EOFs
+        for group in (loaders, servers, [probe] if probe is not None else []):
             for child in group:
                 child.stop()
             for child in group:
@@ -553,6 +570,7 @@ def measure(name: str, setup: Setup) -> dict[str, Any]:
     cell_p99 = sorted(pct(np.sort(row) * 1000.0, 0.99) for r in rows for row in r)
     first = [pct(np.sort(r[0]) * 1000.0, 0.99) for r in rows]
     last = [pct(np.sort(r[-1]) * 1000.0, 0.99) for r in rows]
+    in_place = np.sort(np.load(probe_path).ravel()) * 1000.0 if probe is not None else None
     delta = [b - a for a, b in zip(jiffies0, jiffies1, strict=True)]
     total = sum(delta) or 1
     return {
@@ -567,6 +585,7 @@ def measure(name: str, setup: Setup) -> dict[str, Any]:
         "p99_median_cell": cell_p99[len(cell_p99) // 2],
         "p99_first": sum(first) / len(first),
         "p99_last": sum(last) / len(last),
+        "probe_p99": pct(in_place, 0.99) if in_place is not None and in_place.size else None,
         "overruns": sum(s["overruns"] for s in server_stats),
         "cpu_per_cell": 100.0 * sum(map(float.__sub__, cpu1[0], cpu0[0])) / elapsed / cells,
         "cpu_clients": 100.0 * sum(map(float.__sub__, cpu1[1], cpu0[1])) / elapsed,
@@ -581,17 +600,18 @@ def measure(name: str, setup: Setup) -> dict[str, Any]:
 
 HEADER: Final = (
     "arrangement  cells  lateness p50 / p99 / max ms  p99 worst/median cell  "
-    "p99 first/last  overruns  CPU/cell %  clients %  busy %  steal %  load  "
+    "p99 first/last  probe p99  overruns  CPU/cell %  clients %  busy %  steal %  load  "
     "per cell: points/s  req/s  state kB/s  started in s"
 )
 
 
 def row(r: dict[str, Any]) -> str:
     ok = "ok  " if r["p99"] <= BUDGET_MS else "OVER"
+    probe = "-" if r["probe_p99"] is None else f"{r['probe_p99']:.3f}"
     return (
         f"{r['name']:11s}  {r['cells']:5d}  {r['p50']:6.3f} / {r['p99']:6.3f} / {r['max']:6.1f} "
         f"{ok}  {r['p99_worst_cell']:6.3f} / {r['p99_median_cell']:6.3f}      "
-        f"{r['p99_first']:6.3f} / {r['p99_last']:6.3f}  {r['overruns']:8d}  "
+        f"{r['p99_first']:6.3f} / {r['p99_last']:6.3f}  {probe:>9s}  {r['overruns']:8d}  "
         f"{r['cpu_per_cell']:10.1f}  {r['cpu_clients']:9.0f}  {r['busy']:6.0f}  "
         f"{r['steal']:7.1f}  {r['load']:4.1f}  {r['points']:18.1f}  {r['requests']:5.0f}  "
         f"{r['state_kb']:10.1f}  {r['started_s']:12.1f}"
@@ -626,6 +646,11 @@ def main() -> None:
     parser.add_argument(
         "--realtime", action="store_true", help="every served process as `sim --realtime`"
     )
+    parser.add_argument(
+        "--no-probe",
+        action="store_true",
+        help="no do-nothing ticker beside each twin arrangement (see the docstring)",
+    )
     args = parser.parse_args()
     if args.warmup < STAGGER_S:
         parser.error(f"--warmup must cover the clients' staggered start ({STAGGER_S} s)")
@@ -647,6 +672,7 @@ def main() -> None:
             args.client_procs,
             args.client_nice,
             args.realtime,
+            not args.no_probe,
             Path(tmp),
         )
         for name in args.arrangements:
