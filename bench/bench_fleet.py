@@ -6,6 +6,7 @@ the floor under the same load (issue 22, item 4; prints numbers, not a test).
     python bench/bench_fleet.py --arrangements 16x1 floor16x1 --duration 60
     python bench/bench_fleet.py --realtime              # the same with `sim --realtime`
     python bench/bench_fleet.py --client-nice 0         # clients at the cells' priority
+    python bench/bench_fleet.py --rounds 3              # alternating, then the best of each
 
 Every default arrangement holds 16 cells, and every arrangement carries the same load
 per cell: each cell has one motion client streaming a trajectory (JOINT_TRAJ_PT_FULL every
@@ -666,12 +667,25 @@ def main() -> None:
         action="store_true",
         help="no do-nothing ticker beside each twin arrangement (see the docstring)",
     )
+    parser.add_argument(
+        "--rounds",
+        type=int,
+        default=1,
+        help="measure every arrangement this many times, alternating, then the best p99 of "
+        "each (default %(default)s)",
+    )
     args = parser.parse_args()
+    if args.rounds < 1 or args.duration <= 0 or args.client_procs < 1:
+        parser.error("--rounds, --duration and --client-procs must be positive")
     if args.warmup < STAGGER_S:
         parser.error(f"--warmup must cover the clients' staggered start ({STAGGER_S} s)")
     for name in args.arrangements:
-        if ARRANGEMENT.fullmatch(name) is None:
-            parser.error(f"arrangement {name!r}: write PxC (16x1, 4x4) or floorPxC (floor16x1)")
+        match = ARRANGEMENT.fullmatch(name)
+        if match is None or int(match.group(2)) < 1 or int(match.group(3)) < 1:
+            parser.error(
+                f"arrangement {name!r}: write PxC (16x1, 4x4) or floorPxC (floor16x1), "
+                "P and C at least 1"
+            )
     print(
         f"machine: {os.cpu_count()} cores, Python {sys.version.split()[0]}, load average "
         f"{os.getloadavg()[0]:.2f} at start; {args.duration:.0f} s each after {args.warmup:.0f} s; "
@@ -690,8 +704,17 @@ def main() -> None:
             not args.no_probe,
             Path(tmp),
         )
-        for name in args.arrangements:
-            print(row(measure(name, setup)), flush=True)
+        best: dict[str, dict[str, Any]] = {}
+        for _ in range(args.rounds):
+            for name in args.arrangements:
+                r = measure(name, setup)
+                print(row(r), flush=True)
+                if name not in best or r["p99"] < best[name]["p99"]:
+                    best[name] = r
+    if args.rounds > 1:
+        print(f"best of {args.rounds} rounds (lowest pooled p99):")
+        for r in best.values():
+            print(row(r))
     print(f"load average {os.getloadavg()[0]:.2f} at the end (other work on the machine)")
 
 
