@@ -210,11 +210,11 @@ def serve(kind: str, cells: int, capacity: int, samples: Path, realtime: bool) -
 def twin_server(cells: int, probes: Probes, holder: list[Any]) -> Callable[[], Any]:
     """``cells`` HC10/YRC1000 cells served as ``pymotoros sim`` serves them."""
     from pymotoros.cli.ports_file import CellLabel
-    from pymotoros.cli.sim import run_simulator
+    from pymotoros.cli.sim import run_simulator, simulator_config
     from pymotoros.cli.sim_cells import run_fleet
     from pymotoros.controller import VirtualController
     from pymotoros.controller.cell import load_cell
-    from pymotoros.runtime.app import SimulatorApp, SimulatorConfig
+    from pymotoros.runtime.app import SimulatorApp
     from pymotoros.runtime.fleet import Fleet, FleetCell
 
     cell = load_cell(CELL)
@@ -224,7 +224,7 @@ def twin_server(cells: int, probes: Probes, holder: list[Any]) -> Callable[[], A
         # the ticker takes the bound tick when built: probe it first
         controller.tick = probed(controller.tick, probes, row, lambda: holder[0])  # type: ignore[method-assign]
         controllers.append(controller)
-    config = SimulatorConfig(motion_port=0, state_port=0, io_port=0, http_port=0)
+    config = simulator_config("127.0.0.1", (0, 0, 0, 0), cell)  # as `pymotoros sim` builds it
     if cells == 1:
         app = SimulatorApp(controllers[0], config)
         holder.append(app.ticker)
@@ -582,6 +582,8 @@ def measure(name: str, setup: Setup) -> dict[str, Any]:
                 child.wait()
     cells = procs * per
     rows = [np.load(path) for path in samples]  # (per, n) each
+    if min(r.shape[1] for r in rows) == 0:
+        raise SystemExit(f"{name}: a process sampled no tick in the window; is it ticking?")
     every = np.sort(np.concatenate([r.ravel() for r in rows])) * 1000.0
     cell_p99 = sorted(pct(np.sort(row) * 1000.0, 0.99) for r in rows for row in r)
     first = [pct(np.sort(r[0]) * 1000.0, 0.99) for r in rows]
