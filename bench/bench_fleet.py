@@ -339,6 +339,8 @@ async def state_stand_in(reader: asyncio.StreamReader, writer: asyncio.StreamWri
             writer.write(status)
             await writer.drain()
             deadline += STATE_PERIOD_S
+            if loop.time() - deadline > STATE_PERIOD_S:
+                deadline = loop.time()  # stalled: restart the rhythm, as the twin does
             await asyncio.sleep(deadline - loop.time())
 
     sender = asyncio.create_task(send())
