@@ -137,9 +137,10 @@ class Workspace:
         return Workspace((*kept, obstacle), self.bases, self.tool_radius_m)
 
     def without(self, name: str) -> Workspace:
-        """A copy without the obstacle ``name`` (ConfigError when there is none)."""
+        """A copy without the obstacle ``name`` (:class:`UnknownObstacleError`, a
+        ConfigError, when there is none)."""
         if self.obstacle(name) is None:
-            raise ConfigError(f"no obstacle named {name!r}; obstacles: {self.names or 'none'}")
+            raise UnknownObstacleError(name, self.names)
         kept = tuple(o for o in self.obstacles if o.name != name)
         return Workspace(kept, self.bases, self.tool_radius_m)
 
@@ -149,6 +150,15 @@ class Workspace:
 
 
 EMPTY_WORKSPACE: Final = Workspace()
+
+
+class UnknownObstacleError(ConfigError, LookupError):
+    """An obstacle named that is not in the workspace (the message lists the known ones):
+    the control API answers it with 404, not with the 400 of a bad value."""
+
+    def __init__(self, name: str, known: str) -> None:
+        super().__init__(f"no obstacle named {name!r}; obstacles: {known or 'none'}")
+        self.name = name
 
 
 def _number(value: object) -> float | None:
@@ -295,6 +305,7 @@ __all__ = [
     "Obstacle",
     "Shape",
     "Sphere",
+    "UnknownObstacleError",
     "Workspace",
     "parse_obstacle",
     "workspace_from_dict",
