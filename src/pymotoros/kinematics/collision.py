@@ -374,6 +374,7 @@ class CollisionWorld:
         workspace: Workspace,
     ) -> None:
         self.workspace = workspace
+        self.groups = tuple(groups)
         self.bodies: list[GroupBody | None] = []
         for group, robot in zip(groups, robots, strict=True):
             if link_radii(robot, group) is None or any(a.geometry is None for a in group.axes):
@@ -555,6 +556,49 @@ class CollisionWorld:
     def all_contacts(self, qs: Sequence[Sequence[float] | FloatArray]) -> list[Contact]:
         """Obstacle contacts and self-collisions at ``qs``."""
         return [*self.contacts(qs), *self.self_contacts(qs)]
+
+    # --- paths ----------------------------------------------------------------------
+
+    @property
+    def joint_counts(self) -> tuple[int, ...]:
+        """Joints per group, in the order a joint vector of every group holds them."""
+        return tuple(g.num_axes for g in self.groups)
+
+    def free_waypoints(
+        self,
+        waypoints: Sequence[Sequence[float]],
+        *,
+        time_limit_s: float | None = None,
+        lower: Sequence[float] | None = None,
+        upper: Sequence[float] | None = None,
+        labels: Sequence[str] = (),
+    ) -> list[list[float]]:
+        """Collision-free joint waypoints through ``waypoints`` (every joint of every
+        group), searched by OMPL within the joint limits (or ``lower`` … ``upper``):
+        :func:`pymotoros.kinematics.path_search.free_waypoints`."""
+        from pymotoros.kinematics import path_search  # OMPL loads only when planning
+
+        axes = [a for g in self.groups for a in g.axes]
+        return path_search.free_waypoints(
+            self,
+            waypoints,
+            self.joint_counts,
+            [a.lower for a in axes] if lower is None else lower,
+            [a.upper for a in axes] if upper is None else upper,
+            time_limit_s=path_search.DEFAULT_TIME_LIMIT_S if time_limit_s is None else time_limit_s,
+            labels=labels,
+        )
+
+    def segment_contacts(self, a: Sequence[float], b: Sequence[float]) -> list[Contact]:
+        """The first contact anywhere on the straight joint path a → b (every joint of
+        every group), [] when free: :func:`pymotoros.kinematics.path_search.segment_contacts`."""
+        from pymotoros.kinematics import path_search
+
+        return [
+            c
+            for c in path_search.segment_contacts(self, a, b, self.joint_counts)
+            if isinstance(c, Contact)
+        ]
 
 
 def world_for_cell(cell: CellModels) -> CollisionWorld:
