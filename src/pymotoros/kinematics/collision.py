@@ -220,6 +220,7 @@ class GroupBody:
         )
         self._linear = np.array([a.linear for a in group.axes])
         self._tool_key: tuple[Transform, ToolShape | None] | None = None
+        self._tool_given: Transform | CellTool | None = None
         self.tool_part: _Part | None = None
         self.pairs = self._self_pairs()
 
@@ -246,6 +247,9 @@ class GroupBody:
     def set_tool(self, tool: Transform | CellTool) -> None:
         """Mount a tool on ``tool0``: its TCP (a bare :class:`Transform`) or its tool file
         (TCP and shape). Cached: the same tool again is no work."""
+        if tool is self._tool_given:  # the twin asks with the same object each check
+            return
+        self._tool_given = tool
         data = tool if isinstance(tool, CellTool) else CellTool(0, tcp=tool)
         key = (data.tcp, data.shape)
         if key == self._tool_key:
