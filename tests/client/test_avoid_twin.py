@@ -98,3 +98,19 @@ async def test_avoid_without_a_cell_says_what_it_needs() -> None:
         await client.wait_for_state()  # the client knows robot and controller, no cell
         with pytest.raises(PlanningError, match=r"needs the cell's obstacles.*cell="):
             await client.move_joints(RIGHT, avoid=True)
+
+
+async def test_the_following_monitor_measures_a_detour_along_its_path() -> None:
+    """Progress along a detour is not its start-to-goal line (which a robot going round
+    first leaves sideways or backwards): no false "slowed" there, either way round."""
+    async with (
+        Twin(cell_from_dict(DATA)) as the_twin,
+        the_twin.client(cell=cell_models_from_dict(DATA)) as client,
+    ):
+        await client.wait_for_state()
+        await client.enable()
+        for goal in (RIGHT, LEFT):
+            result = await client.move_joints(goal, avoid=True)
+            assert list(result.final_positions) == pytest.approx(goal, abs=1e-3)
+            assert not result.following.slowed
+            assert result.following.max_lag_s < 0.1
