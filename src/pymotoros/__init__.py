@@ -83,6 +83,7 @@ if TYPE_CHECKING:
     from pymotoros.errors import JobError as JobError
     from pymotoros.errors import KinematicsError as KinematicsError
     from pymotoros.errors import LocalProtocolError as LocalProtocolError
+    from pymotoros.errors import PathBlockedError as PathBlockedError
     from pymotoros.errors import ProtocolError as ProtocolError
     from pymotoros.errors import PymotorosError as PymotorosError
     from pymotoros.errors import RemoteProtocolError as RemoteProtocolError
@@ -148,6 +149,7 @@ _EXPORTS: Final[dict[str, tuple[str, ...]]] = {
         "JobError",
         "KinematicsError",
         "LocalProtocolError",
+        "PathBlockedError",
         "ProtocolError",
         "PymotorosError",
         "RemoteProtocolError",

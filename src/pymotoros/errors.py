@@ -7,6 +7,7 @@
      |    +-- LocalProtocolError        we tried to build or send something illegal
      |    +-- RemoteProtocolError       the peer sent bytes we cannot accept
      +-- ConfigError                    a cell file, model name or option is wrong (ValueError)
+     |    +-- PathBlockedError          no collision-free path around the cell's obstacles
      +-- JobError                       an INFORM job cannot be loaded (ValueError)
      +-- TrajectoryRejectedError        the offline engine refuses a point as MotoROS would
      +-- KinematicsError                a pose no joint values reach (ValueError)
@@ -60,6 +61,12 @@ class ConfigError(PymotorosError, ValueError):
 
     The message names the key (``groups[0].robot``) and says what is wrong with it.
     """
+
+
+class PathBlockedError(ConfigError):
+    """No collision-free path around the cell's obstacles (``plan --avoid``, ``move
+    --avoid``, ``move_joints(..., avoid=True)``): a waypoint in collision, or a goal the
+    planner cannot reach. The message names the obstacle in the way."""
 
 
 class JobError(PymotorosError, ValueError):

@@ -57,10 +57,18 @@ def test_obstacles_are_put_moved_and_removed_by_name(
     assert r.status_code == 200, r.text
     assert [o["name"] for o in r.json()["workspace"]["obstacles"]] == ["post"]
     r = api.request("DELETE", "/api/workspace/table")
-    assert r.status_code == 400
+    assert r.status_code == 404, r.text
     assert r.json()["error"] == (
         "DELETE /api/workspace/table: no obstacle named 'table'; obstacles: post"
     )
+    api.request("DELETE", "/api/workspace/post")
+    r = api.request("DELETE", "/api/workspace/post")
+    assert (r.status_code, r.json()["error"]) == (
+        404,
+        "DELETE /api/workspace/post: no obstacle named 'post'; obstacles: none",
+    )
+    schema = api.get("/openapi.json").json()["paths"]["/api/workspace/{name}"]["delete"]
+    assert "404" in schema["responses"]
 
 
 @pytest.mark.parametrize(

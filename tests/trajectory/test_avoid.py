@@ -55,9 +55,9 @@ def test_a_goal_inside_an_obstacle_is_refused_naming_it() -> None:
 def test_when_the_planner_finds_nothing_the_refusal_names_what_is_in_the_way(
     monkeypatch: pytest.MonkeyPatch,
 ) -> None:
-    import pymotoros.trajectory.avoid as avoid
+    import pymotoros.kinematics.path_search as search
 
-    monkeypatch.setattr(avoid, "_plan_segment", lambda *args: [])
+    monkeypatch.setattr(search, "_plan_segment", lambda *args: [])
     cell = _cell(BALL)
     with pytest.raises(PathBlockedError) as info:
         avoid_waypoints([LEFT, RIGHT], cell, world_for_cell(cell), time_limit_s=0.5)

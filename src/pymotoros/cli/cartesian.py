@@ -114,7 +114,8 @@ def tool_option(func: _F) -> _F:
         help="The tool in force (0..63): its TCP (from the cell file's tool data) is what "
         "--pose/--relative place and what status reports. MotoROS cannot report the "
         "selected tool: with tools in the cell file, Cartesian moves need this. `move "
-        "--pose/--relative` selects it first (SELECT_TOOL); joint moves ignore it.",
+        "--pose/--relative` selects it first (SELECT_TOOL); joint moves with a --config "
+        "cell that has obstacles check (and --avoid plans) with its shape on the flange.",
     )(func)
 
 

@@ -61,7 +61,7 @@ from pymotoros.client.planning import JointTrajectory, PlanningError
 from pymotoros.client.srdf import NamedPoseError
 from pymotoros.client.state import RobotState
 from pymotoros.client.streaming import FollowingSample, MoveResult
-from pymotoros.errors import ConfigError, PymotorosError
+from pymotoros.errors import ConfigError, PathBlockedError, PymotorosError
 from pymotoros.models import GroupModel
 from pymotoros.models.cell import CellModels, load_cell_models
 from pymotoros.protocol.constants import (
@@ -653,6 +653,7 @@ class MoveRequest:
     tcp_speed_mm_s: float = 250.0
     tool: int | None = None
     force: bool = False
+    avoid: bool = False
 
     @property
     def cartesian(self) -> bool:
@@ -672,6 +673,10 @@ class MoveRequest:
             raise click.UsageError("give either joint values J1 ... Jn or --named NAME")
         if self.srdf is not None and self.name is None:
             raise click.UsageError("--srdf goes with --named")
+        if self.avoid and self.cartesian:
+            raise click.UsageError(
+                "--avoid plans joint moves (J1 ... Jn or --named), not --pose/--relative"
+            )
 
 
 @dataclass(frozen=True, slots=True)
@@ -754,15 +759,33 @@ async def _cartesian(
 
 async def _joint_plan(client: RobotClient, req: MoveRequest, goal: MoveGoal) -> JointTrajectory:
     """The joint move from where the robot rests (planned before the progress line
-    starts, so that it can tell the time left from the plan)."""
+    starts, so that it can tell the time left from the plan); with --avoid around the
+    cell's obstacles (a goal that cannot be reached: exit 1, nothing sent)."""
     start = await client.current_positions(goal.groups)
-    return client.plan(
-        start,
-        goal.goal,
-        groups=goal.groups,
-        speed_scale=req.speed_scale,
-        accel_scale=req.accel_scale,
-    )
+    try:
+        return client.plan(
+            start,
+            goal.goal,
+            groups=goal.groups,
+            speed_scale=req.speed_scale,
+            accel_scale=req.accel_scale,
+            avoid=req.avoid,
+        )
+    except PathBlockedError as exc:
+        raise MoveBlockedError(f"not started: {exc}") from None
+
+
+def _need_obstacles(cell: Path | CellModels | None) -> None:
+    """``--avoid`` plans around the obstacles of the --config cell: without them it
+    would silently plan a plain move (usage error, exit 2)."""
+    models = None
+    if cell is not None:
+        models = cell if isinstance(cell, CellModels) else load_cell_models(cell)
+    if models is None or not models.workspace.obstacles:
+        raise click.UsageError(
+            "--avoid needs --config CELL.toml whose [workspace] has obstacles: the cell "
+            "file names them (the controller cannot report them)"
+        )
 
 
 async def _settled_where(
@@ -776,7 +799,10 @@ async def _settled_where(
 
 
 def _refuse_collisions(
-    cell: Path | CellModels | None, planned: JointTrajectory, goal: MoveGoal
+    cell: Path | CellModels | None,
+    planned: JointTrajectory,
+    goal: MoveGoal,
+    tool: int | None = None,
 ) -> None:
     """With a ``--config`` cell that has obstacles, the planned joint move is checked as
     ``pymotoros check --config`` checks a file (at the controller's increments): a
@@ -798,7 +824,7 @@ def _refuse_collisions(
         np.array([p.positions for p in planned.points], dtype=float),
         np.array([p.velocities for p in planned.points], dtype=float),
     )
-    collisions = Loaded(traj, models.robot, models.controller, models).check().collisions
+    collisions = Loaded(traj, models.robot, models.controller, models, tool).check().collisions
     if collisions:
         first = collisions[0]
         more = f" (and {len(collisions) - 1} more)" if len(collisions) > 1 else ""
@@ -820,7 +846,7 @@ async def _move_watched(
     try:
         planned = None if req.cartesian else await _joint_plan(client, req, goal)
         if planned is not None and not req.force:
-            _refuse_collisions(cell, planned, goal)
+            _refuse_collisions(cell, planned, goal, req.tool)
         duration = None if planned is None else planned.duration
         with progress_bar("moving", client, goal.groups, duration_s=duration, deg=req.deg) as bar:
             if planned is None:
@@ -919,6 +945,13 @@ def _report_move(result: MoveResult, req: MoveRequest, goal: MoveGoal, robot: An
     help="Move even if the --config cell's obstacles are in the planned move's way "
     "(checked as `pymotoros check --config` does; joint moves only).",
 )
+@click.option(
+    "--avoid",
+    is_flag=True,
+    help="Plan the joint move around the obstacles of the --config cell's [workspace] "
+    "(OMPL, as `pymotoros plan --avoid`), with the --tool's shape on the flange. A goal "
+    "that cannot be reached is refused before anything moves (exit 1).",
+)
 def move(**kwargs: Any) -> None:
     """Move to joint positions J1 ... Jn (rad, or deg with --deg) or to a named pose.
 
@@ -928,13 +961,15 @@ def move(**kwargs: Any) -> None:
     other, sent as one JOINT_TRAJ_PT_FULL_EX trajectory. --named moves every group the
     pose sets (all groups for home) unless --group names some, and says which.
     With a --config cell that has obstacles, a joint move that would hit one is refused
-    before anything moves (exit 1), unless --force.
+    before anything moves (exit 1), unless --force; with --avoid it goes around them.
     Ctrl-C or SIGTERM stops the robot (STOP_MOTION) and exits with 130 or 143.
     """
     target = _target(kwargs)
     req = MoveRequest(**kwargs)
     req.check_usage()
     try:
+        if req.avoid:
+            _need_obstacles(target.cell)
         goal = resolve_goal(target, req)
     except PymotorosError as exc:
         fail(exc, debug=target.debug)
@@ -944,6 +979,8 @@ def move(**kwargs: Any) -> None:
             await client.wait_for_state(target.timeout_s)
             if req.enable_first:
                 await client.start_trajectory_mode()
+            if not req.cartesian:  # the tool whose shape the obstacle check mounts
+                use_tool(client, req.tool)
             _say_groups(client, req, goal)
             return await _move_watched(client, req, goal, target.timeout_s, target.cell)
 

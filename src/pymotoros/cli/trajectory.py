@@ -18,9 +18,10 @@ import contextlib
 import json
 import math
 import sys
-from dataclasses import dataclass
+from collections.abc import Callable
+from dataclasses import dataclass, replace
 from pathlib import Path
-from typing import TYPE_CHECKING, Any, Final
+from typing import TYPE_CHECKING, Any, Final, TypeVar
 
 import click
 
@@ -50,6 +51,7 @@ from pymotoros.models import (
     robot_model,
 )
 from pymotoros.models.cell import CellModels, load_cell_models
+from pymotoros.protocol.constants import MAX_TOOL_NUMBER
 from pymotoros.trajectory.check import (
     EXIT_OK,
     EXIT_REFUSED,
@@ -70,6 +72,8 @@ if TYPE_CHECKING:
     from pymotoros.client.streaming import MoveResult
     from pymotoros.trajectory.plot import RecordedRun
 
+_F = TypeVar("_F", bound=Callable[..., Any])
+
 CHECK_EXIT_HELP: Final = (
     "\b\nExit codes:\n"
     f"  {EXIT_OK}  all clear\n"
@@ -80,6 +84,22 @@ CHECK_EXIT_HELP: Final = (
 )
 
 _TRAJ = InputFile("trajectory file (.csv, .json, .yaml)")
+
+
+def collision_tool_option(func: _F) -> _F:
+    """``--tool N``: the tool whose shape the collision check puts on the flange."""
+    return click.option(
+        "--tool",
+        "tool",
+        type=click.IntRange(0, MAX_TOOL_NUMBER),
+        default=None,
+        metavar="N",
+        help="With a --config cell that has obstacles: the tool on the flange (its "
+        "`shape`, else a capsule to its TCP, from the cell's tool data). Default: the "
+        "cell's [initial.tool], else tool 0, as the twin boots.",
+    )(func)
+
+
 _MODELS = model_options(controller="controller_name", robot="robot_name")
 
 
@@ -108,6 +128,8 @@ class Loaded:
     robot: RobotModel
     controller: ControllerModel
     cell: CellModels | None = None
+    tool: int | None = None
+    """The tool on the flange for the collision check (None: the cell's default)."""
 
     @property
     def fsu_pct(self) -> int | None:
@@ -127,7 +149,7 @@ class Loaded:
             from pymotoros.kinematics.collision import world_for_cell
             from pymotoros.trajectory.collisions import find_collisions
 
-            world = world_for_cell(self.cell)
+            world = world_for_cell(self.cell, [self.tool] * len(self.cell.robot.groups))
             report.collisions = find_collisions(self.trajectory, self.cell, report.per_group, world)
         return report
 
@@ -237,6 +259,7 @@ def render(
     help="The robot's current position (rad, the file's joints): checks the start margin.",
 )
 @json_option("the report")
+@collision_tool_option
 def check(
     traj: Path,
     robot_name: str | None,
@@ -244,6 +267,7 @@ def check(
     cell_path: Path | None,
     from_: str | None,
     as_json: bool,
+    tool: int | None = None,
 ) -> None:
     """Pre-flight a trajectory file (.csv, .json, .yaml) offline.
 
@@ -254,7 +278,7 @@ def check(
     obstacles of its [workspace] (docs/workspace.md).
     """
     reject_models_with_config(cell_path, "robot_name", "controller_name")
-    loaded = load_models(traj, robot_name, controller_name, cell_path)
+    loaded = replace(load_models(traj, robot_name, controller_name, cell_path), tool=tool)
     current = number_list(
         from_, len(loaded.trajectory.joint_names), hint="--from", what="the file's joints, rad"
     )
@@ -338,6 +362,7 @@ def _plan_models(
     help="Go around the obstacles of the --config cell's [workspace] (OMPL); the result "
     "passes `pymotoros check --config`. A goal that cannot be reached is refused (exit 1).",
 )
+@collision_tool_option
 def plan(
     waypoints: Path,
     robot_name: str,
@@ -348,6 +373,7 @@ def plan(
     sample_s: float,
     output: Path,
     avoid: bool,
+    tool: int | None = None,
 ) -> None:
     """Time waypoints (one row per waypoint, every joint of the robot, rad; an optional
     header row) within the robot's limits, and write the trajectory."""
@@ -358,7 +384,7 @@ def plan(
         robot, controller = _plan_models(robot_name, controller_name, cell_path, speed_scale)
         rows = read_waypoints(waypoints, sum(g.num_axes for g in robot.groups))
         if avoid:  # around the cell's obstacles (trajectory/avoid.py)
-            result = _plan_avoiding(rows, cell_path, speed_scale, accel_scale, sample_s)
+            result = _plan_avoiding(rows, cell_path, speed_scale, accel_scale, sample_s, tool)
         else:
             result = plan_waypoints(
                 rows,
@@ -385,6 +411,7 @@ def _plan_avoiding(
     speed_scale: float,
     accel_scale: float,
     sample_s: float,
+    tool: int | None = None,
 ) -> Trajectory:
     """``plan --avoid``: the cell's obstacles are needed; a blocked goal is one line, exit 1."""
     from pymotoros.kinematics.collision import world_for_cell
@@ -397,7 +424,7 @@ def _plan_avoiding(
         return plan_avoiding(
             rows,
             cell,
-            world_for_cell(cell),
+            world_for_cell(cell, [tool] * len(cell.robot.groups)),
             velocity_scaling=speed_scale,
             acceleration_scaling=accel_scale,
             sample_s=sample_s,

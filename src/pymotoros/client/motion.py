@@ -14,6 +14,7 @@ from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from pymotoros.client.avoid import Avoidance
 from pymotoros.client.connection import DEFAULT_REQUEST_TIMEOUT_S
 from pymotoros.client.errors import ClientError, MoveStoppedError
 from pymotoros.client.link import Link
@@ -22,6 +23,7 @@ from pymotoros.client.planning import (
     DEFAULT_SAMPLE_PERIOD_S,
     JointLimits,
     JointTrajectory,
+    PlanningError,
     plan_joint_move,
 )
 from pymotoros.client.srdf import NamedPose, find_pose, parse_srdf
@@ -34,6 +36,7 @@ from pymotoros.client.streaming import (
     MoveResult,
     TrajectoryStreamer,
 )
+from pymotoros.client.tools import ToolTable
 from pymotoros.models import ControllerModel, RobotModel
 from pymotoros.protocol.constants import Port
 
@@ -51,6 +54,8 @@ class Motion:
     _streamer: TrajectoryStreamer
     _robot: RobotModel
     _controller: ControllerModel
+    _avoidance: Avoidance | None = None
+    """The cell's obstacles, for moves with ``avoid=True`` (None: the client has no cell)."""
     _moving: asyncio.Task[object] | None = field(default=None, init=False)
     _stop_requested: bool = field(default=False, init=False)
 
@@ -82,12 +87,69 @@ class Motion:
         speed_scale: float = 1.0,
         accel_scale: float = 1.0,
         sample_period: float = DEFAULT_SAMPLE_PERIOD_S,
+        avoid: bool = False,
     ) -> JointTrajectory:
-        """A synchronised point-to-point move (see :func:`planning.plan_joint_move`)."""
+        """A synchronised point-to-point move (see :func:`planning.plan_joint_move`).
+
+        ``avoid``: around the obstacles of the client's cell file (``RobotClient(cell=
+        ...)``), searched as ``pymotoros plan --avoid`` searches (OMPL); the groups not in
+        ``groups`` stand where the latest feedback has them. A goal that cannot be
+        reached without a collision is a :class:`~pymotoros.errors.PathBlockedError`
+        naming the obstacle (see :mod:`pymotoros.client.avoid`)."""
         limits = JointLimits.concat([self.limits(g) for g in groups])
+        if avoid:
+            return self._plan_avoiding(
+                start, goal, groups, limits, speed_scale, accel_scale, sample_period
+            )
         return plan_joint_move(
             start,
             goal,
+            limits,
+            velocity_scaling=speed_scale,
+            acceleration_scaling=accel_scale,
+            sample_period=sample_period,
+        )
+
+    def _plan_avoiding(
+        self,
+        start: Sequence[float],
+        goal: Sequence[float],
+        groups: Sequence[int],
+        limits: JointLimits,
+        speed_scale: float,
+        accel_scale: float,
+        sample_period: float,
+    ) -> JointTrajectory:
+        """:meth:`plan` with ``avoid``: every group's start and goal, then the search."""
+        avoidance = self._avoidance
+        if avoidance is None:
+            avoidance = self._avoidance = Avoidance(None, ToolTable(self._robot))
+        if len(start) != limits.dof or len(goal) != limits.dof:
+            raise PlanningError(
+                f"expected {limits.dof} joint values ({', '.join(limits.names)}), "
+                f"got start {len(start)} and goal {len(goal)}"
+            )
+        indices = [self._view.group_index(g) for g in groups]
+        starts: list[tuple[float, ...]] = []
+        goals: list[tuple[float, ...]] = []
+        for index, group in enumerate(self._robot.groups):
+            if index in indices:
+                at = sum(self._robot.groups[g].num_axes for g in indices[: indices.index(index)])
+                starts.append(tuple(start[at : at + group.num_axes]))
+                goals.append(tuple(goal[at : at + group.num_axes]))
+                continue
+            here = self._view.state.positions(index)
+            if here is None:
+                raise PlanningError(
+                    f"avoid needs where group {index} ({group.name}) stands, and no feedback "
+                    "has told it yet: wait_for_state() first"
+                )
+            starts.append(here)
+            goals.append(here)
+        return avoidance.plan(
+            starts,
+            goals,
+            indices,
             limits,
             velocity_scaling=speed_scale,
             acceleration_scaling=accel_scale,
@@ -172,12 +234,15 @@ class Motion:
         goal_tolerance: float = DEFAULT_GOAL_TOLERANCE,
         busy_timeout_s: float = DEFAULT_BUSY_TIMEOUT_S,
         timeout_s: float | None = None,
+        avoid: bool = False,
     ) -> MoveResult:
         """Move to joint positions (rad/m, ROS order) from wherever the robot rests now.
 
         ``goal`` is a list for ``group``, or ``{group: positions}`` to move several
         groups together. Waits for the robot to be at rest, plans with the model's
-        limits, streams, and waits until it has settled at the goal.
+        limits, streams, and waits until it has settled at the goal. ``avoid``: around
+        the obstacles of the client's cell file (see :meth:`plan`); nothing is sent when
+        the goal cannot be reached (:class:`~pymotoros.errors.PathBlockedError`).
         """
         if isinstance(goal, Mapping):
             groups = tuple(sorted(self._view.group_index(g) for g in goal))
@@ -188,7 +253,12 @@ class Motion:
             target = tuple(goal)
         start = await self.current_positions(groups)
         trajectory = self.plan(
-            start, target, groups=groups, speed_scale=speed_scale, accel_scale=accel_scale
+            start,
+            target,
+            groups=groups,
+            speed_scale=speed_scale,
+            accel_scale=accel_scale,
+            avoid=avoid,
         )
         options = ExecuteOptions(busy_timeout_s, goal_tolerance, timeout_s, on_progress=on_progress)
         return await self._execute(trajectory, groups, options)

@@ -31,6 +31,7 @@ from collections.abc import Callable, Mapping
 from pathlib import Path
 from typing import Any, Concatenate, ParamSpec, Self, TypeVar
 
+from pymotoros.client.avoid import Avoidance
 from pymotoros.client.connection import (
     DEFAULT_CONNECT_TIMEOUT_S,
     DEFAULT_REQUEST_TIMEOUT_S,
@@ -167,7 +168,13 @@ class RobotClient:
         )
         self._io_port = IoPort(self._link, self.controller)
         self._motion = Motion(
-            self._link, self._view, self._commands, self.streamer, self.robot, self.controller
+            self._link,
+            self._view,
+            self._commands,
+            self.streamer,
+            self.robot,
+            self.controller,
+            Avoidance(tools, self.tools),
         )
         self._geometry = Geometry(self._view, self._motion, self.tools)
 

@@ -794,16 +794,39 @@ class FollowingMonitor:
 
 
 class _Progress:
-    """``trajectory.progress`` with the start-to-goal line computed once."""
+    """``trajectory.progress`` with the start-to-goal line computed once.
 
-    __slots__ = ("_dd", "_direction", "_start")
+    A plan that comes to rest on the way (a detour around an obstacle,
+    :mod:`pymotoros.client.avoid`: straight segments, rest to rest) is measured along the
+    polyline through its rest points instead, by length, on the segment nearest the
+    position: its start-to-goal line says nothing of a robot going round."""
+
+    __slots__ = ("_dd", "_direction", "_segments", "_start", "_total")
 
     def __init__(self, trajectory: JointTrajectory) -> None:
         self._start = trajectory.start
         self._direction = [g - s for g, s in zip(trajectory.goal, trajectory.start, strict=True)]
         self._dd = sum(x * x for x in self._direction)
+        corners = [trajectory.start]
+        for p in trajectory.points[1:-1]:
+            if not any(p.velocities) and p.positions != corners[-1]:
+                corners.append(p.positions)
+        if trajectory.goal != corners[-1]:
+            corners.append(trajectory.goal)
+        self._segments: list[tuple[tuple[float, ...], list[float], float, float, float]] = []
+        """Per segment between rest points: start, direction, its square, length so far,
+        length (empty for a plan with no rest on the way)."""
+        self._total = 0.0
+        if len(corners) > 2:
+            for a, b in itertools.pairwise(corners):
+                d = [y - x for x, y in zip(a, b, strict=True)]
+                dd = sum(x * x for x in d)
+                self._segments.append((a, d, dd, self._total, dd**0.5))
+                self._total += dd**0.5
 
     def __call__(self, positions: Sequence[float]) -> float:
+        if self._segments:
+            return self._along_polyline(positions)
         if self._dd <= _SAME_POSITION:
             return 1.0
         return (
@@ -812,6 +835,16 @@ class _Progress:
             )
             / self._dd
         )
+
+    def _along_polyline(self, positions: Sequence[float]) -> float:
+        best_distance, best = float("inf"), 0.0
+        for a, d, dd, before, length in self._segments:
+            rel = [p - x for p, x in zip(positions, a, strict=True)]
+            t = min(1.0, max(0.0, sum(r * x for r, x in zip(rel, d, strict=True)) / dd))
+            distance = sum((r - t * x) ** 2 for r, x in zip(rel, d, strict=True))
+            if distance < best_distance:
+                best_distance, best = distance, (before + t * length) / self._total
+        return best
 
 
 class _RestDetector:

@@ -40,7 +40,7 @@ from typing import Any, Final, Literal, Protocol
 from pymotoros.controller.api import FaultInjection, OperatorPanel, PendantMode, SafetyPanel
 from pymotoros.controller.safety.pfl import MAX_RETREAT_MS
 from pymotoros.errors import PymotorosError
-from pymotoros.models.workspace import MAX_SIZE_M, SHAPE_KEYS, Obstacle
+from pymotoros.models.workspace import MAX_SIZE_M, SHAPE_KEYS, Obstacle, UnknownObstacleError
 
 __all__ = [
     "CONTROL_ACTIONS",
@@ -48,6 +48,7 @@ __all__ = [
     "ActionRefusedError",
     "ActionSpec",
     "ActionTarget",
+    "ActionTargetMissingError",
     "Param",
     "ParamKind",
     "Rule",
@@ -85,6 +86,11 @@ class ActionParamError(PymotorosError, ValueError):
 
 class ActionRefusedError(PymotorosError, ValueError):
     """The controller refused an action when it ran (the message says why)."""
+
+
+class ActionTargetMissingError(ActionRefusedError, LookupError):
+    """The action names something that is not there (an obstacle to remove that the
+    cell does not hold): the control API answers 404, the message names what is there."""
 
 
 class ActionTarget(OperatorPanel, FaultInjection, SafetyPanel, Protocol):
@@ -340,6 +346,13 @@ def _put_obstacle(target: ActionTarget, p: Params) -> None:
     target.put_obstacle({k: v for k, v in p.items() if v is not None})
 
 
+def _remove_obstacle(target: ActionTarget, p: Params) -> None:
+    try:
+        target.remove_obstacle(p["name"])
+    except UnknownObstacleError as exc:
+        raise ActionTargetMissingError(str(exc)) from exc
+
+
 def _obstacle_name(value: object) -> str | None:
     if not isinstance(value, str) or not value.strip() or "/" in value:
         return "must be a non-empty name without '/'"
@@ -582,8 +595,8 @@ CONTROL_ACTIONS: Final[tuple[ActionSpec, ...]] = (
     ActionSpec(
         "remove_obstacle",
         "/api/workspace/{name}",
-        "Remove the obstacle of that name from the cell.",
-        lambda t, p: t.remove_obstacle(p["name"]),
+        "Remove the obstacle of that name from the cell (404 when there is none).",
+        _remove_obstacle,
         (_OBSTACLE_NAME,),
         tag="safety",
         method="DELETE",

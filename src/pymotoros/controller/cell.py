@@ -24,7 +24,7 @@ from pymotoros.controller.inform import BUILTIN_VARIANTS, JobRunner, load_jobs
 from pymotoros.controller.io_image import IoImage
 from pymotoros.controller.peripherals import MAX_DELAY_MS, PeripheralConfig
 from pymotoros.controller.safety.startup import StartupConfig, check_parameters
-from pymotoros.errors import JobError
+from pymotoros.errors import ConfigError, JobError
 from pymotoros.models import (
     DEFAULT_CONTROLLER,
     DEFAULT_ROBOT,
@@ -42,9 +42,11 @@ from pymotoros.models.cell import (
     cell_table,
     read_cell_file,
 )
+from pymotoros.models.cell_tools import CellTool
+from pymotoros.models.robots import Transform
 from pymotoros.models.s1cxg import S1cxgTable, parse_s1cxg
 from pymotoros.models.toml_file import TomlTable
-from pymotoros.models.workspace import EMPTY_WORKSPACE, Workspace
+from pymotoros.models.workspace import EMPTY_WORKSPACE, ToolShape, Workspace, parse_tool_shape
 from pymotoros.protocol.constants import MAX_TOOL_NUMBER
 
 logger = logging.getLogger(__name__)
@@ -71,6 +73,13 @@ class ToolConfig:
     tcp_m: tuple[float, float, float] = (0.0, 0.0, 0.0)
     rpy_rad: tuple[float, float, float] = (0.0, 0.0, 0.0)
     """The TCP's orientation on tool0: fixed-axis roll, pitch, yaw (R = Rz·Ry·Rx)."""
+    shape: ToolShape | None = None
+    """Its collision shape on the flange (None: a capsule from the flange to the TCP)."""
+
+    @property
+    def cell_tool(self) -> CellTool:
+        """The tool as the client and the collision model read it (TCP and shape)."""
+        return CellTool(self.number, self.name, Transform(self.tcp_m, self.rpy_rad), self.shape)
 
 
 @dataclass(frozen=True, slots=True)
@@ -430,9 +439,21 @@ def _tool(t_t: TomlTable) -> ToolConfig:
         mass,
         _triple(t_t, "tcp_m", "metres [x, y, z]"),
         _triple(t_t, "rpy_rad", "radians [roll, pitch, yaw]"),
+        _tool_shape(t_t),
     )
     t_t.finish()
     return tool
+
+
+def _tool_shape(t_t: TomlTable) -> ToolShape | None:
+    """A tool's ``shape`` (models/workspace.py reads it for the client too)."""
+    value = t_t.get("shape")
+    if value is None:
+        return None
+    try:
+        return parse_tool_shape(value, t_t.key("shape"))
+    except ConfigError as exc:
+        raise ConfigError(f"{t_t.source}: {exc}") from None
 
 
 def _initial(t: TomlTable, groups: tuple[GroupModel, ...], tool_numbers: set[int]) -> InitialState:

@@ -7,7 +7,8 @@ other, so the checker lives here beside the chains it places.
 
 Each robot group's links are capsules (radii: :mod:`pymotoros.models.link_shapes`)
 placed by the group's own Pinocchio model (its own data: nothing shared with another
-user of the kinematics); the active tool is a capsule from ``tool0`` to its TCP. The
+user of the kinematics); the active tool is its tool file's ``shape`` on the flange, or
+a capsule from ``tool0`` to its TCP (:meth:`GroupBody.set_tool`). The
 obstacles come from :mod:`pymotoros.models.workspace`. Coal (FCL's successor, a
 dependency of Pinocchio) computes the exact signed distances.
 
@@ -37,14 +38,17 @@ import pinocchio as pin
 
 from pymotoros.kinematics.chain import Chain
 from pymotoros.models.cell import CellModels
+from pymotoros.models.cell_tools import CellTool
 from pymotoros.models.link_shapes import link_name, link_radii
 from pymotoros.models.robots import GroupModel, Transform
 from pymotoros.models.workspace import (
     DEFAULT_TOOL_RADIUS_M,
     Box,
+    Capsule,
     Cylinder,
     Obstacle,
     Shape,
+    ToolShape,
     Workspace,
 )
 
@@ -61,6 +65,8 @@ SELF_NEIGHBOUR_M: Final = 0.005
 their capsules meet at a shared joint (the MH5's T link sits 80 mm past B, exactly its
 two radii), not because the arm is folded onto itself."""
 _MIN_SEGMENT_M: Final = 1e-9
+TOOL_LINK: Final = "tool"
+"""The link name of the tool's shape in a contact (``R1 tool touches obstacle 'table'``)."""
 
 
 @dataclass(frozen=True, slots=True)
@@ -139,7 +145,9 @@ class _Part:
     """The segment's two end points in the joint's frame, homogeneous (2 × 4)."""
 
     def __post_init__(self) -> None:
-        self.radius = float(self.geometry.radius)
+        # a box (a tool's shape) has no radius: its bounding sphere stands in for the
+        # lever arms and the reach, which only need an upper bound
+        self.radius = float(getattr(self.geometry, "radius", self.bound))
         self.half = float(getattr(self.geometry, "halfLength", 0.0))
         center = np.asarray(self.local.translation, dtype=float)
         along = np.asarray(self.local.rotation, dtype=float)[:, 2] * self.half
@@ -211,7 +219,8 @@ class GroupBody:
             dtype=float,
         )
         self._linear = np.array([a.linear for a in group.axes])
-        self._tool_key: tuple[float, ...] | None = None
+        self._tool_key: tuple[Transform, ToolShape | None] | None = None
+        self._tool_given: Transform | CellTool | None = None
         self.tool_part: _Part | None = None
         self.pairs = self._self_pairs()
 
@@ -235,23 +244,41 @@ class GroupBody:
 
     # --- the tool -------------------------------------------------------------------
 
-    def set_tool(self, tool: Transform) -> None:
-        """Mount the tool whose TCP is ``tool`` on ``tool0`` (a capsule tool0 → TCP)."""
-        key = (*tool.xyz, *tool.rpy)
+    def set_tool(self, tool: Transform | CellTool) -> None:
+        """Mount a tool on ``tool0``: its TCP (a bare :class:`Transform`) or its tool file
+        (TCP and shape). Cached: the same tool again is no work."""
+        if tool is self._tool_given:  # the twin asks with the same object each check
+            return
+        self._tool_given = tool
+        data = tool if isinstance(tool, CellTool) else CellTool(0, tcp=tool)
+        key = (data.tcp, data.shape)
         if key == self._tool_key:
             return
         self._tool_key = key
-        tcp = self._tool0 * _se3(tool)
+        self.tool_part = self._tool_part(data)
+        self.pairs = self._self_pairs()
+
+    def _tool_part(self, tool: CellTool) -> _Part | None:
+        """The tool's shape on the last link: the one place it is built, for the twin's
+        contact check, ``check`` and ``plan --avoid`` alike. With a ``shape`` in its tool
+        file, that shape at its pose on tool0; else a capsule from tool0 to the TCP of
+        radius ``workspace.tool_radius_m`` (none for a TCP on tool0)."""
+        n = self.num_joints
+        if tool.shape is not None:
+            local = self._tool0 * _se3(tool.shape.pose)
+            shape = tool.shape.shape
+            geometry = (
+                coal.Capsule(shape.radius, shape.length)
+                if isinstance(shape, Capsule)
+                else _geometry(shape)
+            )
+            return _Part(n, n + 1, TOOL_LINK, geometry, local, shape.bounding_radius)
+        tcp = self._tool0 * _se3(tool.tcp)
         a = np.array(self._tool0.translation, dtype=float)
         b = np.array(tcp.translation, dtype=float)
-        self.tool_part = (
-            None
-            if float(np.linalg.norm(b - a)) < _MIN_SEGMENT_M
-            else _Part(
-                self.num_joints, self.num_joints + 1, "tool", *_segment(a, b, self._tool_radius)
-            )
-        )
-        self.pairs = self._self_pairs()
+        if float(np.linalg.norm(b - a)) < _MIN_SEGMENT_M:
+            return None
+        return _Part(n, n + 1, TOOL_LINK, *_segment(a, b, self._tool_radius))
 
     @property
     def all_parts(self) -> list[_Part]:
@@ -327,7 +354,12 @@ class GroupBody:
     def reach(self) -> list[float]:
         """Per joint, an upper bound of the distance from its axis to any point of the
         links it moves (the chain's length beyond it, the tool, the thickest capsule)."""
-        tool = self.tool_part.bound * 2.0 if self.tool_part is not None else 0.0
+        part = self.tool_part
+        tool = (
+            float(np.linalg.norm(np.asarray(part.local.translation))) + part.bound
+            if part is not None
+            else 0.0
+        )
         thickest = max(p.bound for p in self.all_parts)
         return [sum(self.lengths[k:]) + tool + thickest for k in range(self.num_joints)]
 
@@ -374,6 +406,7 @@ class CollisionWorld:
         workspace: Workspace,
     ) -> None:
         self.workspace = workspace
+        self.groups = tuple(groups)
         self.bodies: list[GroupBody | None] = []
         for group, robot in zip(groups, robots, strict=True):
             if link_radii(robot, group) is None or any(a.geometry is None for a in group.axes):
@@ -421,8 +454,9 @@ class CollisionWorld:
     def has_obstacles(self) -> bool:
         return bool(self._obstacles)
 
-    def set_tool(self, group_index: int, tool: Transform) -> None:
-        """The active tool of a group (its TCP on tool0), as a capsule from tool0."""
+    def set_tool(self, group_index: int, tool: Transform | CellTool) -> None:
+        """The active tool of a group: its tool file (TCP and shape), or its TCP alone
+        (a capsule from tool0), see :meth:`GroupBody.set_tool`."""
         body = self.bodies[group_index]
         if body is not None:
             body.set_tool(tool)
@@ -556,11 +590,74 @@ class CollisionWorld:
         """Obstacle contacts and self-collisions at ``qs``."""
         return [*self.contacts(qs), *self.self_contacts(qs)]
 
+    # --- paths ----------------------------------------------------------------------
 
-def world_for_cell(cell: CellModels) -> CollisionWorld:
+    @property
+    def joint_counts(self) -> tuple[int, ...]:
+        """Joints per group, in the order a joint vector of every group holds them."""
+        return tuple(g.num_axes for g in self.groups)
+
+    def free_waypoints(
+        self,
+        waypoints: Sequence[Sequence[float]],
+        *,
+        time_limit_s: float | None = None,
+        lower: Sequence[float] | None = None,
+        upper: Sequence[float] | None = None,
+        labels: Sequence[str] = (),
+    ) -> list[list[float]]:
+        """Collision-free joint waypoints through ``waypoints`` (every joint of every
+        group), searched by OMPL within the joint limits (or ``lower`` … ``upper``):
+        :func:`pymotoros.kinematics.path_search.free_waypoints`."""
+        from pymotoros.kinematics import path_search  # OMPL loads only when planning
+
+        axes = [a for g in self.groups for a in g.axes]
+        return path_search.free_waypoints(
+            self,
+            waypoints,
+            self.joint_counts,
+            [a.lower for a in axes] if lower is None else lower,
+            [a.upper for a in axes] if upper is None else upper,
+            time_limit_s=path_search.DEFAULT_TIME_LIMIT_S if time_limit_s is None else time_limit_s,
+            labels=labels,
+        )
+
+    def segment_contacts(self, a: Sequence[float], b: Sequence[float]) -> list[Contact]:
+        """The first contact anywhere on the straight joint path a → b (every joint of
+        every group), [] when free: :func:`pymotoros.kinematics.path_search.segment_contacts`."""
+        from pymotoros.kinematics import path_search
+
+        return [
+            c
+            for c in path_search.segment_contacts(self, a, b, self.joint_counts)
+            if isinstance(c, Contact)
+        ]
+
+
+def world_for_cell(cell: CellModels, tools: Sequence[int | None] = ()) -> CollisionWorld:
     """The collision world of a cell file as the client reads it (its groups in cell
-    order, its ``[workspace]``)."""
-    return CollisionWorld(cell.robot.groups, cell.robots, cell.workspace)
+    order, its ``[workspace]``), each group with a tool on its flange: ``tools[g]`` (a
+    tool number; missing or None: the cell's default, ``[initial.tool]`` or tool 0, as
+    the twin boots), its shape from the cell's tool data (:meth:`GroupBody.set_tool`)."""
+    world = CollisionWorld(cell.robot.groups, cell.robots, cell.workspace)
+    for g in range(len(cell.robot.groups)):
+        given = tools[g] if g < len(tools) else None
+        world.set_tool(g, cell_tool(cell, g, cell.default_tool(g) if given is None else given))
+    return world
 
 
-__all__ = ["NEAR_M", "CollisionWorld", "Contact", "GroupBody", "world_for_cell"]
+def cell_tool(cell: CellModels, group_index: int, number: int) -> CellTool:
+    """Tool file ``number`` of a group in the cell (an empty one when the cell has none)."""
+    tools = cell.tools[group_index] if group_index < len(cell.tools) else ()
+    return next((t for t in tools if t.number == number), CellTool(number))
+
+
+__all__ = [
+    "NEAR_M",
+    "TOOL_LINK",
+    "CollisionWorld",
+    "Contact",
+    "GroupBody",
+    "cell_tool",
+    "world_for_cell",
+]

@@ -25,7 +25,7 @@ from pathlib import Path
 from typing import Any, Final, NamedTuple
 
 from pymotoros.errors import ConfigError
-from pymotoros.models.cell_tools import CellTool, cell_tools
+from pymotoros.models.cell_tools import CellTool, cell_tools, initial_tools
 from pymotoros.models.controllers import DEFAULT_CONTROLLER, ControllerModel, controller_model
 from pymotoros.models.robots import DEFAULT_ROBOT, GroupKind, GroupModel, RobotModel, robot_model
 from pymotoros.models.toml_file import TomlTable, read_toml
@@ -57,6 +57,15 @@ class CellModels:
 
     workspace: Workspace = EMPTY_WORKSPACE
     """``[workspace]``: obstacles around the robot (models/workspace.py)."""
+    initial_tools: tuple[int, ...] = ()
+    """Per group, the tool selected at boot (``[initial.tool]``; empty: tool 0)."""
+
+    def default_tool(self, group_index: int) -> int:
+        """The tool a group has when nobody selected one: the cell's ``[initial.tool]``,
+        else tool 0 (as after a controller boot, reference §5.8). The twin boots with it,
+        and ``check`` / ``plan --avoid`` put its shape on the flange."""
+        tools = self.initial_tools
+        return tools[group_index] if group_index < len(tools) else 0
 
 
 PORT_KINDS: Final = ("motion", "state", "io", "http")
@@ -233,6 +242,7 @@ def _models(data: Mapping[str, object], source: str, parts: Sequence[GroupPart])
         tuple(p.group.name for p in parts[: len(groups)]),
         cell_tools(data, source, groups),
         workspace,
+        initial_tools(data, groups),
     )
 
 

@@ -1,4 +1,5 @@
-"""The tool files of a cell file as the client needs them: number, name, TCP on tool0.
+"""The tool files of a cell file as the client needs them: number, name, TCP on tool0,
+and the tool's collision shape (``shape``, docs/workspace.md).
 
 MotoROS streams joint positions only and cannot report the tool data or which tool is
 selected, so the client takes the tool data from the same cell file the simulator
@@ -18,6 +19,7 @@ from typing import Final
 
 from pymotoros.errors import ConfigError
 from pymotoros.models.robots import DEFAULT_ROBOT, GroupKind, GroupModel, Transform, robot_model
+from pymotoros.models.workspace import ToolShape, parse_tool_shape
 from pymotoros.protocol.constants import MAX_TOOL_NUMBER
 
 NO_OFFSET: Final = Transform()
@@ -31,6 +33,9 @@ class CellTool:
     number: int
     name: str = ""
     tcp: Transform = NO_OFFSET
+    shape: ToolShape | None = None
+    """Its collision shape on the flange (``shape = {capsule = [r, length]}`` …); None:
+    a capsule from the flange to the TCP (``workspace.tool_radius_m``)."""
 
 
 def _triple(entry: Mapping[str, object], key: str, where: str, unit: str) -> tuple[float, ...]:
@@ -67,7 +72,9 @@ def _tool_list(value: object, where: str) -> tuple[CellTool, ...]:
         xyz = _triple(entry, "tcp_m", at, "metres [x, y, z]")
         rpy = _triple(entry, "rpy_rad", at, "radians [roll, pitch, yaw]")
         frame = Transform((xyz[0], xyz[1], xyz[2]), (rpy[0], rpy[1], rpy[2]))
-        tools.append(CellTool(number, str(name), frame))
+        shape_value = entry.get("shape")
+        shape = None if shape_value is None else parse_tool_shape(shape_value, f"{at}.shape")
+        tools.append(CellTool(number, str(name), frame, shape))
     return tuple(tools)
 
 
@@ -102,4 +109,19 @@ def cell_tools(
     return tuple(out)
 
 
-__all__ = ["CellTool", "cell_tools"]
+def initial_tools(data: Mapping[str, object], groups: Sequence[GroupModel]) -> tuple[int, ...]:
+    """Per group, the tool ``[initial.tool]`` selects at boot (0 where it says nothing).
+    The simulator's reader refuses a bad entry; here one is read as tool 0."""
+    initial = data.get("initial")
+    table = initial.get("tool") if isinstance(initial, Mapping) else None
+    if not isinstance(table, Mapping):
+        return ()
+    out = []
+    for group in groups:
+        number = table.get(group.name, 0)
+        valid = isinstance(number, int) and not isinstance(number, bool)
+        out.append(number if valid and 0 <= number <= MAX_TOOL_NUMBER else 0)
+    return tuple(out)
+
+
+__all__ = ["CellTool", "cell_tools", "initial_tools"]

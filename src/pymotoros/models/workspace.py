@@ -93,6 +93,45 @@ Shape = Box | Cylinder | Sphere
 
 
 @dataclass(frozen=True, slots=True)
+class Capsule:
+    """A capsule: the points within ``radius`` of a segment ``length`` long along its
+    own z, centred (a tool's shape only: a spindle, a gripper's fingers)."""
+
+    radius: float
+    length: float
+
+    def as_dict(self) -> dict[str, object]:
+        return {"capsule": [self.radius, self.length]}
+
+    @property
+    def bounding_radius(self) -> float:
+        return 0.5 * self.length + self.radius
+
+
+TOOL_SHAPE_KEYS: Final = ("capsule", "box", "cylinder", "sphere")
+"""The shape keys of a tool's ``shape`` table; exactly one of them is given."""
+TOOL_SHAPE_TABLE_KEYS: Final = frozenset({"xyz", "rpy_deg", *TOOL_SHAPE_KEYS})
+
+
+@dataclass(frozen=True, slots=True)
+class ToolShape:
+    """The collision shape of a tool (``shape`` in its ``[[tools]]`` entry), on the flange.
+
+    ``pose`` is the shape's centre and orientation in ``tool0``'s frame (the flange).
+    Without ``xyz`` the shape stands on the flange, along tool0's z: its centre half its
+    length out (a capsule's segment runs from the flange to ``length``)."""
+
+    shape: Capsule | Box | Cylinder | Sphere
+    pose: Transform = field(default_factory=Transform)
+
+    def as_dict(self) -> dict[str, object]:
+        out = self.shape.as_dict()
+        out["xyz"] = list(self.pose.xyz)
+        out["rpy_deg"] = [math.degrees(a) for a in self.pose.rpy]
+        return out
+
+
+@dataclass(frozen=True, slots=True)
 class Obstacle:
     """One obstacle: its name, shape and pose (in the frame it was given in)."""
 
@@ -137,9 +176,10 @@ class Workspace:
         return Workspace((*kept, obstacle), self.bases, self.tool_radius_m)
 
     def without(self, name: str) -> Workspace:
-        """A copy without the obstacle ``name`` (ConfigError when there is none)."""
+        """A copy without the obstacle ``name`` (:class:`UnknownObstacleError`, a
+        ConfigError, when there is none)."""
         if self.obstacle(name) is None:
-            raise ConfigError(f"no obstacle named {name!r}; obstacles: {self.names or 'none'}")
+            raise UnknownObstacleError(name, self.names)
         kept = tuple(o for o in self.obstacles if o.name != name)
         return Workspace(kept, self.bases, self.tool_radius_m)
 
@@ -149,6 +189,15 @@ class Workspace:
 
 
 EMPTY_WORKSPACE: Final = Workspace()
+
+
+class UnknownObstacleError(ConfigError, LookupError):
+    """An obstacle named that is not in the workspace (the message lists the known ones):
+    the control API answers it with 404, not with the 400 of a bad value."""
+
+    def __init__(self, name: str, known: str) -> None:
+        super().__init__(f"no obstacle named {name!r}; obstacles: {known or 'none'}")
+        self.name = name
 
 
 def _number(value: object) -> float | None:
@@ -189,6 +238,46 @@ def _shape(entry: Mapping[str, object], key: str) -> Shape:
         return Cylinder(r, length)
     (r,) = _sizes(value, f"{key}.sphere", 1, "a radius in metres")
     return Sphere(r)
+
+
+def parse_tool_shape(value: object, key: str) -> ToolShape:
+    """A tool's ``shape`` table (``key`` is its path, ``tools[0].shape``, for errors):
+    exactly one of ``capsule = [radius, length]``, ``box = [x, y, z]``, ``cylinder =
+    [radius, length]``, ``sphere = radius`` (m), and optionally ``xyz`` (m) and
+    ``rpy_deg`` on tool0 (default: standing on the flange, see :class:`ToolShape`)."""
+    if not isinstance(value, Mapping):
+        raise ConfigError(
+            f"{key}: must be a table such as {{capsule = [0.03, 0.2]}} (radius, length in "
+            f"metres, along the flange's z), not {value!r}"
+        )
+    _unknown(value, TOOL_SHAPE_TABLE_KEYS, key)
+    given = [k for k in TOOL_SHAPE_KEYS if k in value]
+    if len(given) != 1:
+        problem = "gives none" if not given else f"gives {' and '.join(given)}"
+        raise ConfigError(
+            f"{key}: a tool shape has exactly one of capsule, box, cylinder, sphere; it {problem}"
+        )
+    shape: Capsule | Shape
+    if given[0] == "capsule":
+        r, length = _sizes(value["capsule"], f"{key}.capsule", 2, "[radius, length] in metres")
+        shape = Capsule(r, length)
+        half = length / 2
+    else:
+        shape = _shape(value, key)
+        half = _half_length(shape)
+    pose = _pose(value, key, need_xyz=False)
+    if "xyz" not in value:
+        pose = Transform((0.0, 0.0, half), pose.rpy)
+    return ToolShape(shape, pose)
+
+
+def _half_length(shape: Shape) -> float:
+    """Half a shape's length along its own z (how far its centre stands off the flange)."""
+    if isinstance(shape, Box):
+        return shape.size[2] / 2
+    if isinstance(shape, Cylinder):
+        return shape.length / 2
+    return shape.radius
 
 
 def _pose(entry: Mapping[str, object], key: str, *, need_xyz: bool) -> Transform:
@@ -290,12 +379,17 @@ def _workspace(value: object, groups: Sequence[str]) -> Workspace:
 __all__ = [
     "DEFAULT_TOOL_RADIUS_M",
     "EMPTY_WORKSPACE",
+    "TOOL_SHAPE_KEYS",
     "Box",
+    "Capsule",
     "Cylinder",
     "Obstacle",
     "Shape",
     "Sphere",
+    "ToolShape",
+    "UnknownObstacleError",
     "Workspace",
     "parse_obstacle",
+    "parse_tool_shape",
     "workspace_from_dict",
 ]

@@ -8,9 +8,10 @@ derived from the declared actions (:data:`~pymotoros.controller.actions.CONTROL_
 one per action, its body a pydantic model built from the action's parameters (so the
 OpenAPI schema shows their bounds, units and meaning), checked by the same declaration
 as a scenario file's events: a bad value is a 422 with the same words. A rule between
-parameters, or a refusal by the controller, is a 400. Every endpoint is an ``async def``
-so it runs on the simulator's event loop, between two interpolation ticks, never in
-a worker thread: the controller is not thread-safe and does not need to be.
+parameters, or a refusal by the controller, is a 400; removing something that is not
+there (``DELETE /api/workspace/NAME``), a 404 naming what is. Every endpoint is an
+``async def`` so it runs on the simulator's event loop, between two interpolation ticks,
+never in a worker thread: the controller is not thread-safe and does not need to be.
 
 Every error answer, unknown paths and malformed bodies included, is a 4xx with a
 JSON body ``{"error": "<what was wrong>"}``. Each POST answers with the state after
@@ -37,6 +38,7 @@ from pymotoros.controller.actions import (
     ActionParamError,
     ActionRefusedError,
     ActionSpec,
+    ActionTargetMissingError,
     Param,
     actions_by_name,
     with_scenario_of,
@@ -254,11 +256,13 @@ async def _http_error(request: Request, exc: Exception) -> JSONResponse:
 
 async def _our_error(request: Request, exc: Exception) -> JSONResponse:
     """Our errors (a refused action, a bad scenario, an unreadable address) are the
-    client's: 400. Any other exception is a bug in the simulator: 500."""
+    client's: 400; an action naming something that is not there (an obstacle to
+    remove), 404. Any other exception is a bug in the simulator: 500."""
     message = f"{request.method} {request.url.path}: {exc}"
     if api_refusal_allowed(request.scope, logger, logging.INFO):  # a flood: counted
         logger.info("control API refused a request: %s", message)
-    return JSONResponse({"error": message}, status_code=400)
+    status = 404 if isinstance(exc, ActionTargetMissingError) else 400
+    return JSONResponse({"error": message}, status_code=status)
 
 
 # --------------------------------------------------------------------------- the app
@@ -266,6 +270,9 @@ async def _our_error(request: Request, exc: Exception) -> JSONResponse:
 _ERRORS: dict[int | str, dict[str, object]] = {
     400: {"model": ErrorModel, "description": "the controller refused the arguments"},
     422: {"model": ErrorModel, "description": "the body is malformed"},
+}
+_NOT_FOUND: dict[int | str, dict[str, object]] = {
+    404: {"model": ErrorModel, "description": "nothing of that name (the error lists what is)"},
 }
 
 StateFn = Callable[[], dict[str, Any]]
@@ -388,7 +395,7 @@ def _install_action(
         endpoint,
         methods=[spec.method],
         response_model=answer,
-        responses=_ERRORS,
+        responses=_ERRORS | _NOT_FOUND if spec.method == "DELETE" else _ERRORS,
         tags=[spec.tag],
         summary=spec.doc.split(":")[0].rstrip("."),
         description=spec.doc,

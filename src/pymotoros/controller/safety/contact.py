@@ -37,7 +37,7 @@ from pymotoros.controller.operator_keys import OperatorKeys
 from pymotoros.controller.safety.pfl import DEFAULT_RETREAT_MS, PflFunction
 from pymotoros.controller.servo import SLOTS, ServoGroup
 from pymotoros.kinematics.collision import CollisionWorld, Contact
-from pymotoros.models.robots import Transform
+from pymotoros.models.cell_tools import CellTool
 from pymotoros.models.workspace import Workspace
 from pymotoros.motion import GroupAxes
 
@@ -85,7 +85,7 @@ class ContactFunction:
         servos: Sequence[ServoGroup],
         axes: Sequence[GroupAxes],
         *,
-        tool: Callable[[int], Transform],
+        tool: Callable[[int], CellTool],
         react: Callable[[Sequence[Contact], int], None],
     ) -> None:
         self.world = world
@@ -253,13 +253,13 @@ def workspace_contact(
         return None
     interps = ctx.interpolators
 
-    frames: dict[tuple[int, int], Transform] = {}
+    frames: dict[tuple[int, int], CellTool] = {}
 
-    def tool(g: int) -> Transform:
+    def tool(g: int) -> CellTool:
+        """The selected tool's file (TCP and shape), mounted by the collision model."""
         key = (g, interps[g].tool)
         if key not in frames:
-            t = cell.tool(g, key[1])
-            frames[key] = Transform(t.tcp_m, t.rpy_rad)
+            frames[key] = cell.tool(g, key[1]).cell_tool
         return frames[key]
 
     def servo_off() -> None:
