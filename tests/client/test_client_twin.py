@@ -93,7 +93,8 @@ async def test_a_long_planned_move_runs_much_faster_than_real_time(
     result = await client.execute(plan)
     cpu, wall = time.process_time() - cpu_start, watch.unloaded()
     assert _off(goal, result.final_positions) < TOLERANCE
-    assert result.stream.busy_replies > 0
+    assert result.stream.points == len(plan.points)
+    assert result.stream.offers <= 2 * len(plan.points)  # BUSY retries paced (issue 22)
     assert not result.following.slowed
     assert cpu < plan.duration / 4  # the work (CPU time: load does not stretch it)
     assert wall < 0.9 * plan.duration  # not paced by the wall clock (less CPU waits)
