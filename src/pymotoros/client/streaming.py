@@ -87,7 +87,8 @@ so a full queue costs about one BUSY per point instead of one every millisecond.
 a LAN round trip or a scheduling hiccup of the client."""
 
 BUSY_RELAXED_MAX_S: Final = 0.1
-"""Longest single wait between BUSY retries, so a lost connection is still noticed fast."""
+"""Longest single wait before an offer or between BUSY retries, so a lost connection is
+still noticed fast: a tenth of the state-stall bound (``DEFAULT_STATE_STALL_S``, 1 s)."""
 
 
 class BusyPolicy(enum.StrEnum):
@@ -99,8 +100,9 @@ class BusyPolicy(enum.StrEnum):
 
     PACED = "paced"
     """The default. A point that follows an accepted point (sequence > 0) is not offered
-    before one interpolation period after that point was *sent*, nor before the relaxed
-    wait of a full queue (:meth:`_Pacing.first_wait`). MotoROS clears its pending-point
+    before one interpolation period after that point was *sent*, nor, while more than
+    :data:`BUSY_KEEP_AHEAD_S` is queued, before the relaxed wait
+    (:meth:`_Pacing.first_wait`). MotoROS clears its pending-point
     flag only in its AddToIncQueue task, once per tick (§5.3): an offer in the same tick
     interval as the previous acceptance is certain to get BUSY. About one offer per
     point instead of two (points far apart) to four or five (points one tick apart)."""
