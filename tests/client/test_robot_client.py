@@ -193,18 +193,25 @@ async def test_speed_refusal_by_controller_and_preflight(client: RobotClient) ->
         await client.execute(traj)
 
 
+async def _sparse_plan(client: RobotClient) -> JointTrajectory:
+    """Points 1 s apart: a segment of 250 increments, more than the 200-entry queue
+    (0.8 s, §5.1), so MotoROS keeps the pending slot until the queue has room for the
+    segment's last increments, and the next point meets BUSY (on the twin, points closer
+    together are offered only once the slot is free: no BUSY at all)."""
+    here = await client.current_positions()
+    return client.plan(here, GOAL, speed_scale=0.05, sample_period=1.0)
+
+
 async def test_busy_is_retried(client: RobotClient) -> None:
     await client.enable()
-    result = await client.move_joints(GOAL, speed_scale=0.3)
-    # 0.8 s of queue (§5.1): a longer move streams ahead and meets BUSY, then catches up.
+    result = await client.execute(await _sparse_plan(client))
     assert result.stream.busy_replies > 0
     assert _off(GOAL, result.final_positions) < TOLERANCE
 
 
 async def test_busy_storm_ends_in_busy_timeout(client: RobotClient) -> None:
     await client.enable()
-    here = await client.current_positions()
-    traj = client.plan(here, (1.0, 0.0, 0.0, 0.0, 0.0, 0.0), speed_scale=0.2, sample_period=0.004)
+    traj = await _sparse_plan(client)
     with pytest.raises(BusyTimeoutError) as info:
         await client.execute(traj, busy_timeout_s=0.002)
     assert info.value.point is not None

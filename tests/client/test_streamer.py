@@ -12,12 +12,14 @@ from pymotoros.client import BusyTimeoutError, ConnectionLostError, TrajectorySt
 from pymotoros.client.motion_port import MotionReadiness
 from pymotoros.client.planning import JointTrajectory, TrajectoryPoint
 from pymotoros.client.state import RobotState
-from pymotoros.client.streaming import BUSY_BACKOFF_FIRST_S, BUSY_BACKOFF_MAX_S
+from pymotoros.client.streaming import BUSY_BACKOFF_FIRST_S, BUSY_BACKOFF_MAX_S, BusyPolicy
 from pymotoros.models import controller_model, robot_model
 from pymotoros.protocol.constants import MsgType, ResultCode
 from pymotoros.protocol.messages import MotoMotionReply, WireMessage
 
 CLIENT = Path(__file__).resolve().parents[2] / "src" / "pymotoros" / "client"
+BACKOFF = [BUSY_BACKOFF_FIRST_S, 2 * BUSY_BACKOFF_FIRST_S, BUSY_BACKOFF_MAX_S, BUSY_BACKOFF_MAX_S]
+"""The sleeps between four BUSY replies to one point."""
 
 
 class FakeClock:
@@ -81,22 +83,43 @@ def _trajectory(points: int) -> JointTrajectory:
 
 
 def _streamer(
-    port: FakePort, clock: FakeClock, states: FakeStates | None = None
+    port: FakePort,
+    clock: FakeClock,
+    states: FakeStates | None = None,
+    policy: BusyPolicy = BusyPolicy.PACED,
 ) -> TrajectoryStreamer:
     return TrajectoryStreamer(
-        port, states or FakeStates(), robot_model("hc10"), controller_model("yrc1000"), clock=clock
+        port,
+        states or FakeStates(),
+        robot_model("hc10"),
+        controller_model("yrc1000"),
+        clock=clock,
+        busy_policy=policy,
     )
 
 
 async def test_busy_back_off_sleeps_on_the_injected_clock() -> None:
     clock = FakeClock()
     port = FakePort(busy=4)
+    stats = await _streamer(port, clock, policy=BusyPolicy.IMMEDIATE).send_points(
+        _trajectory(3), (0,)
+    )
+    assert stats.points == 3
+    assert stats.busy_replies == 8
+    assert stats.offers == 11
+    assert clock.sleeps == pytest.approx(BACKOFF * 2)
+    assert stats.elapsed_s == pytest.approx(sum(clock.sleeps))
+
+
+async def test_paced_offers_wait_one_period_after_the_point_that_holds_the_slot() -> None:
+    """Point 1 follows point 0 at once (sequence 0 takes no pending slot, §3.4); point 2
+    is first offered one interpolation period (4 ms on a YRC1000) after point 1 was sent."""
+    clock = FakeClock()
+    port = FakePort(busy=4)
     stats = await _streamer(port, clock).send_points(_trajectory(3), (0,))
     assert stats.points == 3
     assert stats.busy_replies == 8
-    first = [BUSY_BACKOFF_FIRST_S, 2 * BUSY_BACKOFF_FIRST_S, BUSY_BACKOFF_MAX_S, BUSY_BACKOFF_MAX_S]
-    assert clock.sleeps == pytest.approx(first * 2)
-    assert stats.elapsed_s == pytest.approx(sum(clock.sleeps))
+    assert clock.sleeps == pytest.approx([*BACKOFF, 0.004, *BACKOFF])
 
 
 async def test_busy_budget_is_measured_on_the_injected_clock() -> None:
