@@ -331,6 +331,7 @@ class Twin:
         state_period: float = STATE_PERIOD_S,
         state_message_gap: float = TWIN_STATE_MESSAGE_GAP_S,
         start_time: float = 0.0,
+        task_paths: bool = False,
     ) -> None:
         if cell is not None and (robot is not None or controller is not None):
             raise ValueError("give a cell, or robot/controller names, not both")
@@ -351,6 +352,11 @@ class Twin:
             TCP_PORT_STATE: self.state,
             TCP_PORT_IO: self.io,
         }
+        self.task_paths = task_paths
+        """Run the state cycle as the simulator does (a broadcast task, a sender task per
+        client) instead of as clock callbacks writing directly: the same bytes at the
+        same virtual times, more event-loop work. For the tests that compare the two."""
+        self._crash: BaseException | None = None
         self._numbers = itertools.count(1)
         self._stop = asyncio.Event()
         self._started = asyncio.Event()
@@ -393,21 +399,34 @@ class Twin:
 
     async def _serve(self) -> None:
         services = tuple(self._services.values())
+        stop_cycles: Callable[[], None] | None = None
         async with asyncio.TaskGroup() as tg:
             for service in services:
                 service.attach(tg)
-            loops = [
-                tg.create_task(self.state.broadcast(), name="twin-state-broadcast"),
-                tg.create_task(self.clock.drive(), name="twin-virtual-time"),
-            ]
+            loops = []
+            if self.task_paths:
+                loops.append(tg.create_task(self.state.broadcast(), name="twin-state-broadcast"))
+            else:
+                stop_cycles = self.state.schedule_cycles(self.clock, self._crashed)
+            loops.append(tg.create_task(self.clock.drive(), name="twin-virtual-time"))
             self._started.set()
             try:
                 await self._stop.wait()
             finally:
+                if stop_cycles is not None:
+                    stop_cycles()
                 for service in services:
                     await service.close_clients()
                 for task in loops:
                     task.cancel()
+        if self._crash is not None:
+            raise self._crash
+
+    def _crashed(self, exc: BaseException) -> None:
+        """A state cycle failed: stop the twin; :meth:`stop` re-raises it."""
+        if self._crash is None:
+            self._crash = exc
+        self._stop.set()
 
     # ----------------------------------------------------------- clients
 

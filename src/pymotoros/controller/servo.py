@@ -175,6 +175,12 @@ class ServoGroup:
         """No increment in the whole feedback window: feedback equals the command."""
         return self._quiet >= self._window or all(not any(inc) for inc in self._history)
 
+    def at_rest(self, powered: bool) -> bool:
+        """Feedback equals the command and the speed is zero: settled, and no noise is
+        added (none configured, or the drives off). Then :meth:`feedback` is the command
+        and :meth:`speed` all zeros, whatever the tick."""
+        return (not powered or not self._noise_pulses) and self.settled()
+
     def feedback(self, tick: int, powered: bool) -> list[int]:
         """Encoder pulses now (controller order)."""
         hist = self._history

@@ -13,7 +13,7 @@ from typing import Final
 from pymotoros.controller.api import FeedbackData, GroupSnapshot, StatusData
 from pymotoros.controller.context import MotoRosContext
 from pymotoros.controller.readiness import Readiness
-from pymotoros.controller.servo import IN_MOTION_PULSES
+from pymotoros.controller.servo import IN_MOTION_PULSES, ZERO_INCREMENT
 from pymotoros.controller.tool_point import TcpTracker
 from pymotoros.controller.units import RosConverter
 from pymotoros.protocol.constants import MAX_JOINTS, StatusMode, ValidFields
@@ -34,6 +34,8 @@ class StateView:
         self._readiness = readiness
         self._tcp = tcp
         self._to_ros = tuple(RosConverter(a) for a in ctx.axes)
+        self._at_rest: list[tuple[tuple[int, ...], FeedbackData] | None] = [None] * len(ctx.axes)
+        """Per group: the command pulses of the last feedback computed at rest, and it."""
 
     def check_group(self, group_no: int) -> None:
         """ValueError naming the valid range when ``group_no`` is not a group of the cell."""
@@ -51,11 +53,26 @@ class StateView:
         self.check_group(group_no)
         ctx = self._ctx
         servo = ctx.servos[group_no]
-        pulses = servo.feedback(ctx.clock.tick_count, ctx.machine.state.drives_powered)
-        to_ros = self._to_ros[group_no]
-        return FeedbackData(
-            group_no, FEEDBACK_FIELDS, _pad(to_ros(pulses)), _pad(to_ros(servo.speed()))
+        powered = ctx.machine.state.drives_powered
+        if servo.at_rest(powered):
+            # Feedback = command and speed = 0 until the command changes: a robot at rest
+            # (most of a test's state cycles) reuses the last conversion.
+            command = tuple(servo.command)
+            rest = self._at_rest[group_no]
+            if rest is not None and rest[0] == command:
+                return rest[1]
+            data = self._feedback(group_no, command, ZERO_INCREMENT)
+            self._at_rest[group_no] = (command, data)
+            return data
+        return self._feedback(
+            group_no, servo.feedback(ctx.clock.tick_count, powered), servo.speed()
         )
+
+    def _feedback(
+        self, group_no: int, pulses: Sequence[int], speed: Sequence[int]
+    ) -> FeedbackData:
+        to_ros = self._to_ros[group_no]
+        return FeedbackData(group_no, FEEDBACK_FIELDS, _pad(to_ros(pulses)), _pad(to_ros(speed)))
 
     def in_motion(self) -> bool:
         """Any queue holds increments, or |feedback − command| > 30 pulses on a valid axis."""

@@ -21,6 +21,7 @@ import os
 import sys
 import threading
 import time
+from collections.abc import Callable
 from typing import Final, Protocol
 
 __all__ = [
@@ -362,17 +363,42 @@ def precise_clock() -> TimerFdClock | ThreadClock:
     return TimerFdClock() if TimerFdClock.available() else ThreadClock()
 
 
+class TimerHandle:
+    """A callback waiting on a :class:`ManualClock` (:meth:`ManualClock.call_at`)."""
+
+    __slots__ = ("_callback", "_done", "_loop")
+
+    def __init__(self, loop: asyncio.AbstractEventLoop, callback: Callable[[], object]) -> None:
+        self._loop = loop
+        self._callback = callback
+        self._done = False
+
+    def done(self) -> bool:
+        """Fired or cancelled."""
+        return self._done
+
+    def cancel(self) -> None:
+        self._done = True
+
+    def fire(self) -> None:
+        if not self._done:
+            self._done = True
+            self._loop.call_soon(self._callback)
+
+
 class ManualClock:
     """Virtual time for tests: it moves only when told to.
 
-    Sleepers are kept in a heap of ``(deadline, order, future)``; :meth:`advance` wakes
+    Sleepers are kept in a heap of ``(deadline, order, waiter)``; :meth:`advance` wakes
     them in deadline order (ties in the order they went to sleep), so a run is the same
-    every time.
+    every time. A waiter is a sleeping task's future, or a callback registered with
+    :meth:`call_at`, which is scheduled (``loop.call_soon``) at exactly the place in
+    that order where a task's wake-up would be.
     """
 
     def __init__(self, start: float = 0.0) -> None:
         self._now = start
-        self._sleepers: list[tuple[float, int, asyncio.Future[None]]] = []
+        self._sleepers: list[tuple[float, int, asyncio.Future[None] | TimerHandle]] = []
         self._order = itertools.count()
 
     def now(self) -> float:
@@ -380,8 +406,10 @@ class ManualClock:
 
     @property
     def sleepers(self) -> int:
-        """Tasks currently waiting on this clock."""
-        return sum(1 for _, _, f in self._sleepers if not f.done())
+        """Tasks currently waiting on this clock (callbacks of :meth:`call_at` not counted)."""
+        return sum(
+            1 for _, _, f in self._sleepers if isinstance(f, asyncio.Future) and not f.done()
+        )
 
     @property
     def next_deadline(self) -> float | None:
@@ -397,6 +425,21 @@ class ManualClock:
         heapq.heappush(self._sleepers, (deadline, next(self._order), future))
         await future
 
+    def call_at(self, deadline: float, callback: Callable[[], object]) -> TimerHandle:
+        """Run ``callback`` on the running loop once time reaches ``deadline``.
+
+        What a task that calls ``sleep_until(deadline)`` and then ``callback()`` does,
+        in the same order among the other sleepers, without a task: a periodic job (the
+        twin's state cycle) then costs one callback per period instead of a task's
+        wake-up. A deadline already reached schedules it at once.
+        """
+        handle = TimerHandle(asyncio.get_running_loop(), callback)
+        if deadline <= self._now:
+            handle.fire()
+        else:
+            heapq.heappush(self._sleepers, (deadline, next(self._order), handle))
+        return handle
+
     def advance(self, seconds: float) -> None:
         """Move time forward and wake, in deadline order, everyone whose deadline has come."""
         if seconds < 0:
@@ -409,9 +452,11 @@ class ManualClock:
             raise ValueError(f"time cannot go backwards ({when} < {self._now})")
         self._now = when
         while self._sleepers and self._sleepers[0][0] <= when:
-            _, _, future = heapq.heappop(self._sleepers)
-            if not future.done():
-                future.set_result(None)
+            _, _, waiter = heapq.heappop(self._sleepers)
+            if isinstance(waiter, TimerHandle):
+                waiter.fire()
+            elif not waiter.done():
+                waiter.set_result(None)
 
     def _drop_cancelled(self) -> None:
         while self._sleepers and self._sleepers[0][2].done():
