@@ -33,7 +33,7 @@ from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
-sys.path.insert(0, str(ROOT / "tests"))  # the test helpers import each other by bare name (load_proof)
+sys.path.insert(0, str(ROOT / "tests"))  # test helpers import load_proof by bare name
 
 from tests.runtime.test_robustness import (  # noqa: E402 - the test's own fuzzer
     SEED,
