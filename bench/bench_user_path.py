@@ -171,7 +171,10 @@ LAYERS: Final = (
 
 
 def breakdown(case: Case, plan: JointTrajectory, wall: float) -> None:
-    """One profiled round: the profile's own time per layer, scaled to ``wall``."""
+    """One profiled round: the profile's own time per layer, scaled to ``wall``.
+
+    Counts are of functions that never wait (cProfile counts every resumption of a
+    coroutine as a call; ``_process`` answers without suspending)."""
     profile = cProfile.Profile()
     profile.enable()
     user_round(case, plan)
@@ -183,8 +186,7 @@ def breakdown(case: Case, plan: JointTrajectory, wall: float) -> None:
         "controller/cycle.py:tick": "ticks",
         "runtime/state_server.py:build_cycle": "state cycles built",
         "base_events.py:_run_once": "event-loop turns",
-        "client/connection.py:request": "client requests (motion + IO)",
-        "client/streaming.py:send_point": "point offers (BUSY retries included)",
+        "runtime/motion_server.py:_process": "motion requests answered (offers included)",
         "protocol/framing.py:encode": "frames encoded",
     }
     for (path, _line, name), (_cc, calls, tottime, _ct, _callers) in stats.stats.items():  # type: ignore[attr-defined]
