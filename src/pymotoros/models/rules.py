@@ -298,9 +298,31 @@ class GroupRules:
         )
 
 
-@functools.lru_cache(maxsize=64)
 def group_rules(group: GroupModel, controller: ControllerModel) -> GroupRules:
-    """:meth:`GroupRules.from_model`, remembered: the client asks for it per point."""
+    """:meth:`GroupRules.from_model`, remembered: the client asks for it per point.
+
+    The same model objects come back point after point, so they are looked up by
+    identity first: hashing a frozen model (every axis, every limit) costs more than
+    the check it serves, tens of µs per point on a streamed plan."""
+    global _recent_rules  # a cache of immutable values, swapped whole
+    recent = _recent_rules  # one read: another thread may swap it meanwhile
+    for known_group, known_controller, rules in recent:
+        if known_group is group and known_controller is controller:
+            return rules
+    rules = _group_rules(group, controller)
+    _recent_rules = ((group, controller, rules), *recent[:RECENT_RULES - 1])
+    return rules
+
+
+RECENT_RULES: Final = 8
+"""(group, controller) pairs remembered by identity: a cell has at most 8 groups."""
+_recent_rules: tuple[tuple[GroupModel, ControllerModel, GroupRules], ...] = ()
+"""The last pairs asked for. A cache of immutable values, not state (two equal models
+give equal rules); replaced whole, never changed in place, so threads can share it."""
+
+
+@functools.lru_cache(maxsize=64)
+def _group_rules(group: GroupModel, controller: ControllerModel) -> GroupRules:
     return GroupRules.from_model(group, controller)
 
 
