@@ -25,6 +25,7 @@ from dataclasses import dataclass
 import pytest
 
 from pymotoros.client import ConnectionLostError, MoveResult, RobotClient, StateStreamLostError
+from pymotoros.client.streaming import BusyPolicy
 from pymotoros.client.watchdog import DEFAULT_STATE_STALL_S
 from pymotoros.protocol.constants import ByteOrder, MotionCommand, Port, ResultCode
 from pymotoros.protocol.framing import FrameDecoder
@@ -165,12 +166,15 @@ async def test_latency_and_jitter_moves_still_complete(pymotoros_twin: RunningTw
 async def test_busy_retries_send_no_point_twice_and_skip_none(
     pymotoros_twin: RunningTwin,
 ) -> None:
-    """Points 4 ms apart fill MotoROS's queue (0.8 s): the rest go through BUSY retries.
-    (No added latency here: a round trip longer than 4 ms never lets the queue fill.)"""
+    """Points 4 ms apart, each offered the moment the one before is accepted
+    (``BusyPolicy.IMMEDIATE``: the default paced offers wait for the slot to free and
+    rarely meet BUSY): every point goes through BUSY retries. (No added latency here: a
+    round trip longer than 4 ms frees the slot before the next offer.)"""
     async with (
         proxied(pymotoros_twin) as proxies,
         client_through(proxies) as client,
     ):
+        client.streamer.busy_policy = BusyPolicy.IMMEDIATE
         await client.start_trajectory_mode()
         start = await client.current_positions(0)
         trajectory = client.plan(start, GOAL, speed_scale=0.1, sample_period=0.004)
