@@ -10,10 +10,11 @@ import pytest
 from prometheus_client.parser import text_string_to_metric_families
 
 from pymotoros.controller import VirtualController
-from pymotoros.protocol.constants import MotionCommand, Port, ResultCode
+from pymotoros.protocol.constants import MotionCommand, MsgType, Port, ResultCode
 from pymotoros.protocol.messages import JointTrajPtFull, MotoMotionReply, Ping
 from pymotoros.runtime.app import SimulatorApp
 from pymotoros.runtime.fleet import Fleet, FleetCell
+from pymotoros.runtime.traffic import OTHER, Traffic
 
 from .peer import Peer, ctrl
 from .support import LOCAL
@@ -106,3 +107,31 @@ async def test_each_cell_of_a_fleet_is_labelled() -> None:
             samples = await scrape(app.ports.http)
             assert value(samples, "pymotoros_ticks_total", cell=name) > 0
             assert value(samples, "pymotoros_connections", cell=name, port="state") == 0
+
+
+async def test_made_up_commands_and_types_are_counted_under_one_label(sim: SimulatorApp) -> None:
+    """A client sending random commands (a fuzzer) must not grow the counters, nor the
+    exported labels, by one per distinct value: a million fuzzed frames grew the twin by
+    9 MiB that way, and the scrape with it."""
+    peer = await Peer.connect(sim.ports.motion, Port.MOTION)
+    try:
+        for command in range(900_001, 900_041):  # 40 distinct commands MotoROS does not know
+            result, _ = await ctrl(peer, command)
+            assert result == ResultCode.INVALID
+    finally:
+        await peer.close()
+    traffic = Traffic()
+    for msg_type in range(5_000, 5_040):
+        traffic.request(msg_type)
+    traffic.request(int(MsgType.PING))
+    assert traffic.requests == {OTHER: 40, int(MsgType.PING): 1}
+    samples = await scrape(sim.ports.http)
+    subjects = {
+        dict(labels)["subject"]
+        for name, labels in samples
+        if name == "pymotoros_replies_total" and dict(labels)["port"] == "motion"
+    }
+    assert "other" in subjects
+    assert not any(s.isdigit() for s in subjects), subjects
+    other = value(samples, "pymotoros_replies_total", port="motion", subject="other", result="3")
+    assert other == 40

@@ -47,6 +47,7 @@ from prometheus_client.core import (
 from prometheus_client.registry import Collector
 
 from pymotoros.protocol.constants import MotionCommand, MsgType
+from pymotoros.runtime.traffic import OTHER
 
 if TYPE_CHECKING:
     from pymotoros.controller.alarms import Alarm
@@ -71,6 +72,8 @@ LATENESS_BUCKETS_S: Final = (
 
 
 def _type_name(value: int) -> str:
+    if value == OTHER:
+        return "other"
     for enum in (MotionCommand, MsgType):
         try:
             return str(enum(value).name)

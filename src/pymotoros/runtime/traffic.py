@@ -8,9 +8,20 @@ nobody monitors pays a few hundred nanoseconds per message and no more.
 
 from __future__ import annotations
 
+from typing import Final
+
+from pymotoros.protocol.constants import MotionCommand, MsgType
 from pymotoros.protocol.messages import Message, MotoMotionReply
 
-__all__ = ["Traffic"]
+__all__ = ["OTHER", "Traffic"]
+
+OTHER: Final = -1
+"""The key every message type or command outside the protocol's own is counted under: a
+client sending random types (a fuzzer, a wrong port) must not grow the counters, nor the
+labels ``GET /metrics`` exports, without bound (one key per distinct value, before)."""
+
+_KNOWN_TYPES: Final = frozenset(int(t) for t in MsgType)
+_KNOWN_SUBJECTS: Final = _KNOWN_TYPES | frozenset(int(c) for c in MotionCommand)
 
 
 class Traffic:
@@ -30,11 +41,15 @@ class Traffic:
         self.refusals: dict[tuple[int, int], int] = {}
 
     def request(self, msg_type: int) -> None:
+        if msg_type not in _KNOWN_TYPES:
+            msg_type = OTHER
         self.requests[msg_type] = self.requests.get(msg_type, 0) + 1
 
     def reply(self, message: Message) -> None:
         if type(message) is MotoMotionReply:  # the motion port's every reply: kept lean
             key = message[2:4]  # (command, result): the tuple's own fields, no properties
+            if key[0] not in _KNOWN_SUBJECTS:  # a command the client made up, echoed
+                key = (OTHER, key[1])
             if key[1]:
                 refusal = message[3:5]  # (result, subcode)
                 self.refusals[refusal] = self.refusals.get(refusal, 0) + 1
