@@ -211,6 +211,20 @@ def breakdown(case: Case, plan: JointTrajectory, wall: float) -> None:
         print(f"    {what:45s} {n:7d}  ~{wall / n * 1e6 if n else 0:7.1f} µs of the round each")
 
 
+async def _startup() -> float:
+    """Seconds from nothing to a connected client that has its first state."""
+    start = time.perf_counter()
+    async with twin(robot="hc10", timeout_s=2.0):
+        return time.perf_counter() - start
+
+
+def startup_ms(rounds: int = 20) -> tuple[float, float]:
+    """(median, best) ms of :func:`_startup`, after one warm-up (imports)."""
+    asyncio.run(_startup())
+    times = [asyncio.run(_startup()) * 1000 for _ in range(rounds)]
+    return statistics.median(times), min(times)
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--rounds", type=int, default=3, help="rounds per case (default 3)")
@@ -262,6 +276,9 @@ def main() -> None:
         )
         if args.breakdown:
             breakdown(case, plan, best.wall)
+    median, best = startup_ms()
+    print(f"twin start-up to a client with its first state: median {median:.2f} ms,"
+          f" best {best:.2f} ms")
     print(f"load average at the end: {os.getloadavg()[0]:.2f}")
 
 
