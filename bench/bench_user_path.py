@@ -211,6 +211,35 @@ def breakdown(case: Case, plan: JointTrajectory, wall: float) -> None:
         print(f"    {what:45s} {n:7d}  ~{wall / n * 1e6 if n else 0:7.1f} µs of the round each")
 
 
+async def _wakeups(n: int) -> float:
+    """Seconds per task wake-up: two tasks waking each other through futures ``n`` times."""
+    loop = asyncio.get_running_loop()
+    ping: list[asyncio.Future[None]] = [loop.create_future()]
+    pong: list[asyncio.Future[None]] = [loop.create_future()]
+
+    async def responder() -> None:
+        for _ in range(n):
+            await ping[0]
+            ping[0] = loop.create_future()
+            pong[0].set_result(None)
+
+    task = asyncio.create_task(responder())
+    await asyncio.sleep(0)  # the responder waits
+    start = time.perf_counter()
+    for _ in range(n):
+        ping[0].set_result(None)
+        await pong[0]
+        pong[0] = loop.create_future()
+    elapsed = time.perf_counter() - start
+    await task
+    return elapsed / (2 * n)
+
+
+def wakeup_us(n: int = 50_000) -> float:
+    """The asyncio floor of this machine: µs per task wake-up (best of three)."""
+    return min(asyncio.run(_wakeups(n)) for _ in range(3)) * 1e6
+
+
 async def _startup() -> float:
     """Seconds from nothing to a connected client that has its first state."""
     start = time.perf_counter()
@@ -276,6 +305,12 @@ def main() -> None:
         )
         if args.breakdown:
             breakdown(case, plan, best.wall)
+    wake = wakeup_us()
+    print(
+        f"asyncio floor: {wake:.1f} µs per task wake-up; a state cycle needs at least two"
+        f" (the client's reader, the clock's driver): {40 * 2 * wake / 1000:.2f} ms per"
+        f" virtual second at 40 cycles/s, before any work"
+    )
     median, best = startup_ms()
     print(f"twin start-up to a client with its first state: median {median:.2f} ms,"
           f" best {best:.2f} ms")
