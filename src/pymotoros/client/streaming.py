@@ -890,7 +890,7 @@ class _Progress:
         """Per segment between rest points: start, direction, its square, length so far,
         length (empty for a plan with no rest on the way)."""
         self._total = 0.0
-        if len(corners) > 2:
+        if corners[1:-1]:  # a rest on the way: more than the start and the goal
             for a, b in itertools.pairwise(corners):
                 d = [y - x for x, y in zip(a, b, strict=True)]
                 dd = sum(x * x for x in d)
