@@ -138,6 +138,65 @@ def _check_float(owner: str, name: str, value: object) -> None:
         raise LocalProtocolError(f"{owner}.{name} = {value} does not fit in float32") from None
 
 
+_FIELD_TYPE: Final[Mapping[_Kind, type]] = MappingProxyType(
+    {_I32: int, _U32: int, _F32: float, _JOINTS: tuple}
+)
+"""The exact type the fast check wants per kind (a bool, an int for a float, a list or a
+subclass are valid too, but they take the field-by-field path)."""
+
+_JOINT_VALUE_TYPES: Final = frozenset((float, int))
+
+
+def _never(_message: object) -> bool:
+    """The fast check of a layout without ``FIELDS``: always ask the full check."""
+    return False
+
+
+def _bind_fast_check(fields: tuple[tuple[str, _Kind], ...]) -> Callable[[Any], bool]:
+    """A check that ``message`` would pass :meth:`Message._validated_fields` unchanged.
+
+    Why: the state server builds JOINT_FEEDBACK and ROBOT_STATUS every cycle and the
+    client builds a JOINT_TRAJ_PT_FULL per point; checking their 31 floats one Python
+    call each was a tenth of a streamed move's time. Here the types are compared in one
+    ``tuple(map(type, …))`` against the layout's exact types, and the ranges are tested
+    by ``struct`` packing, which is what ``_check_float`` and ``_check_int`` test
+    (float32 overflow; int32/uint32 range for an exact ``int``). True only when every
+    field passes; on False the caller runs the field-by-field check, so a refusal keeps
+    its exact wording and an unusual valid value (a bool, a list, a numpy float) is
+    still accepted, as before.
+    """
+    if not fields:
+        return _never
+    signature = tuple(_FIELD_TYPE[kind] for _name, kind in fields)
+    scalar_at = tuple(i for i, (_name, kind) in enumerate(fields) if kind is not _JOINTS)
+    joints_at = tuple(i for i, (_name, kind) in enumerate(fields) if kind is _JOINTS)
+    pack_scalars = struct.Struct(
+        ByteOrder.LITTLE + "".join(fields[i][1].value for i in scalar_at)
+    ).pack
+    pack_joints = struct.Struct(ByteOrder.LITTLE + _JOINTS.value).pack
+    value_types = _JOINT_VALUE_TYPES
+    size = MAX_JOINTS
+
+    count = len(scalar_at)
+    leading = scalar_at == tuple(range(count))  # scalars first: every layout so far
+
+    def fast_check(message: _AnyTuple) -> bool:
+        if tuple(map(type, message)) != signature:
+            return False
+        try:
+            pack_scalars(*(message[:count] if leading else [message[i] for i in scalar_at]))
+            for i in joints_at:
+                values = message[i]
+                if len(values) != size or not value_types.issuperset(map(type, values)):
+                    return False
+                pack_joints(*values)
+        except (struct.error, OverflowError):
+            return False
+        return True
+
+    return fast_check
+
+
 def _pad_joints(owner: str, name: str, values: Iterable[float] | None) -> tuple[float, ...]:
     """Pad a short joint list with zeros to the 10 slots of the wire."""
     if values is None:
@@ -255,6 +314,9 @@ class Message:
     """No array field: the struct's values are the tuple's values."""
     _DECODERS: ClassVar[dict[str, Callable[[bytes, int, int], Any]]]
     """``_bind_unpack_from(order)`` per byte order, made on first use (see unpack_from)."""
+    _FAST_CHECK: ClassVar[Callable[[Any], bool]]
+    """Whether a constructed message certainly passes :meth:`_validated_fields` unchanged
+    (False means "ask it", never "invalid"): see :func:`_bind_fast_check`."""
 
     def __init_subclass__(cls, **kwargs: Any) -> None:
         """Derive the layout from ``FIELDS`` and register the class (see the class doc)."""
@@ -263,6 +325,7 @@ class Message:
         cls._STRUCTS = _structs("".join(kind.value for _name, kind in cls.FIELDS))
         cls._FLAT = all(kind is not _JOINTS for _name, kind in cls.FIELDS)
         cls._DECODERS = {}
+        cls._FAST_CHECK = _bind_fast_check(cls.FIELDS)
         if "BODY_SIZE" not in own:
             cls.BODY_SIZE = cls._STRUCTS[0].size
         if "OFFSETS" not in own:
@@ -292,7 +355,19 @@ class Message:
 
     @classmethod
     def _validated(cls, message: Self) -> Self:
-        """Check every field; return the message with joint arrays as tuples."""
+        """Check every field; return the message with joint arrays as tuples.
+
+        The common case (exact ``int``/``float``/``tuple`` values that all fit) is
+        answered by :func:`_bind_fast_check` in a few C calls; anything else, valid or
+        not, goes through :meth:`_validated_fields`, the one place the errors are worded.
+        """
+        if cls._FAST_CHECK(message):
+            return message
+        return cls._validated_fields(message)
+
+    @classmethod
+    def _validated_fields(cls, message: Self) -> Self:
+        """Field by field: the reference check, and the one that words every error."""
         owner = cls.__name__
         values = list(cast(_AnyTuple, message))
         changed = False
