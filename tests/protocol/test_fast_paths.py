@@ -357,3 +357,70 @@ def test_encode_unknown_messages_keep_their_own_type() -> None:
 def test_encode_errors_unchanged() -> None:
     with pytest.raises(ProtocolError, match="exceed"):
         encode(UnknownMessage(2, bytes(600)), ByteOrder.LITTLE)
+
+
+# --------------------------------------------------------------------------- packing
+
+
+def _pack_reference(message: Message, order: ByteOrder) -> bytes:
+    """``Message.pack`` with the field-by-field flattening it had before ``_LEADING``."""
+    layout = struct.Struct(order + "".join(kind.value for _name, kind in message.FIELDS))
+    try:
+        flat: list[object] = []
+        for (_name, kind), value in zip(message.FIELDS, message, strict=True):
+            if kind is _JOINTS:
+                flat.extend(value)
+            else:
+                flat.append(value)
+        return layout.pack(*flat)
+    except (struct.error, OverflowError, TypeError) as exc:
+        raise LocalProtocolError(f"cannot pack {message!r}: {exc}") from None
+
+
+ARRAYS_LAST = [
+    cls for cls in CLASSES if cls._LEADING >= 0 and not cls._FLAT and "pack" not in cls.__dict__
+]
+
+
+@pytest.mark.parametrize("cls", ARRAYS_LAST, ids=lambda c: c.__name__)
+def test_pack_of_arrays_last_layouts_equals_the_field_by_field_flattening(
+    cls: type[Message],
+) -> None:
+    rng = random.Random(f"pack-{cls.__name__}")
+    names = [name for name, _kind in cls.FIELDS]
+    odd: list[object] = [(0.0,) * 9, (0.0,) * 11, 5, None, ("x",) * 10, (1e39,) * 10, 2**40]
+    for _ in range(300):
+        message = _sample(cls, rng)
+        if rng.random() < 0.5:  # _replace skips validation: pack is where it fails
+            message = message._replace(**{rng.choice(names): rng.choice(odd)})  # type: ignore[attr-defined]
+        for order in ByteOrder:
+            outcomes = []
+            for pack in (lambda m, o: m.pack(o), _pack_reference):
+                try:
+                    outcomes.append(pack(message, order))
+                except Exception as exc:  # type and text compared
+                    outcomes.append((type(exc), str(exc)))
+            assert outcomes[0] == outcomes[1]
+    assert ARRAYS_LAST  # MOTO_MOTION_CTRL and MOTO_MOTION_REPLY at least
+
+
+@pytest.mark.parametrize("cls", CLASSES, ids=lambda c: c.__name__)
+def test_positional_construction_equals_the_namedtuple_path(cls: type[Message]) -> None:
+    """All fields by position skip the NamedTuple's ``__new__``; by keyword they do not."""
+    rng = random.Random(f"construct-{cls.__name__}")
+    kinds = [kind for _name, kind in cls.FIELDS]
+    names = list(cls._fields)  # type: ignore[attr-defined]
+    for _ in range(200):
+        values = [_odd(k, rng) if rng.random() < 0.2 else _good(k, rng) for k in kinds]
+        values = [tuple(v) if hasattr(v, "__next__") else v for v in values]
+        outcomes = []
+        by_name = dict(zip(names, values, strict=True))
+        for args, kwargs in ((values, {}), ([], by_name)):
+            try:
+                made = cls(*args, **kwargs)
+                outcomes.append(("ok", type(made), _key(tuple(made))))
+            except Exception as exc:  # type and text compared
+                outcomes.append(("raised", type(exc), str(exc)))
+        assert outcomes[0] == outcomes[1]
+    with pytest.raises(TypeError):  # one field too many: still the NamedTuple's own error
+        cls(*[_good(k, rng) for k in kinds], 0)

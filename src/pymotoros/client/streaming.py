@@ -849,10 +849,10 @@ class _Progress:
         if len(positions) == self._size:
             # The same products summed by the same ``sum`` in the same order as below,
             # through ``map`` instead of a generator (once per state message).
-            return (
-                sum(map(operator.mul, map(operator.sub, positions, self._start), self._direction))
-                / self._dd
+            total: float = sum(
+                map(operator.mul, map(operator.sub, positions, self._start), self._direction)
             )
+            return total / self._dd
         return (  # different lengths: zip's strict error, as always
             sum(
                 (p - s) * x for p, s, x in zip(positions, self._start, self._direction, strict=True)

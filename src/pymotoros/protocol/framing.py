@@ -20,7 +20,7 @@ import struct
 from collections.abc import Callable, Iterator, Mapping
 from dataclasses import dataclass
 from types import MappingProxyType
-from typing import Final, NamedTuple, TypeAlias, overload
+from typing import Final, NamedTuple, TypeAlias, cast, overload
 
 from pymotoros.errors import LocalProtocolError, RemoteProtocolError
 from pymotoros.protocol.constants import (
@@ -163,7 +163,7 @@ def encode(
             reply_type = ReplyType.FAILURE
     if comm_type is None:
         comm_type = default_comm
-    msg_type = message.msg_type if class_msg_type is None else class_msg_type
+    msg_type = cast(UnknownMessage, message).msg_type if class_msg_type is None else class_msg_type
     head = _HEAD_BE if order == ">" else _HEAD_LE
     length = HEADER_SIZE + len(body)
     if length > MAX_LENGTH_PREFIX:

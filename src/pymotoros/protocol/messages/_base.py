@@ -314,6 +314,11 @@ class Message:
     """No array field: the struct's values are the tuple's values."""
     _DECODERS: ClassVar[dict[str, Callable[[bytes, int, int], Any]]]
     """``_bind_unpack_from(order)`` per byte order, made on first use (see unpack_from)."""
+    _ARITY: ClassVar[int] = -1
+    """How many fields the NamedTuple has: all given by position, construction skips its
+    generated ``__new__`` (a Python call that only packs them into the tuple)."""
+    _LEADING: ClassVar[int] = -1
+    """With every joint array after every scalar field, how many scalars lead; else -1."""
     _FAST_CHECK: ClassVar[Callable[[Any], bool]]
     """Whether a constructed message certainly passes :meth:`_validated_fields` unchanged
     (False means "ask it", never "invalid"): see :func:`_bind_fast_check`."""
@@ -326,6 +331,10 @@ class Message:
         cls._FLAT = all(kind is not _JOINTS for _name, kind in cls.FIELDS)
         cls._DECODERS = {}
         cls._FAST_CHECK = _bind_fast_check(cls.FIELDS)
+        cls._ARITY = len(getattr(cls, "_fields", ()))
+        kinds = [kind for _name, kind in cls.FIELDS]
+        leading = kinds.index(_JOINTS) if _JOINTS in kinds else len(kinds)
+        cls._LEADING = leading if all(kind is _JOINTS for kind in kinds[leading:]) else -1
         if "BODY_SIZE" not in own:
             cls.BODY_SIZE = cls._STRUCTS[0].size
         if "OFFSETS" not in own:
@@ -351,6 +360,8 @@ class Message:
     if not TYPE_CHECKING:  # mypy keeps the typed NamedTuple constructor
 
         def __new__(cls, *args, **kwargs):
+            if not kwargs and len(args) == cls._ARITY:  # every field given, by position:
+                return cls._validated(_tnew(cls, args))  # what the NamedTuple's __new__ does
             return cls._validated(super().__new__(cls, *args, **kwargs))
 
     @classmethod
@@ -405,7 +416,16 @@ class Message:
         return True
 
     def _flat(self) -> list[Any]:
-        flat: list[Any] = []
+        fields = cast(_AnyTuple, self)
+        leading = self._LEADING
+        flat: list[Any]
+        if leading >= 0 and len(fields) == len(self.FIELDS):
+            # Scalars then arrays (MOTION_CTRL, MOTION_REPLY): no per-field kind test.
+            flat = list(fields[:leading])
+            for value in fields[leading:]:
+                flat.extend(value)
+            return flat
+        flat = []
         for (_name, kind), value in zip(self.FIELDS, cast(_AnyTuple, self), strict=True):
             if kind is _JOINTS:
                 flat.extend(value)
@@ -501,12 +521,42 @@ class Message:
 
             return unpack_flat
 
+        if cls._LEADING >= 0 and cls.unpack.__func__ is Message.unpack.__func__:  # type: ignore[attr-defined]
+            return _bind_arrays_last(cls, order)
+
         unpack = cls.unpack
 
         def unpack_other(buffer: bytes, start: int, end: int) -> Message:
             return unpack(buffer[start:end], order)
 
         return unpack_other
+
+
+def _bind_arrays_last(cls: type[Message], order: ByteOrder) -> Callable[[bytes, int, int], Message]:
+    """:meth:`Message.unpack` of a layout whose joint arrays all follow its scalars, bound
+    to ``order``: the scalars in one unpack, each array in one, no slicing of the body.
+
+    MOTO_MOTION_REPLY (the answer to every point the client streams) decodes here.
+    """
+    kinds = [kind for _name, kind in cls.FIELDS]
+    leading = cls._LEADING
+    head = struct.Struct(order + "".join(kind.value for kind in kinds[:leading]))
+    joints = struct.Struct(order + _JOINTS.value)
+    offsets = tuple(head.size + k * joints.size for k in range(len(kinds) - leading))
+    size = _pick(cls._STRUCTS, order).size
+    unpack_head = head.unpack_from
+    unpack_joints = joints.unpack_from
+
+    def unpack_arrays_last(buffer: bytes, start: int, end: int) -> Message:
+        if end - start != size:
+            raise _size_error(cls, buffer[start:end], size)
+        return _tnew(
+            cls,
+            unpack_head(buffer, start)
+            + tuple([unpack_joints(buffer, start + at) for at in offsets]),
+        )
+
+    return unpack_arrays_last
 
 
 def _offsets(fields: tuple[tuple[str, _Kind], ...]) -> Mapping[str, int]:
