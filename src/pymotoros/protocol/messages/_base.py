@@ -101,6 +101,30 @@ else:
     _tnew = tuple.__new__
 
 _AnyTuple: TypeAlias = tuple[Any, ...]
+
+if TYPE_CHECKING:
+
+    def _tuple_eq(left: object, right: object, /) -> bool:
+        """Typed view of ``tuple.__eq__`` (see below)."""
+
+    def _tuple_hash(value: object, /) -> int:
+        """Typed view of ``tuple.__hash__`` (see below)."""
+
+else:
+    # Message equality and hashing are the tuple's, without a runtime ``cast`` call each
+    # (the motion server hashes every request it receives).
+    _tuple_eq = tuple.__eq__
+    _tuple_hash = tuple.__hash__
+
+
+_ECHO_NONE: Final = 0
+"""Not a request with a sequence: its MOTION_REPLY matches by type alone (reply_echo)."""
+_ECHO_TYPE: Final = 1
+"""The reply echoes (msg_type, sequence)."""
+_ECHO_COMMAND: Final = 2
+"""The reply echoes (command, sequence): MOTION_CTRL."""
+
+
 """For ``cast``: naming the alias once avoids building ``tuple[Any, ...]`` on every call."""
 
 
@@ -314,6 +338,8 @@ class Message:
     """No array field: the struct's values are the tuple's values."""
     _DECODERS: ClassVar[dict[str, Callable[[bytes, int, int], Any]]]
     """``_bind_unpack_from(order)`` per byte order, made on first use (see unpack_from)."""
+    _ECHO: ClassVar[int]
+    """What :meth:`reply_echo` reads, decided once from ``ROLE`` and ``OFFSETS``."""
     _ARITY: ClassVar[int] = -1
     """How many fields the NamedTuple has: all given by position, construction skips its
     generated ``__new__`` (a Python call that only packs them into the tuple)."""
@@ -339,6 +365,10 @@ class Message:
             cls.BODY_SIZE = cls._STRUCTS[0].size
         if "OFFSETS" not in own:
             cls.OFFSETS = _offsets(cls.FIELDS)
+        if getattr(cls, "ROLE", None) is not Role.REQUEST or "sequence" not in cls.OFFSETS:
+            cls._ECHO = _ECHO_NONE
+        else:
+            cls._ECHO = _ECHO_COMMAND if "command" in cls.OFFSETS else _ECHO_TYPE
         entries = [
             (tables[port], port)
             for ports, tables in (
@@ -403,13 +433,13 @@ class Message:
         return _tnew(cls, values) if changed else message
 
     def __eq__(self, other: object) -> bool:
-        return type(self) is type(other) and tuple.__eq__(cast(_AnyTuple, self), other)
+        return type(self) is type(other) and _tuple_eq(self, other)
 
     def __ne__(self, other: object) -> bool:
         return not self == other
 
     def __hash__(self) -> int:
-        return tuple.__hash__(cast(_AnyTuple, self))
+        return _tuple_hash(self)
 
     def __bool__(self) -> bool:
         """A message is a message, even with an empty body (tuples would say False)."""
@@ -438,7 +468,8 @@ class Message:
         layout = _pick(self._STRUCTS, order)
         try:
             if self._FLAT:
-                return layout.pack(*cast(_AnyTuple, self))
+                fields: _AnyTuple = self  # type: ignore[assignment]  # a tuple; cast is a call
+                return layout.pack(*fields)
             return layout.pack(*self._flat())
         except (struct.error, OverflowError, TypeError) as exc:  # only after _replace()
             raise LocalProtocolError(f"cannot pack {self!r}: {exc}") from None
@@ -480,11 +511,11 @@ class Message:
         ``command`` field (MOTION_CTRL) or else its type; any other message
         (no sequence, or not a request) matches by type alone.
         """
-        offsets = self.OFFSETS
-        if self.ROLE is not Role.REQUEST or "sequence" not in offsets:
+        echo = self._ECHO
+        if echo == _ECHO_NONE:
             return None
-        fields = cast(Any, self)
-        command = fields.command if "command" in offsets else self.MSG_TYPE
+        fields: Any = self
+        command = fields.command if echo == _ECHO_COMMAND else self.MSG_TYPE
         return int(command), int(fields.sequence)
 
     @classmethod
