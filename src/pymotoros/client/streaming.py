@@ -810,10 +810,12 @@ class FollowingMonitor:
         k10 = h10 * h  # ``h10 * h * v0`` is ``(h10 * h) * v0``: the same product
         k11 = h11 * h
         return tuple(
-            h00 * p0 + k10 * v0 + h01 * p1 + k11 * v1
-            for p0, v0, p1, v1 in zip(
-                a.positions, a.velocities, b.positions, b.velocities, strict=True
-            )
+            [  # a list, not a generator: one frame instead of one resumption per joint
+                h00 * p0 + k10 * v0 + h01 * p1 + k11 * v1
+                for p0, v0, p1, v1 in zip(
+                    a.positions, a.velocities, b.positions, b.velocities, strict=True
+                )
+            ]
         )
 
     def _time_at_progress(self, fraction: float) -> float:

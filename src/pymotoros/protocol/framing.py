@@ -211,7 +211,6 @@ class FrameDecoder:
 
     __slots__ = (
         "_buf",
-        "_comm_type",
         "_order",
         "_pos",
         "_rep_io",
@@ -222,6 +221,7 @@ class FrameDecoder:
         "_req_state",
         "_unpack_head",
         "_unpack_prefix",
+        "comm_type",
     )
 
     def __init__(self, order: ByteOrder) -> None:
@@ -242,20 +242,15 @@ class FrameDecoder:
         self._rep_state = tables.rep_state
         self._buf = b""
         self._pos = 0
-        self._comm_type = 0
+        self.comm_type = 0
+        """The header's comm type of the last frame returned (0 before the first): what
+        :meth:`next_reply` leaves out, for a client that tells topics from replies
+        without the two-step form's :class:`Frame` and body copy. A plain attribute,
+        not a property: the client reads it for every frame."""
 
     @property
     def order(self) -> ByteOrder:
         return self._order
-
-    @property
-    def comm_type(self) -> int:
-        """The header's comm type of the last frame returned (0 before the first).
-
-        What :meth:`next_reply` leaves out, for a client that tells topics from
-        replies without the two-step form's :class:`Frame` and body copy.
-        """
-        return self._comm_type
 
     @property
     def buffered(self) -> int:
@@ -320,7 +315,7 @@ class FrameDecoder:
         else:
             self._pos = end
         start = pos + FRAME_OVERHEAD
-        self._comm_type = comm_type
+        self.comm_type = comm_type
         if table is None:
             return _new_frame(Frame, (msg_type, comm_type, reply_type, buf[start:end]))
         unpack_from = table.get(msg_type)

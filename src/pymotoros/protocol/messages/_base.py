@@ -356,7 +356,10 @@ class Message:
         cls._STRUCTS = _structs("".join(kind.value for _name, kind in cls.FIELDS))
         cls._FLAT = all(kind is not _JOINTS for _name, kind in cls.FIELDS)
         cls._DECODERS = {}
-        cls._FAST_CHECK = _bind_fast_check(cls.FIELDS)
+        # A class with its own _validated is checked by it alone (__new__ asks the fast
+        # check first).
+        own_check = cls._validated.__func__ is not Message._validated.__func__  # type: ignore[attr-defined]
+        cls._FAST_CHECK = _never if own_check else _bind_fast_check(cls.FIELDS)
         cls._ARITY = len(getattr(cls, "_fields", ()))
         kinds = [kind for _name, kind in cls.FIELDS]
         leading = kinds.index(_JOINTS) if _JOINTS in kinds else len(kinds)
@@ -391,8 +394,10 @@ class Message:
 
         def __new__(cls, *args, **kwargs):
             if not kwargs and len(args) == cls._ARITY:  # every field given, by position:
-                return cls._validated(_tnew(cls, args))  # what the NamedTuple's __new__ does
-            return cls._validated(super().__new__(cls, *args, **kwargs))
+                message = _tnew(cls, args)  # what the NamedTuple's __new__ does
+            else:
+                message = super().__new__(cls, *args, **kwargs)
+            return message if cls._FAST_CHECK(message) else cls._validated(message)
 
     @classmethod
     def _validated(cls, message: Self) -> Self:
