@@ -424,3 +424,32 @@ def test_positional_construction_equals_the_namedtuple_path(cls: type[Message]) 
         assert outcomes[0] == outcomes[1]
     with pytest.raises(TypeError):  # one field too many: still the NamedTuple's own error
         cls(*[_good(k, rng) for k in kinds], 0)
+
+
+def _reply_echo_reference(message: Message) -> tuple[int, int] | None:
+    """``reply_echo`` as it read ``ROLE`` and ``OFFSETS`` per call."""
+    offsets = message.OFFSETS
+    if message.ROLE is not Role.REQUEST or "sequence" not in offsets:
+        return None
+    fields: Any = message
+    command = fields.command if "command" in offsets else message.MSG_TYPE
+    return int(command), int(fields.sequence)
+
+
+@pytest.mark.parametrize("cls", CLASSES, ids=lambda c: c.__name__)
+def test_reply_echo_decided_per_class_equals_per_message(cls: type[Message]) -> None:
+    rng = random.Random(f"echo-{cls.__name__}")
+    for _ in range(20):
+        message = _sample(cls, rng)
+        assert message.reply_echo() == _reply_echo_reference(message)
+
+
+def test_reply_echo_of_the_hand_laid_out_messages() -> None:
+    from pymotoros.protocol.messages import MotoJointFeedbackEx, MotoJointTrajPtFullEx
+
+    record = JointTrajPtExData.for_joints(1, 0.5, [0.1], [0.0])
+    full_ex = MotoJointTrajPtFullEx.for_groups(42, [record])
+    feedback_ex = MotoJointFeedbackEx.for_groups([JointFeedback.for_joints(0, [0.1])])
+    for message in (full_ex, feedback_ex):
+        assert message.reply_echo() == _reply_echo_reference(message)
+    assert full_ex.reply_echo() == (2016, 42)

@@ -101,6 +101,7 @@ else:
     _tnew = tuple.__new__
 
 _AnyTuple: TypeAlias = tuple[Any, ...]
+"""For ``cast``: naming the alias once avoids building ``tuple[Any, ...]`` on every call."""
 
 if TYPE_CHECKING:
 
@@ -123,9 +124,6 @@ _ECHO_TYPE: Final = 1
 """The reply echoes (msg_type, sequence)."""
 _ECHO_COMMAND: Final = 2
 """The reply echoes (command, sequence): MOTION_CTRL."""
-
-
-"""For ``cast``: naming the alias once avoids building ``tuple[Any, ...]`` on every call."""
 
 
 def _structs(body_format: str) -> tuple[struct.Struct, struct.Struct]:
