@@ -55,6 +55,9 @@ Connector: TypeAlias = Callable[
 """Opens the byte stream to ``host:port``; the default is ``asyncio.open_connection`` (TCP).
 The in-memory twin (:mod:`pymotoros.testing`) passes its own."""
 
+_TOPIC: Final = int(CommType.TOPIC)
+"""A plain int: compared with every received frame's comm type."""
+
 _PORT_HINT: Final[dict[Port, str]] = {
     Port.MOTION: "--motion-port",
     Port.STATE: "--state-port",
@@ -215,6 +218,8 @@ class FrameConnection:
 
     async def _read_loop(self) -> None:
         reason = "closed by the controller"
+        decoder = self._decoder
+        kind = self.kind
         try:
             while True:
                 data = await self._reader.read(READ_CHUNK)
@@ -222,14 +227,14 @@ class FrameConnection:
                     break
                 if self._flow is not None:
                     self._flow.received(data)
-                self._decoder.feed(data)
-                while (frame := self._decoder.next_frame()) is not None:
-                    if wire_logger.isEnabledFor(logging.DEBUG):
-                        wire_logger.debug(
-                            "%s <- type %d %s", self, frame.msg_type, frame.body.hex()
-                        )
-                    message = decode_reply(frame, self.order, self.kind)
-                    if frame.comm_type == CommType.TOPIC:
+                decoder.feed(data)
+                if wire_logger.isEnabledFor(logging.DEBUG):
+                    self._decode_logged()
+                    continue
+                # The hot path (every state message): decode straight from the buffer, no
+                # Frame and no body copy; the same messages and errors as the logged path.
+                while (message := decoder.next_reply(kind)) is not None:
+                    if decoder.comm_type == _TOPIC:
                         if self._on_topic is not None:
                             self._on_topic(message)
                     else:
@@ -250,6 +255,17 @@ class FrameConnection:
             if self._closing:
                 reason = "closed by the client"
             self._fail(self._lost(reason))
+
+    def _decode_logged(self) -> None:
+        """Every buffered frame, each logged with its bytes before it is decoded."""
+        while (frame := self._decoder.next_frame()) is not None:
+            wire_logger.debug("%s <- type %d %s", self, frame.msg_type, frame.body.hex())
+            message = decode_reply(frame, self.order, self.kind)
+            if frame.comm_type == _TOPIC:
+                if self._on_topic is not None:
+                    self._on_topic(message)
+            else:
+                self._deliver(message)
 
     def _deliver(self, message: WireMessage) -> None:
         pending = self._pending

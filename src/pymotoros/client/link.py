@@ -17,6 +17,8 @@ from pymotoros.client.errors import ClientError, ConnectionLostError
 from pymotoros.protocol.constants import ByteOrder, Port
 from pymotoros.protocol.messages import WireMessage
 
+_MOTION, _STATE, _IO = Port.MOTION, Port.STATE, Port.IO
+
 
 @dataclass(eq=False, repr=False)
 class Link:
@@ -82,7 +84,16 @@ class Link:
 
     def need(self, kind: Port) -> FrameConnection:
         """The open connection of ``kind``, or a ClientError saying how to open it."""
-        conn = {Port.MOTION: self.motion, Port.STATE: self.state, Port.IO: self.io}[kind]
+        # Identity tests, not a dict keyed by Port: Enum hashing is a Python call, and
+        # the motion port is asked for once per trajectory point.
+        if kind is _MOTION:
+            conn = self.motion
+        elif kind is _STATE:
+            conn = self.state
+        elif kind is _IO:
+            conn = self.io
+        else:
+            raise KeyError(kind)
         if conn is None:
             raise ClientError(
                 f"the {kind.value} port is not connected (connect({kind.value}=True))"

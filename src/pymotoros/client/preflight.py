@@ -10,12 +10,17 @@ back the commanded pulses MotoROS compares a start with (:func:`feedback_pulses`
 * :func:`first_refusal`: what MotoROS would answer to a point (subcode, group, axis).
 * :func:`start_deviations` / :func:`speed_deviations`: every axis beyond a limit, as
   :class:`AxisDeviation` values for the typed errors.
+* :func:`speed_screen` / :func:`within_screen`: the speed check's limits once per
+  trajectory, so a point well within them costs one pass instead of the full check.
 """
 
 from __future__ import annotations
 
+import operator
+import struct
 from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import Final
 
 from pymotoros.client.errors import AxisDeviation
 from pymotoros.client.planning import TrajectoryPoint
@@ -33,6 +38,7 @@ from pymotoros.models.rules import (
     start_deviation,
     to_pulses,
 )
+from pymotoros.protocol.constants import INT32_MAX
 
 
 @dataclass(frozen=True, slots=True)
@@ -124,6 +130,50 @@ def speed_deviations(
                 out.append(AxisDeviation(base + i, model.axes[i].name, v, rules.max_speed[i]))
         base += model.num_axes
     return out
+
+
+_NUMBER_TYPES: Final = frozenset((float, int))
+
+
+def speed_screen(models: Sequence[GroupModel], controller: ControllerModel) -> tuple[float, ...]:
+    """Per joint of ``models`` joined, a speed under which MotoROS's check surely passes.
+
+    The largest float32 at or below the axis's limit: for ``|v|`` at or under it, the
+    float32 the wire carries is too (rounding to float32 is monotonic and keeps float32
+    values), so :func:`speed_deviations` would find nothing and log nothing. Computed
+    once per trajectory; :func:`within_screen` is then one pass per point instead of
+    the rules looked up and every velocity rounded. A limit that is not a finite
+    speed gives -1.0: nothing passes the screen, the full check runs.
+    """
+    out: list[float] = []
+    for model in models:
+        rules = group_rules(model, controller)
+        out.extend(_f32_at_most(rules.max_speed[i]) for i in range(model.num_axes))
+    return tuple(out)
+
+
+def within_screen(velocities: Sequence[float], screen: Sequence[float]) -> bool:
+    """True when every velocity is a plain number within ``screen`` (see :func:`speed_screen`);
+    False means "run :func:`speed_deviations`", not "refused" (NaN and inf land here)."""
+    return _NUMBER_TYPES.issuperset(map(type, velocities)) and all(
+        map(operator.le, map(abs, velocities), screen)
+    )
+
+
+def _f32_at_most(limit: float) -> float:
+    """The largest float32 value ≤ ``limit`` (``limit`` finite, ≥ 0), else -1.0."""
+    if not 0.0 <= limit < INT32_MAX:
+        return -1.0
+    nearest = f32(limit)
+    if nearest <= limit:
+        return nearest
+    (bits,) = _F32_BITS.unpack(_F32.pack(nearest))
+    (below,) = _F32.unpack(_F32_BITS.pack(bits - 1))  # positive: one ulp down
+    return float(below)
+
+
+_F32: Final = struct.Struct("<f")
+_F32_BITS: Final = struct.Struct("<I")
 
 
 def _refused_speed(i: int, v: float, rules: GroupRules) -> bool:

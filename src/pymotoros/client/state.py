@@ -107,6 +107,12 @@ class RobotState:
 
 Listener = Callable[[RobotState], None]
 
+_VELOCITY: Final = int(ValidFields.VELOCITY)
+"""A plain int: ``IntFlag`` operators are Python calls, and every feedback message asks."""
+
+_same: Final = tuple.__eq__
+"""Field-wise equality of two messages of the same class (their ``__eq__`` is Python)."""
+
 
 class StateTracker:
     """Latest state, listeners, iterators and waits; fed by the state connection."""
@@ -121,6 +127,15 @@ class StateTracker:
         self._now = now
         self._state = RobotState()
         self._listeners: list[Listener] = []
+        self._calling: tuple[Listener, ...] = ()
+        """``tuple(self._listeners)``, kept in step by add/remove: what a message calls
+        (a snapshot, so a listener may remove itself), without a copy per message."""
+        self._waiting = 0
+        """Coroutines inside :meth:`next_state`'s wait: with none, a message has nobody to
+        wake, and the current unset event can stay (no set and no new Event per message)."""
+        self._status_seen: tuple[RobotStatus, Status] | None = None
+        """The last ROBOT_STATUS and its :class:`Status`: the status repeats every cycle
+        while nothing changes, and an equal message gives an equal (immutable) Status."""
         self._queues: set[asyncio.Queue[RobotState]] = set()
         self._changed = asyncio.Event()
         self._error: ConnectionLostError | None = None
@@ -135,8 +150,14 @@ class StateTracker:
         return self._state
 
     def _saw(self, fb: JointFeedback) -> None:
-        used = max((i + 1 for i, v in enumerate(fb.pos) if v != 0.0), default=0)
-        self._cycle[fb.group_no] = max(used, self._cycle.get(fb.group_no, 0))
+        pos = fb.pos
+        used = len(pos)  # up to the last position that is not 0.0 (NaN counts as used)
+        while used and pos[used - 1] == 0.0:
+            used -= 1
+        cycle = self._cycle
+        group = fb.group_no
+        seen = cycle.get(group, 0)
+        cycle[group] = used if used > seen else seen
 
     @property
     def error(self) -> ConnectionLostError | None:
@@ -145,53 +166,71 @@ class StateTracker:
     def add_listener(self, listener: Listener) -> Callable[[], None]:
         """Call ``listener(state)`` on every state message; returns a function that removes it."""
         self._listeners.append(listener)
+        self._calling = tuple(self._listeners)
 
         def remove() -> None:
             if listener in self._listeners:
                 self._listeners.remove(listener)
+                self._calling = tuple(self._listeners)
 
         return remove
 
-    def _trim(self, group: int, values: tuple[float, ...]) -> tuple[float, ...]:
-        return values[: self._axes.get(group, 8)]
-
     def _joint_state(self, fb: JointFeedback, now: float) -> JointState:
-        vel = self._trim(fb.group_no, fb.vel) if fb.valid_fields & ValidFields.VELOCITY else None
-        return JointState(fb.group_no, self._trim(fb.group_no, fb.pos), vel, now)
+        group = fb.group_no
+        axes = self._axes.get(group, 8)  # 8 slots at most (MotoROS zeros the last two)
+        vel = fb.vel[:axes] if fb.valid_fields & _VELOCITY else None
+        return JointState(group, fb.pos[:axes], vel, now)
+
+    def _status(self, message: RobotStatus) -> Status:
+        """``Status.from_message``, reused while ROBOT_STATUS repeats itself."""
+        seen = self._status_seen
+        if seen is not None and type(message) is type(seen[0]) and _same(message, seen[0]):
+            return seen[1]
+        status = Status.from_message(message)
+        self._status_seen = (message, status)
+        return status
 
     def feed(self, message: WireMessage) -> None:
         """Take one state-port message (the state connection's topic callback)."""
         old = self._state
         now = self._now()
-        status, status_count = old.status, old.status_count
-        joints = dict(old.joints)
         if isinstance(message, RobotStatus):
-            status = Status.from_message(message)
-            status_count += 1
+            status_count = old.status_count + 1
             if status_count >= STATUSES_FOR_A_FULL_CYCLE:
                 self.groups_seen = MappingProxyType(dict(self._cycle))
             self._cycle = {}
+            # The joints did not change: the same read-only view serves the new state.
+            state = RobotState(self._status(message), old.joints, old.count + 1, status_count)
         elif isinstance(message, JointFeedback):
+            joints = dict(old.joints)
             joints[message.group_no] = self._joint_state(message, now)
             self._saw(message)
+            state = RobotState(
+                old.status, MappingProxyType(joints), old.count + 1, old.status_count
+            )
         elif isinstance(message, MotoJointFeedbackEx):
+            joints = dict(old.joints)
             for fb in message.groups:
                 joints[fb.group_no] = self._joint_state(fb, now)
                 self._saw(fb)
+            state = RobotState(
+                old.status, MappingProxyType(joints), old.count + 1, old.status_count
+            )
         else:
             logger.debug("state port: ignoring %r", message)
             return
-        self._publish(RobotState(status, MappingProxyType(joints), old.count + 1, status_count))
+        self._publish(state)
 
     def _publish(self, state: RobotState) -> None:
         self._state = state
-        self._changed.set()
-        self._changed = asyncio.Event()
+        if self._waiting:
+            self._changed.set()
+            self._changed = asyncio.Event()
         for queue in self._queues:
             if queue.full():
                 queue.get_nowait()
             queue.put_nowait(state)
-        for listener in list(self._listeners):
+        for listener in self._calling:
             try:
                 listener(state)
             except Exception:
@@ -215,6 +254,7 @@ class StateTracker:
         """Wait for the next state message."""
         self._check()
         event = self._changed
+        self._waiting += 1
         try:
             async with asyncio.timeout(timeout_s):
                 await event.wait()
@@ -222,6 +262,8 @@ class StateTracker:
             raise RequestTimeoutError(
                 f"no state message for {timeout_s:g} s: is the state port streaming?"
             ) from None
+        finally:
+            self._waiting -= 1
         self._check()
         return self._state
 

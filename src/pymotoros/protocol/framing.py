@@ -20,7 +20,7 @@ import struct
 from collections.abc import Callable, Iterator, Mapping
 from dataclasses import dataclass
 from types import MappingProxyType
-from typing import Final, NamedTuple, TypeAlias, overload
+from typing import Final, NamedTuple, TypeAlias, cast, overload
 
 from pymotoros.errors import LocalProtocolError, RemoteProtocolError
 from pymotoros.protocol.constants import (
@@ -121,6 +121,21 @@ def encode_frame(frame: Frame, order: ByteOrder) -> bytes:
     return prefix + frame.body
 
 
+_ClassHeader: TypeAlias = tuple[int, int, bool, "int | None"]
+"""(default comm type, default reply type, IO_RESULT, msg_type or None for UnknownMessage)."""
+
+_CLASS_HEADERS: Final[dict[type, _ClassHeader]] = {}
+"""Per message class, what :func:`encode` derives from the class alone: filled on first
+use, so a frame costs one dict lookup on the class instead of a ``Role`` lookup (Enum
+hashing is a Python call) and attribute reads."""
+
+
+def _class_header(message: WireMessage) -> _ClassHeader:
+    comm, reply = _DEFAULT_HEADER[message.ROLE]
+    msg_type = None if isinstance(message, UnknownMessage) else int(message.MSG_TYPE)
+    return int(comm), int(reply), bool(message.IO_RESULT), msg_type
+
+
 def encode(
     message: WireMessage,
     order: ByteOrder,
@@ -137,14 +152,18 @@ def encode(
     non-zero, as MotoROS sends them; pass ``reply_type`` to override anything.
     """
     body = message.pack(order)
-    default_comm, default_reply = _DEFAULT_HEADER[message.ROLE]
+    cls = type(message)
+    known = _CLASS_HEADERS.get(cls)
+    if known is None:
+        known = _CLASS_HEADERS[cls] = _class_header(message)
+    default_comm, default_reply, io_result, class_msg_type = known
     if reply_type is None:
         reply_type = default_reply
-        if message.IO_RESULT and getattr(message, "result_code", 0) != 0:
+        if io_result and getattr(message, "result_code", 0) != 0:
             reply_type = ReplyType.FAILURE
     if comm_type is None:
         comm_type = default_comm
-    msg_type = message.msg_type if isinstance(message, UnknownMessage) else message.MSG_TYPE
+    msg_type = cast(UnknownMessage, message).msg_type if class_msg_type is None else class_msg_type
     head = _HEAD_BE if order == ">" else _HEAD_LE
     length = HEADER_SIZE + len(body)
     if length > MAX_LENGTH_PREFIX:
@@ -202,6 +221,7 @@ class FrameDecoder:
         "_req_state",
         "_unpack_head",
         "_unpack_prefix",
+        "comm_type",
     )
 
     def __init__(self, order: ByteOrder) -> None:
@@ -222,6 +242,11 @@ class FrameDecoder:
         self._rep_state = tables.rep_state
         self._buf = b""
         self._pos = 0
+        self.comm_type = 0
+        """The header's comm type of the last frame returned (0 before the first): what
+        :meth:`next_reply` leaves out, for a client that tells topics from replies
+        without the two-step form's :class:`Frame` and body copy. A plain attribute,
+        not a property: the client reads it for every frame."""
 
     @property
     def order(self) -> ByteOrder:
@@ -290,6 +315,7 @@ class FrameDecoder:
         else:
             self._pos = end
         start = pos + FRAME_OVERHEAD
+        self.comm_type = comm_type
         if table is None:
             return _new_frame(Frame, (msg_type, comm_type, reply_type, buf[start:end]))
         unpack_from = table.get(msg_type)

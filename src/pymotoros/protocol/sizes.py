@@ -122,6 +122,13 @@ _NO_GROUP: Final = -1
 """groupNo and sequence of a reply that belongs to no request (§1.6)."""
 
 
+_MOTION: Final = Port.MOTION
+_IO: Final = Port.IO
+_MOTION_REQUESTS: Final = REQUEST_CLASSES[Port.MOTION]
+_IO_REQUESTS: Final = REQUEST_CLASSES[Port.IO]
+_SERVICE_REPLY: Final = int(CommType.SERVICE_REPLY)
+
+
 def _int_at(body: bytes, offset: int, order: ByteOrder) -> int:
     """int32 at ``offset``, with missing bytes read as zero (MotoROS's zero-filled buffer)."""
     chunk = body[offset : offset + 4].ljust(4, b"\0")
@@ -135,9 +142,15 @@ def expected_size(msg_type: int, port: Port, body: bytes, order: ByteOrder) -> i
     FULL_EX: 24 + 132·n with n read from the body; 552 when n is not there yet
     (see ``MotoJointTrajPtFullEx.needed_body_size``).
     """
-    if port is Port.STATE:
+    # Identity tests on the port, not a lookup keyed by it: Enum hashing is a Python call,
+    # and the motion server sizes every request (several per streamed point).
+    if port is _MOTION:
+        table = _MOTION_REQUESTS
+    elif port is _IO:
+        table = _IO_REQUESTS
+    else:
         raise ValueError(f"MotoROS reads no requests on the {port.value} port")
-    cls = REQUEST_CLASSES[port].get(msg_type)
+    cls = table.get(msg_type)
     if cls is None:
         return None
     return FRAME_OVERHEAD + cls.needed_body_size(body, order)
@@ -224,11 +237,13 @@ def check_request(frame: Frame, order: ByteOrder, port: Port) -> Verdict:
     received = FRAME_OVERHEAD + len(frame.body)
     if received < expected:
         return Reject(short_message_reply(frame, order, port), InvalidSubcode.MSGSIZE)
-    if port is Port.MOTION and msg_type in MOTION_CLOSE_TYPES:
+    if port is _MOTION and msg_type in MOTION_CLOSE_TYPES:
         return Close(msg_type, f"{MsgType.describe(msg_type)} is not a request (§1.5)")
-    body = frame.body[: expected - FRAME_OVERHEAD]
-    message = decode_request(Frame(msg_type, frame.comm_type, frame.reply_type, body), order, port)
+    if received != expected:  # surplus bytes: MotoROS reads what the type needs
+        body = frame.body[: expected - FRAME_OVERHEAD]
+        frame = Frame(msg_type, frame.comm_type, frame.reply_type, body)
+    message = decode_request(frame, order, port)
     if isinstance(message, UnknownMessage):  # pragma: no cover - the tables agree (tested)
         raise RuntimeError(f"bug: type {msg_type} has a size on {port} but no class")
-    reply_expected = not (port is Port.MOTION and frame.comm_type == CommType.SERVICE_REPLY)
+    reply_expected = not (port is _MOTION and frame.comm_type == _SERVICE_REPLY)
     return Accept(message, received - expected, reply_expected)

@@ -103,6 +103,28 @@ else:
 _AnyTuple: TypeAlias = tuple[Any, ...]
 """For ``cast``: naming the alias once avoids building ``tuple[Any, ...]`` on every call."""
 
+if TYPE_CHECKING:
+
+    def _tuple_eq(left: object, right: object, /) -> bool:
+        """Typed view of ``tuple.__eq__`` (see below)."""
+
+    def _tuple_hash(value: object, /) -> int:
+        """Typed view of ``tuple.__hash__`` (see below)."""
+
+else:
+    # Message equality and hashing are the tuple's, without a runtime ``cast`` call each
+    # (the motion server hashes every request it receives).
+    _tuple_eq = tuple.__eq__
+    _tuple_hash = tuple.__hash__
+
+
+_ECHO_NONE: Final = 0
+"""Not a request with a sequence: its MOTION_REPLY matches by type alone (reply_echo)."""
+_ECHO_TYPE: Final = 1
+"""The reply echoes (msg_type, sequence)."""
+_ECHO_COMMAND: Final = 2
+"""The reply echoes (command, sequence): MOTION_CTRL."""
+
 
 def _structs(body_format: str) -> tuple[struct.Struct, struct.Struct]:
     """The (little-endian, big-endian) ``Struct`` pair for one body layout."""
@@ -136,6 +158,65 @@ def _check_float(owner: str, name: str, value: object) -> None:
         struct.pack("<f", value)
     except OverflowError:
         raise LocalProtocolError(f"{owner}.{name} = {value} does not fit in float32") from None
+
+
+_FIELD_TYPE: Final[Mapping[_Kind, type]] = MappingProxyType(
+    {_I32: int, _U32: int, _F32: float, _JOINTS: tuple}
+)
+"""The exact type the fast check wants per kind (a bool, an int for a float, a list or a
+subclass are valid too, but they take the field-by-field path)."""
+
+_JOINT_VALUE_TYPES: Final = frozenset((float, int))
+
+
+def _never(_message: object) -> bool:
+    """The fast check of a layout without ``FIELDS``: always ask the full check."""
+    return False
+
+
+def _bind_fast_check(fields: tuple[tuple[str, _Kind], ...]) -> Callable[[Any], bool]:
+    """A check that ``message`` would pass :meth:`Message._validated_fields` unchanged.
+
+    Why: the state server builds JOINT_FEEDBACK and ROBOT_STATUS every cycle and the
+    client builds a JOINT_TRAJ_PT_FULL per point; checking their 31 floats one Python
+    call each was a tenth of a streamed move's time. Here the types are compared in one
+    ``tuple(map(type, …))`` against the layout's exact types, and the ranges are tested
+    by ``struct`` packing, which is what ``_check_float`` and ``_check_int`` test
+    (float32 overflow; int32/uint32 range for an exact ``int``). True only when every
+    field passes; on False the caller runs the field-by-field check, so a refusal keeps
+    its exact wording and an unusual valid value (a bool, a list, a numpy float) is
+    still accepted, as before.
+    """
+    if not fields:
+        return _never
+    signature = tuple(_FIELD_TYPE[kind] for _name, kind in fields)
+    scalar_at = tuple(i for i, (_name, kind) in enumerate(fields) if kind is not _JOINTS)
+    joints_at = tuple(i for i, (_name, kind) in enumerate(fields) if kind is _JOINTS)
+    pack_scalars = struct.Struct(
+        ByteOrder.LITTLE + "".join(fields[i][1].value for i in scalar_at)
+    ).pack
+    pack_joints = struct.Struct(ByteOrder.LITTLE + _JOINTS.value).pack
+    value_types = _JOINT_VALUE_TYPES
+    size = MAX_JOINTS
+
+    count = len(scalar_at)
+    leading = scalar_at == tuple(range(count))  # scalars first: every layout so far
+
+    def fast_check(message: _AnyTuple) -> bool:
+        if tuple(map(type, message)) != signature:
+            return False
+        try:
+            pack_scalars(*(message[:count] if leading else [message[i] for i in scalar_at]))
+            for i in joints_at:
+                values = message[i]
+                if len(values) != size or not value_types.issuperset(map(type, values)):
+                    return False
+                pack_joints(*values)
+        except (struct.error, OverflowError):
+            return False
+        return True
+
+    return fast_check
 
 
 def _pad_joints(owner: str, name: str, values: Iterable[float] | None) -> tuple[float, ...]:
@@ -255,6 +336,16 @@ class Message:
     """No array field: the struct's values are the tuple's values."""
     _DECODERS: ClassVar[dict[str, Callable[[bytes, int, int], Any]]]
     """``_bind_unpack_from(order)`` per byte order, made on first use (see unpack_from)."""
+    _ECHO: ClassVar[int]
+    """What :meth:`reply_echo` reads, decided once from ``ROLE`` and ``OFFSETS``."""
+    _ARITY: ClassVar[int] = -1
+    """How many fields the NamedTuple has: all given by position, construction skips its
+    generated ``__new__`` (a Python call that only packs them into the tuple)."""
+    _LEADING: ClassVar[int] = -1
+    """With every joint array after every scalar field, how many scalars lead; else -1."""
+    _FAST_CHECK: ClassVar[Callable[[Any], bool]]
+    """Whether a constructed message certainly passes :meth:`_validated_fields` unchanged
+    (False means "ask it", never "invalid"): see :func:`_bind_fast_check`."""
 
     def __init_subclass__(cls, **kwargs: Any) -> None:
         """Derive the layout from ``FIELDS`` and register the class (see the class doc)."""
@@ -263,10 +354,22 @@ class Message:
         cls._STRUCTS = _structs("".join(kind.value for _name, kind in cls.FIELDS))
         cls._FLAT = all(kind is not _JOINTS for _name, kind in cls.FIELDS)
         cls._DECODERS = {}
+        # A class with its own _validated is checked by it alone (__new__ asks the fast
+        # check first).
+        own_check = cls._validated.__func__ is not Message._validated.__func__  # type: ignore[attr-defined]
+        cls._FAST_CHECK = _never if own_check else _bind_fast_check(cls.FIELDS)
+        cls._ARITY = len(getattr(cls, "_fields", ()))
+        kinds = [kind for _name, kind in cls.FIELDS]
+        leading = kinds.index(_JOINTS) if _JOINTS in kinds else len(kinds)
+        cls._LEADING = leading if all(kind is _JOINTS for kind in kinds[leading:]) else -1
         if "BODY_SIZE" not in own:
             cls.BODY_SIZE = cls._STRUCTS[0].size
         if "OFFSETS" not in own:
             cls.OFFSETS = _offsets(cls.FIELDS)
+        if getattr(cls, "ROLE", None) is not Role.REQUEST or "sequence" not in cls.OFFSETS:
+            cls._ECHO = _ECHO_NONE
+        else:
+            cls._ECHO = _ECHO_COMMAND if "command" in cls.OFFSETS else _ECHO_TYPE
         entries = [
             (tables[port], port)
             for ports, tables in (
@@ -288,11 +391,27 @@ class Message:
     if not TYPE_CHECKING:  # mypy keeps the typed NamedTuple constructor
 
         def __new__(cls, *args, **kwargs):
-            return cls._validated(super().__new__(cls, *args, **kwargs))
+            if not kwargs and len(args) == cls._ARITY:  # every field given, by position:
+                message = _tnew(cls, args)  # what the NamedTuple's __new__ does
+            else:
+                message = super().__new__(cls, *args, **kwargs)
+            return message if cls._FAST_CHECK(message) else cls._validated(message)
 
     @classmethod
     def _validated(cls, message: Self) -> Self:
-        """Check every field; return the message with joint arrays as tuples."""
+        """Check every field; return the message with joint arrays as tuples.
+
+        The common case (exact ``int``/``float``/``tuple`` values that all fit) is
+        answered by :func:`_bind_fast_check` in a few C calls; anything else, valid or
+        not, goes through :meth:`_validated_fields`, the one place the errors are worded.
+        """
+        if cls._FAST_CHECK(message):
+            return message
+        return cls._validated_fields(message)
+
+    @classmethod
+    def _validated_fields(cls, message: Self) -> Self:
+        """Field by field: the reference check, and the one that words every error."""
         owner = cls.__name__
         values = list(cast(_AnyTuple, message))
         changed = False
@@ -317,20 +436,29 @@ class Message:
         return _tnew(cls, values) if changed else message
 
     def __eq__(self, other: object) -> bool:
-        return type(self) is type(other) and tuple.__eq__(cast(_AnyTuple, self), other)
+        return type(self) is type(other) and _tuple_eq(self, other)
 
     def __ne__(self, other: object) -> bool:
         return not self == other
 
     def __hash__(self) -> int:
-        return tuple.__hash__(cast(_AnyTuple, self))
+        return _tuple_hash(self)
 
     def __bool__(self) -> bool:
         """A message is a message, even with an empty body (tuples would say False)."""
         return True
 
     def _flat(self) -> list[Any]:
-        flat: list[Any] = []
+        fields = cast(_AnyTuple, self)
+        leading = self._LEADING
+        flat: list[Any]
+        if leading >= 0 and len(fields) == len(self.FIELDS):
+            # Scalars then arrays (MOTION_CTRL, MOTION_REPLY): no per-field kind test.
+            flat = list(fields[:leading])
+            for value in fields[leading:]:
+                flat.extend(value)
+            return flat
+        flat = []
         for (_name, kind), value in zip(self.FIELDS, cast(_AnyTuple, self), strict=True):
             if kind is _JOINTS:
                 flat.extend(value)
@@ -343,7 +471,8 @@ class Message:
         layout = _pick(self._STRUCTS, order)
         try:
             if self._FLAT:
-                return layout.pack(*cast(_AnyTuple, self))
+                fields: _AnyTuple = self  # type: ignore[assignment]  # a tuple; cast is a call
+                return layout.pack(*fields)
             return layout.pack(*self._flat())
         except (struct.error, OverflowError, TypeError) as exc:  # only after _replace()
             raise LocalProtocolError(f"cannot pack {self!r}: {exc}") from None
@@ -385,11 +514,11 @@ class Message:
         ``command`` field (MOTION_CTRL) or else its type; any other message
         (no sequence, or not a request) matches by type alone.
         """
-        offsets = self.OFFSETS
-        if self.ROLE is not Role.REQUEST or "sequence" not in offsets:
+        echo = self._ECHO
+        if echo == _ECHO_NONE:
             return None
-        fields = cast(Any, self)
-        command = fields.command if "command" in offsets else self.MSG_TYPE
+        fields: Any = self
+        command = fields.command if echo == _ECHO_COMMAND else self.MSG_TYPE
         return int(command), int(fields.sequence)
 
     @classmethod
@@ -426,12 +555,42 @@ class Message:
 
             return unpack_flat
 
+        if cls._LEADING >= 0 and cls.unpack.__func__ is Message.unpack.__func__:  # type: ignore[attr-defined]
+            return _bind_arrays_last(cls, order)
+
         unpack = cls.unpack
 
         def unpack_other(buffer: bytes, start: int, end: int) -> Message:
             return unpack(buffer[start:end], order)
 
         return unpack_other
+
+
+def _bind_arrays_last(cls: type[Message], order: ByteOrder) -> Callable[[bytes, int, int], Message]:
+    """:meth:`Message.unpack` of a layout whose joint arrays all follow its scalars, bound
+    to ``order``: the scalars in one unpack, each array in one, no slicing of the body.
+
+    MOTO_MOTION_REPLY (the answer to every point the client streams) decodes here.
+    """
+    kinds = [kind for _name, kind in cls.FIELDS]
+    leading = cls._LEADING
+    head = struct.Struct(order + "".join(kind.value for kind in kinds[:leading]))
+    joints = struct.Struct(order + _JOINTS.value)
+    offsets = tuple(head.size + k * joints.size for k in range(len(kinds) - leading))
+    size = _pick(cls._STRUCTS, order).size
+    unpack_head = head.unpack_from
+    unpack_joints = joints.unpack_from
+
+    def unpack_arrays_last(buffer: bytes, start: int, end: int) -> Message:
+        if end - start != size:
+            raise _size_error(cls, buffer[start:end], size)
+        return _tnew(
+            cls,
+            unpack_head(buffer, start)
+            + tuple([unpack_joints(buffer, start + at) for at in offsets]),
+        )
+
+    return unpack_arrays_last
 
 
 def _offsets(fields: tuple[tuple[str, _Kind], ...]) -> Mapping[str, int]:

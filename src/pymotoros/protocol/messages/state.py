@@ -88,6 +88,12 @@ _GROUP_RECORD_FIELDS: Final[tuple[tuple[str, _Kind], ...]] = (
 # pos, vel and acc end the 132-byte group record, at offsets 12, 52 and 92 (§1.4).
 
 
+_FEEDBACK_FLAGS: Final = int(ValidFields.POSITION)
+_FEEDBACK_FLAGS_VEL: Final = int(ValidFields.POSITION | ValidFields.VELOCITY)
+"""JOINT_FEEDBACK's default flags as plain ints, computed once (the state server builds
+one per group every cycle; ``IntFlag`` operators are Python calls)."""
+
+
 class JointFeedback(Message, _GroupRecord):
     """JOINT_FEEDBACK (15): one group's feedback position (rad or m) and speed.
 
@@ -120,7 +126,7 @@ class JointFeedback(Message, _GroupRecord):
         when ``vel`` is given.
         """
         if valid_fields is None:
-            valid_fields = ValidFields.POSITION | (ValidFields.VELOCITY if vel is not None else 0)
+            valid_fields = _FEEDBACK_FLAGS_VEL if vel is not None else _FEEDBACK_FLAGS
         return cls(group_no, int(valid_fields), time, *_pad_arrays(cls.__name__, pos, vel, acc))
 
     def pack(self, order: ByteOrder) -> bytes:

@@ -85,9 +85,14 @@ class JointTrajPtExData(Message, _GroupRecord):
         return cls(group_no, int(valid_fields), time, *_pad_arrays(cls.__name__, pos, vel, acc))
 
 
+_POINT_FLAGS: Final = int(ValidFields.TIME | ValidFields.POSITION | ValidFields.VELOCITY)
+_POINT_FLAGS_ACC: Final = int(_POINT_FLAGS | ValidFields.ACCELERATION)
+"""The default flags as plain ints, computed once (``IntFlag`` operators are Python calls,
+and the client builds a point per trajectory sample)."""
+
+
 def _point_flags(acc: object) -> int:
-    flags = ValidFields.TIME | ValidFields.POSITION | ValidFields.VELOCITY
-    return int(flags | ValidFields.ACCELERATION if acc is not None else flags)
+    return _POINT_FLAGS_ACC if acc is not None else _POINT_FLAGS
 
 
 # pos, vel and acc end the JOINT_TRAJ_PT_FULL body, at offsets 16, 56 and 96 (§1.4).
