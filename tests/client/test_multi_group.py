@@ -115,7 +115,9 @@ def test_sync_stop_from_another_thread() -> None:
 
         def move() -> None:
             try:
-                client.move_joints(goal, on_progress=lambda s: moving.set())
+                # Slow (about 100 s of virtual motion): the twin's time runs as fast as
+                # its thread, so a brisk move could end before stop() arrives.
+                client.move_joints(goal, speed_scale=0.01, on_progress=lambda s: moving.set())
             except BaseException as exc:
                 errors.append(exc)
 
