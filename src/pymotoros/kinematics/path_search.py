@@ -32,6 +32,7 @@ import numpy as np
 import numpy.typing as npt
 
 from pymotoros.errors import PathBlockedError
+from pymotoros.models.workspace import ContactLike
 
 F64Array = npt.NDArray[np.float64]
 
@@ -52,21 +53,6 @@ RNG_SEED: Final = 20261126
 MIN_ADVANCE_M: Final = 1e-4
 """The continuous check's smallest step (m of travel): a path grazing an obstacle closer
 than this is not a contact, and the check ends."""
-
-
-class ContactLike(Protocol):
-    """A contact as the collision model reports it."""
-
-    @property
-    def obstacle(self) -> str: ...
-    @property
-    def link(self) -> str: ...
-    @property
-    def group(self) -> str: ...
-    @property
-    def distance_m(self) -> float: ...
-    @property
-    def self_collision(self) -> bool: ...
 
 
 class SearchWorld(Protocol):

@@ -28,7 +28,7 @@ from __future__ import annotations
 import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
-from typing import Final
+from typing import Final, Protocol
 
 from pymotoros.errors import ConfigError
 from pymotoros.models.robots import Transform, Vec3
@@ -376,12 +376,30 @@ def _workspace(value: object, groups: Sequence[str]) -> Workspace:
     return Workspace(tuple(obstacles), bases, radius)
 
 
+class ContactLike(Protocol):
+    """A contact as a collision model reports it (obstacle or, for a self-collision, the
+    other link; the link touching; its group; the distance). Declared here, beside the
+    obstacles, so the planner (kinematics) and the offline check (trajectory) share it."""
+
+    @property
+    def obstacle(self) -> str: ...
+    @property
+    def link(self) -> str: ...
+    @property
+    def group(self) -> str: ...
+    @property
+    def distance_m(self) -> float: ...
+    @property
+    def self_collision(self) -> bool: ...
+
+
 __all__ = [
     "DEFAULT_TOOL_RADIUS_M",
     "EMPTY_WORKSPACE",
     "TOOL_SHAPE_KEYS",
     "Box",
     "Capsule",
+    "ContactLike",
     "Cylinder",
     "Obstacle",
     "Shape",

@@ -25,25 +25,11 @@ import numpy as np
 import numpy.typing as npt
 
 from pymotoros.models.cell import CellModels
+from pymotoros.models.workspace import ContactLike
 from pymotoros.motion import GroupAxes, to_pulses
 from pymotoros.trajectory.files import Trajectory
 
 F64Array = npt.NDArray[np.float64]
-
-
-class ContactLike(Protocol):
-    """A contact as the collision model reports it."""
-
-    @property
-    def obstacle(self) -> str: ...
-    @property
-    def link(self) -> str: ...
-    @property
-    def group(self) -> str: ...
-    @property
-    def distance_m(self) -> float: ...
-    @property
-    def self_collision(self) -> bool: ...
 
 
 class CollisionModel(Protocol):
