@@ -74,6 +74,7 @@ class Ports:
     io: int = TCP_PORT_IO
 
     def of(self, kind: Port) -> int:
+        """The port number for one of the three kinds (motion, state or IO)."""
         return {Port.MOTION: self.motion, Port.STATE: self.state, Port.IO: self.io}[kind]
 
 

@@ -144,6 +144,7 @@ class AxisDeviation:
 
     @property
     def difference(self) -> float:
+        """``value - reference``: how far past the limit or tolerance the point was (same unit)."""
         return self.value - self.reference
 
 
@@ -176,6 +177,8 @@ class NotReadyError(ReplyError):
 
     @property
     def reason(self) -> NotReadySubcode | None:
+        """The NOT_READY subcode as an enum (what to fix: servo off, E-stop ...); None for a code
+        this version does not know."""
         try:
             return NotReadySubcode(self.subcode)
         except ValueError:

@@ -88,6 +88,7 @@ class JointLimits:
 
     @property
     def dof(self) -> int:
+        """Number of joints (degrees of freedom) these limits cover."""
         return len(self.names)
 
 
@@ -124,14 +125,17 @@ class JointTrajectory:
 
     @property
     def duration(self) -> float:
+        """Planned duration in seconds: the time of the last point."""
         return self.points[-1].time
 
     @property
     def start(self) -> tuple[float, ...]:
+        """Positions of the first point (rad, m for linear axes), in ROS joint order."""
         return self.points[0].positions
 
     @property
     def goal(self) -> tuple[float, ...]:
+        """Positions of the last point (rad, m for linear axes), in ROS joint order."""
         return self.points[-1].positions
 
     def position_at(self, t: float) -> tuple[float, ...]:

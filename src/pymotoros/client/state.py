@@ -56,6 +56,7 @@ class Status:
 
     @classmethod
     def from_message(cls, msg: RobotStatus) -> Status:
+        """Decode a ROBOT_STATUS message (MotoROS's ints: 1 true, 0 false, -1 unknown)."""
         return cls(
             drives_powered=msg.drives_powered == 1,
             e_stopped=msg.e_stopped == 1,
@@ -67,6 +68,8 @@ class Status:
         )
 
     def as_dict(self) -> dict[str, object]:
+        """The fields as plain JSON values (``mode`` as its word, "play" or "teach"): the
+        ``status`` object of ``pymotoros status --json``."""
         return {
             "drives_powered": self.drives_powered,
             "e_stopped": self.e_stopped,
@@ -101,6 +104,8 @@ class RobotState:
     """Number of ROBOT_STATUS messages received so far (one per state cycle)."""
 
     def positions(self, group: int = 0) -> tuple[float, ...] | None:
+        """The latest joint positions of ``group`` (rad, m for linear axes); None before its first
+        feedback."""
         js = self.joints.get(group)
         return None if js is None else js.positions
 

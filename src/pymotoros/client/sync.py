@@ -108,6 +108,8 @@ class SyncRobotClient:
             raise
 
     def connect(self, *, motion: bool = True, state: bool = True, io: bool = True) -> Self:
+        """Open the motion, state and IO connections (those asked for) and wait for them; returns
+        self. ``with`` calls it."""
         self.run(self.client.connect(motion=motion, state=state, io=io))
         return self
 
@@ -141,13 +143,16 @@ class SyncRobotClient:
 
     @property
     def state(self) -> RobotState:
+        """The latest state snapshot (frozen: safe to read from any thread)."""
         return self.client.state
 
     @property
     def status(self) -> Status | None:
+        """The latest ROBOT_STATUS, or None before the first arrives."""
         return self.client.status
 
     def feedback(self, group: int = 0) -> JointState | None:
+        """The latest joint feedback of ``group`` (None before the first)."""
         return self.client.feedback(group)
 
     def add_listener(self, listener: Callable[[RobotState], None]) -> Callable[[], None]:
@@ -170,30 +175,37 @@ class SyncRobotClient:
 
     @property
     def robot(self) -> RobotModel:
+        """The robot model the client plans and checks with (joint names, limits)."""
         return self.client.robot
 
     @property
     def controller(self) -> ControllerModel:
+        """The controller model: byte order and IO map used to check addresses."""
         return self.client.controller
 
     @property
     def host(self) -> str:
+        """The controller's address, as given."""
         return self.client.host
 
     @property
     def ports(self) -> Ports:
+        """The motion, state and IO ports in use."""
         return self.client.ports
 
     @property
     def order(self) -> ByteOrder:
+        """The wire's byte order (big-endian for an FS100, little-endian otherwise)."""
         return self.client.order
 
     @property
     def timeout_s(self) -> float:
+        """Longest wait for a reply to one request, in seconds."""
         return self.client.timeout_s
 
     @property
     def connect_timeout_s(self) -> float:
+        """Longest wait for a TCP connection to open, in seconds."""
         return self.client.connect_timeout_s
 
     @property

@@ -156,6 +156,7 @@ class VirtualController:
 
     @property
     def period_ms(self) -> int:
+        """The interpolation period in ms (4, the generic Yaskawa figure): one ``tick()``."""
         return self._clock.period_ms
 
     @property
@@ -165,10 +166,12 @@ class VirtualController:
 
     @property
     def tick_count(self) -> int:
+        """Interpolation periods run since boot (``time_ms`` is this times ``period_ms``)."""
         return self._clock.tick_count
 
     @property
     def num_groups(self) -> int:
+        """Number of control groups in the cell (robots and external axes), 1 to 4."""
         return self._ctx.num_groups
 
     def commanded_pulses(self, group_no: int) -> tuple[int, ...]:
@@ -214,12 +217,16 @@ class VirtualController:
     # ================================================================== motion port
 
     def motion_ctrl(self, group_no: int, command: int) -> Outcome | Pending:
+        """MOTO_MOTION_CTRL: a motion-port command such as CHECK_MOTION_READY or START_TRAJ_MODE;
+        its Outcome now, or a Pending that completes on a later tick."""
         return self._scheduler.run(
             self._commands.motion_ctrl(group_no, command),
             lambda: MotionCommand.describe(command),
         )
 
     def trajectory_point(self, sequence: int, point: PointData) -> Outcome | Pending:
+        """JOINT_TRAJ_PT_FULL: one group's trajectory point, accepted (queued) or refused as
+        MotoROS does."""
         now = self._trajectory.trajectory_point_now(sequence, point)
         if now is not None:  # the streaming hot path: answered without a Process
             return now
@@ -229,35 +236,49 @@ class VirtualController:
         )
 
     def trajectory_point_ex(self, sequence: int, points: Sequence[PointData]) -> Outcome | Pending:
+        """JOINT_TRAJ_PT_FULL_EX: one point for several groups at once, accepted or refused as a
+        whole."""
         return self._scheduler.run(
             self._trajectory.trajectory_point_ex(sequence, points),
             lambda: f"JOINT_TRAJ_PT_FULL_EX sequence {sequence}",
         )
 
     def select_tool(self, group_no: int, tool: int) -> Outcome:
+        """SELECT_TOOL (§5.8): the tool number the group's TCP is computed with."""
         return self._trajectory.select_tool(group_no, tool)
 
     def dh_parameters(self) -> DhTable | None:
+        """GET_DH_PARAMETERS (§5.9): per group, the links' (theta, d, a, alpha) in rad and m."""
         return self._trajectory.dh_parameters()
 
     # ================================================================== IO
 
     def read_io_bit(self, address: int) -> IoRead:
+        """An IO bit as the IO port reads it (MotoROS's address numbering); the IO result code
+        MotoROS answers when the address may not be read."""
         return self._io.read_bit(address)
 
     def write_io_bit(self, address: int, value: int) -> IoResultCode:
+        """Write an IO bit as the IO port does (only writable ranges); SUCCESS or the IO result
+        code MotoROS answers."""
         return self._io.write_bit(address, value)
 
     def read_io_group(self, address: int) -> IoRead:
+        """An IO group (8 bits, as a byte) as the IO port reads it; the IO result code MotoROS
+        answers when the address may not be read."""
         return self._io.read_group(address)
 
     def write_io_group(self, address: int, value: int) -> IoResultCode:
+        """Write an IO group (a byte) as the IO port does; SUCCESS or the IO result code MotoROS
+        answers."""
         return self._io.write_group(address, value)
 
     def read_mregister(self, number: int) -> IoRead:
+        """An M-register as the IO port reads it; the IO result code for a number it refuses."""
         return self._io.read_mregister(number)
 
     def write_mregister(self, number: int, value: int) -> IoResultCode:
+        """Write an M-register as the IO port does; SUCCESS or the IO result code MotoROS gives."""
         return self._io.write_mregister(number, value)
 
     def set_io_api_failure(self, *, reads: bool = False, writes: bool = False) -> None:
@@ -267,6 +288,7 @@ class VirtualController:
     # ================================================================== connections
 
     def motion_connected(self) -> None:
+        """A client connected to the motion port: OT#893 (motion connected) on, as MotoROS."""
         self._connections.motion_connected()
 
     def motion_disconnected(self) -> None:
@@ -274,12 +296,15 @@ class VirtualController:
         self._connections.motion_disconnected()
 
     def state_clients_changed(self, count: int) -> None:
+        """The number of state-port clients changed: OT#894 is on while there is at least one."""
         self._connections.state_clients_changed(count)
 
     def io_connected(self) -> None:
+        """A client connected to the IO port: sets OT#895 (MotoROS never clears it)."""
         self._connections.io_connected()
 
     def has_queued_motion(self) -> bool:
+        """Whether any group still has increments queued (the robot is still to move)."""
         return self._ctx.queues.has_queued_motion()
 
     # ================================================================== state server
@@ -297,6 +322,8 @@ class VirtualController:
         return self._state.robot_status()
 
     def snapshot(self) -> ControllerSnapshot:
+        """An immutable picture of the controller now (what ``GET /api/state`` and the pendant
+        show)."""
         s = self._machine.state
         return ControllerSnapshot(
             time_ms=self._clock.time_ms,
@@ -343,6 +370,7 @@ class VirtualController:
 
     @property
     def io(self) -> IoImage:
+        """The IO image (inputs, outputs, registers): the operator's and the cell's side of IO."""
         return self._io
 
     @property
@@ -351,6 +379,7 @@ class VirtualController:
         return self._ctx.runner.position()
 
     def alarm_history(self) -> tuple[Alarm, ...]:
+        """Alarms and errors raised so far, oldest first (bounded: the oldest drop out)."""
         return self._keys.alarm_history()
 
     def subscribe(self, observer: SnapshotObserver) -> None:
@@ -364,12 +393,16 @@ class VirtualController:
         self._keys.press_estop(pressed, source)
 
     def set_hold(self, on: bool) -> None:
+        """The HOLD key, on (True) or off: HOLD stops the job (and so MotoROS's motion); off
+        leaves it stopped."""
         self._keys.set_hold(on)
 
     def set_mode(self, mode: PendantMode) -> None:
+        """The pendant's mode key (TEACH or PLAY); MotoROS moves only in PLAY."""
         self._keys.set_mode(mode)
 
     def set_remote(self, on: bool) -> None:
+        """The REMOTE key: MotoROS moves only in REMOTE."""
         self._keys.set_remote(on)
 
     def set_servo(self, on: bool) -> None:
@@ -381,6 +414,8 @@ class VirtualController:
         self._keys.set_eco(on)
 
     def raise_alarm(self, code: int, subcode: int, text: str) -> None:
+        """Raise a controller alarm (code 0..9999): the job stops, servo power goes off if the
+        alarm's class cuts it, and motion is refused until the alarm is reset."""
         self._keys.raise_alarm(code, subcode, text)
 
     def raise_error(self, code: int, subcode: int = 0, text: str = "") -> None:

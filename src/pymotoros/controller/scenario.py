@@ -72,6 +72,9 @@ class ScenarioEvent:
 
 @dataclass(frozen=True, slots=True)
 class Scenario:
+    """A fault scenario: the events a twin plays on its own clock (``pymotoros sim
+    --scenario FILE``); ``source`` names the file in error messages."""
+
     events: tuple[ScenarioEvent, ...]
     source: str = "<scenario>"
 

@@ -195,6 +195,7 @@ class Chain:
 
     @property
     def num_joints(self) -> int:
+        """Number of joints the chain moves (the group's axes, in ROS order)."""
         return len(self.joint_names)
 
     def with_tool(self, tool: Transform) -> Chain:

@@ -120,10 +120,12 @@ class GroupModel:
 
     @property
     def joint_names(self) -> tuple[str, ...]:
+        """The axes' names in ROS order, as in trajectories and joint states."""
         return tuple(a.name for a in self.axes)
 
     @property
     def num_axes(self) -> int:
+        """Number of axes in the group (robot joints or external axes)."""
         return len(self.axes)
 
 

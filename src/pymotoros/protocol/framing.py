@@ -250,6 +250,7 @@ class FrameDecoder:
 
     @property
     def order(self) -> ByteOrder:
+        """The byte order frames are decoded in (big-endian for an FS100)."""
         return self._order
 
     @property

@@ -226,6 +226,7 @@ class Close:
 
 
 Verdict: TypeAlias = Accept | Reject | Close
+"""What a server does with a request, decided from its header and size before the body is read."""
 
 
 def check_request(frame: Frame, order: ByteOrder, port: Port) -> Verdict:

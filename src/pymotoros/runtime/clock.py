@@ -402,6 +402,7 @@ class ManualClock:
         self._order = itertools.count()
 
     def now(self) -> float:
+        """Virtual time in seconds: moves only when advanced, never by itself."""
         return self._now
 
     @property
@@ -418,6 +419,7 @@ class ManualClock:
         return self._sleepers[0][0] if self._sleepers else None
 
     async def sleep_until(self, deadline: float) -> None:
+        """Wait until virtual time reaches ``deadline`` (s): only :meth:`advance` moves it there."""
         if deadline <= self._now:
             await asyncio.sleep(0)
             return

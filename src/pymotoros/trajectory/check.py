@@ -113,11 +113,14 @@ class CheckReport:
 
     @property
     def exit_code(self) -> int:
+        """The exit status of ``pymotoros check``: 0 accepted, 4 accepted with warnings, 1 refused
+        or colliding."""
         if not self.accepted or self.collisions:
             return EXIT_REFUSED
         return EXIT_WARNINGS if self.warnings else EXIT_OK
 
     def to_json(self) -> dict[str, Any]:
+        """The report as plain JSON values: what ``pymotoros check --json`` prints."""
         refusal = None
         if self.refusal is not None:
             r = asdict(self.refusal)

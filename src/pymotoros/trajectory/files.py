@@ -83,6 +83,7 @@ class Trajectory:
 
     @property
     def duration(self) -> float:
+        """Seconds from the first point to the last."""
         return float(self.times[-1] - self.times[0])
 
     def group_columns(self, robot: RobotModel) -> list[tuple[int, list[int]]]:

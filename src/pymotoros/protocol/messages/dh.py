@@ -105,11 +105,14 @@ class MotoGetDhParametersReply(Message, _Dh):
         return cls(tuple(rows) + (zero_group,) * (MAX_GROUPS - len(rows)))
 
     def pack(self, order: ByteOrder) -> bytes:
+        """The body: 4 groups × 8 links × (theta, d, a, alpha) as float32, unused groups zero."""
         flat = [value for links in self.groups for link in links for value in link]
         return _pick(_DH_STRUCTS, order).pack(*flat)
 
     @classmethod
     def unpack(cls, body: bytes, order: ByteOrder) -> Self:
+        """Decode exactly one body of ``BODY_SIZE_DH_REPLY`` bytes; another size is the peer's
+        fault."""
         if len(body) != BODY_SIZE_DH_REPLY:
             raise _size_error(cls, body, BODY_SIZE_DH_REPLY)
         raw = _pick(_DH_STRUCTS, order).unpack(body)

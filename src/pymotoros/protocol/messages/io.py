@@ -226,6 +226,7 @@ class IoErrorReply(Message, _ErrorReply):
     FIELDS: ClassVar[tuple[tuple[str, _Kind], ...]] = _I32_FIELDS_ERROR
 
     def pack(self, order: ByteOrder) -> bytes:
+        """``result`` and ``subcode`` as int32, then 52 zero bytes (the size of a MOTION_REPLY)."""
         return _pick(self._STRUCTS, order).pack(self.result, self.subcode) + bytes(
             _IO_ERROR_PADDING
         )

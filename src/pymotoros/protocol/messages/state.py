@@ -141,6 +141,7 @@ class JointFeedback(Message, _GroupRecord):
 
     @classmethod
     def unpack(cls, body: bytes, order: ByteOrder) -> Self:
+        """Decode exactly one body of this type; a wrong size is the peer's fault."""
         return cls.unpack_from(body, 0, len(body), order)
 
     @classmethod
@@ -220,12 +221,15 @@ class MotoJointFeedbackEx(Message, _FeedbackEx):
         return cls(len(records), records)
 
     def pack(self, order: ByteOrder) -> bytes:
+        """The count, the groups' records, then zeros up to ``BODY_SIZE_FEEDBACK_EX`` (MotoROS's
+        fixed size)."""
         head = _pick(_EX_COUNT_STRUCTS, order).pack(self.number_of_valid_groups)
         slots = b"".join(record.pack(order) for record in self.groups)
         return head + slots + bytes(BODY_SIZE_FEEDBACK_EX - len(head) - len(slots))
 
     @classmethod
     def unpack(cls, body: bytes, order: ByteOrder) -> Self:
+        """Decode exactly ``BODY_SIZE_FEEDBACK_EX`` bytes: the count, then the group records."""
         if len(body) != BODY_SIZE_FEEDBACK_EX:
             raise _size_error(cls, body, BODY_SIZE_FEEDBACK_EX)
         head = _pick(_EX_COUNT_STRUCTS, order)

@@ -160,6 +160,7 @@ class JointTrajPtFull(Message, _Point):
 
     @classmethod
     def unpack(cls, body: bytes, order: ByteOrder) -> Self:
+        """Decode exactly one body of this type; a wrong size is the peer's fault."""
         return cls.unpack_from(body, 0, len(body), order)
 
     @classmethod
@@ -252,6 +253,7 @@ class MotoJointTrajPtFullEx(Message, _FullEx):
         return cls(len(records), sequence, records)
 
     def pack(self, order: ByteOrder) -> bytes:
+        """The count and sequence (int32), then one record per group, no padding."""
         head = _pick(_EX_HEAD_STRUCTS, order).pack(self.number_of_valid_groups, self.sequence)
         return head + b"".join(record.pack(order) for record in self.groups)
 
