@@ -96,6 +96,8 @@ from pymotoros.client.connection import Ports  # noqa: E402
 ROOT = Path(__file__).resolve().parents[1]
 BASH = shutil.which("bash") or "/bin/bash"
 DOCS_TMP = "/tmp/"  # noqa: S108 - the docs' scratch paths, replaced by the test's own directory
+# Not docs/api/: the API reference's MkDocs pages (``::: name`` lines); their only commands
+# are `mkdocs serve`/`build`, which tests/test_api_reference.py runs and holds them to.
 DOCUMENTS = [ROOT / "README.md", *sorted((ROOT / "docs").glob("*.md"))]
 NOT_RUN_REASONS = frozenset({"real robot", "your files", "docker", "heavy"})
 EXAMPLE_CONTROLLER = "192.168.1.31"
