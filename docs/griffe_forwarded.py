@@ -53,8 +53,9 @@ class ForwardedMethods(griffe.Extension):
 def markdown(text: str) -> str:
     """The docstrings are written for Sphinx-like readers (roles, ``::`` before a literal
     block); the reference renders Markdown. A role becomes a code span of the name as the
-    source writes it (the last part where ``~`` asks for it), ``::`` ending a paragraph
-    a colon (the indented block under it is a code block in Markdown too)."""
+    source writes it (the last part where ``~`` asks for it); ``::`` ending a paragraph
+    becomes a colon and a ``::`` line of its own goes (the indented block under either is
+    a code block in Markdown too)."""
 
     def code(match: re.Match[str]) -> str:
         target = match.group(1)
@@ -64,7 +65,8 @@ def markdown(text: str) -> str:
         return f"`{shown}`"
 
     text = _ROLE.sub(code, text)
-    return re.sub(r"(?<=\S)::$|^::$", ":", text, flags=re.MULTILINE)
+    text = re.sub(r"^[ \t]*::[ \t]*$", "", text, flags=re.MULTILINE)  # a lone marker
+    return re.sub(r"(?<=\S)::$", ":", text, flags=re.MULTILINE)
 
 
 def _objects(obj: griffe.Object) -> Iterator[griffe.Object]:

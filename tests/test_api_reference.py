@@ -16,6 +16,7 @@ check). Attribute docstrings (the string under a constant) count, as on the page
 from __future__ import annotations
 
 import importlib
+import importlib.util
 import re
 import subprocess
 import sys
@@ -195,10 +196,29 @@ def test_the_reference_builds_without_a_warning_and_names_every_public_name(
         "public names no page of docs/api/ shows (add a `::: path` line for each):\n  "
         + "\n  ".join(absent)
     )
+    testing = (site / "testing.html").read_text()
+    for name in _plugin_names():
+        assert name in testing, f"the testing page does not document the plugin's {name!r}"
     remote = sorted(
         set(re.findall(r'<(?:script|link|img)[^>]+(?:src|href)="(https?://[^"]+)"', html))
     )
     assert not remote, f"the pages load files from the network: {remote}"
+
+
+def _plugin_names() -> list[str]:
+    """The pytest plugin's marker and ini options, as the plugin registers them."""
+    plugin = importlib.import_module("pymotoros.pytest_plugin")
+    names = [f"@pytest.mark.{plugin.MARKER}("]
+
+    class Parser:
+        def addini(self, name: str, *args: object, **kwargs: object) -> None:
+            names.append(name)
+
+        def addoption(self, *names_: str, **kwargs: object) -> None:
+            names.extend(names_)
+
+    plugin.pytest_addoption(Parser())
+    return names
 
 
 def _shown(path: str, anchors: set[str]) -> bool:
@@ -242,3 +262,17 @@ def test_the_reference_pages_hold_no_block_the_docs_runner_would_miss() -> None:
             if language == "sh":
                 commands += [line.split("#")[0].strip() for line in body.splitlines()]
     assert {c for c in commands if c} == {"mkdocs serve", "mkdocs build --strict"}, commands
+
+
+def test_sphinx_roles_are_written_as_markdown() -> None:
+    """The docstrings' reST markup would show raw on a Markdown page."""
+    spec = importlib.util.spec_from_file_location("griffe_forwarded", EXTENSION)
+    assert spec is not None
+    assert spec.loader is not None
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    text = (
+        "See :class:`~pymotoros.client.RobotClient` and :meth:`Motion.stop`. Front door::\n\n    x"
+    )
+    assert module.markdown(text) == "See `RobotClient` and `Motion.stop`. Front door:\n\n    x"
+    assert module.markdown("Tree:\n\n::\n\n    a") == "Tree:\n\n\n\n    a"
