@@ -15,6 +15,7 @@ check). Attribute docstrings (the string under a constant) count, as on the page
 
 from __future__ import annotations
 
+import functools
 import importlib
 import importlib.util
 import re
@@ -54,6 +55,7 @@ EXTENSION = ROOT / "docs" / "griffe_forwarded.py"
 (``RobotClient.move_joints`` a documented method, not an attribute holding a call)."""
 
 
+@functools.cache
 def _load() -> object:
     extensions = griffe.load_extensions(str(EXTENSION))
     loader = griffe.GriffeLoader(search_paths=[str(SOURCES)], extensions=extensions)
