@@ -1,4 +1,5 @@
-"""A griffe extension for the API reference: forwarded methods shown as the methods they are.
+"""A griffe extension for the API reference: forwarded methods shown as the methods they are,
+and the docstrings' reST roles as Markdown links.
 
 ``RobotClient`` is a facade over its parts (``move_joints = _part("_motion",
 Motion.move_joints)``) and ``SyncRobotClient`` a blocking facade over ``RobotClient``
@@ -21,8 +22,9 @@ that every public name has a docstring, so both see the same API.
 
 from __future__ import annotations
 
+import html
 import re
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from typing import Any
 
 import griffe
@@ -31,7 +33,7 @@ BLOCKING_HELPERS = frozenset({"_forward"})
 """pymotoros.client.sync's helper that runs a coroutine on the facade's loop and waits."""
 
 
-_ROLE = re.compile(r":(?:class|meth|func|mod|attr|exc|data|obj|const):`~?([^`]+)`")
+_ROLE = re.compile(r":(?:class|meth|func|mod|attr|exc|data|obj|const):`(~?)([^`]+)`")
 """A Sphinx cross-reference role (``:class:`~pymotoros.client.RobotClient```)."""
 
 
@@ -47,26 +49,53 @@ class ForwardedMethods(griffe.Extension):
                 _replace(cls, name, loader)
         for obj in _objects(pkg):
             if obj.docstring is not None:
-                obj.docstring.value = markdown(obj.docstring.value)
+                obj.docstring.value = markdown(obj.docstring.value, _resolver(obj))
 
 
-def markdown(text: str) -> str:
+def markdown(text: str, resolve: Callable[[str], str | None] = lambda target: None) -> str:
     """The docstrings are written for Sphinx-like readers (roles, ``::`` before a literal
-    block); the reference renders Markdown. A role becomes a code span of the name as the
-    source writes it (the last part where ``~`` asks for it); ``::`` ending a paragraph
-    becomes a colon and a ``::`` line of its own goes (the indented block under either is
-    a code block in Markdown too)."""
+    block); the reference renders Markdown. A role becomes the name as the source writes it
+    (the last part where ``~`` asks for it) in code, linked to the object's page where
+    ``resolve`` finds its full path and the reference shows it (an *optional* autorefs
+    link: one the reference does not show stays plain code, without a warning). ``::``
+    ending a paragraph becomes a colon and a ``::`` line of its own goes (the indented
+    block under either is a code block in Markdown too)."""
 
-    def code(match: re.Match[str]) -> str:
-        target = match.group(1)
-        shown = (
-            target.rsplit(".", 1)[-1] if match.group(0).split("`")[1].startswith("~") else target
-        )
-        return f"`{shown}`"
+    def reference(match: re.Match[str]) -> str:
+        tilde, target = match.group(1), match.group(2)
+        code = f"<code>{html.escape(target.rsplit('.', 1)[-1] if tilde else target)}</code>"
+        identifier = resolve(target)
+        if identifier is None:
+            return code
+        return f'<autoref identifier="{html.escape(identifier)}" optional>{code}</autoref>'
 
-    text = _ROLE.sub(code, text)
+    text = _ROLE.sub(reference, text)
     text = re.sub(r"^[ \t]*::[ \t]*$", "", text, flags=re.MULTILINE)  # a lone marker
     return re.sub(r"(?<=\S)::$", ":", text, flags=re.MULTILINE)
+
+
+def _resolver(obj: griffe.Object) -> Callable[[str], str | None]:
+    """A role's target as a full path: as written when it is one, else its first part
+    looked up in the scope of the object the docstring belongs to (its members, its
+    module's imports, then its parents')."""
+
+    def resolve(target: str) -> str | None:
+        if target.startswith("pymotoros."):
+            return target
+        head, _, rest = target.partition(".")
+        try:
+            path = obj.resolve(head)
+        except (
+            griffe.NameResolutionError,
+            griffe.AliasResolutionError,
+            griffe.CyclicAliasError,
+            KeyError,
+            ValueError,
+        ):
+            return None
+        return f"{path}.{rest}" if rest else path
+
+    return resolve
 
 
 def _objects(obj: griffe.Object) -> Iterator[griffe.Object]:

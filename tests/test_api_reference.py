@@ -224,22 +224,33 @@ def _plugin_names() -> list[str]:
 
 
 def _shown(path: str, anchors: set[str]) -> bool:
-    """A name is shown under the path users import it by; a front-door name may be shown
-    under the module it comes from instead (``pymotoros.client.Ports``,
-    ``pymotoros.models.RobotModel``), as the pages group names by sub-package."""
+    """A name is shown under the path users import it by, or under another path to the
+    same definition (each object is on one page only, or cross-references to it would be
+    ambiguous): the front door's names under their sub-package's (``pymotoros.client.Ports``,
+    ``pymotoros.models.RobotModel``), ``pymotoros.DhLink`` as ``pymotoros.protocol.DhLink``."""
     if path in anchors:
         return True
-    module, _, name = path.rpartition(".")
-    if module != "pymotoros":
+    target = _definition(path)
+    return any(_definition(anchor) == target for anchor in anchors if _is_object(anchor))
+
+
+def _is_object(anchor: str) -> bool:
+    try:
+        _definition(anchor)
+    except (KeyError, ValueError, AttributeError, griffe.AliasResolutionError):
         return False
-    front_door = importlib.import_module("pymotoros")
-    client = importlib.import_module("pymotoros.client")
-    elsewhere = {f"{front_door._WHERE[name]}.{name}"}
-    if name in client.__all__:
-        elsewhere.add(f"pymotoros.client.{name}")
-    if front_door._WHERE[name] == "pymotoros.errors":
-        elsewhere.add(f"pymotoros.errors.{name}")
-    return bool(elsewhere & anchors)
+    return True
+
+
+@functools.cache
+def _definition(path: str) -> str:
+    """Where a public path's object is defined (``pymotoros.client.robot.RobotClient``); the
+    front door's names through the table of ``pymotoros._EXPORTS``."""
+    module, _, name = path.rpartition(".")
+    if module == "pymotoros":
+        module = importlib.import_module("pymotoros")._WHERE[name]
+    obj = _load()[module.removeprefix("pymotoros.") + "." + name]  # type: ignore[index]
+    return str((obj.final_target if obj.is_alias else obj).path)
 
 
 def test_the_build_is_offline() -> None:
@@ -267,7 +278,8 @@ def test_the_reference_pages_hold_no_block_the_docs_runner_would_miss() -> None:
 
 
 def test_sphinx_roles_are_written_as_markdown() -> None:
-    """The docstrings' reST markup would show raw on a Markdown page."""
+    """The docstrings' reST markup would show raw on a Markdown page: a role becomes the
+    name in code, an optional link where the target resolves; ``::`` a colon."""
     spec = importlib.util.spec_from_file_location("griffe_forwarded", EXTENSION)
     assert spec is not None
     assert spec.loader is not None
@@ -276,5 +288,12 @@ def test_sphinx_roles_are_written_as_markdown() -> None:
     text = (
         "See :class:`~pymotoros.client.RobotClient` and :meth:`Motion.stop`. Front door::\n\n    x"
     )
-    assert module.markdown(text) == "See `RobotClient` and `Motion.stop`. Front door:\n\n    x"
+    assert module.markdown(text) == (
+        "See <code>RobotClient</code> and <code>Motion.stop</code>. Front door:\n\n    x"
+    )
+    linked = module.markdown(":class:`~pymotoros.client.RobotClient`", lambda target: target)
+    assert linked == (
+        '<autoref identifier="pymotoros.client.RobotClient" optional>'
+        "<code>RobotClient</code></autoref>"
+    )
     assert module.markdown("Tree:\n\n::\n\n    a") == "Tree:\n\n\n\n    a"
