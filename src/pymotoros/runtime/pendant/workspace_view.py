@@ -4,9 +4,13 @@ and the obstacles, both in the workspace frame (the first group's ``base_link``)
 The page has no kinematics, so the shapes come placed: each group's capsules (the link
 shapes of :mod:`pymotoros.models.link_shapes`, placed by the same
 :class:`~pymotoros.kinematics.collision.GroupBody` the twin's contact check uses) as end
-points and a radius, and each obstacle's centre, rotation and sizes, with whether the
-robot touches it now (the page draws it red). Both are computed only when they change:
-the capsules when the joints move, the obstacles when one is put or removed.
+points and a radius, the tool in force (its shape from the cell file's tool data, mounted
+by the same ``GroupBody.set_tool`` and with the same ``workspace.tool_radius_m`` as the
+contact check, and its TCP), and each obstacle's centre, rotation and sizes, with whether
+the robot touches it now (the page draws it red). Without the tool, a gripper touching a
+fixture was drawn as an arm ending short of a red fixture (issue 29). All of it is
+computed only when it changes: the robot's shapes when the joints or the tool change,
+the obstacles when one is put or removed.
 """
 
 from __future__ import annotations
@@ -14,14 +18,16 @@ from __future__ import annotations
 from collections.abc import Sequence
 from typing import Any
 
+import coal
 import numpy as np
 import pinocchio as pin
 
 from pymotoros.controller.api import WorkspaceSnapshot
 from pymotoros.controller.cell import CellConfig
 from pymotoros.kinematics.collision import GroupBody
+from pymotoros.models.cell_tools import CellTool
 from pymotoros.models.link_shapes import link_radii
-from pymotoros.models.robots import Transform
+from pymotoros.models.robots import GroupModel, Transform
 from pymotoros.models.workspace import Box, Cylinder, Obstacle, Workspace
 
 __all__ = ["WorkspaceView"]
@@ -38,39 +44,104 @@ def _round(values: Any) -> list[float]:
     return [round(float(v), _DECIMALS) for v in values]
 
 
+def _shape_of(geometry: Any) -> tuple[str, list[float]]:
+    """The page's name and sizes of a Coal shape (capsules and cylinders along z)."""
+    if isinstance(geometry, coal.Capsule):
+        return "capsule", _round([geometry.radius, 2 * geometry.halfLength])
+    if isinstance(geometry, coal.Cylinder):
+        return "cylinder", _round([geometry.radius, 2 * geometry.halfLength])
+    if isinstance(geometry, coal.Box):
+        return "box", _round(2 * np.asarray(geometry.halfSide, dtype=float))
+    return "sphere", _round([geometry.radius])
+
+
+Placed = tuple[list[list[float]], dict[str, Any] | None]
+"""A group's capsules and its tool (see :meth:`WorkspaceView.robot`)."""
+
+
 class WorkspaceView:
     """The placed shapes of one cell, for the pendant's document."""
 
     def __init__(self, cell: CellConfig | None) -> None:
+        self._cell = cell
         self._workspace: Workspace = cell.workspace if cell is not None else Workspace()
         self._bodies: list[GroupBody | None] = []
+        self._groups: list[GroupModel] = list(cell.groups) if cell is not None else []
         for group, robot in zip(cell.groups, cell.robots, strict=True) if cell else ():
             shaped = link_radii(robot, group) is not None and all(
                 a.geometry is not None for a in group.axes
             )
             self._bodies.append(
-                GroupBody(group, robot, self._workspace.base(group.name)) if shaped else None
+                GroupBody(
+                    group,
+                    robot,
+                    self._workspace.base(group.name),
+                    tool_radius=self._workspace.tool_radius_m,  # as the contact check's
+                )
+                if shaped
+                else None
             )
-        self._capsules: dict[int, tuple[tuple[float, ...], list[list[float]]]] = {}
+        self._placed_robot: dict[int, tuple[tuple[Any, ...], Placed]] = {}
         self._obstacles_key: tuple[Obstacle, ...] | None = None
         self._placed: list[dict[str, Any]] = []
 
     def capsules(self, group_index: int, q: Sequence[float]) -> list[list[float]] | None:
-        """The group's capsules at joints ``q``: ``[ax, ay, az, bx, by, bz, radius]`` each
-        (m); None for a group without collision shapes. Do not mutate the answer."""
+        """The group's link capsules at joints ``q`` with tool 0 (:meth:`robot`)."""
+        placed = self.robot(group_index, q, 0)
+        return None if placed is None else placed[0]
+
+    def robot(self, group_index: int, q: Sequence[float], tool: int) -> Placed | None:
+        """The group at joints ``q`` with tool file ``tool`` in force: its link capsules
+        (``[ax, ay, az, bx, by, bz, radius]`` each, m, the tool's shape not among them)
+        and the tool (:meth:`_tool`); None for a group without collision shapes. Do not
+        mutate the answer: it is reused while the joints and the tool stay."""
         body = self._bodies[group_index] if group_index < len(self._bodies) else None
-        if body is None or len(q) != body.num_joints:
+        if body is None or self._cell is None or len(q) != body.num_joints:
             return None
-        key = tuple(q)
-        known = self._capsules.get(group_index)
+        key = (*q, tool)
+        known = self._placed_robot.get(group_index)
         if known is not None and known[0] == key:
             return known[1]
-        parts = body.place(np.asarray(key, dtype=float))
-        out = [
+        cell_tool = self._cell.tool(group_index, tool).cell_tool
+        body.set_tool(cell_tool)  # the twin's contact check mounts the same
+        parts = body.place(np.asarray(q, dtype=float))
+        links = len(body.parts)
+        capsules = [
             [*_round(ends[0]), *_round(ends[1]), round(part.radius, _DECIMALS)]
-            for part, ends in zip(parts, body.ends, strict=True)
+            for part, ends in zip(parts[:links], body.ends[:links], strict=True)
         ]
-        self._capsules[group_index] = (key, out)
+        placed: Placed = (capsules, self._tool(group_index, body, cell_tool))
+        self._placed_robot[group_index] = (key, placed)
+        return placed
+
+    def _tool(self, group_index: int, body: GroupBody, tool: CellTool) -> dict[str, Any]:
+        """The tool in force, placed (workspace frame): ``number``, ``name``, ``shape``
+        (capsule, box, cylinder, sphere; null for a tool whose TCP is tool0 and that has
+        no shape), ``size`` (a capsule's or cylinder's radius and length along its own z,
+        a box's full sizes, a sphere's radius), ``xyz`` and ``rot`` (3 × 3, row by row)
+        of the shape's centre, and the points ``tool0`` and ``tcp``."""
+        group = self._groups[group_index]
+        flange = body.frames[body.num_joints - 1]
+        tool0 = flange * (_se3(group.tool0) if group.tool0 is not None else pin.SE3.Identity())
+        tcp = tool0 * _se3(tool.tcp)
+        out: dict[str, Any] = {
+            "number": tool.number,
+            "name": tool.name,
+            "shape": None,
+            "tool0": _round(tool0.translation),
+            "tcp": _round(tcp.translation),
+        }
+        part = body.tool_part
+        if part is None:
+            return out
+        kind, size = _shape_of(part.geometry)
+        m = body.world_of(part)
+        out |= {
+            "shape": kind,
+            "size": size,
+            "xyz": _round(m.translation),
+            "rot": _round(np.asarray(m.rotation, dtype=float).reshape(9)),
+        }
         return out
 
     def obstacles(self, workspace: WorkspaceSnapshot) -> list[dict[str, Any]]:
