@@ -58,6 +58,15 @@ def test_move_pose_lines_name_the_frame(hc10: Sim) -> None:
     reached = next(line for line in lines if line.startswith("the TCP stands at"))
     assert "x 600.0 y 100.0 z 300.0 mm" in reached
     assert reached.endswith(HC10_BASE)
+    down = invoke(hc10, "move", "--relative", "dz=-0.05", "--tool", "1", "--config", str(CELL))
+    assert down.exit_code == 0, down.output
+    step = next(line for line in down.stderr.splitlines() if line.startswith("moving the TCP"))
+    assert step.endswith(
+        f"by dx 0.0 dy 0.0 dz -50.0 mm  drx 0.00 dry 0.00 drz 0.00 deg along {HC10_BASE}"
+    )
+    assert "z 250.0 mm" in next(ln for ln in down.stderr.splitlines() if ln.startswith("the TCP"))
+    back = invoke(hc10, "move", "--relative", "dz=0.05", "--tool", "1", "--config", str(CELL))
+    assert back.exit_code == 0, back.output
     # the same TCP 0.275 m lower in base_link: the numbers really are in base
     q = json.loads(invoke(hc10, "status", "--config", str(CELL), "--json").stdout)
     joints = q["groups"][0]["positions"]

@@ -80,12 +80,15 @@ def frame_note(group: GroupModel) -> str:
     return f"in base ({group.base_height:.3f} m above base_link, the S-axis height)"
 
 
-def pose_text(pose: Sequence[float]) -> str:
-    """``x 600.0 y 100.0 z 300.0 mm  Rx 180.00 Ry -0.00 Rz 0.00 deg`` (pose in m, rad)."""
+def pose_text(pose: Sequence[float], *, step: bool = False) -> str:
+    """``x 600.0 y 100.0 z 300.0 mm  Rx 180.00 Ry -0.00 Rz 0.00 deg`` (pose in m, rad);
+    with ``step`` a relative move's ``dx … drz``."""
     x, y, z, rx, ry, rz = pose
+    d = "d" if step else ""
+    r = "dr" if step else "R"
     return (
-        f"x {x * 1000:.1f} y {y * 1000:.1f} z {z * 1000:.1f} mm"
-        f"  Rx {math.degrees(rx):.2f} Ry {math.degrees(ry):.2f} Rz {math.degrees(rz):.2f} deg"
+        f"{d}x {x * 1000:.1f} {d}y {y * 1000:.1f} {d}z {z * 1000:.1f} mm"
+        f"  {r}x {math.degrees(rx):.2f} {r}y {math.degrees(ry):.2f} {r}z {math.degrees(rz):.2f} deg"
     )
 
 
@@ -112,7 +115,13 @@ async def cartesian_move(
     if tool is not None:
         await client.select_tool(tool, group)
     model = client.robot.groups[group]
-    goal = "" if pose is None else f" to {pose_text(pose)} {frame_note(model)}"
+    if pose is not None:
+        goal = f" to {pose_text(pose)} {frame_note(model)}"
+    elif relative is not None:
+        axes = "the tool's own axes" if frame == "tool" else frame_note(model)
+        goal = f" by {pose_text(relative, step=True)} along {axes}"
+    else:
+        goal = ""
     click.echo(f"moving the TCP of {client.tools.describe(group)}{goal}", err=True)
     options: dict[str, Any] = {
         "group": group,
