@@ -87,3 +87,13 @@ def test_outputs_without_a_cell_file_says_what_it_needs() -> None:
     result = CliRunner().invoke(cli, ["mreg", "outputs", "--motion-port", "1"])
     assert result.exit_code == EXIT_USAGE
     assert "needs --config CELL.toml: its [groups.s1cxg] table" in result.output
+
+
+def test_outputs_of_a_cell_without_a_table_says_so_before_connecting() -> None:
+    fixture = CELL.parent / "hc10_table_fixture.toml"
+    result = CliRunner().invoke(
+        cli, ["mreg", "outputs", "--config", str(fixture), "--io-port", "1"]
+    )  # port 1: nothing listens; the refusal comes first
+    assert result.exit_code == EXIT_USAGE
+    assert "hc10_table_fixture.toml has no [groups.s1cxg] table for group 0" in result.output
+    assert "mreg read N" in result.output

@@ -25,6 +25,7 @@ from pymotoros.cli.robot import EXIT_CODES_HELP, _target, connected, mreg, run
 from pymotoros.client import RobotClient
 from pymotoros.client.registers import RegisterValues
 from pymotoros.errors import ConfigError
+from pymotoros.models.cell import read_cell_file
 from pymotoros.models.robots import GroupKind, GroupModel
 from pymotoros.models.s1cxg import CARTESIAN_NAMES, Quantity, Reading
 
@@ -108,6 +109,24 @@ def outputs_lines(
     return lines
 
 
+def _check_table(path: Path, group_index: int) -> None:
+    """Refuse, before connecting, a cell file without the table to decode with."""
+    try:
+        data = read_cell_file(path).data
+    except ConfigError as exc:
+        raise click.BadParameter(str(exc), param_hint="--config") from None
+    groups = data.get("groups")
+    entry = groups[group_index] if isinstance(groups, list) and group_index < len(groups) else None
+    if not isinstance(entry, dict) or not isinstance(entry.get("s1cxg"), dict):
+        raise click.BadParameter(
+            f"{path.name} has no [groups.s1cxg] table for group {group_index} ([[groups]] "
+            f"entry {group_index}): it declares which M-registers the controller fills "
+            "(docs/cell.md, examples/cells/hc10_register_outputs.toml); `pymotoros mreg read "
+            "N` reads one register raw",
+            param_hint="--config",
+        )
+
+
 @mreg.command("outputs", epilog=EXIT_CODES_HELP)
 @robot_options
 @click.option(
@@ -134,6 +153,7 @@ def mreg_outputs(group_index: int, as_json: bool, **kwargs: Any) -> None:
             "mreg outputs needs --config CELL.toml: its [groups.s1cxg] table says which "
             "M-registers hold which value (docs/cell.md)"
         )
+    _check_table(cell_path, group_index)
     target = _target(kwargs)
 
     async def work() -> tuple[RobotClient, RegisterValues]:
