@@ -181,7 +181,7 @@ def test_the_pendant_draws_the_tool_in_force_and_the_frames(
 
     # a probe at the gripper's TCP: the twin reports the tool touching it, the page
     # draws it red where the drawn tool ends
-    probe = {"name": "probe", "sphere": 0.02, "xyz": tool["tcp"]}
+    probe = {"name": "probe", "sphere": 0.05, "xyz": tool["tcp"]}
     touched = cell_sim.api("/api/workspace", probe)["workspace"]["contacts"]
     assert {(c["obstacle"], c["link"]) for c in touched} == {("probe", "tool")}
     _wait(
@@ -189,7 +189,11 @@ def test_the_pendant_draws_the_tool_in_force_and_the_frames(
         lambda d: (o := _obstacle(d, "probe")) is not None and o["contact"],
         "the probe drawn as touched",
     )
-    png = _canvas_png(browser)
-    assert _red_pixels(browser, png) > 0
+
+    def red_canvas(d: WebDriver) -> bytes | None:
+        png = _canvas_png(d)
+        return png if _red_pixels(d, png) > 0 else None
+
+    png = _wait(browser, red_canvas, "the touched probe drawn red")
     assert browser.save_screenshot(str(screenshot_dir / "pendant-tool.png"))
     (screenshot_dir / "pendant-tool-view.png").write_bytes(png)
