@@ -37,7 +37,11 @@ encoding ~0.03 ms; each tab's send ~0.07 ms.
 The 3D view is drawn by the page on a ``<canvas>`` from the joint positions of each
 group's kinematic chain (:class:`.document.Skeleton`, the ``xyz`` of
 :meth:`pymotoros.kinematics.Chain.joint_frames`), computed here for the feedback and the
-command (the "ghost").
+command (the "ghost"), with each group's collision capsules and the tool in force
+(:class:`.workspace_view.WorkspaceView`: its shape as the twin's contact check mounts it,
+and its TCP), and the frames the page names: poses in ``base`` (``groups[].base_frame``,
+the S-axis height from the robot model), obstacles in ``base_link``
+(``pendant.workspace_frame``).
 """
 
 from __future__ import annotations
