@@ -85,11 +85,6 @@ class WorkspaceView:
         self._obstacles_key: tuple[Obstacle, ...] | None = None
         self._placed: list[dict[str, Any]] = []
 
-    def capsules(self, group_index: int, q: Sequence[float]) -> list[list[float]] | None:
-        """The group's link capsules at joints ``q`` with tool 0 (:meth:`robot`)."""
-        placed = self.robot(group_index, q, 0)
-        return None if placed is None else placed[0]
-
     def robot(self, group_index: int, q: Sequence[float], tool: int) -> Placed | None:
         """The group at joints ``q`` with tool file ``tool`` in force: its link capsules
         (``[ax, ay, az, bx, by, bz, radius]`` each, m, the tool's shape not among them)
