@@ -16,7 +16,8 @@ the obstacles when one is put or removed.
 from __future__ import annotations
 
 from collections.abc import Sequence
-from typing import Any
+from dataclasses import dataclass
+from typing import Any, Final
 
 import coal
 import numpy as np
@@ -25,7 +26,6 @@ import pinocchio as pin
 from pymotoros.controller.api import WorkspaceSnapshot
 from pymotoros.controller.cell import CellConfig
 from pymotoros.kinematics.collision import GroupBody
-from pymotoros.models.cell_tools import CellTool
 from pymotoros.models.link_shapes import link_radii
 from pymotoros.models.robots import GroupModel, Transform
 from pymotoros.models.workspace import Box, Cylinder, Obstacle, Workspace
@@ -55,6 +55,22 @@ def _shape_of(geometry: Any) -> tuple[str, list[float]]:
     return "sphere", _round([geometry.radius])
 
 
+NO_TOOL: Final = Transform()
+"""A TCP on tool0 and no shape: the body with its links only."""
+
+
+@dataclass(frozen=True, slots=True)
+class _Mount:
+    """A tool file mounted on a group: placements on the last joint's frame."""
+
+    number: int
+    name: str
+    tool0: Any
+    tcp: Any
+    shape: tuple[str, list[float], Any] | None
+    """The collision shape's kind, sizes and placement (None: no shape)."""
+
+
 Placed = tuple[list[list[float]], dict[str, Any] | None]
 """A group's capsules and its tool (see :meth:`WorkspaceView.robot`)."""
 
@@ -82,6 +98,8 @@ class WorkspaceView:
                 else None
             )
         self._placed_robot: dict[int, tuple[tuple[Any, ...], Placed]] = {}
+        self._mounts: dict[tuple[int, int], _Mount] = {}
+        """(group, tool number) → the tool on the last joint's frame."""
         self._obstacles_key: tuple[Obstacle, ...] | None = None
         self._placed: list[dict[str, Any]] = []
 
@@ -97,40 +115,55 @@ class WorkspaceView:
         known = self._placed_robot.get(group_index)
         if known is not None and known[0] == key:
             return known[1]
-        cell_tool = self._cell.tool(group_index, tool).cell_tool
-        body.set_tool(cell_tool)  # the twin's contact check mounts the same
-        parts = body.place(np.asarray(q, dtype=float))
-        links = len(body.parts)
+        mount = self._mount(self._cell, group_index, body, tool)
+        parts = body.place(np.asarray(q, dtype=float))  # the links only (see _mount)
         capsules = [
             [*_round(ends[0]), *_round(ends[1]), round(part.radius, _DECIMALS)]
-            for part, ends in zip(parts[:links], body.ends[:links], strict=True)
+            for part, ends in zip(parts, body.ends, strict=True)
         ]
-        placed: Placed = (capsules, self._tool(group_index, body, cell_tool))
+        placed: Placed = (capsules, self._tool(body, mount))
         self._placed_robot[group_index] = (key, placed)
         return placed
 
-    def _tool(self, group_index: int, body: GroupBody, tool: CellTool) -> dict[str, Any]:
+    def _mount(self, cell: CellConfig, group_index: int, body: GroupBody, number: int) -> _Mount:
+        """Tool file ``number`` of the group as the twin's contact check mounts it
+        (``GroupBody.set_tool``: the same shape, the same tool radius), kept as placements
+        on the last joint's frame. Built once per group and tool; the body itself is left
+        without a tool, so placing it moves the links only (a mounted tool would make
+        every ``place`` rebuild the body's stacked end points)."""
+        mount = self._mounts.get((group_index, number))
+        if mount is not None:
+            return mount
+        tool = cell.tool(group_index, number).cell_tool
+        body.set_tool(tool)
+        part = body.tool_part
+        body.set_tool(NO_TOOL)  # back to the bare links (no shape, TCP on tool0)
+        group = self._groups[group_index]
+        tool0 = _se3(group.tool0) if group.tool0 is not None else pin.SE3.Identity()
+        shape = None if part is None else (*_shape_of(part.geometry), part.local)
+        mount = _Mount(tool.number, tool.name, tool0, tool0 * _se3(tool.tcp), shape)
+        self._mounts[(group_index, number)] = mount
+        return mount
+
+    @staticmethod
+    def _tool(body: GroupBody, mount: _Mount) -> dict[str, Any]:
         """The tool in force, placed (workspace frame): ``number``, ``name``, ``shape``
         (capsule, box, cylinder, sphere; null for a tool whose TCP is tool0 and that has
         no shape), ``size`` (a capsule's or cylinder's radius and length along its own z,
         a box's full sizes, a sphere's radius), ``xyz`` and ``rot`` (3 × 3, row by row)
         of the shape's centre, and the points ``tool0`` and ``tcp``."""
-        group = self._groups[group_index]
-        flange = body.frames[body.num_joints - 1]
-        tool0 = flange * (_se3(group.tool0) if group.tool0 is not None else pin.SE3.Identity())
-        tcp = tool0 * _se3(tool.tcp)
+        last = body.frames[body.num_joints - 1]  # the last joint's frame, workspace frame
         out: dict[str, Any] = {
-            "number": tool.number,
-            "name": tool.name,
+            "number": mount.number,
+            "name": mount.name,
             "shape": None,
-            "tool0": _round(tool0.translation),
-            "tcp": _round(tcp.translation),
+            "tool0": _round((last * mount.tool0).translation),
+            "tcp": _round((last * mount.tcp).translation),
         }
-        part = body.tool_part
-        if part is None:
+        if mount.shape is None:
             return out
-        kind, size = _shape_of(part.geometry)
-        m = body.world_of(part)
+        kind, size, local = mount.shape
+        m = last * local
         out |= {
             "shape": kind,
             "size": size,
