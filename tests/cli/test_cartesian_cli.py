@@ -46,7 +46,7 @@ def test_relative_and_pose_moves(sim: Sim) -> None:
     expected = chain_for("hc10").pose([float(v) for v in START])
     assert before == pytest.approx(expected, abs=1e-4)
     table = invoke(sim, "status")
-    assert "TCP (base)" in table.output
+    assert "in base (0.275 m above base_link, the S-axis height)" in table.output
 
     result = invoke(sim, "move", "--relative", "dz=-0.05", "--json")
     assert result.exit_code == 0, result.output
@@ -130,7 +130,7 @@ def test_a_pose_move_places_the_selected_tools_tcp(gripper_sim: Sim) -> None:
     assert "z 300.0 mm" in table
 
     unknown = in_cell(gripper_sim, "status").output
-    assert "tool0 (base)" in unknown
+    assert "    tool0  " in unknown
     assert "z 450.0 mm" in unknown  # tool0, 150 mm above the gripper's TCP
     assert "TCP unknown: name the tool in force with --tool N" in unknown
 

@@ -360,3 +360,66 @@ def test_run_with_a_cell_refuses_what_the_cell_would_slow_down_unless_forced(
     )
     assert forced.exit_code == 0, forced.output
     assert np.allclose(json.loads(forced.stdout)["positions"], [0.0] * 6, atol=1e-4)
+
+
+CELLS = Path(__file__).resolve().parents[2] / "examples" / "cells"
+FIXTURE_CELL = CELLS / "hc10_table_fixture.toml"
+
+
+def _tick_csv(tmp_path: Path, offset_s: float = 0.0) -> Path:
+    """A slow S-axis sweep sampled at exactly one 4 ms tick, as a CSV (no robot name in it)."""
+    n = 60
+    times = np.arange(n) * 0.004 + offset_s
+    pos = np.zeros((n, 6))
+    pos[:, 0] = np.linspace(0.0, 0.003, n)
+    vel = np.zeros((n, 6))
+    vel[1:-1, 0] = 0.003 / ((n - 1) * 0.004)
+    rows = ["time,p1,p2,p3,p4,p5,p6,v1,v2,v3,v4,v5,v6"]
+    rows += [
+        ",".join(repr(float(x)) for x in (t, *p, *v))
+        for t, p, v in zip(times, pos, vel, strict=True)
+    ]
+    path = tmp_path / "ticks.csv"
+    path.write_text("\n".join(rows) + "\n")
+    return path
+
+
+def test_check_config_of_a_csv_does_not_take_the_cell_for_its_maker(tmp_path: Path) -> None:
+    """Issue 29 item 5: a CSV names no robot, so ``check --config`` has nobody to warn about
+    (it warned "was made for HC10 on a table; checking it against the cell HC10 on a table")."""
+    result = invoke("check", str(_tick_csv(tmp_path)), "--config", str(FIXTURE_CELL))
+    assert "was made for" not in result.stderr, result.stderr
+    assert "cell 'HC10 on a table'" in result.stdout  # it was checked against the cell
+
+
+def test_check_explains_the_whole_millisecond_truncation(tmp_path: Path) -> None:
+    """Issue 29 item 5: a file sampled at exactly 4 ms loses a millisecond now and then to
+    MotoROS's truncation of the float32 time (reference §3.4, §11); the message says so, with
+    the numbers, the rule, and what to do; doing it clears the warning."""
+    result = invoke("check", str(_tick_csv(tmp_path)), "--robot", "hc10")
+    assert result.exit_code == EXIT_WARNINGS, result.output
+    text = result.stdout
+    assert "less than one 4 ms tick (first: point 5, 3 ms after point 4)" in text
+    assert "the file spaces them 4 ms apart" in text
+    assert "truncates each point's float32 time to whole milliseconds" in text
+    assert "§3.4" in text
+    assert "§11" in text
+    assert "3.999999 ms is truncated to 3 ms" in text
+    assert "add 0.0005 s to each time" in text
+    fixed = invoke("check", str(_tick_csv(tmp_path, offset_s=0.0005)), "--robot", "hc10")
+    assert "tick" not in fixed.stdout, fixed.stdout
+    assert fixed.exit_code == EXIT_OK, fixed.output
+
+
+def test_check_names_a_gap_the_file_itself_makes_too_short(tmp_path: Path) -> None:
+    """Points really closer than a tick are not blamed on the truncation."""
+    path = _tick_csv(tmp_path)
+    lines = path.read_text().splitlines()
+    # point 1 at 0.007 s: point 2 (0.008 s) follows it by 1 ms in the file itself
+    cells = lines[2].split(",")
+    lines[2] = ",".join(["0.007", *cells[1:]])
+    path.write_text("\n".join(lines) + "\n")
+    text = invoke("check", str(path), "--robot", "hc10").stdout
+    assert "(first: point 2, 1 ms after point 1); the file itself spaces them 1 ms apart" in text
+    assert "sample it at 4 ms or more" in text
+    assert "truncat" not in text

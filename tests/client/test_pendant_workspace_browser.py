@@ -140,3 +140,60 @@ def test_the_pendant_draws_obstacles_capsules_and_a_contact_in_red(
     with urllib.request.urlopen(request, timeout=10) as response:  # noqa: S310
         assert response.status == 200
     _wait(browser, lambda d: _obstacle(d, "crate") is None, "the crate gone from the view")
+
+
+FIXTURE_CELL = (
+    Path(__file__).resolve().parents[2] / "examples" / "cells" / "hc10_table_fixture.toml"
+)
+HC10_BASE_M = 0.275
+"""The HC10's S-axis height: its base frame above base_link (robot model)."""
+
+
+@pytest.fixture(scope="module")
+def cell_sim() -> Iterator[Sim]:
+    """The HC10 on a table with its gripper (tool 0: a 150 mm capsule of radius 40 mm)."""
+    with running_sim("--config", str(FIXTURE_CELL)) as sim:
+        yield sim
+
+
+def test_the_pendant_draws_the_tool_in_force_and_the_frames(
+    cell_sim: Sim, browser: WebDriver, screenshot_dir: Path
+) -> None:
+    """Issue 29 item 5: the 3D view draws the gripper (its shape as the contact check
+    mounts it, and its TCP), so an obstacle touched by the tool is seen touching it; the
+    obstacles' frame and the poses' frame are drawn and the pose readout names its frame."""
+    browser.get(f"http://127.0.0.1:{cell_sim.http}/")
+    _wait(browser, lambda d: d.find_element(By.ID, "link").text == "live", "the live feed")
+    scene = _wait(
+        browser, lambda d: (s := _scene(d)) is not None and s.get("tools") and s, "a tool"
+    )
+    [tool] = scene["tools"]
+    assert (tool["group"], tool["number"], tool["name"], tool["shape"]) == (
+        "R1", 0, "gripper", "capsule",
+    )  # fmt: skip
+    assert tool["size"] == pytest.approx([0.04, 0.15])  # workspace.tool_radius_m, tcp_m
+    state = cell_sim.api("/api/state")
+    x, y, z = state["groups"][0]["tcp"]["feedback"][:3]  # base coordinates
+    assert tool["tcp"] == pytest.approx([x, y, z + HC10_BASE_M], abs=1e-3)  # drawn in base_link
+    assert scene["frames"] == ["base_link R1 (obstacles)", "base R1 (poses, +0.275 m)"]
+    pose = browser.execute_script('return document.querySelector("#groups .tcp-pose").textContent')
+    assert pose.endswith("in base (0.275 m above base_link, the S-axis height)")
+
+    # a probe at the gripper's TCP: the twin reports the tool touching it, the page
+    # draws it red where the drawn tool ends
+    probe = {"name": "probe", "sphere": 0.05, "xyz": tool["tcp"]}
+    touched = cell_sim.api("/api/workspace", probe)["workspace"]["contacts"]
+    assert {(c["obstacle"], c["link"]) for c in touched} == {("probe", "tool")}
+    _wait(
+        browser,
+        lambda d: (o := _obstacle(d, "probe")) is not None and o["contact"],
+        "the probe drawn as touched",
+    )
+
+    def red_canvas(d: WebDriver) -> bytes | None:
+        png = _canvas_png(d)
+        return png if _red_pixels(d, png) > 0 else None
+
+    png = _wait(browser, red_canvas, "the touched probe drawn red")
+    assert browser.save_screenshot(str(screenshot_dir / "pendant-tool.png"))
+    (screenshot_dir / "pendant-tool-view.png").write_bytes(png)

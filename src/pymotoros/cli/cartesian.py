@@ -1,6 +1,10 @@
 """The Cartesian part of the CLI: ``move --pose/--relative`` and the tool they refer to.
 
-Every Cartesian line names the tool whose TCP it is about (number, name, offset):
+Every Cartesian line names the frame its numbers are in and the tool whose TCP it is
+about. Poses are in ``base`` (Yaskawa's robot coordinates: ``base_link`` raised by the
+S-axis height, 0.275 m on an HC10, from the robot model), while a cell's obstacles are in
+``base_link``: a gripper 186 mm above the table reads z -89 mm in base, and without the
+frame on screen that looks wrong (issue 29). Tools: the number, name and offset:
 MotoROS cannot report the selected tool, so ``--tool N`` (``PYMOTOROS_TOOL``, or
 ``tool = N`` in the settings file's ``[move]``/``[status]``) says it; a ``pymotoros
 tool N`` run earlier is not known to a later process. See :mod:`pymotoros.client.tools`.
@@ -8,6 +12,7 @@ tool N`` run earlier is not known to a later process. See :mod:`pymotoros.client
 
 from __future__ import annotations
 
+import contextlib
 import math
 from collections.abc import Callable, Sequence
 from typing import Any, Final, Literal, TypeVar
@@ -19,6 +24,7 @@ from pymotoros.client import RobotClient
 from pymotoros.client.streaming import FollowingSample, MoveResult
 from pymotoros.client.tools import ToolUnknownError
 from pymotoros.errors import PymotorosError
+from pymotoros.models.robots import GroupModel
 from pymotoros.protocol.constants import MAX_TOOL_NUMBER
 
 _F = TypeVar("_F", bound=Callable[..., Any])
@@ -61,6 +67,31 @@ def pose_from_args(values: Sequence[float], deg: bool) -> tuple[float, ...]:
     return (x, y, z, rx, ry, rz)
 
 
+def frame_data(group: GroupModel) -> dict[str, Any]:
+    """``{"name": "base", "above_base_link_m": h}``: the frame of a pose in JSON output."""
+    return {"name": "base", "above_base_link_m": group.base_height}
+
+
+def frame_note(group: GroupModel) -> str:
+    """``in base (0.275 m above base_link, the S-axis height)``: the frame of a printed
+    pose, with the height from the robot model (0 for a model whose base is base_link)."""
+    if group.base_height == 0.0:
+        return "in base (= base_link)"
+    return f"in base ({group.base_height:.3f} m above base_link, the S-axis height)"
+
+
+def pose_text(pose: Sequence[float], *, step: bool = False) -> str:
+    """``x 600.0 y 100.0 z 300.0 mm  Rx 180.00 Ry -0.00 Rz 0.00 deg`` (pose in m, rad);
+    with ``step`` a relative move's ``dx … drz``."""
+    x, y, z, rx, ry, rz = pose
+    d = "d" if step else ""
+    r = "dr" if step else "R"
+    return (
+        f"{d}x {x * 1000:.1f} {d}y {y * 1000:.1f} {d}z {z * 1000:.1f} mm"
+        f"  {r}x {math.degrees(rx):.2f} {r}y {math.degrees(ry):.2f} {r}z {math.degrees(rz):.2f} deg"
+    )
+
+
 async def cartesian_move(
     client: RobotClient,
     *,
@@ -83,7 +114,15 @@ async def cartesian_move(
     """
     if tool is not None:
         await client.select_tool(tool, group)
-    click.echo(f"moving the TCP of {client.tools.describe(group)}", err=True)
+    model = client.robot.groups[group]
+    if pose is not None:
+        goal = f" to {pose_text(pose)} {frame_note(model)}"
+    elif relative is not None:
+        axes = "the tool's own axes" if frame == "tool" else frame_note(model)
+        goal = f" by {pose_text(relative, step=True)} along {axes}"
+    else:
+        goal = ""
+    click.echo(f"moving the TCP of {client.tools.describe(group)}{goal}", err=True)
     options: dict[str, Any] = {
         "group": group,
         "linear": linear,
@@ -93,10 +132,15 @@ async def cartesian_move(
         "on_progress": on_progress,
     }
     if relative is not None:
-        return await client.move_relative(*relative, frame=frame, **options)
-    if pose is None:
+        result = await client.move_relative(*relative, frame=frame, **options)
+    elif pose is None:
         raise click.UsageError("give --pose X Y Z RX RY RZ or --relative KEY=VALUE")
-    return await client.move_cartesian(pose, **options)
+    else:
+        result = await client.move_cartesian(pose, **options)
+    with contextlib.suppress(PymotorosError):  # no feedback: the joint line says it all
+        reached = client.tcp_pose(group)
+        click.echo(f"the TCP stands at {pose_text(reached)} {frame_note(model)}", err=True)
+    return result
 
 
 # --------------------------------------------------------------------------- the tool
@@ -132,9 +176,10 @@ def tcp_data(client: RobotClient, group: int) -> dict[str, Any]:
         tool = client.tools.tool(group)
         pose: list[float] | None = list(client.tcp_pose(group))
     except PymotorosError:
-        return {"tcp": None, "tool": None}
+        return {"tcp": None, "tool": None, "tcp_frame": frame_data(client.robot.groups[group])}
     return {
         "tcp": pose,
+        "tcp_frame": frame_data(client.robot.groups[group]),
         "tool": {
             "number": tool.number,
             "name": tool.name,
@@ -145,22 +190,21 @@ def tcp_data(client: RobotClient, group: int) -> dict[str, Any]:
 
 
 def tcp_lines(client: RobotClient, group: int, width: int) -> list[str]:
-    """``status``'s TCP line with the tool it refers to; tool0 and what to do when the
-    tool in force is unknown; nothing without feedback or kinematics."""
-    label = "TCP (base)"
+    """``status``'s TCP line with its frame and the tool it refers to; tool0 and what to do
+    when the tool in force is unknown; nothing without feedback or kinematics."""
+    label = "TCP"
     try:
         try:
             pose = client.tcp_pose(group)
             tool = client.tools.describe(group)
         except ToolUnknownError:
             pose = client.tcp_pose(group, frame="tool0")
-            label = "tool0 (base)"
+            label = "tool0"
             tool = "TCP unknown: name the tool in force with --tool N"
     except PymotorosError:
         return []
-    x, y, z, rx, ry, rz = pose
+    model = client.robot.groups[group]
     return [
-        f"    {label:<{width}}x {x * 1000:.1f} y {y * 1000:.1f} z {z * 1000:.1f} mm"
-        f"  Rx {math.degrees(rx):.2f} Ry {math.degrees(ry):.2f} Rz {math.degrees(rz):.2f} deg",
-        f"    {'':<{width}}{tool}",
+        f"    {label:<{width}}{pose_text(pose)}",
+        f"    {'':<{width}}{frame_note(model)}; {tool}",
     ]

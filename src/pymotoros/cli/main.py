@@ -37,7 +37,10 @@ _COMMANDS: Final[dict[str, tuple[str, str]]] = {
     "move": ("pymotoros.cli.robot:move", "Move to joint positions or a named pose."),
     "stop": ("pymotoros.cli.robot:stop", "Stop motion at once (STOP_MOTION)."),
     "io": ("pymotoros.cli.robot:io", "Read or write an IO bit or group."),
-    "mreg": ("pymotoros.cli.robot:mreg", "Read or write an M-register."),
+    "mreg": (
+        "pymotoros.cli.register_outputs:mreg",
+        "Read or write an M-register; decode a cell's S1CxG register outputs.",
+    ),
     "tool": ("pymotoros.cli.robot:tool", "Select the tool file a group moves with."),
     "urdf": ("pymotoros.cli.urdf:urdf", "Write a robot model's URDF (base_link to tool0)."),
     "reset": ("pymotoros.cli.robot:reset", "Reset alarms and errors (RESET_ALARM)."),

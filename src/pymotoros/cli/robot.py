@@ -913,7 +913,8 @@ def _report_move(result: MoveResult, req: MoveRequest, goal: MoveGoal, robot: An
     "as_pose",
     is_flag=True,
     help="The values are a TCP pose X Y Z (m) RX RY RZ (rad; deg with --deg) in base "
-    "coordinates, R = Rz·Ry·Rx; a joint move unless --linear.",
+    "coordinates (base_link raised by the S-axis height, as status prints it), "
+    "R = Rz·Ry·Rx; a joint move unless --linear.",
 )
 @click.option("--linear", is_flag=True, help="With --pose: move the TCP in a straight line.")
 @click.option(

@@ -561,6 +561,36 @@ def _model_checks(
     return out
 
 
+def _short_gap_cause(
+    traj: Trajectory, exact: np.ndarray, ms: np.ndarray, i: int, period_ms: int
+) -> str:
+    """Why the gap after point ``i`` is short, and what to do.
+
+    MotoROS turns a point's float32 time into whole milliseconds by truncation
+    (reference §3.4 step 5.2 and §11: ms = trunc(float32(time) × 1000)). Times on an
+    exact tick grid are often a hair below it as float32 (0.02 s is 0.0199999996 s),
+    so a file sampled at exactly one tick loses a millisecond now and then and the gap
+    it meant as 4 ms reaches MotoROS as 3 ms. The user sees that only if the message
+    says so; otherwise a 4 ms file "with 3 ms gaps" reads as a bug in the check.
+    """
+    meant_ms = round((float(traj.times[i + 1]) - float(traj.times[i])) * 1000.0, 6)
+    if meant_ms < period_ms:
+        return (
+            f"the file itself spaces them {meant_ms:g} ms apart; sample it at "
+            f"{period_ms} ms or more. "
+        )
+    return (
+        f"the file spaces them {meant_ms:g} ms apart, but MotoROS truncates each point's "
+        "float32 time to whole milliseconds (reference §3.4 step 5.2, §11: "
+        f"ms = trunc(float32(time) × 1000)): point {i + 1} at {float(traj.times[i + 1]):.9g} s "
+        f"is {float(exact[i + 1]):.7f} ms as float32, truncated to {ms[i + 1]:g} ms, "
+        f"point {i} at {float(traj.times[i]):.9g} s to {ms[i]:g} ms, so "
+        f"{float(exact[i + 1] - exact[i]):.7g} ms is truncated to {ms[i + 1] - ms[i]:g} ms; "
+        "put every time half a millisecond past its tick (add 0.0005 s to each time) or "
+        f"sample at {period_ms + 1} ms or more. "
+    )
+
+
 def _feed_checks(traj: Trajectory, period_ms: int, mode: FloatMode) -> list[Warning_]:
     """Point times as MotoROS sees them (integer ms of the float32 time, §11)."""
     out: list[Warning_] = []
@@ -594,8 +624,9 @@ def _feed_checks(traj: Trajectory, period_ms: int, mode: FloatMode) -> list[Warn
                 float(gaps[i]),
                 float(period_ms),
                 f"{int(short.sum())} point(s) follow the one before by less than one "
-                f"{period_ms} ms tick (first: point {i + 1}, {gaps[i]:g} ms); "
-                "MotoROS takes at most "
+                f"{period_ms} ms tick (first: point {i + 1}, {gaps[i]:g} ms after point {i}); "
+                + _short_gap_cause(traj, exact, ms, i, period_ms)
+                + "MotoROS takes at most "
                 "one point per group per tick, so the motion falls behind the trajectory's times",
             )
         )

@@ -170,7 +170,10 @@ def format_of(path: Path) -> str:
 
 
 def parse_csv(text: str, robot: RobotModel, name: str = "CSV") -> Trajectory:
-    """The CSV of ``pymotoros interpolate`` for ``robot``'s single group."""
+    """The CSV of ``pymotoros interpolate`` for ``robot``'s single group.
+
+    The file carries no robot name, so the trajectory's ``robot`` stays ``None``.
+    """
     if len(robot.groups) != 1:
         raise TrajectoryFileError(
             f"{name}: the CSV format holds one control group; {robot.name} has "
@@ -198,9 +201,10 @@ def parse_csv(text: str, robot: RobotModel, name: str = "CSV") -> Trajectory:
     if not data:
         raise TrajectoryFileError(f"{name} has no points after the header")
     arr = np.array(data, dtype=np.float64)
-    return Trajectory(
-        group.joint_names, arr[:, 0], arr[:, 1 : n + 1], arr[:, n + 1 :], robot=robot.name
-    )
+    # The CSV names no robot: ``robot`` only says how to read its columns. Recording
+    # robot.name here would pass a cell's name (or the --robot default) off as the file's
+    # maker and make ``check --config`` warn that the file was made for another robot.
+    return Trajectory(group.joint_names, arr[:, 0], arr[:, 1 : n + 1], arr[:, n + 1 :])
 
 
 def _floats(value: Any, count: int, where: str) -> list[float]:

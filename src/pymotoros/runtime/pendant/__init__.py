@@ -37,7 +37,11 @@ encoding ~0.03 ms; each tab's send ~0.07 ms.
 The 3D view is drawn by the page on a ``<canvas>`` from the joint positions of each
 group's kinematic chain (:class:`.document.Skeleton`, the ``xyz`` of
 :meth:`pymotoros.kinematics.Chain.joint_frames`), computed here for the feedback and the
-command (the "ghost").
+command (the "ghost"), with each group's collision capsules and the tool in force
+(:class:`.workspace_view.WorkspaceView`: its shape as the twin's contact check mounts it,
+and its TCP), and the frames the page names: poses in ``base`` (``groups[].base_frame``,
+the S-axis height from the robot model), obstacles in ``base_link``
+(``pendant.workspace_frame``).
 """
 
 from __future__ import annotations
@@ -257,6 +261,15 @@ class PendantDocument:
         self._skeletons: list[Skeleton | None] = []
         cell = controller.snapshot().cell
         self._workspace = WorkspaceView(cell)
+        groups = cell.groups if cell is not None else ()
+        # where the poses and the obstacles are: poses in each group's base frame (its
+        # base_link raised by the S-axis height, from the model), obstacles in the first
+        # group's base_link; the page prints and draws both (issue 29)
+        self._base_frames = [{"name": "base", "above_base_link_m": g.base_height} for g in groups]
+        self._workspace_frame = {
+            "name": "base_link",
+            "of": groups[0].name if groups else None,
+        }
         for group in cell.groups if cell is not None else ():
             try:
                 self._skeletons.append(Skeleton(chain_for(group)))
@@ -301,9 +314,12 @@ class PendantDocument:
                 "feedback": skeleton.points(group["feedback_rad"]),
                 "command": skeleton.points(group["command_rad"]),
             }
-            group["capsules"] = self._workspace.capsules(i, group["feedback_rad"])
+            placed = self._workspace.robot(i, group["feedback_rad"], group["tool"])
+            group["capsules"], group["tool_body"] = placed if placed is not None else (None, None)
+            group["base_frame"] = self._base_frames[i]
         doc["pendant"] = captured.extras
         doc["pendant"]["workspace"] = self._workspace.obstacles(captured.snapshot.workspace)
+        doc["pendant"]["workspace_frame"] = self._workspace_frame
         return doc
 
     def _extras(self, snapshot: ControllerSnapshot) -> dict[str, Any]:

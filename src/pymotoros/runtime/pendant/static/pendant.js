@@ -44,6 +44,14 @@
     return $("units-rad").checked ? rad.toFixed(4) : (rad * 180 / Math.PI).toFixed(2);
   }
 
+  // Poses are in base (base_link raised by the S-axis height, from the robot model),
+  // obstacles in base_link: every pose on screen says which (issue 29).
+  function frameNote(g) {
+    const h = g.base_frame ? g.base_frame.above_base_link_m : null;
+    if (h === null) return "in base coordinates";
+    return h === 0 ? "in base (= base_link)" : `in base (${h.toFixed(3)} m above base_link, the S-axis height)`;
+  }
+
   function renderGroups(groups) {
     const unit = $("units-rad").checked ? "rad" : "deg";
     let html = "";
@@ -54,9 +62,9 @@
       html += `<tr><th>feedback (${unit})</th>` + g.feedback_rad.map((v, i) => `<td class="fb" data-joint="${i}">${fmt(v)}</td>`).join("") + "</tr></table>";
       if (g.tcp) {
         const p = g.tcp.feedback;
-        html += `<div class="small">TCP x ${(p[0] * 1000).toFixed(1)} y ${(p[1] * 1000).toFixed(1)} z ${(p[2] * 1000).toFixed(1)} mm,` +
+        html += `<div class="small tcp-pose">TCP x ${(p[0] * 1000).toFixed(1)} y ${(p[1] * 1000).toFixed(1)} z ${(p[2] * 1000).toFixed(1)} mm,` +
                 ` rx ${(p[3] * 180 / Math.PI).toFixed(2)} ry ${(p[4] * 180 / Math.PI).toFixed(2)} rz ${(p[5] * 180 / Math.PI).toFixed(2)}°,` +
-                ` ${g.tcp.speed_mm_s.feedback.toFixed(1)} mm/s</div>`;
+                ` ${g.tcp.speed_mm_s.feedback.toFixed(1)} mm/s ${frameNote(g)}</div>`;
       }
     }
     $("groups").innerHTML = html;
@@ -301,6 +309,59 @@
     ctx.fillStyle = look.line; ctx.fillText(o.name, c[0] + 4, c[1] - 4);
   }
 
+  // The tool in force (groups[].tool_body): its shape as the contact check mounts it,
+  // the line tool0 → TCP and the TCP itself, so a tool touching an obstacle is seen
+  // touching it.
+  const TOOL = { fill: "rgba(255,213,79,0.45)", line: "#ffd54f" };
+
+  function drawTool(ctx, t, shift, v, w, h) {
+    const onto = (p) => shift(p);
+    if (t.shape === "capsule") {      // along its own z: a thick round-capped line
+      const half = t.size[1] / 2, r = t.rot;
+      const a = [t.xyz[0] - r[2] * half, t.xyz[1] - r[5] * half, t.xyz[2] - r[8] * half];
+      const b = [t.xyz[0] + r[2] * half, t.xyz[1] + r[5] * half, t.xyz[2] + r[8] * half];
+      const pa = project(onto(a), v, w, h), pb = project(onto(b), v, w, h);
+      ctx.strokeStyle = TOOL.fill; ctx.lineCap = "round";
+      ctx.lineWidth = Math.max(2, 2 * t.size[0] * h * 1.2 / Math.max(0.1, (pa[2] + pb[2]) / 2));
+      ctx.beginPath(); ctx.moveTo(pa[0], pa[1]); ctx.lineTo(pb[0], pb[1]); ctx.stroke();
+    } else if (t.shape) {             // box, cylinder, sphere: drawn as an obstacle is
+      const o = { xyz: onto(t.xyz), rot: t.rot, size: t.size, shape: t.shape };
+      ctx.fillStyle = TOOL.fill; ctx.strokeStyle = TOOL.line; ctx.lineWidth = 1;
+      if (o.shape === "sphere") {
+        const c = project(o.xyz, v, w, h), f = h * 1.2 / Math.max(0.1, c[2]);
+        ctx.beginPath(); ctx.arc(c[0], c[1], o.size[0] * f, 0, 2 * Math.PI); ctx.fill();
+      }
+      for (const face of obstacleFaces(o)) {
+        const pts = face.map((p) => project(place(o, p), v, w, h));
+        ctx.beginPath(); ctx.moveTo(pts[0][0], pts[0][1]);
+        for (const q of pts.slice(1)) ctx.lineTo(q[0], q[1]);
+        if (pts.length > 2) { ctx.closePath(); if (o.shape !== "sphere") ctx.fill(); }
+        ctx.stroke();
+      }
+    }
+    const a = project(onto(t.tool0), v, w, h), b = project(onto(t.tcp), v, w, h);
+    ctx.strokeStyle = TOOL.line; ctx.lineWidth = 2; ctx.setLineDash([4, 3]);
+    ctx.beginPath(); ctx.moveTo(a[0], a[1]); ctx.lineTo(b[0], b[1]); ctx.stroke(); ctx.setLineDash([]);
+    ctx.fillStyle = TOOL.line; ctx.beginPath(); ctx.arc(b[0], b[1], 4, 0, 2 * Math.PI); ctx.fill();
+    ctx.fillText(`TCP (tool ${t.number}${t.name ? " " + t.name : ""})`, b[0] + 6, b[1] + 4);
+  }
+
+  // A frame's axes (x, y, z) at a point, 0.2 m long, with its name: the obstacles'
+  // base_link at the robot's foot and the poses' base above it. No pure red: red is what
+  // a touched obstacle is drawn in (the browser test counts red pixels).
+  const AXES = [["x", "#ffcc80"], ["y", "#9ccc65"], ["z", "#64b5f6"]];
+  function drawFrameAxes(ctx, origin, label, v, w, h) {
+    const o = project(origin, v, w, h);
+    AXES.forEach(([name, color], k) => {
+      const tip = origin.slice(); tip[k] += 0.2;
+      const p = project(tip, v, w, h);
+      ctx.strokeStyle = color; ctx.lineWidth = 2;
+      ctx.beginPath(); ctx.moveTo(o[0], o[1]); ctx.lineTo(p[0], p[1]); ctx.stroke();
+      ctx.fillStyle = color; ctx.fillText(name, p[0] + 2, p[1] - 2);
+    });
+    ctx.fillStyle = "#cfd8dc"; ctx.fillText(label, o[0] - 8 - ctx.measureText(label).width, o[1] + 4);
+  }
+
   function drawCapsules(ctx, capsules, shift, v, w, h) {
     ctx.strokeStyle = CAPSULE; ctx.lineCap = "round";
     for (const k of capsules) {     // [ax, ay, az, bx, by, bz, radius]: a thick round-capped line
@@ -322,14 +383,28 @@
     const obstacles = (state.last && state.last.pendant && state.last.pendant.workspace) || [];
     for (const o of obstacles) drawObstacle(ctx, o, v, w, h);
     const groups = (state.last && state.last.groups) || [];
-    state.scene = {                 // what the view shows (for the browser test)
-      obstacles: obstacles.map((o) => ({ name: o.name, shape: o.shape, contact: o.contact, color: (o.contact ? TOUCHED : OBSTACLE).fill })),
-      capsules: groups.reduce((n, g) => n + (g.capsules ? g.capsules.length : 0), 0),
-    };
+    const wsFrame = (state.last && state.last.pendant && state.last.pendant.workspace_frame) || null;
+    const frames = [];
+    if (wsFrame) {                  // the frame every obstacle's xyz is in
+      const label = `${wsFrame.name}${wsFrame.of ? " " + wsFrame.of : ""} (obstacles)`;
+      drawFrameAxes(ctx, [0, 0, 0], label, v, w, h);
+      frames.push(label);
+    }
+    const tools = [];
     groups.forEach((g, gi) => {
       if (!g.frames) return;
       const shift = (p) => [p[0], p[1] + gi * 1.5, p[2]];          // groups side by side
       if (g.capsules) drawCapsules(ctx, g.capsules, shift, v, w, h);
+      if (g.tool_body) {
+        drawTool(ctx, g.tool_body, shift, v, w, h);
+        tools.push({ group: g.name, number: g.tool_body.number, name: g.tool_body.name, shape: g.tool_body.shape,
+                     size: g.tool_body.size || null, tcp: g.tool_body.tcp, color: TOOL.fill });
+      }
+      if (g.base_frame && g.base_frame.above_base_link_m > 0) {   // the frame of the poses
+        const label = `base ${g.name} (poses, +${g.base_frame.above_base_link_m.toFixed(3)} m)`;
+        drawFrameAxes(ctx, shift([0, 0, g.base_frame.above_base_link_m]), label, v, w, h);
+        frames.push(label);
+      }
       for (const [pts, color, width] of [[g.frames.command, "rgba(200,200,200,0.35)", 9], [g.frames.feedback, "#f5a623", 11]]) {
         const all = [[0, 0, 0]].concat(pts).map((p) => project(shift(p), v, w, h));
         ctx.lineCap = "round"; ctx.lineJoin = "round";
@@ -343,6 +418,11 @@
       const base = project(shift([0, 0, 0]), v, w, h);
       ctx.fillStyle = "#aab"; ctx.fillText(g.name, base[0] + 8, base[1] + 14);
     });
+    state.scene = {                 // what the view shows (for the browser test)
+      obstacles: obstacles.map((o) => ({ name: o.name, shape: o.shape, contact: o.contact, color: (o.contact ? TOUCHED : OBSTACLE).fill })),
+      capsules: groups.reduce((n, g) => n + (g.capsules ? g.capsules.length : 0), 0),
+      tools, frames,
+    };
   }
 
   function setupOrbit() {
