@@ -153,6 +153,7 @@ def test_the_installed_wheel_runs_the_sim_and_moves_the_robot(
     python = str(installed / "bin" / "python")
     where = run([python, "-c", "import pymotoros; print(pymotoros.__file__)"], 60, tmp_path, env)
     assert Path(where.strip()).is_relative_to(installed), where  # not the checkout's
-    moved = run([str(installed / "bin" / "pymotoros"), "move", "--enable", "--ports-file",
-                 str(ports_file), "0.2", "0", "0", "0", "0", "0"], MOVE_TIMEOUT_S, tmp_path, env)  # fmt: skip
+    move = [str(installed / "bin" / "pymotoros"), "move", "--enable", "--ports-file",
+            str(ports_file), "0.2", "0", "0", "0", "0", "0"]  # fmt: skip
+    moved = run(move, MOVE_TIMEOUT_S, tmp_path, env)
     assert re.match(r"reached \[0\.2000, 0\.0000, 0\.0000, 0\.0000, 0\.0000, 0\.0000\] rad", moved)
