@@ -2,12 +2,16 @@
 # have (docker compose, a CI service container, a Kubernetes Deployment: deploy/k8s/),
 # one twin each.
 #
-#   docker build -t pymotoros .
-#   docker run --rm -e PYMOTOROS_TOKEN=change-me -p 50240-50242:50240-50242 -p 8080:8080 pymotoros
-#   docker run --rm -e PYMOTOROS_TOKEN=change-me -v $PWD/examples/cells:/cells pymotoros --config /cells/hc10_yrc1000.toml
+#   docker build -t pymotoros:0.1.0 .
+#   export PYMOTOROS_TOKEN="$(python3 -c 'import secrets; print(secrets.token_urlsafe(32))')"
+#   docker run --rm -e PYMOTOROS_TOKEN -p 50240-50242:50240-50242 -p 8080:8080 pymotoros:0.1.0
+#   docker run --rm -e PYMOTOROS_TOKEN -v $PWD/examples/cells:/cells pymotoros:0.1.0 --config /cells/hc10_yrc1000.toml
+#   docker run --rm -e PYMOTOROS_TOKEN -e PYMOTOROS_SIM_HTTP_PORT=9090 -p 9090:9090 pymotoros:0.1.0
 #
 # The ready line (`pymotoros sim ready motion=... state=... io=... http=...`) is the
-# first line on stdout; GET /healthz (never guarded) is the health check.
+# first line on stdout; GET /healthz (never guarded) is the health check, on the control
+# API's port: PYMOTOROS_SIM_HTTP_PORT, read by `pymotoros sim` and the HEALTHCHECK alike
+# (change the port with it, not with --http-port, or the health check asks the old one).
 # `--host 0.0.0.0`: a container's loopback is unreachable from `docker run -p`, so the
 # twin listens on every interface of its own network namespace. The control API (E-stop,
 # modes, forced IO, the pendant's buttons) then needs a token (issue 23): the container
@@ -25,7 +29,8 @@ RUN python -m pip install --no-cache-dir . \
 
 # nobody (65534 in Debian): numeric, so the runtime need not resolve the name (DL3066)
 USER 65534:65534
+ENV PYMOTOROS_SIM_HTTP_PORT=8080
 EXPOSE 50240 50241 50242 8080
 HEALTHCHECK --interval=10s --timeout=3s --start-period=20s \
-    CMD ["python", "-c", "import urllib.request; urllib.request.urlopen('http://127.0.0.1:8080/healthz', timeout=2)"]
+    CMD ["python", "-c", "import os, urllib.request; urllib.request.urlopen('http://127.0.0.1:%s/healthz' % os.environ['PYMOTOROS_SIM_HTTP_PORT'], timeout=2)"]
 ENTRYPOINT ["pymotoros", "sim", "--host", "0.0.0.0"]

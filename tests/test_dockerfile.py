@@ -8,7 +8,10 @@ Docker engine: linted by hadolint, and its contract held against the package its
 - its ENTRYPOINT is ``pymotoros sim`` with options the CLI accepts, bound to a
   non-loopback address (``docker run -p`` cannot reach a container's loopback);
 - its HEALTHCHECK runs a program the image has (the base image's python) against an
-  endpoint the control API serves, on the port the sim listens on, and that needs no token;
+  endpoint the control API serves and that needs no token, on the port the sim listens
+  on: both read PYMOTOROS_SIM_HTTP_PORT (the image's ENV), so a port changed there moves
+  both; the check passes against a twin started from that variable on another port, and
+  fails where nothing listens;
 - bound beyond loopback, it refuses to start without a token (issue 23), naming
   PYMOTOROS_TOKEN's option, and starts with one.
 """
@@ -16,9 +19,11 @@ Docker engine: linted by hadolint, and its contract held against the package its
 from __future__ import annotations
 
 import json
+import os
 import re
 import shlex
 import shutil
+import socket
 import subprocess
 import sys
 import tomllib
@@ -28,6 +33,8 @@ from pathlib import Path
 import click
 import pytest
 
+from container_sim import container_sim
+from pymotoros.cli.main import cli
 from pymotoros.cli.sim import check_http_access, sim
 from pymotoros.protocol.constants import TCP_PORT_IO, TCP_PORT_MOTION, TCP_PORT_STATE
 from pymotoros.runtime.app import DEFAULT_HTTP_PORT
@@ -160,21 +167,76 @@ def test_the_entrypoint_is_the_sim_bound_for_port_publishing() -> None:
         assert context.params.get(option) == port, (option, context.params.get(option))
 
 
-def test_the_healthcheck_uses_what_the_image_has() -> None:
+HTTP_PORT_ENV = "PYMOTOROS_SIM_HTTP_PORT"
+"""``pymotoros sim --http-port`` from the environment (the CLI's PYMOTOROS_<COMMAND>_<OPTION>)."""
+
+
+def env_of_image() -> dict[str, str]:
+    """The image's ENV instructions (``ENV KEY=VALUE ...``)."""
+    out: dict[str, str] = {}
+    for word, args in instructions():
+        if word == "ENV":
+            for pair in shlex.split(args):
+                key, _, value = pair.partition("=")
+                out[key] = value
+    return out
+
+
+def healthcheck_argv() -> list[str]:
     args = only("HEALTHCHECK")
     options, _, command = args.partition("CMD")
     assert "--interval" in options
     assert "--timeout" in options
-    argv = exec_form(command.strip())
+    return exec_form(command.strip())
+
+
+def test_the_healthcheck_uses_what_the_image_has() -> None:
+    argv = healthcheck_argv()
     assert argv[0] == "python", f"{argv[0]}: the slim base image has python, not curl/wget"
     assert argv[1] == "-c"
     script = argv[2]
     compile(script, "HEALTHCHECK", "exec")  # valid Python
-    url = re.search(r"http://127\.0\.0\.1:(\d+)(/[\w/]*)", script)
+    url = re.search(r"http://127\.0\.0\.1:(\S+?)(/[\w/]*)", script)
     assert url, script
-    assert int(url[1]) == DEFAULT_HTTP_PORT
     assert url[2] == "/healthz"  # open even when the control API needs its token
     assert "timeout" in script  # a hung twin fails the check instead of hanging it
+    assert HTTP_PORT_ENV in script, "the HEALTHCHECK must ask the port the sim was given"
+    assert not re.search(r"127\.0\.0\.1:\d", script), "a fixed port in the HEALTHCHECK"
+
+
+def test_the_sim_and_the_healthcheck_read_one_port_setting(monkeypatch: pytest.MonkeyPatch) -> None:
+    """The image's ENV names the sim's default port, and the sim takes it from there."""
+    assert env_of_image().get(HTTP_PORT_ENV) == str(DEFAULT_HTTP_PORT)
+    command = cli.get_command(click.Context(cli), "sim")
+    assert command is not None
+    monkeypatch.setenv(HTTP_PORT_ENV, "9090")
+    argv = exec_form(only("ENTRYPOINT"))
+    assert "--http-port" not in argv, "--http-port would override the variable"
+    assert command.make_context("sim", argv[2:]).params["http_port"] == 9090
+
+
+def run_healthcheck(port: int) -> subprocess.CompletedProcess[str]:
+    """The HEALTHCHECK's command as Docker runs it, with the image's environment but the
+    control API's port set to ``port``."""
+    argv = healthcheck_argv()
+    return subprocess.run(  # noqa: S603 - the Dockerfile's own check
+        [sys.executable, *argv[1:]],
+        env={**os.environ, **env_of_image(), HTTP_PORT_ENV: str(port)},
+        capture_output=True, text=True, check=False, timeout=HADOLINT_TIMEOUT_S,
+    )  # fmt: skip
+
+
+def test_the_healthcheck_passes_on_the_configured_port_and_fails_elsewhere(
+    tmp_path: Path,
+) -> None:
+    with container_sim(tmp_path) as twin:
+        assert twin.http != DEFAULT_HTTP_PORT
+        done = run_healthcheck(twin.http)
+        assert done.returncode == 0, done.stderr[-2000:]
+    with socket.socket() as probe:  # a port nothing listens on
+        probe.bind(("127.0.0.1", 0))
+        closed = probe.getsockname()[1]
+    assert run_healthcheck(closed).returncode != 0
 
 
 def test_the_entrypoint_needs_a_token_for_its_control_api() -> None:
@@ -196,7 +258,7 @@ def test_the_documented_docker_run_arguments_are_accepted() -> None:
     appended to the ENTRYPOINT, ``pymotoros sim`` must accept them."""
     argv = exec_form(only("ENTRYPOINT"))
     documented = (ROOT / "docs" / "fleet.md").read_text() + DOCKERFILE.read_text()
-    runs = re.findall(r"docker run ([^\n]*?)\bpymotoros\b([^\n]*)", documented)
+    runs = re.findall(r"docker run ([^\n]*?)\bpymotoros(?::[\w.-]+)?(?=\s|$)([^\n]*)", documented)
     extra = []
     for options, run in runs:
         args = shlex.split(run)

@@ -179,12 +179,44 @@ def _cell_for(request: pytest.FixtureRequest) -> tuple[CellConfig, bool]:
     return default_cell(), http
 
 
+ASYNCIO_LOOP_SCOPE_INI: Final = "asyncio_default_fixture_loop_scope"
+"""pytest-asyncio's default event loop scope of async fixtures (its 0.24 and later).
+
+pytest-asyncio 0.24+ warns when a project leaves it unset (a PytestDeprecationWarning,
+an error under ``-W error``), so the example and the docs set it. pytest-asyncio 0.23,
+or no pytest-asyncio at all, does not know the name, and pytest then warns "Unknown
+config option" about the same line. The plugin declares the name where nothing else
+has, so one configuration is clean with every pytest-asyncio the project allows and
+without one. It does not choose a scope for anyone: which loop a user's own async
+fixtures run in is theirs to set (a session-scoped fixture would change loops)."""
+
+
 def pytest_addoption(parser: pytest.Parser) -> None:
     parser.addini(
         "pymotoros_cell",
         "cell TOML file (relative to the rootdir) for the pymotoros_twin fixture",
         default="",
     )
+
+
+def pytest_load_initial_conftests(early_config: pytest.Config, parser: pytest.Parser) -> None:
+    """Declare pytest-asyncio's loop-scope option if no plugin did (see above).
+
+    By this hook every plugin named on the command line or installed (entry points) has
+    declared its options; pytest checks the configuration's names only after
+    collection. A later pytest-asyncio (a conftest's ``pytest_plugins``) declares it
+    again, and its declaration wins.
+    """
+    try:
+        early_config.getini(ASYNCIO_LOOP_SCOPE_INI)
+    except ValueError:  # "unknown configuration value": no pytest-asyncio 0.24+ loaded
+        parser.addini(
+            ASYNCIO_LOOP_SCOPE_INI,
+            "pytest-asyncio's default event loop scope of async fixtures; declared by "
+            "pymotoros because no loaded pytest-asyncio (0.24+) knows it, so it does "
+            "nothing here",
+            default=None,
+        )
 
 
 def pytest_configure(config: pytest.Config) -> None:
