@@ -24,7 +24,7 @@ from __future__ import annotations
 import enum
 from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import Final
+from typing import Any, Final
 
 from pymotoros.protocol.constants import ResultCode
 
@@ -238,6 +238,11 @@ class ClientLint:
                 )
             )
         return out
+
+    def document(self) -> dict[str, Any]:
+        """``{"findings": [...]}``: the answer of ``GET /api/lint``, ``--lint-report`` and
+        ``pymotoros lint --json``."""
+        return {"findings": [f.as_dict() for f in self.findings()]}
 
     def clear(self) -> None:
         """Forget every finding (the checks' state is kept: a stream in progress goes on)."""
