@@ -36,6 +36,7 @@ __all__ = [
     "Finding",
     "LintCode",
     "LintRule",
+    "format_findings",
 ]
 
 
@@ -355,3 +356,18 @@ class ClientLint:
                 self._sequences.clear()
             state = self._sequences[group] = _Sequence()
         return state
+
+
+def format_findings(findings: Sequence[Finding]) -> str:
+    """A readable table: one block per finding, the remedy under what happened."""
+    if not findings:
+        return "no client lint findings"
+    lines = [f"{len(findings)} client lint finding(s):"]
+    for f in findings:
+        lines.append(
+            f"  {f.code}  x{f.count}  first at {f.first_s:.3f} s  on {f.connection}  "
+            f"({f.reference})"
+        )
+        lines.append(f"      {f.text}")
+        lines.append(f"      fix: {f.remedy}")
+    return "\n".join(lines)
