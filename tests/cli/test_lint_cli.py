@@ -16,7 +16,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "client"))
 from client_sim import Sim, running_sim
 
 from pymotoros.cli.main import cli
-from pymotoros.protocol.constants import ByteOrder, MotionCommand
+from pymotoros.protocol.constants import ByteOrder, MotionCommand, Port
 from pymotoros.protocol.framing import encode
 from pymotoros.protocol.messages import MotoMotionCtrl, Ping
 
@@ -102,3 +102,43 @@ def test_an_unreadable_recording_is_a_usage_error(tmp_path: Path) -> None:
     result = CliRunner().invoke(cli, ["lint", str(bogus)])
     assert result.exit_code == 2
     assert "error:" in result.output
+
+
+def _point(sock: socket.socket, sequence: int, t: float, pos: float, vel: float) -> int:
+    """One JOINT_TRAJ_PT_FULL for joint 1; the reply's result (BUSY resent after 5 ms)."""
+    from pymotoros.protocol.framing import FrameDecoder, decode_reply
+    from pymotoros.protocol.messages import JointTrajPtFull, MotoMotionReply
+
+    request = JointTrajPtFull.for_joints(0, sequence, t, [pos] + [0.0] * 5, [vel] + [0.0] * 5)
+    while True:
+        sock.sendall(encode(request, ORDER))
+        decoder = FrameDecoder(ORDER)
+        frame = None
+        while frame is None:
+            decoder.feed(sock.recv(1024))
+            frame = decoder.next_frame()
+        reply = decode_reply(frame, ORDER, Port.MOTION)
+        assert isinstance(reply, MotoMotionReply)
+        if reply.result != 1:
+            return int(reply.result)
+        time.sleep(0.005)
+
+
+def test_a_careless_stream_is_found_live_and_in_its_recording(tmp_path: Path) -> None:
+    """No state connection, a gap in the sequence, and the last point still moving: the
+    twin finds all three, and ``pymotoros lint`` finds them in the recording too."""
+    recording = tmp_path / "session.pcapng"
+    expected = ["motion-without-state", "queue-starved", "sequence-not-consecutive"]
+    with running_sim("--record", str(recording)) as sim:
+        robot(sim, "enable")
+        with socket.create_connection((sim.host, sim.motion), timeout=10) as sock:
+            sock.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
+            assert _point(sock, 0, 0.0, 0.0, 0.0) == 0
+            assert _point(sock, 1, 0.3, 0.03, 0.1) == 0
+            assert _point(sock, 3, 0.6, 0.06, 0.1) == 0  # 2 never sent; still moving
+            time.sleep(1.0)  # the queue runs dry at 0.1 rad/s
+        live = sim.api("/api/lint")
+    assert _codes(live) == expected
+    result = invoke("lint", str(recording), "--json")
+    assert result.exit_code == 1, result.output
+    assert _codes(json.loads(result.output)) == expected

@@ -142,3 +142,11 @@ def test_a_motion_connection_opened_over_queued_increments(queued: bool, codes: 
     lint = ClientLint()
     lint.motion_opened(C, 4.2, queued=queued)
     assert _codes(lint) == codes
+
+
+def test_the_simulator_guide_lists_every_code_with_its_reference() -> None:
+    from pathlib import Path
+
+    guide = (Path(__file__).resolve().parents[2] / "docs" / "sim.md").read_text()
+    for code, rule in RULES.items():
+        assert f"| `{code}` | {rule.reference} |" in guide, code
