@@ -13,7 +13,7 @@ from collections.abc import AsyncIterator
 
 import pytest
 
-from pymotoros.controller.lint import LintCode
+from pymotoros.controller.lint import MAX_FINDINGS, OTHER_CONNECTIONS, LintCode
 from pymotoros.protocol.constants import (
     TCP_PORT_IO,
     TCP_PORT_MOTION,
@@ -308,3 +308,18 @@ async def test_a_reconnect_over_kept_increments_is_found(
     await _connect(cell)
     await cell.sleep(0.01)
     assert "reconnect-resumed-motion" in _codes(cell)
+
+
+async def test_a_flood_of_connections_cannot_grow_the_findings(cell: Twin) -> None:
+    """More misbehaving connections than the lint keeps: later ones share one entry per
+    code, every occurrence is still counted."""
+    connections = MAX_FINDINGS + 44
+    for _ in range(connections):
+        client = await _connect(cell)
+        await client.ctrl(200199)
+        client.close()
+        _OPEN.remove(client.writer)
+    findings = cell.controller.lint.findings()
+    assert len(findings) <= MAX_FINDINGS + len(LintCode)
+    assert sum(f.count for f in findings) == 2 * connections
+    assert {f.connection for f in findings} >= {OTHER_CONNECTIONS}
