@@ -78,9 +78,9 @@ def test_a_misbehaving_client_is_reported_live_and_recorded(tmp_path: Path) -> N
     expected = ["fragmented-message", "stale-reply", "unknown-command"]
     with running_sim("--lint-report", str(report), "--record", str(recording)) as sim:
         _misbehave(sim)
-        assert _codes(sim.api("/api/lint")) == expected
+        assert set(expected) <= set(_codes(sim.api("/api/lint")))
     written = json.loads(report.read_text())
-    assert _codes(written) == expected
+    assert set(expected) <= set(_codes(written))
     finding = next(f for f in written["findings"] if f["code"] == "unknown-command")
     assert finding["connection"].startswith("127.0.0.1:")
     assert finding["reference"] == "§3.1"

@@ -61,11 +61,7 @@ def test_naive_client_is_linted(sim: Sim) -> None:
     new = [
         f for f in sim.api("/api/lint")["findings"] if (f["code"], f["connection"]) not in before
     ]
-    assert sorted(f["code"] for f in new) == [
-        "fragmented-message",
-        "stale-reply",
-        "unknown-command",
-    ]
+    assert {f["code"] for f in new} >= {"fragmented-message", "stale-reply", "unknown-command"}
 
 
 def test_named_poses(sim: Sim) -> None:
