@@ -142,3 +142,18 @@ def test_a_careless_stream_is_found_live_and_in_its_recording(tmp_path: Path) ->
     result = invoke("lint", str(recording), "--json")
     assert result.exit_code == 1, result.output
     assert _codes(json.loads(result.output)) == expected
+
+
+def test_the_report_of_several_cells_names_each_findings_cell(tmp_path: Path) -> None:
+    from pymotoros.cli.lint import write_lint_report
+    from pymotoros.controller.lint import ClientLint, LintCode
+
+    line1, line2 = ClientLint(), ClientLint()
+    line2.record(LintCode.MOTION_WITHOUT_STATE, "10.0.0.2:4000", 3.0, "point 0")
+    report = tmp_path / "lint.json"
+    write_lint_report(report, [("line1", line1), ("line2", line2)])
+    (finding,) = json.loads(report.read_text())["findings"]
+    assert finding["cell"] == "line2"
+    assert finding["code"] == "motion-without-state"
+    write_lint_report(report, [(None, line2)])
+    assert "cell" not in json.loads(report.read_text())["findings"][0]
