@@ -101,7 +101,12 @@ def test_clean_passes(pymotoros_twin):
     assert pymotoros_twin.lint_findings() == []
 
 
-def test_dirty_by_default_passes(pymotoros_twin):
+def test_dirty_by_the_ini_option_fails(pymotoros_twin):
+    unknown_command(pymotoros_twin)
+
+
+@pytest.mark.pymotoros(lint="ignore")
+def test_dirty_ignored_passes(pymotoros_twin):
     unknown_command(pymotoros_twin)
     assert sorted(str(f.code) for f in pymotoros_twin.lint_findings()) == [
         "stale-reply", "unknown-command"
@@ -110,9 +115,11 @@ def test_dirty_by_default_passes(pymotoros_twin):
 
 
 def test_lint_error_fails_a_test_with_findings(tmp_path: Path) -> None:
-    """``@pytest.mark.pymotoros(lint="error")``: a test whose client did something a robot
-    answers differently fails with the findings; a clean one, and the default, pass."""
+    """``@pytest.mark.pymotoros(lint="error")`` or ``pymotoros_lint = error`` in the ini
+    file: a test whose client did something a robot answers differently fails with the
+    findings; a clean one, and one marked ``lint="ignore"``, pass."""
     (tmp_path / "test_linted.py").write_text(_LINTED_TESTS)
+    (tmp_path / "pytest.ini").write_text("[pytest]\npymotoros_lint = error\n")
     env = {**os.environ, "PYTHONPATH": str(Path(__file__).resolve().parents[1] / "src")}
     run = subprocess.run(  # noqa: S603 - our own interpreter and a test file we wrote
         [sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider", str(tmp_path)],
@@ -125,7 +132,8 @@ def test_lint_error_fails_a_test_with_findings(tmp_path: Path) -> None:
     )
     out = run.stdout + run.stderr
     assert run.returncode == 1, out
-    assert "1 failed, 2 passed" in out, out
+    assert "2 failed, 2 passed" in out, out
     assert "FAILED test_linted.py::test_dirty_fails" in out, out
+    assert "FAILED test_linted.py::test_dirty_by_the_ini_option_fails" in out, out
     assert "unknown-command" in out
     assert "fix: Send only the commands" in out
