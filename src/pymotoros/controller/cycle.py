@@ -69,8 +69,9 @@ class TickCycle:
         self._has_peripherals = peripherals.active
         self._scheduler = scheduler
         self.contact = contact
-        self._lint = lint if lint is not None else ClientLint()
         """The workspace contact check (None: a cell without obstacles, nothing to do)."""
+        self._lint = lint if lint is not None else ClientLint()
+        """Where the queue-starved check reports (the controller's client lint)."""
 
     def tick(self) -> None:
         """Advance controller time by exactly one interpolation period.
