@@ -123,3 +123,15 @@ def test_a_late_point_after_a_moving_one_starved_the_queue() -> None:
         [(1.0, 0, 0.0, 0.0, 0.0), (1.01, 1, 0.5, 0.05, 0.2), (2.0, 2, 1.0, 0.1, 0.0)],
     )
     assert _codes(_recording(_state(), late)) == ["queue-starved"]
+
+
+def test_the_motion_starts_with_the_first_point_after_sequence_0() -> None:
+    """Seconds between point 0 and point 1 do not eat into the queue: the robot starts
+    moving when point 1 is accepted."""
+    slow_start = _stream(
+        1,
+        0.5,
+        None,
+        [(1.0, 0, 0.0, 0.0, 0.0), (6.0, 1, 0.5, 0.05, 0.2), (6.3, 2, 1.0, 0.1, 0.0)],
+    )
+    assert _codes(_recording(_state(), slow_start)) == []

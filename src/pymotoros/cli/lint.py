@@ -86,7 +86,9 @@ class _Trajectory:
     """One group's trajectory as the recording shows it (for the queue estimates)."""
 
     start_s: float | None = None
-    """When its sequence-0 point was accepted."""
+    """Recording time at which the trajectory's time 0 passes on the robot: set when the
+    first point after sequence 0 is accepted (the motion starts then), and again when a
+    point comes after the queue ran dry (the motion starts again from it)."""
     last_time: float = 0.0
     """Trajectory time of the last accepted point."""
     moving: bool = False
@@ -94,7 +96,7 @@ class _Trajectory:
 
     @property
     def queue_end_s(self) -> float | None:
-        """When the queue runs out, counted from the sequence-0 point."""
+        """When the queue runs out: the last accepted point's time on the robot's clock."""
         return None if self.start_s is None else self.start_s + self.last_time
 
 
@@ -222,12 +224,16 @@ def _accepted(
     for group, time, moving in points:
         traj = session.trajectories.setdefault(group, _Trajectory())
         end = traj.queue_end_s
-        if traj.moving and end is not None and at > end:  # it ran dry before this point
-            session.lint.record(
-                LintCode.QUEUE_STARVED, name, end, f"group {group} (estimated at {end:.3f} s)"
-            )
+        if end is not None and at > end:  # the queue ran dry before this point came
+            if traj.moving:
+                session.lint.record(
+                    LintCode.QUEUE_STARVED, name, end, f"group {group} (estimated at {end:.3f} s)"
+                )
+            traj.start_s = None  # the motion starts again from this point
         if sequence == 0:
-            traj.start_s = at - time
+            traj.start_s = None
+        elif traj.start_s is None:  # the segment to this point starts being executed now
+            traj.start_s = at - traj.last_time
         traj.last_time, traj.moving = time, moving
 
 
