@@ -1,10 +1,10 @@
 """A hand-written Simple Message client with two bugs a real MotoROS punishes.
 
-It works against a forgiving simulator, which is the trouble: it writes the prefix of
-each message separately from the rest (a real controller answers the first piece
-INVALID/3001 and parses the rest as a new message), and asks for a MOTO_MOTION_CTRL
-command MotoROS does not have (the robot then sends its previous reply again, which can
-look like a success). The twin answers it, and records both as client lint findings:
+It works against a forgiving simulator, which is the trouble: it asks for a
+MOTO_MOTION_CTRL command MotoROS does not have (the robot then sends its previous reply
+again, which can look like a success), and it writes the prefix of a message separately
+from the rest (a real controller answers the first piece INVALID/3001 and parses the
+rest as a new message). The twin answers it, and records both as client lint findings:
 ``curl 127.0.0.1:8080/api/lint`` or the pendant's "Client lint" panel shows them.
 """
 
@@ -40,12 +40,14 @@ def main() -> None:
     args = parser.parse_args()
     with socket.create_connection((args.host, args.motion_port), timeout=5) as sock:
         sock.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
+        sock.sendall(motion_ctrl(CHECK_QUEUE_CNT))
+        sock.recv(1024)
+        sock.sendall(motion_ctrl(MADE_UP_COMMAND))  # bug 1: a command MotoROS lacks
+        sock.recv(1024)
         frame = motion_ctrl(CHECK_QUEUE_CNT)
-        sock.sendall(frame[:4])  # bug 1: the prefix on its own
+        sock.sendall(frame[:4])  # bug 2: the prefix on its own
         time.sleep(PREFIX_GAP_S)
         sock.sendall(frame[4:])
-        sock.recv(1024)
-        sock.sendall(motion_ctrl(MADE_UP_COMMAND))  # bug 2: a command MotoROS lacks
         sock.recv(1024)
     print("done: see GET /api/lint")
 

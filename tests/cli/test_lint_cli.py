@@ -57,19 +57,20 @@ def test_our_cli_gives_no_finding_live_or_recorded(tmp_path: Path) -> None:
 
 
 def _misbehave(sim: Sim) -> None:
-    """A client that sends a message in two pieces and a command MotoROS does not know."""
+    """A client that asks for a command MotoROS does not know, then sends a message in
+    two pieces (last: on a robot the pieces put the stream out of step)."""
     with socket.create_connection((sim.host, sim.motion), timeout=10) as sock:
         sock.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
+        sock.sendall(
+            encode(MotoMotionCtrl(0, 0, MotionCommand.CHECK_QUEUE_CNT, (0.0,) * 10), ORDER)
+        )
+        sock.recv(1024)
+        sock.sendall(encode(MotoMotionCtrl(0, 0, 200199, (0.0,) * 10), ORDER))
+        sock.recv(1024)
         ping = encode(Ping(), ORDER)
         sock.sendall(ping[:10])
         time.sleep(PIECE_GAP_S)
         sock.sendall(ping[10:])
-        sock.recv(1024)
-        sock.sendall(encode(MotoMotionCtrl(0, 0, 200199, (0.0,) * 10), ORDER))
-        sock.recv(1024)
-        sock.sendall(
-            encode(MotoMotionCtrl(0, 0, MotionCommand.CHECK_QUEUE_CNT, (0.0,) * 10), ORDER)
-        )
         sock.recv(1024)
 
 

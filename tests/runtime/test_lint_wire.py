@@ -328,6 +328,7 @@ async def test_a_flood_of_connections_cannot_grow_the_findings(cell: Twin) -> No
     connections = MAX_FINDINGS + 44
     for _ in range(connections):
         client = await _connect(cell)
+        await client.ctrl(MotionCommand.CHECK_QUEUE_CNT)  # a reply a stale one can repeat
         await client.ctrl(200199)
         client.close()
         _OPEN.remove(client.writer)
