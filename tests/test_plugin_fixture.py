@@ -5,7 +5,10 @@ stopped after each test."""
 from __future__ import annotations
 
 import asyncio
+import os
 import socket
+import subprocess
+import sys
 from pathlib import Path
 
 import httpx
@@ -71,3 +74,66 @@ def test_without_http_there_is_no_control_api(pymotoros_twin: RunningTwin) -> No
     assert pymotoros_twin.http is None
     with socket.create_connection(("127.0.0.1", pymotoros_twin.state), timeout=10) as sock:
         assert sock.recv(4096)
+
+
+_LINTED_TESTS = '''
+import socket
+import struct
+
+import pytest
+
+
+def unknown_command(twin):
+    """A MOTO_MOTION_CTRL with command 200199 (MotoROS knows no such command)."""
+    frame = struct.pack("<7i10f", 64, 2001, 2, 0, 0, 0, 200199, *([0.0] * 10))
+    with socket.create_connection((twin.host, twin.motion), timeout=5) as sock:
+        sock.sendall(frame)
+        sock.recv(100)
+
+
+@pytest.mark.pymotoros(lint="error")
+def test_dirty_fails(pymotoros_twin):
+    unknown_command(pymotoros_twin)
+
+
+@pytest.mark.pymotoros(lint="error")
+def test_clean_passes(pymotoros_twin):
+    assert pymotoros_twin.lint_findings() == []
+
+
+def test_dirty_by_the_ini_option_fails(pymotoros_twin):
+    unknown_command(pymotoros_twin)
+
+
+@pytest.mark.pymotoros(lint="ignore")
+def test_dirty_ignored_passes(pymotoros_twin):
+    unknown_command(pymotoros_twin)
+    assert sorted(str(f.code) for f in pymotoros_twin.lint_findings()) == [
+        "stale-reply", "unknown-command"
+    ]
+'''
+
+
+def test_lint_error_fails_a_test_with_findings(tmp_path: Path) -> None:
+    """``@pytest.mark.pymotoros(lint="error")`` or ``pymotoros_lint = error`` in the ini
+    file: a test whose client did something a robot answers differently fails with the
+    findings; a clean one, and one marked ``lint="ignore"``, pass."""
+    (tmp_path / "test_linted.py").write_text(_LINTED_TESTS)
+    (tmp_path / "pytest.ini").write_text("[pytest]\npymotoros_lint = error\n")
+    env = {**os.environ, "PYTHONPATH": str(Path(__file__).resolve().parents[1] / "src")}
+    run = subprocess.run(  # noqa: S603 - our own interpreter and a test file we wrote
+        [sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider", str(tmp_path)],
+        capture_output=True,
+        text=True,
+        cwd=tmp_path,
+        env=env,
+        timeout=120,
+        check=False,
+    )
+    out = run.stdout + run.stderr
+    assert run.returncode == 1, out
+    assert "2 failed, 2 passed" in out, out
+    assert "FAILED test_linted.py::test_dirty_fails" in out, out
+    assert "FAILED test_linted.py::test_dirty_by_the_ini_option_fails" in out, out
+    assert "unknown-command" in out
+    assert "fix: Send only the commands" in out

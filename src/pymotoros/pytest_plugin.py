@@ -20,6 +20,11 @@ The cell comes from, in order: the test's ``@pytest.mark.pymotoros(cell=PATH)``
 marker, its ``robot=``/``controller=`` names, the ``pymotoros_cell`` ini option (a
 path relative to the rootdir), the default cell (HC10 on a YRC1000).
 
+Client lint (issue 31): ``twin.lint_findings()`` are what the code under test did that a
+real controller answers differently. With ``@pytest.mark.pymotoros(lint="error")`` (or
+``pymotoros_lint = error`` in the ini file) a test that passed fails when there are any,
+with the findings as its message; ``lint="ignore"`` (the default) leaves them to the test.
+
 Like :mod:`pymotoros.testing`, this module sits on top of every layer; nothing in the
 package imports it.
 """
@@ -40,6 +45,7 @@ if TYPE_CHECKING:  # imported by the fixture, not by every pytest run (see above
 
     from pymotoros.controller import VirtualController
     from pymotoros.controller.cell import CellConfig
+    from pymotoros.controller.lint import Finding
 
 __all__ = ["RunningTwin", "pymotoros_twin"]
 
@@ -52,6 +58,9 @@ STOP_TIMEOUT_S: Final = 30.0
 """Longest wait for the twin's thread to finish after the test."""
 
 MARKER: Final = "pymotoros"
+
+LINT_MODES: Final = ("ignore", "error")
+"""What a test with findings does: nothing (the test may assert on them), or fail."""
 
 
 @dataclass(frozen=True)
@@ -88,6 +97,10 @@ class RunningTwin:
 
         self._loop.call_soon_threadsafe(run)
         return future.result(timeout=START_TIMEOUT_S)
+
+    def lint_findings(self) -> list[Finding]:
+        """The client lint's findings so far (``assert not twin.lint_findings()``)."""
+        return self.call(lambda c: c.lint.findings())
 
 
 class _TwinThread:
@@ -160,11 +173,11 @@ def _cell_for(request: pytest.FixtureRequest) -> tuple[CellConfig, bool]:
 
     marker = request.node.get_closest_marker(MARKER)
     kwargs = dict(marker.kwargs) if marker is not None else {}
-    unknown = set(kwargs) - {"cell", "robot", "controller", "http"}
+    unknown = set(kwargs) - {"cell", "robot", "controller", "http", "lint"}
     if unknown:
         raise pytest.UsageError(
             f"@pytest.mark.{MARKER} got unknown arguments {sorted(unknown)}; "
-            "use cell=PATH, robot=NAME, controller=NAME, http=True"
+            'use cell=PATH, robot=NAME, controller=NAME, http=True, lint="error"'
         )
     http = bool(kwargs.get("http", False))
     names = {k: str(v) for k, v in kwargs.items() if k in ("robot", "controller")}
@@ -191,12 +204,45 @@ without one. It does not choose a scope for anyone: which loop a user's own asyn
 fixtures run in is theirs to set (a session-scoped fixture would change loops)."""
 
 
+def _lint_mode(item: pytest.Item) -> str:
+    marker = item.get_closest_marker(MARKER)
+    mode = marker.kwargs.get("lint") if marker is not None else None
+    if mode is None:
+        mode = item.config.getini("pymotoros_lint") or "ignore"
+    if mode not in LINT_MODES:
+        raise pytest.UsageError(
+            f"pymotoros lint mode {mode!r} is not one of {', '.join(LINT_MODES)}"
+        )
+    return str(mode)
+
+
 def pytest_addoption(parser: pytest.Parser) -> None:
     parser.addini(
         "pymotoros_cell",
         "cell TOML file (relative to the rootdir) for the pymotoros_twin fixture",
         default="",
     )
+    parser.addini(
+        "pymotoros_lint",
+        "client lint findings of the pymotoros_twin fixture: ignore (default) or error "
+        "(fail a test that passed)",
+        default="ignore",
+    )
+
+
+@pytest.hookimpl(wrapper=True)
+def pytest_runtest_call(item: pytest.Item) -> Iterator[None]:
+    """With lint "error", a test of the twin that passed fails on the twin's findings."""
+    result = yield
+    funcargs = getattr(item, "funcargs", {})
+    twin = funcargs.get("pymotoros_twin") if isinstance(funcargs, dict) else None
+    if isinstance(twin, RunningTwin) and _lint_mode(item) == "error":
+        findings = twin.lint_findings()
+        if findings:
+            from pymotoros.controller.lint import format_findings
+
+            pytest.fail(format_findings(findings) + '\n(@pytest.mark.pymotoros(lint="error"))')
+    return result
 
 
 def pytest_load_initial_conftests(early_config: pytest.Config, parser: pytest.Parser) -> None:
@@ -222,7 +268,7 @@ def pytest_load_initial_conftests(early_config: pytest.Config, parser: pytest.Pa
 def pytest_configure(config: pytest.Config) -> None:
     config.addinivalue_line(
         "markers",
-        f"{MARKER}(cell=None, robot=None, controller=None, http=False): "
+        f"{MARKER}(cell=None, robot=None, controller=None, http=False, lint=None): "
         "the cell and options of the pymotoros_twin fixture",
     )
 

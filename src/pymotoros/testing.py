@@ -41,6 +41,7 @@ from typing import Any, Final, Self
 from pymotoros.client.robot import RobotClient
 from pymotoros.client.sync import SyncRobotClient
 from pymotoros.controller import CellConfig, VirtualController, default_cell
+from pymotoros.controller.lint import ClientLint, format_findings
 from pymotoros.models import DEFAULT_CONTROLLER, DEFAULT_ROBOT, ControllerType, RobotModel
 from pymotoros.protocol.constants import TCP_PORT_IO, TCP_PORT_MOTION, TCP_PORT_STATE
 from pymotoros.runtime.clock import ManualClock
@@ -465,6 +466,26 @@ class Twin:
     async def sleep(self, seconds: float) -> None:
         """Wait ``seconds`` of the twin's time (a shortcut for ``twin.clock.sleep``)."""
         await self.clock.sleep(seconds)
+
+    # ----------------------------------------------------------- client lint
+
+    @property
+    def lint(self) -> ClientLint:
+        """What the clients of this twin did that a real controller answers differently
+        (``twin.lint.findings()``, ``twin.lint.clear()``; see :meth:`assert_no_lint`)."""
+        return self.controller.lint
+
+    def assert_no_lint(self) -> None:
+        """Fail with the findings, as a table, if any client did something a robot
+        would answer differently (issue 31)::
+
+            async with twin(robot="hc10") as (client, cell):
+                await my_driver_moves(client)
+                cell.assert_no_lint()
+        """
+        findings = self.controller.lint.findings()
+        if findings:
+            raise AssertionError(format_findings(findings))
 
     # ----------------------------------------------------------- observing ticks
 

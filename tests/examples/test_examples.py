@@ -47,9 +47,21 @@ def test_every_example_is_tested() -> None:
         "back_to_back.py",
         "io_signal.py",
         "joint_values.py",
+        "naive_client.py",
         "named_poses.py",
         "recover_from_pfl.py",
     ]
+
+
+def test_naive_client_is_linted(sim: Sim) -> None:
+    sim_lint = sim.api("/api/lint")["findings"]
+    before = {(f["code"], f["connection"]) for f in sim_lint}
+    done = run_example(sim, "naive_client.py")
+    assert done.returncode == 0, done.stderr
+    new = [
+        f for f in sim.api("/api/lint")["findings"] if (f["code"], f["connection"]) not in before
+    ]
+    assert {f["code"] for f in new} >= {"fragmented-message", "stale-reply", "unknown-command"}
 
 
 def test_named_poses(sim: Sim) -> None:

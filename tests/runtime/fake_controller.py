@@ -22,6 +22,7 @@ from pymotoros.controller.api import (
     PointData,
     StatusData,
 )
+from pymotoros.controller.lint import ClientLint
 from pymotoros.protocol.constants import IoResultCode, MotionCommand, ResultCode
 
 
@@ -44,6 +45,7 @@ class FakeController:
         self.alarms: list[AlarmInfo] = []
         self.dh_ok = True
         self.state_clients = 0
+        self.lint = ClientLint()
 
     def _record(self, event: str) -> None:
         self.events.append(event)
@@ -63,6 +65,10 @@ class FakeController:
     @property
     def num_groups(self) -> int:
         return self._groups
+
+    @property
+    def time_ms(self) -> int:
+        return self.ticks * self._period
 
     def tick(self) -> None:
         self.ticks += 1

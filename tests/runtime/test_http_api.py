@@ -10,6 +10,7 @@ import pytest
 
 from pymotoros.controller import VirtualController
 from pymotoros.controller.cell import cell_from_dict
+from pymotoros.controller.lint import LintCode
 from pymotoros.protocol.constants import MotionCommand
 from pymotoros.runtime.app import SimulatorApp
 from pymotoros.runtime.http_api import create_http_app
@@ -205,3 +206,25 @@ async def test_register_outputs_read_through_the_api() -> None:
         r = await client.get("/api/io/1000012")
     assert r.status_code == 200
     assert r.json()["value"] == round(math.degrees(0.5))  # S axis position in whole degrees
+
+
+async def test_lint_findings_are_served_and_cleared(
+    api: httpx.AsyncClient, controller: VirtualController
+) -> None:
+    assert (await api.get("/api/lint")).json() == {"findings": []}
+    controller.lint.record(LintCode.UNKNOWN_COMMAND, "10.1.2.3:40000", 1.25, "command 7")
+    controller.lint.record(LintCode.UNKNOWN_COMMAND, "10.1.2.3:40000", 2.5)
+    (finding,) = (await api.get("/api/lint")).json()["findings"]
+    assert finding["code"] == "unknown-command"
+    assert finding["count"] == 2
+    assert finding["first_s"] == 1.25
+    assert finding["connection"] == "10.1.2.3:40000"
+    assert finding["reference"] == "§3.1"
+    assert "command 7" in finding["text"]
+    assert finding["remedy"]
+    assert (await api.delete("/api/lint")).json() == {"findings": []}
+    assert (await api.get("/api/lint")).json() == {"findings": []}
+    schema = (await api.get("/openapi.json")).json()
+    answer = schema["paths"]["/api/lint"]["get"]["responses"]["200"]["content"]
+    assert answer["application/json"]["schema"] == {"$ref": "#/components/schemas/LintModel"}
+    assert "delete" in schema["paths"]["/api/lint"]

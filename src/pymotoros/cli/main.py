@@ -56,6 +56,10 @@ _COMMANDS: Final[dict[str, tuple[str, str]]] = {
         "pymotoros.cli.replay:replay",
         "Replay a recorded session against a fresh twin or a controller; print the diff.",
     ),
+    "lint": (
+        "pymotoros.cli.lint:lint",
+        "Lint a recorded session: what the client does that a robot answers differently.",
+    ),
 }
 
 

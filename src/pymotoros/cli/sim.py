@@ -36,6 +36,7 @@ from pymotoros.runtime.fleet import cell_names, short_name
 
 if TYPE_CHECKING:
     from pymotoros.capture import SessionRecorder
+    from pymotoros.controller.lint import ClientLint
 
 logger = logging.getLogger(__name__)
 
@@ -246,6 +247,15 @@ def _cell(
     "driver, a PLC) to a pcapng file for Wireshark, `pymotoros replay` and `plot`.",
 )
 @click.option(
+    "--lint-report",
+    "lint_report",
+    type=click.Path(dir_okay=False, writable=True, path_type=Path),
+    default=None,
+    metavar="FILE.json",
+    help="When the twin stops, write the client lint's findings (what clients did that a "
+    "real controller answers differently, as GET /api/lint) to this JSON file.",
+)
+@click.option(
     "--realtime",
     is_flag=True,
     help="Ask Linux for real-time scheduling (SCHED_FIFO, low priority): steadier ticks "
@@ -287,6 +297,7 @@ def sim(
     scenario_path: Path | None,
     ports_file: Path | None,
     record_path: Path | None = None,
+    lint_report: Path | None = None,
     realtime: bool = False,
     no_idle_batching: bool = False,
     token: str | None = None,
@@ -312,6 +323,7 @@ def sim(
             record_path=record_path,
             idle_batching=False if no_idle_batching else None,
             token=token,
+            lint_report=lint_report,
         )
         return
     config_file = config_path[0] if config_path else None
@@ -334,6 +346,7 @@ def sim(
         recorder=recorder,
         port_hint="let the OS choose with --motion-port 0 --state-port 0 --io-port 0 "
         "--http-port 0 --ports-file FILE",
+        lint_report=None if lint_report is None else (lint_report, [(None, controller.lint)]),
     )
 
 
@@ -394,10 +407,12 @@ def serve(
     ports_file: Path | None,
     recorder: SessionRecorder | None,
     port_hint: str,
+    lint_report: tuple[Path, Sequence[tuple[str | None, ClientLint]]] | None = None,
 ) -> None:
-    """Run ``main`` (one cell or several) to its end; remove the ports file and close the
-    recording whatever happened, and turn a port already in use into an error that says
-    what to do (``port_hint``)."""
+    """Run ``main`` (one cell or several) to its end; remove the ports file, close the
+    recording and write the lint report (``--lint-report``: file, each cell's lint)
+    whatever happened, and turn a port already in use into an error that says what to do
+    (``port_hint``)."""
     try:
         try:
             asyncio.run(main)
@@ -406,6 +421,10 @@ def serve(
                 ports_file.unlink(missing_ok=True)
             if recorder is not None:
                 recorder.close()
+            if lint_report is not None:
+                from pymotoros.cli.lint import write_lint_report
+
+                write_lint_report(*lint_report)
     except OSError as exc:  # e.g. a port already in use
         hint = (
             f"; another controller or sim holds the port: stop it, or {port_hint}"

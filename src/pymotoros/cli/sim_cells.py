@@ -83,6 +83,7 @@ def run_cells(
     record_path: Path | None = None,
     idle_batching: bool | None = None,
     token: str | None = None,
+    lint_report: Path | None = None,
 ) -> None:
     """Load every cell, check their ports, serve them until SIGINT/SIGTERM."""
     _refuse_single_cell_options(ctx, scenario_path)
@@ -107,6 +108,9 @@ def run_cells(
         ports_file=ports_file,
         recorder=recorder,
         port_hint="remove that port from the cell file's [ports] table (the OS then chooses one)",
+        lint_report=None
+        if lint_report is None
+        else (lint_report, [(c.name, c.controller.lint) for c in cells]),
     )
 
 

@@ -151,6 +151,8 @@ class RecordedConnection:
     messages: tuple[RecordedMessage, ...]
     trailing: Mapping[Direction, int] = field(default_factory=dict)
     """Bytes at the end of each direction that do not make a whole frame (a cut recording)."""
+    client: str = ""
+    """The client's end, "host:port" (as the twin names a connection)."""
 
     def sent(self) -> tuple[RecordedMessage, ...]:
         """Messages the client sent."""
@@ -489,6 +491,7 @@ def read_recording(
                 chunks=chunks,
                 messages=tuple(m for _, m in messages),
                 trailing=trailing,
+                client=_endpoint(conn.client),
             )
         )
     # file order (the order the recorder wrote them), not a sort by time that could

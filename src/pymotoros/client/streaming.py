@@ -629,7 +629,7 @@ class TrajectoryStreamer:
                 grace = asyncio.get_running_loop().call_later(STOP_TIMEOUT_S, task.cancel)
                 cancel_later.append(grace)
 
-        watchdog = StallWatchdog(self.states, self.state_stall_s, on_stall)
+        watchdog = StallWatchdog(self.states, self.state_stall_s, on_stall, clock=self.clock)
 
         def disarm() -> None:
             watchdog.close()

@@ -26,6 +26,7 @@ from pymotoros.protocol.constants import PendantMode as PendantMode  # its old h
 if TYPE_CHECKING:
     from pymotoros.controller.alarms import Alarm
     from pymotoros.controller.cell import CellConfig
+    from pymotoros.controller.lint import ClientLint
     from pymotoros.controller.safety import SafetySnapshot, SafetyUnit
     from pymotoros.controller.safety.fsu import FsuRequest
     from pymotoros.controller.scenario import Scenario
@@ -343,6 +344,14 @@ class MotoRosController(Protocol):
 
     @property
     def num_groups(self) -> int: ...
+
+    @property
+    def time_ms(self) -> int:
+        """Controller time since boot (ms): the time line of the lint's findings."""
+        ...
+
+    lint: ClientLint
+    """What clients did that a real controller answers differently (issue 31)."""
 
     def tick(self) -> None:
         """Advance controller time by exactly one interpolation period."""

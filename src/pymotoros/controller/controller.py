@@ -55,6 +55,7 @@ from pymotoros.controller.drive_power import DrivePower
 from pymotoros.controller.forced_io import ForcedSignals
 from pymotoros.controller.incmove_task import IncMoveTask
 from pymotoros.controller.io_image import IoImage
+from pymotoros.controller.lint import ClientLint
 from pymotoros.controller.machine import EstopSource, Event, OperatorState
 from pymotoros.controller.motoros import MotoRos
 from pymotoros.controller.operator_keys import MAX_ALARM_CODE, OperatorKeys
@@ -104,6 +105,9 @@ class VirtualController:
         self._safety.fsu.tcp_limiter = lambda limit, g, cmd, inc: self._tcp.clip_increment(
             limit, g, interps[g].tool, cmd, inc
         )
+        self.lint = ClientLint()
+        """What clients did that a real controller answers differently (issue 31): the
+        servers and the tick record it, ``GET /api/lint`` shows it."""
         self._build_motoros(ctx)
         self._keys = OperatorKeys(ctx.machine, ctx.clock)
         self._forced = ForcedSignals(ctx.io, self._keys)
@@ -133,6 +137,7 @@ class VirtualController:
             scenarios=self._scenarios,
             peripherals=Peripherals(ctx.io, cell.peripherals),
             scheduler=self._scheduler,
+            lint=self.lint,
         )
         self._workspace = WorkspaceRuntime(ctx, self._safety.pfl, self._keys, self._cycle)
         # The tick runs every 4 ms for every twin: callers reach the cycle's tick
@@ -297,6 +302,7 @@ class VirtualController:
 
     def state_clients_changed(self, count: int) -> None:
         """The number of state-port clients changed: OT#894 is on while there is at least one."""
+        self.lint.state_clients = count
         self._connections.state_clients_changed(count)
 
     def io_connected(self) -> None:

@@ -11,7 +11,8 @@ tick, in this order:
 5. the IncMove task (one increment per group to the servos), idle servos otherwise;
    the workspace contact check of the new commanded position (only in a cell with
    obstacles);
-6. the AddToIncQueue tasks (interpolation into the queues);
+6. the AddToIncQueue tasks (interpolation into the queues), then the client lint's
+   queue-starved check (only while a group's last accepted point moves);
 7. the outputs that follow the servos (S1CxG registers: what they read is kept here,
    their words are computed when an M-register is read), the scenario's events, the
    simulated peripherals;
@@ -23,6 +24,7 @@ from __future__ import annotations
 from pymotoros.controller.context import MotoRosContext
 from pymotoros.controller.drive_power import DrivePower
 from pymotoros.controller.incmove_task import IncMoveTask
+from pymotoros.controller.lint import ClientLint
 from pymotoros.controller.machine import Event
 from pymotoros.controller.peripherals import Peripherals
 from pymotoros.controller.processes import Scheduler
@@ -51,6 +53,7 @@ class TickCycle:
         peripherals: Peripherals,
         scheduler: Scheduler,
         contact: ContactFunction | None = None,
+        lint: ClientLint | None = None,
     ) -> None:
         self._ctx = ctx
         self._startup = startup
@@ -67,6 +70,8 @@ class TickCycle:
         self._scheduler = scheduler
         self.contact = contact
         """The workspace contact check (None: a cell without obstacles, nothing to do)."""
+        self._lint = lint if lint is not None else ClientLint()
+        """Where the queue-starved check reports (the controller's client lint)."""
 
     def tick(self) -> None:
         """Advance controller time by exactly one interpolation period.
@@ -102,6 +107,8 @@ class TickCycle:
         elif self.contact is not None:
             self.contact.tick(now)
         inc_move.fill_tick()
+        if moved and self._lint.watching_queues:  # queue-starved: only after a moving point
+            self._starved(now)
         if self._has_registers:  # S1CxG register outputs: only when configured
             self._registers.step(
                 ctx.servos, ctx.interpolators, clock.tick_count, machine.state.drives_powered
@@ -113,3 +120,13 @@ class TickCycle:
         scheduler = self._scheduler
         if scheduler.busy:
             scheduler.advance()
+
+    def _starved(self, now_ms: int) -> None:
+        """Report each group whose queue IncMove just emptied while its last point moved
+        (client lint, issue 31): nothing pending, nothing queued, the robot stops dead."""
+        interps = self._ctx.interpolators
+        for group in self._lint.moving_groups():
+            if group < len(interps):
+                interp = interps[group]
+                if not interp.pending and not len(interp.queue):
+                    self._lint.queue_ran_empty(group, now_ms / 1000.0)

@@ -197,6 +197,22 @@ class IoValueModel(BaseModel):
     result_code: int
 
 
+class FindingModel(Answer):
+    """One client lint finding (``pymotoros.controller.lint``)."""
+
+    code: str = Field(description="what the client did, e.g. fragmented-message")
+    count: int = Field(description="how often, on this connection")
+    first_s: float = Field(description="controller time (s) of the first occurrence")
+    connection: str = Field(description='the client, "host:port"')
+    reference: str = Field(description="section of the MotoROS 1.9.12 reference")
+    text: str = Field(description="what happened, and what a real controller does with it")
+    remedy: str = Field(description="what to change in the client")
+
+
+class LintModel(Answer):
+    findings: list[FindingModel]
+
+
 def state_model(
     snapshot: ControllerSnapshot, tick: TickStats, ports: Ports = (None, None, None)
 ) -> Answer:
@@ -306,6 +322,7 @@ def create_http_app(
     for spec in actions_by_name(actions).values():
         _install_action(app, spec, controller, state, answer)
     _install_read_io(app, controller)
+    _install_lint(app, controller)
     return app
 
 
@@ -425,3 +442,17 @@ def _install_read_io(app: FastAPI, controller: SimulatedController) -> None:
         if read.result_code != 0:
             raise ActionRefusedError(f"address {address}: {read.result_code.meaning}")
         return IoValueModel(address=address, value=read.value, result_code=int(read.result_code))
+
+
+def _install_lint(app: FastAPI, controller: SimulatedController) -> None:
+    @app.get("/api/lint", response_model=LintModel, tags=["lint"])
+    async def get_lint() -> dict[str, Any]:
+        """What clients did that a real controller answers differently, or that works only
+        by luck: one finding per code and connection (issue 31)."""
+        return controller.lint.document()
+
+    @app.delete("/api/lint", response_model=LintModel, tags=["lint"])
+    async def clear_lint() -> dict[str, Any]:
+        """Forget every finding (answers the empty list)."""
+        controller.lint.clear()
+        return controller.lint.document()

@@ -15,6 +15,7 @@ from collections.abc import Callable
 from typing import Final
 
 from pymotoros.controller.api import IoRead, MotoRosController
+from pymotoros.controller.lint import LintCode
 from pymotoros.protocol.constants import (
     ByteOrder,
     InvalidSubcode,
@@ -134,6 +135,13 @@ def log_rejection(
     )
 
 
+def length_detail(frame: Frame, order: ByteOrder, port: Port) -> str:
+    """The client lint's words for a prefix that disagrees with its type's size."""
+    expected = expected_size(frame.msg_type, port, frame.body, order)
+    needs = (expected or 0) - 4
+    return f"type {frame.msg_type}: prefix length {frame.size - 4}, the type needs {needs}"
+
+
 def handle_io_request(
     controller: MotoRosController,
     msg: WireMessage,
@@ -180,6 +188,10 @@ class IoServer(FramedService):
     def on_connect(self, conn: Connection) -> None:
         self._controller.io_connected()
 
+    def lint(self, code: LintCode, conn: Connection, detail: str = "") -> None:
+        c = self._controller
+        c.lint.record(code, conn.peer, c.time_ms / 1000.0, detail)
+
     async def serve_connection(self, conn: Connection) -> None:
         async with contextlib.aclosing(self.frames(conn)) as frames:
             async for frame in frames:
@@ -190,9 +202,17 @@ class IoServer(FramedService):
         verdict = check_request(frame, self._order, Port.IO)
         if isinstance(verdict, Reject):
             log_rejection(conn, frame, verdict, self._order, Port.IO)
+            if verdict.subcode == InvalidSubcode.MSGSIZE:
+                self.lint(
+                    LintCode.LENGTH_MISMATCH, conn, length_detail(frame, self._order, Port.IO)
+                )
             return verdict.reply
         reply = None
         if isinstance(verdict, Accept):
+            if verdict.surplus:
+                self.lint(
+                    LintCode.LENGTH_MISMATCH, conn, length_detail(frame, self._order, Port.IO)
+                )
             reply = handle_io_request(self._controller, verdict.message, "io", conn)
         if reply is None:  # pragma: no cover - check_request only accepts IO types here
             return IoErrorReply(ResultCode.INVALID, InvalidSubcode.MSGTYPE)

@@ -28,6 +28,7 @@ import logging
 from typing import Final
 
 from pymotoros.controller.api import MotoRosController, Outcome, Pending, PointData
+from pymotoros.controller.lint import LintCode
 from pymotoros.protocol.constants import (
     MAX_JOINTS,
     ByteOrder,
@@ -55,7 +56,7 @@ from pymotoros.protocol.messages import (
 )
 from pymotoros.protocol.sizes import Close, Reject, check_request
 from pymotoros.runtime.connections import MOTION_CLIENTS
-from pymotoros.runtime.io_server import handle_io_request, log_rejection
+from pymotoros.runtime.io_server import handle_io_request, length_detail, log_rejection
 from pymotoros.runtime.tcp import Connection, FramedService
 
 __all__ = ["MotionServer"]
@@ -64,6 +65,10 @@ logger = logging.getLogger(__name__)
 
 _QUIET_COMMANDS = frozenset({MotionCommand.CHECK_QUEUE_CNT, MotionCommand.CHECK_MOTION_READY})
 """Queries: a FALSE answer is information, not a refusal (logged at DEBUG)."""
+
+
+_KNOWN_COMMANDS = frozenset(int(m) for m in MotionCommand)
+"""MOTO_MOTION_CTRL commands MotoROS answers (§3.1); any other gets its previous reply."""
 
 
 def _meaning(result: int, subcode: int) -> str:
@@ -114,7 +119,13 @@ class MotionServer(FramedService):
         self.requests = 0
 
     def on_connect(self, conn: Connection) -> None:
-        self._controller.motion_connected()
+        c = self._controller
+        c.lint.motion_opened(conn.peer, c.time_ms / 1000.0, queued=c.has_queued_motion())
+        c.motion_connected()
+
+    def lint(self, code: LintCode, conn: Connection, detail: str = "") -> None:
+        c = self._controller
+        c.lint.record(code, conn.peer, c.time_ms / 1000.0, detail)
 
     async def send(self, conn: Connection, message: Message) -> None:
         """:meth:`FramedService.send`, with each distinct MOTO_MOTION_REPLY encoded once:
@@ -161,9 +172,16 @@ class MotionServer(FramedService):
             raise _CloseConnectionError
         if isinstance(verdict, Reject):
             log_rejection(conn, frame, verdict, self._order, Port.MOTION, logger)
+            if verdict.subcode == InvalidSubcode.MSGSIZE:
+                self.lint(
+                    LintCode.LENGTH_MISMATCH, conn, length_detail(frame, self._order, Port.MOTION)
+                )
             reply: Message = verdict.reply
         else:
             if verdict.surplus:
+                self.lint(
+                    LintCode.LENGTH_MISMATCH, conn, length_detail(frame, self._order, Port.MOTION)
+                )
                 logger.debug(
                     "motion: client %s: %d surplus bytes after type %d ignored",
                     conn.peer,
@@ -182,6 +200,11 @@ class MotionServer(FramedService):
     async def _process(self, conn: Connection, msg: Message, msg_type: int) -> Message:
         c = self._controller
         if isinstance(msg, MotoMotionCtrl):
+            if msg.command not in _KNOWN_COMMANDS:
+                self.lint(LintCode.UNKNOWN_COMMAND, conn, f"command {msg.command}")
+                self.lint(LintCode.STALE_REPLY, conn, f"MOTO_MOTION_CTRL command {msg.command}")
+            elif msg.command not in _QUIET_COMMANDS:
+                c.lint.motion_reset()
             outcome = await self._resolve(c.motion_ctrl(msg.group_no, msg.command))
             if outcome.close_connection and not self.log.allow(
                 "connections closed on request", logger, logging.INFO
@@ -203,6 +226,13 @@ class MotionServer(FramedService):
             outcome = await self._resolve(c.trajectory_point(msg.sequence, point))
             what = f"JOINT_TRAJ_PT_FULL seq {msg.sequence} (group {msg.group_no}, t {msg.time:g} s)"
             self._log_outcome(conn, what, outcome)
+            c.lint.point_answered(
+                conn.peer,
+                ((msg.group_no, any(msg.vel)),),
+                msg.sequence,
+                outcome.result,
+                c.time_ms / 1000.0,
+            )
             return self._reply(outcome, msg.group_no, msg.sequence, MsgType.JOINT_TRAJ_PT_FULL)
         if isinstance(msg, MotoJointTrajPtFullEx):
             points = [
@@ -213,6 +243,18 @@ class MotionServer(FramedService):
             groups = ",".join(str(p.group_no) for p in points)
             what = f"JOINT_TRAJ_PT_FULL_EX seq {msg.sequence} (groups {groups or 'none'})"
             self._log_outcome(conn, what, outcome)
+            if msg.number_of_valid_groups <= 0:
+                self.lint(
+                    LintCode.STALE_REPLY, conn, f"FULL_EX with {msg.number_of_valid_groups} groups"
+                )
+            else:
+                c.lint.point_answered(
+                    conn.peer,
+                    [(p.group_no, any(p.vel)) for p in points],
+                    msg.sequence,
+                    outcome.result,
+                    c.time_ms / 1000.0,
+                )
             last = points[-1].group_no if points else -1
             return self._reply(outcome, last, msg.sequence, MsgType.MOTO_JOINT_TRAJ_PT_FULL_EX)
         if isinstance(msg, MotoSelectTool):

@@ -20,6 +20,7 @@ from collections.abc import AsyncGenerator, Callable
 from typing import Final
 
 from pymotoros.capture import Flow, SessionRecorder
+from pymotoros.controller.lint import LintCode
 from pymotoros.errors import RemoteProtocolError
 from pymotoros.protocol.constants import ByteOrder
 from pymotoros.protocol.framing import Frame, FrameDecoder, encode
@@ -369,6 +370,7 @@ class FramedService(TcpService):
                     break
                 if fragmented:
                     fragmented = False
+                    self.lint(LintCode.FRAGMENTED_MESSAGE, conn, f"type {frame.msg_type}")
                     self._log.debug(
                         "%s: client %s: type %d arrived in several pieces and was "
                         "reassembled (a real controller would answer 3001)",
@@ -378,6 +380,10 @@ class FramedService(TcpService):
                     )
                 self.traffic.request(frame.msg_type)
                 yield frame
+
+    def lint(self, code: LintCode, conn: Connection, detail: str = "") -> None:
+        """Hook: a client lint finding on ``conn`` (issue 31); the motion and IO servers
+        record it on their controller, in controller time."""
 
     async def send(self, conn: Connection, message: Message) -> None:
         """One write per message: common clients read one reply per ``recv()`` (clients §1.3)."""

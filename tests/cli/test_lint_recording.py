@@ -1,0 +1,137 @@
+"""``lint_recording`` on recordings built message by message: the estimates a recording
+allows (a reconnect over queued increments, a starved queue) and the sequence checks
+across connections."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from pymotoros.cli.lint import lint_recording
+from pymotoros.client.recording import (
+    Direction,
+    RecordedChunk,
+    RecordedConnection,
+    RecordedMessage,
+    Recording,
+)
+from pymotoros.protocol.constants import ByteOrder, Port, ResultCode
+from pymotoros.protocol.framing import FrameDecoder, encode
+from pymotoros.protocol.messages import JointTrajPtFull, Message, MotoMotionReply
+
+ORDER = ByteOrder.LITTLE
+MOTION, STATE = 50240, 50241
+
+
+def _message(conn: int, port: int, t: float, direction: Direction, msg: Message) -> RecordedMessage:
+    decoder = FrameDecoder(ORDER)
+    decoder.feed(encode(msg, ORDER))
+    frame = decoder.next_frame()
+    assert frame is not None
+    kind = Port.MOTION if port == MOTION else Port.STATE
+    return RecordedMessage(t, t, conn, port, 40000 + conn, kind, direction, frame, msg)
+
+
+def _connection(
+    index: int,
+    port: int,
+    opened: float,
+    closed: float | None,
+    exchanges: list[tuple[float, Message, Message]],
+) -> RecordedConnection:
+    messages: list[RecordedMessage] = []
+    chunks: list[RecordedChunk] = []
+    for t, request, reply in exchanges:
+        for when, direction, msg in (
+            (t, Direction.TO_SERVER, request),
+            (t, Direction.FROM_SERVER, reply),
+        ):
+            recorded = _message(index, port, when, direction, msg)
+            messages.append(recorded)
+            chunks.append(
+                RecordedChunk(when, when, index, port, 40000 + index, direction, encode(msg, ORDER))
+            )
+    kind = Port.MOTION if port == MOTION else Port.STATE
+    return RecordedConnection(
+        index,
+        port,
+        40000 + index,
+        kind,
+        ORDER,
+        opened,
+        closed,
+        tuple(chunks),
+        tuple(messages),
+        client=f"127.0.0.1:{40000 + index}",
+    )
+
+
+def _point(seq: int, time: float, pos: float, vel: float) -> tuple[Message, Message]:
+    request = JointTrajPtFull.for_joints(0, seq, time, [pos] + [0.0] * 5, [vel] + [0.0] * 5)
+    reply = MotoMotionReply(0, seq, 14, ResultCode.SUCCESS, 0, (0.0,) * 10)
+    return request, reply
+
+
+def _recording(*connections: RecordedConnection, end: float = 10.0) -> Recording:
+    messages = tuple(m for c in connections for m in c.messages)
+    chunks = tuple(ch for c in connections for ch in c.chunks)
+    return Recording(Path("synthetic.pcapng"), 0.0, end, connections, chunks, messages)
+
+
+def _codes(recording: Recording) -> list[str]:
+    return sorted(str(f.code) for f in lint_recording(recording).findings())
+
+
+def _state() -> RecordedConnection:
+    return _connection(0, STATE, 0.0, None, [])
+
+
+def _stream(
+    index: int,
+    opened: float,
+    closed: float | None,
+    points: list[tuple[float, int, float, float, float]],
+) -> RecordedConnection:
+    return _connection(
+        index, MOTION, opened, closed, [(t, *_point(s, tt, p, v)) for t, s, tt, p, v in points]
+    )
+
+
+def test_a_reconnect_before_the_queue_ran_out_would_resume_it() -> None:
+    first = _stream(1, 0.5, 1.5, [(1.0, 0, 0.0, 0.0, 0.0), (1.01, 1, 2.0, 0.4, 0.2)])
+    second = _stream(2, 1.6, None, [(1.7, 2, 4.0, 0.8, 0.0)])  # carries on: 2 after 1
+    assert _codes(_recording(_state(), first, second)) == ["reconnect-resumed-motion"]
+
+
+def test_a_reconnect_after_the_queue_ran_out_resumes_nothing() -> None:
+    first = _stream(1, 0.5, 1.5, [(1.0, 0, 0.0, 0.0, 0.0), (1.01, 1, 2.0, 0.4, 0.0)])
+    second = _stream(2, 3.5, None, [(3.6, 0, 0.0, 0.4, 0.0), (3.61, 1, 1.0, 0.0, 0.0)])
+    assert _codes(_recording(_state(), first, second)) == []
+
+
+def test_a_stream_that_stops_moving_starves() -> None:
+    moving_end = _stream(1, 0.5, None, [(1.0, 0, 0.0, 0.0, 0.0), (1.01, 1, 0.5, 0.05, 0.2)])
+    assert _codes(_recording(_state(), moving_end)) == ["queue-starved"]
+    at_rest = _stream(1, 0.5, None, [(1.0, 0, 0.0, 0.0, 0.0), (1.01, 1, 0.5, 0.05, 0.0)])
+    assert _codes(_recording(_state(), at_rest)) == []
+
+
+def test_a_late_point_after_a_moving_one_starved_the_queue() -> None:
+    late = _stream(
+        1,
+        0.5,
+        None,
+        [(1.0, 0, 0.0, 0.0, 0.0), (1.01, 1, 0.5, 0.05, 0.2), (2.0, 2, 1.0, 0.1, 0.0)],
+    )
+    assert _codes(_recording(_state(), late)) == ["queue-starved"]
+
+
+def test_the_motion_starts_with_the_first_point_after_sequence_0() -> None:
+    """Seconds between point 0 and point 1 do not eat into the queue: the robot starts
+    moving when point 1 is accepted."""
+    slow_start = _stream(
+        1,
+        0.5,
+        None,
+        [(1.0, 0, 0.0, 0.0, 0.0), (6.0, 1, 0.5, 0.05, 0.2), (6.3, 2, 1.0, 0.1, 0.0)],
+    )
+    assert _codes(_recording(_state(), slow_start)) == []
