@@ -11,6 +11,8 @@
           +-- RequestTimeoutError       (TimeoutError) no reply / no state within the timeout
           +-- MotionTimeoutError        (TimeoutError) the robot did not finish a move in time
           +-- MotionIncompleteError     the robot came to rest away from the goal
+          +-- MoveStoppedError          stop() ended the move (STOP_MOTION sent)
+          +-- MoveInProgressError       a second move while one runs: refused at once
           +-- ReplyError                the controller refused a request (.result, .subcode)
           |    +-- NotReadyError        result 5 (or FALSE to CHECK_MOTION_READY), .reason
           |    +-- InvalidRequestError  result 3
@@ -126,6 +128,14 @@ class MoveStoppedError(ClientError):
     def __init__(self, message: str, *, positions: tuple[float, ...] = ()) -> None:
         super().__init__(message)
         self.positions = positions
+
+
+class MoveInProgressError(ClientError):
+    """A move was asked for while another move of the same client still runs.
+
+    MotoROS executes one trajectory at a time; the second is refused before anything is
+    sent, and the message says how to wait for the first or stop it.
+    """
 
 
 @dataclass(frozen=True, slots=True)

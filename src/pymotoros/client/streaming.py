@@ -40,6 +40,7 @@ from typing import Final
 
 from pymotoros.client.errors import (
     AxisDeviation,
+    ClientError,
     ConnectionLostError,
     MotionIncompleteError,
     MotionTimeoutError,
@@ -135,6 +136,19 @@ STALL_TIMEOUT_S: Final = 2.0
 STOP_TIMEOUT_S: Final = 1.0
 """How long STOP_MOTION may take after the state stream was lost."""
 
+STOP_REST_TIMEOUT_S: Final = 2.0
+"""After STOP_MOTION, how long the feedback may take to show the robot at rest
+(``in_motion`` false, still for :data:`SETTLE_SAMPLES` state cycles). MotoROS stops at
+once (no ramp, §3.6): what is left is the servo's own lag and three quiet state cycles
+(~75 ms), so 2 s is ample and still short enough for a person waiting on Ctrl-C."""
+
+EARLY_STOP_BOUND_S: Final = STOP_TIMEOUT_S + STOP_REST_TIMEOUT_S
+"""The longest a move that ends early holds up its cancellation or error to stop the
+robot: the STOP_MOTION reply plus the wait for rest (3 s; docs/client.md)."""
+
+STOP_ON_THE_PENDANT: Final = "stop the robot on the pendant"
+"""What to do when STOP_MOTION could not be sent or was not answered (one wording, here)."""
+
 LAG_WARNING_S: Final = 0.25
 """A robot this far behind the plan is being slowed (a safety speed limit, HOLD…)."""
 
@@ -209,6 +223,37 @@ class FollowingReport:
     def max_lag_rad(self) -> float:
         """The largest lag in rad (or m): :attr:`max_error`."""
         return self.max_error
+
+
+@dataclass(frozen=True, slots=True)
+class EarlyStop:
+    """How a move that ended early was stopped (:meth:`TrajectoryStreamer.stop_early`)."""
+
+    stopped: bool
+    """STOP_MOTION was acknowledged (SUCCESS)."""
+    at_rest: bool
+    """The feedback then showed the robot at rest."""
+    positions: tuple[float, ...]
+    """Where the robot stands (or was last reported), joints of the moved groups."""
+    took_s: float
+    """From the stop's start to rest (or to giving up)."""
+    why: str
+    """What ended the move."""
+    detail: str
+    """Where the robot stopped, with units, or why it may not have."""
+
+    @property
+    def text(self) -> str:
+        return f"{self.why}: {self.detail}"
+
+    def tell(self, exc: BaseException) -> None:
+        """Put the stop into ``exc``: the client's own errors get it in their message
+        (what the CLI prints), anything else (``CancelledError``, ``KeyboardInterrupt``,
+        the caller's exception) a note, so its type and message stay as they were."""
+        if isinstance(exc, ClientError) and exc.args and isinstance(exc.args[0], str):
+            exc.args = (f"{exc.args[0]}; {self.detail}", *exc.args[1:])
+        else:
+            exc.add_note(self.text)
 
 
 @dataclass(frozen=True, slots=True)
@@ -357,6 +402,8 @@ class TrajectoryStreamer:
     _motion_gone: bool = field(default=False, init=False)
     _in_flight: int | None = field(default=None, init=False)
     """Sequence of the point sent and not yet answered, while there is one."""
+    last_stop: EarlyStop | None = field(default=None, init=False)
+    """How the latest :meth:`execute` that ended early stopped the robot (None: it did not)."""
 
     # ------------------------------------------------------------------ sending
 
@@ -596,19 +643,30 @@ class TrajectoryStreamer:
         groups: Sequence[int],
         options: ExecuteOptions = ExecuteOptions(),
     ) -> MoveResult:
-        """Stream ``trajectory``, follow the robot, and wait until it settled at the goal."""
+        """Stream ``trajectory``, follow the robot, and wait until it settled at the goal.
+
+        Whatever ends the move early (a cancellation, a timeout around it, an exception of
+        ``on_progress``, a refusal or error of the client's own) first stops the robot
+        (:meth:`stop_early`: STOP_MOTION, then the feedback at rest, within
+        :data:`EARLY_STOP_BOUND_S`), then goes on with the position where the robot stopped
+        in its message (a note and a log for a ``CancelledError``, which stays one).
+        """
         groups = tuple(groups)
-        monitor = FollowingMonitor(
-            trajectory, groups, on_sample=options.on_progress, clock=self.clock
-        )
+        task = asyncio.current_task()
+        failed: list[Exception] = []
+        """An exception of the caller's progress callback: the move ends with it."""
+        on_sample = options.on_progress
+        if on_sample is not None:
+            on_sample = _callback_guard(on_sample, failed, task)
+        monitor = FollowingMonitor(trajectory, groups, on_sample=on_sample, clock=self.clock)
         remove = self.states.add_listener(monitor.listen)
         started = self.clock.now()
         accepted_count = 0
-        task = asyncio.current_task()
         waiting = False
         cancel_later: list[asyncio.TimerHandle] = []
         self._stalled_for = None
         self._in_flight = None
+        self.last_stop = None
 
         def accepted(index: int) -> None:
             nonlocal accepted_count
@@ -659,14 +717,21 @@ class TrajectoryStreamer:
             raise await self._stream_lost(
                 groups, self._stalled_for, accepted_count, trajectory
             ) from None
-        except asyncio.CancelledError:
-            if task is None or not self._stalled():  # a cancel that is not the watchdog's
-                raise
+        except asyncio.CancelledError as cancel:
             disarm()
-            task.uncancel()
-            raise await self._stream_lost(
-                groups, self._stalled_for, accepted_count, trajectory
-            ) from None
+            if task is not None and self._stalled():  # the watchdog's cancel, not a caller's
+                task.uncancel()
+                raise await self._stream_lost(
+                    groups, self._stalled_for, accepted_count, trajectory
+                ) from None
+            if failed and task is not None:  # the progress callback raised: end with it
+                task.uncancel()
+                error = failed[0]
+                await self._stop_then(groups, error, "the progress callback raised")
+                raise error from None
+            reason = f" ({cancel.args[0]})" if cancel.args and cancel.args[0] else ""
+            await self._stop_then(groups, cancel, f"the move was cancelled{reason}")
+            raise
         except ConnectionLostError as exc:
             if self.states.error is None or isinstance(exc, StateStreamLostError):
                 raise  # the motion port went: nothing can be stopped from here
@@ -675,11 +740,91 @@ class TrajectoryStreamer:
             if not lost.stopped and self._motion_gone:
                 raise  # both went together (the controller closed): the plain loss says it
             raise lost from exc
+        except BaseException as exc:  # a refusal, a timeout, KeyboardInterrupt in this thread
+            disarm()
+            if accepted_count:  # points are queued: the robot may move
+                await self._stop_then(groups, exc, f"the move ended early ({type(exc).__name__})")
+            raise
         finally:
             disarm()
             remove()
         return MoveResult(
             trajectory, final, stats, monitor.report, self.clock.now() - started, groups
+        )
+
+    async def _stop_then(self, groups: Sequence[int], exc: BaseException, why: str) -> None:
+        """:meth:`stop_early`, safe from further cancels, and ``exc`` told where it ended.
+
+        The stop runs as a task of its own, awaited through :func:`asyncio.shield`: a
+        second cancel (a ``wait_for`` around a ``wait_for``, a second Ctrl-C) does not cut
+        it short; it is remembered, and a ``CancelledError`` goes on once the stop is
+        done (at most :data:`EARLY_STOP_BOUND_S` later), so nothing is left half-done.
+        """
+        stopping = asyncio.ensure_future(self.stop_early(groups, why))
+        cancelled_again = False
+        while True:
+            try:
+                outcome = await asyncio.shield(stopping)
+                break
+            except asyncio.CancelledError:
+                if stopping.done():  # the loop itself is going away
+                    raise
+                cancelled_again = True
+        self.last_stop = outcome
+        outcome.tell(exc)
+        if cancelled_again and not isinstance(exc, asyncio.CancelledError):
+            raise asyncio.CancelledError(outcome.text) from exc
+
+    async def stop_early(self, groups: Sequence[int], why: str) -> EarlyStop:
+        """Stop the robot after a move ended early: STOP_MOTION, then wait (at most
+        :data:`STOP_REST_TIMEOUT_S`) until the feedback shows it at rest.
+
+        Never raises for a stop that fails: the :class:`EarlyStop` says what happened,
+        with the last known position and "stop the robot on the pendant".
+        """
+        started = self.clock.now()
+        stopped, note = await self._send_stop(groups)
+        at_rest = False
+        rest_note = ""
+        if stopped:
+            try:
+                await self.wait_until_at_rest(groups, timeout_s=STOP_REST_TIMEOUT_S)
+                at_rest = True
+            except (MotionTimeoutError, ConnectionLostError) as exc:
+                rest_note = f"; the feedback did not show it at rest ({exc})"
+        models = [self.robot.groups[g] for g in groups]
+        positions = _joined_positions(self.states.state, groups) or ()
+        where = joint_values_text(positions, models)
+        took = self.clock.now() - started
+        if at_rest:
+            detail = f"the robot was stopped (STOP_MOTION) and stands at {where}"
+            logger.warning("%s: %s (at rest %.3f s after the stop was sent)", why, detail, took)
+        else:
+            detail = f"{note}{rest_note}; last known position {where}"
+            if stopped:
+                detail += ": check that the robot stands, stop it on the pendant if not"
+            logger.error("%s: %s", why, detail)
+        return EarlyStop(stopped, at_rest, positions, took, why, detail)
+
+    async def _send_stop(self, groups: Sequence[int]) -> tuple[bool, str]:
+        """STOP_MOTION within :data:`STOP_TIMEOUT_S`: (acknowledged, what happened). The one
+        place that words a failed stop ("stop the robot on the pendant")."""
+        self._motion_gone = False
+        try:
+            reply = await self.port.request_motion(
+                MotoMotionCtrl(groups[0], 0, int(MotionCommand.STOP_MOTION)),
+                timeout_s=STOP_TIMEOUT_S,
+            )
+        except (ConnectionLostError, RequestTimeoutError) as exc:
+            self._motion_gone = isinstance(exc, ConnectionLostError)
+            return False, f"STOP_MOTION could not be sent ({exc}): {STOP_ON_THE_PENDANT}"
+        except ClientError as exc:
+            return False, f"STOP_MOTION failed ({exc}): {STOP_ON_THE_PENDANT}"
+        if reply.result == ResultCode.SUCCESS:
+            return True, "STOP_MOTION acknowledged"
+        return False, (
+            f"STOP_MOTION refused (result {reply.result}, subcode {reply.subcode}): "
+            f"{STOP_ON_THE_PENDANT}"
         )
 
     def _stalled(self) -> bool:
@@ -694,22 +839,13 @@ class TrajectoryStreamer:
         trajectory: JointTrajectory,
     ) -> StateStreamLostError:
         """Stop the robot (STOP_MOTION, if the motion port still answers) and say what was lost."""
-        stopped = False
-        self._motion_gone = False
-        stop_note = "STOP_MOTION acknowledged"
-        try:
-            reply = await self.port.request_motion(
-                MotoMotionCtrl(groups[0], 0, int(MotionCommand.STOP_MOTION)),
-                timeout_s=STOP_TIMEOUT_S,
-            )
-            stopped = reply.result == ResultCode.SUCCESS
-            if not stopped:
-                stop_note = f"STOP_MOTION refused (result {reply.result}, subcode {reply.subcode})"
-        except (ConnectionLostError, RequestTimeoutError) as exc:
-            self._motion_gone = isinstance(exc, ConnectionLostError)
-            stop_note = f"STOP_MOTION could not be sent ({exc}): stop the robot on the pendant"
+        stopped, stop_note = await self._send_stop(groups)
         positions = _joined_positions(self.states.state, groups) or ()
-        where = ", ".join(f"{v:.4f}" for v in positions) or "unknown"
+        where = (
+            joint_values_text(positions, [self.robot.groups[g] for g in groups])
+            if positions
+            else "unknown"
+        )
         if silent_s is None:
             what = f"the state stream closed ({self.states.error})"
         else:
@@ -725,7 +861,7 @@ class TrajectoryStreamer:
         )
         message = (
             f"{what}; streaming stopped with {accepted} of {total} points accepted by the "
-            f"robot{unanswered}; {stop_note}; last known position [{where}]. Check the network "
+            f"robot{unanswered}; {stop_note}; last known position {where}. Check the network "
             "to the "
             "controller, then reconnect and move again from the current position"
         )
@@ -738,6 +874,60 @@ class TrajectoryStreamer:
             total_points=total,
             stopped=stopped,
         )
+
+
+def _callback_guard(
+    callback: Callable[[FollowingSample], None],
+    failed: list[Exception],
+    task: asyncio.Task[object] | None,
+) -> Callable[[FollowingSample], None]:
+    """``callback`` for the following monitor: its first exception is kept in ``failed``
+    and cancels the move's task (the move then stops the robot and raises it); later
+    samples are not passed on."""
+
+    def guarded(sample: FollowingSample) -> None:
+        if failed:
+            return
+        try:
+            callback(sample)
+        except Exception as exc:
+            failed.append(exc)
+            if task is not None:
+                task.cancel()
+
+    return guarded
+
+
+def joint_values_text(positions: Sequence[float], models: Sequence[GroupModel]) -> str:
+    """``[0.5724, 0.0000, …] rad`` (``rad``/``m`` after each value when a linear axis is
+    among them): joint values with their units, as every message of the client gives them."""
+    axes = [a for m in models for a in m.axes]
+    if len(axes) != len(positions):
+        return "[" + ", ".join(f"{v:.4f}" for v in positions) + "] (rad/m)"
+    if not any(a.linear for a in axes):
+        return "[" + ", ".join(f"{v:.4f}" for v in positions) + "] rad"
+    return (
+        "["
+        + ", ".join(
+            f"{v:.4f} {'m' if a.linear else 'rad'}" for v, a in zip(positions, axes, strict=True)
+        )
+        + "]"
+    )
+
+
+def farthest_text(
+    positions: Sequence[float], goal: Sequence[float], models: Sequence[GroupModel]
+) -> str:
+    """The largest joint distance to ``goal`` with its unit and joint: ``0.1056 rad
+    (joint_1_s)``, as every message that says how far the robot is from a goal gives it."""
+    axes = [a for m in models for a in m.axes]
+    gaps = [abs(p - g) for p, g in zip(positions, goal, strict=True)]
+    if not gaps:
+        return "0 rad"
+    i = max(range(len(gaps)), key=gaps.__getitem__)
+    if len(axes) != len(gaps):
+        return f"{gaps[i]:.4f} rad/m (axis {i + 1})"
+    return f"{gaps[i]:.4f} {'m' if axes[i].linear else 'rad'} ({axes[i].name})"
 
 
 class _StreamStalledError(Exception):
