@@ -20,7 +20,13 @@ from collections.abc import Awaitable, Callable
 from dataclasses import dataclass
 from typing import Final, TypeAlias
 
-from pymotoros.client.errors import ConnectError, ConnectionLostError, RequestTimeoutError
+from pymotoros.client.errors import (
+    REPLACED_MOTION_CLIENT,
+    SECOND_MOTION_CLIENT,
+    ConnectError,
+    ConnectionLostError,
+    RequestTimeoutError,
+)
 from pymotoros.client.recorder import active_flow
 from pymotoros.errors import RemoteProtocolError
 from pymotoros.protocol.constants import (
@@ -152,6 +158,9 @@ class FrameConnection:
         )
         """Requests sent and given up on (cancel, timeout): their replies are still owed."""
         self._error: ConnectionLostError | None = None
+        self._answered = False
+        """A reply has arrived on this connection (a motion port closed before any was
+        closed by MotoROS's one-motion-client rule)."""
         self._closing = False
         self.closed = asyncio.Event()
         """Set once the connection is gone, for whatever reason."""
@@ -264,6 +273,8 @@ class FrameConnection:
         finally:
             if self._closing:
                 reason = "closed by the client"
+            elif reason == "closed by the controller" and kind is Port.MOTION:
+                reason = REPLACED_MOTION_CLIENT if self._answered else SECOND_MOTION_CLIENT
             self._fail(self._lost(reason))
 
     def _decode_logged(self) -> None:
@@ -286,6 +297,7 @@ class FrameConnection:
             return
         future, request, expected = pending
         if reply_matches(request, message, expected):
+            self._answered = True
             future.set_result(message)
         else:
             logger.warning("%s: reply %r does not answer %r; dropped", self, message, request)

@@ -67,6 +67,23 @@ class ConnectionLostError(ClientError, ConnectionError):
     """The connection closed while the client was using it; every waiter gets this at once."""
 
 
+SECOND_MOTION_CLIENT: Final = (
+    "closed by the controller before it answered anything: MotoROS takes one motion "
+    "connection, and while the robot moves (increments queued) it closes a new one at once "
+    "(reference §2.2): another client holds the motion connection and is moving the "
+    "robot. Wait until its move has ended, or stop it there (Ctrl-C in its terminal, HOLD "
+    "on the pendant), then connect again"
+)
+"""Why a motion connection closes before its first reply (the one-motion-client rule)."""
+
+REPLACED_MOTION_CLIENT: Final = (
+    "closed by the controller (MotoROS takes one motion connection: a client that connects "
+    "to the motion port while no motion is queued takes it over and the older connection "
+    "is closed, reference §2.2; was another client started?)"
+)
+"""Why an established motion connection may close (it was taken over)."""
+
+
 class StateStreamLostError(ConnectionLostError):
     """The state stream stalled (or closed) while a trajectory was streamed or followed.
 

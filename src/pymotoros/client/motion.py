@@ -11,6 +11,8 @@ from __future__ import annotations
 
 import asyncio
 import contextlib
+import signal
+import threading
 from collections.abc import Callable, Iterator, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -89,6 +91,7 @@ class Motion:
             )
         self._moving, self._move_name = task, name
         self._stop_requested = False
+        terminated = _catch_sigterm(task)
         try:
             yield
         except asyncio.CancelledError:
@@ -107,6 +110,8 @@ class Motion:
             ) from None
         finally:
             self._moving = None
+            if terminated():  # SIGTERM came: the robot is stopped, end as it would have
+                signal.raise_signal(signal.SIGTERM)
 
     async def end_move(self, why: str = "the client is closing") -> None:
         """Cancel a move running in another task and wait (bounded) until it has stopped
@@ -338,6 +343,41 @@ class Motion:
                 accel_scale=accel_scale,
                 on_progress=on_progress,
             )
+
+
+def _catch_sigterm(task: asyncio.Task[object] | None) -> Callable[[], bool]:
+    """While a move runs on an event loop of the main thread, SIGTERM with its default
+    action (the process would end at once, the robot still moving) cancels the move
+    instead, so that it stops the robot; the returned function puts the default back and
+    says whether SIGTERM came (the caller then raises it again). A handler the program
+    installed (the CLI's, its own) is left alone."""
+    loop = asyncio.get_running_loop()
+    if (
+        task is None
+        or threading.current_thread() is not threading.main_thread()
+        or signal.getsignal(signal.SIGTERM) is not signal.SIG_DFL
+    ):
+        return _false
+    came: list[int] = []
+
+    def on_sigterm() -> None:
+        came.append(signal.SIGTERM)
+        task.cancel("SIGTERM")
+
+    try:
+        loop.add_signal_handler(signal.SIGTERM, on_sigterm)
+    except (NotImplementedError, RuntimeError, ValueError):  # no signals on this loop
+        return _false
+
+    def restore() -> bool:
+        loop.remove_signal_handler(signal.SIGTERM)  # back to SIG_DFL
+        return bool(came)
+
+    return restore
+
+
+def _false() -> bool:
+    return False
 
 
 def _in_loop(loop: asyncio.AbstractEventLoop) -> bool:

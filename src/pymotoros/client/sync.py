@@ -26,6 +26,7 @@ import asyncio
 import concurrent.futures
 import contextlib
 import functools
+import signal
 import threading
 import time
 from collections.abc import AsyncIterator, Callable, Coroutine, Iterator
@@ -140,6 +141,7 @@ class SyncRobotClient:
             task.add_done_callback(finished)
 
         loop.call_soon_threadsafe(start)
+        restore = _catch_sigterm()
         try:
             return done.result()
         except concurrent.futures.CancelledError as exc:
@@ -157,7 +159,12 @@ class SyncRobotClient:
                 )
             for note in notes:
                 exc.add_note(note)
+            if isinstance(exc, _Terminated):  # the robot is stopped: end as SIGTERM would
+                restore()
+                signal.raise_signal(signal.SIGTERM)
             raise
+        finally:
+            restore()
 
     def connect(self, *, motion: bool = True, state: bool = True, io: bool = True) -> Self:
         self.run(self.client.connect(motion=motion, state=state, io=io))
@@ -297,6 +304,37 @@ class SyncRobotClient:
     tcp_pose = _after_first_state(RobotClient.tcp_pose)
 
 
+class _Terminated(BaseException):
+    """SIGTERM arrived while a call blocked (raised by :func:`_catch_sigterm`'s handler)."""
+
+
+def _nothing() -> None:
+    return None
+
+
+def _catch_sigterm() -> Callable[[], None]:
+    """While a call blocks in the main thread, SIGTERM with its default action (the
+    process ends at once, the robot still moving) is caught instead: the call is
+    interrupted like Ctrl-C (the robot stopped), then SIGTERM is raised again with the
+    default action. A handler the program installed itself is left alone. Returns the
+    function that puts the default back (idempotent)."""
+    if threading.current_thread() is not threading.main_thread():
+        return _nothing
+    if signal.getsignal(signal.SIGTERM) is not signal.SIG_DFL:
+        return _nothing
+
+    def terminated(_sig: int, _frame: object) -> None:
+        raise _Terminated("SIGTERM")
+
+    signal.signal(signal.SIGTERM, terminated)
+
+    def restore() -> None:
+        if signal.getsignal(signal.SIGTERM) is terminated:
+            signal.signal(signal.SIGTERM, signal.SIG_DFL)
+
+    return restore
+
+
 def _wait_through_interrupts(done: concurrent.futures.Future[Any], timeout_s: float) -> bool:
     """Wait until ``done`` is done, at most ``timeout_s``; a further Ctrl-C meanwhile is
     absorbed (the stop it would cut short is what the first one asked for). True if done."""
@@ -307,7 +345,7 @@ def _wait_through_interrupts(done: concurrent.futures.Future[Any], timeout_s: fl
             return False
         try:
             concurrent.futures.wait([done], timeout=left)
-        except KeyboardInterrupt:
+        except (KeyboardInterrupt, _Terminated):
             continue
     return True
 

@@ -1,0 +1,98 @@
+"""Issue 29, item 2: one move at a time, said plainly.
+
+A second move on a client while one runs is refused at once (nothing sent) with a
+typed error that says what runs and how to wait for it or stop it; a second client
+that MotoROS's one-motion-connection rule shuts out is told that rule.
+"""
+
+from __future__ import annotations
+
+import asyncio
+
+import pytest
+
+from pymotoros import MoveInProgressError as FrontDoorError
+from pymotoros.client import ConnectionLostError, MoveInProgressError, RobotClient
+from pymotoros.testing import Twin
+
+GOAL = (1.0, 0.0, 0.0, 0.0, 0.0, 0.0)
+OTHER = (-1.0, 0.0, 0.0, 0.0, 0.0, 0.0)
+
+
+def test_the_error_is_at_the_front_door() -> None:
+    assert FrontDoorError is MoveInProgressError
+
+
+async def test_a_second_move_is_refused_at_once_and_the_first_goes_on(
+    pair: tuple[RobotClient, Twin],
+) -> None:
+    client, the_twin = pair
+    await client.enable()
+    first, second = await asyncio.gather(
+        client.move_joints(GOAL), client.move_joints(OTHER), return_exceptions=True
+    )
+    assert not isinstance(first, BaseException), first
+    assert abs(first.final_positions[0] - GOAL[0]) < 1e-3
+    assert isinstance(second, MoveInProgressError)
+    text = str(second)
+    assert "move_joints() refused" in text
+    assert "still running" in text
+    assert "await" in text  # how to wait for it
+    assert "stop()" in text  # how to stop it
+    assert abs((client.state.positions(0) or (0.0,))[0] - GOAL[0]) < 1e-3
+
+
+async def test_every_move_entry_is_refused_while_one_runs(pair: tuple[RobotClient, Twin]) -> None:
+    client, the_twin = pair
+    await client.enable()
+    moving = asyncio.create_task(client.move_joints(GOAL))
+    await the_twin.sleep(0.2)
+    start = client.state.positions(0) or ()
+    plan = client.plan(start, OTHER)
+    attempts = {
+        "execute": client.execute(plan),
+        "move_joints": client.move_joints(OTHER),
+        "move_named": client.move_named("home"),
+        "move_pose": client.move_pose((0.5, 0.0, 0.5, 3.14, 0.0, 0.0), tool=0),
+        "move_linear": client.move_linear((0.5, 0.0, 0.5, 3.14, 0.0, 0.0), tool=0),
+        "move_relative": client.move_relative(dz=0.01, tool=0),
+    }
+    for name, attempt in attempts.items():
+        t0 = the_twin.clock.now()
+        with pytest.raises(MoveInProgressError, match=rf"{name}\(\) refused"):
+            await attempt
+        assert the_twin.clock.now() == t0  # at once: no wait, nothing sent
+    result = await moving
+    assert abs(result.final_positions[0] - GOAL[0]) < 1e-3
+
+
+async def test_the_same_client_moves_again_once_the_first_move_ended(
+    pair: tuple[RobotClient, Twin],
+) -> None:
+    client, _ = pair
+    await client.enable()
+    await client.move_joints(GOAL)
+    result = await client.move_joints(OTHER)
+    assert abs(result.final_positions[0] - OTHER[0]) < 1e-3
+
+
+async def test_a_second_client_is_told_the_one_motion_connection_rule() -> None:
+    async with Twin(robot="hc10") as the_twin:
+        first = the_twin.client(timeout_s=2.0)
+        await first.connect()
+        await first.wait_for_state()
+        await first.enable()
+        moving = asyncio.create_task(first.move_joints((2.0, 0, 0, 0, 0, 0)))
+        await the_twin.sleep(0.3)
+        second = the_twin.client(timeout_s=2.0)
+        await second.connect(state=False, io=False)
+        with pytest.raises(ConnectionLostError) as info:
+            await second.check_motion_ready()
+        text = str(info.value)
+        assert "MotoROS takes one motion connection" in text
+        assert "another client holds the motion connection" in text
+        assert "Wait until its move has ended" in text
+        await second.close()
+        result = await moving  # the first client's move is not disturbed
+        assert abs(result.final_positions[0] - 2.0) < 1e-3
+        await first.close()
