@@ -26,7 +26,7 @@ def test_the_error_is_at_the_front_door() -> None:
 async def test_a_second_move_is_refused_at_once_and_the_first_goes_on(
     pair: tuple[RobotClient, Twin],
 ) -> None:
-    client, the_twin = pair
+    client, _the_twin = pair
     await client.enable()
     first, second = await asyncio.gather(
         client.move_joints(GOAL), client.move_joints(OTHER), return_exceptions=True
