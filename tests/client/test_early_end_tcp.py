@@ -109,7 +109,7 @@ def _script(twin: RunningTwin, body: str) -> str:
 
 
 def _run_until_moving(twin: RunningTwin, body: str) -> subprocess.Popen[str]:
-    env = {**os.environ, "PYTHONPATH": str(SRC)}
+    env = {"PYTHONPATH": str(SRC), **os.environ}
     process = subprocess.Popen(  # noqa: S603 - our own script
         [sys.executable, "-c", _script(twin, body)],
         stdout=subprocess.PIPE,
@@ -178,7 +178,7 @@ def test_sigterm_to_a_sync_script_stops_the_robot(pymotoros_twin: RunningTwin) -
 def test_sigint_to_an_asyncio_script_stops_the_robot(pymotoros_twin: RunningTwin) -> None:
     """``asyncio.run`` turns Ctrl-C into a cancel of the main task: the move stops the
     robot before the KeyboardInterrupt leaves ``asyncio.run``."""
-    env = {**os.environ, "PYTHONPATH": str(SRC)}
+    env = {"PYTHONPATH": str(SRC), **os.environ}
     twin = pymotoros_twin
     script = textwrap.dedent(
         f"""

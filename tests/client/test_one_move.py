@@ -8,6 +8,7 @@ that MotoROS's one-motion-connection rule shuts out is told that rule.
 from __future__ import annotations
 
 import asyncio
+import re
 
 import pytest
 
@@ -96,3 +97,42 @@ async def test_a_second_client_is_told_the_one_motion_connection_rule() -> None:
         result = await moving  # the first client's move is not disturbed
         assert abs(result.final_positions[0] - 2.0) < 1e-3
         await first.close()
+
+
+async def _moving(client: RobotClient, the_twin: Twin) -> None:
+    for _ in range(200):
+        status = client.state.status
+        if status is not None and status.in_motion:
+            return
+        await the_twin.sleep(0.01)
+    raise AssertionError("the robot did not start moving")
+
+
+async def test_a_robot_stopped_away_from_the_goal_is_told_in_rad_with_the_joint(
+    pair: tuple[RobotClient, Twin],
+) -> None:
+    """Issue 29: "came to rest 1.00000 from the goal" had no unit and no joint."""
+    client, the_twin = pair
+    await client.enable()
+    move = asyncio.create_task(client.move_joints(GOAL, speed_scale=0.3))
+    await _moving(client, the_twin)
+    await client.stop_motion()  # what the robot sees of a second client's STOP_MOTION
+    with pytest.raises(Exception, match="from the goal") as info:
+        await move
+    text = str(info.value)
+    assert type(info.value).__name__ == "MotionIncompleteError"
+    assert re.search(r"came to rest \d+\.\d{4} rad \(joint_1_s\) from the goal", text), text
+    assert re.search(r"at \[-?\d+\.\d{4}, .*\] rad", text), text
+
+
+async def test_an_estop_mid_move_says_the_distance_in_rad(pair: tuple[RobotClient, Twin]) -> None:
+    client, the_twin = pair
+    await client.enable()
+    start = await client.current_positions()
+    plan = client.plan(start, GOAL, speed_scale=0.3)
+    move = asyncio.create_task(client.execute(plan))
+    await the_twin.sleep(plan.duration - 0.05)  # every point sent: waiting for the end
+    the_twin.controller.press_estop(True)
+    with pytest.raises(Exception, match="from the goal") as info:
+        await move
+    assert re.search(r"stopped \d+\.\d{4} rad \(joint_1_s\) from the goal", str(info.value))

@@ -305,14 +305,24 @@ def build_message(
     )
 
 
-def _deviation_text(devs: Sequence[AxisDeviation], kind: str) -> str:
+def _deviation_text(
+    devs: Sequence[AxisDeviation], kind: str, models: Sequence[GroupModel] = ()
+) -> str:
+    """The numbers of a refusal with their units (rad, rad/s; m, m/s for a linear axis
+    of ``models``, the refused groups' models in order)."""
+    linear = {i for i, a in enumerate(a for m in models for a in m.axes) if a.linear}
     if kind == "start":
         return "; ".join(
-            f"{d.name} {d.pulses} pulses ({d.difference:+.5f} rad) from the robot, "
-            f"tolerance {START_TOLERANCE_PULSES}"
+            f"{d.name} {d.pulses} pulses ({d.difference:+.5f} "
+            f"{'m' if d.axis in linear else 'rad'}) from the robot, "
+            f"tolerance {START_TOLERANCE_PULSES} pulses"
             for d in devs
         )
-    return "; ".join(f"{d.name} {d.value:+.4f} > limit {d.reference:.4f}" for d in devs)
+    return "; ".join(
+        f"{d.name} {d.value:+.4f} {unit} > limit {d.reference:.4f} {unit}"
+        for d in devs
+        for unit in ("m/s" if d.axis in linear else "rad/s",)
+    )
 
 
 deviation_text: Final = _deviation_text
@@ -420,10 +430,12 @@ class TrajectoryStreamer:
             groups = [self.robot.groups.index(m) for m in models]
             current = _joined_positions(self.states.state, groups)
             devs = start_deviations(point, models, current, self.controller)
-            detail = _deviation_text(devs, "start") or "compared with the commanded position"
+            detail = (
+                _deviation_text(devs, "start", models) or "compared with the commanded position"
+            )
         elif reply.result == ResultCode.INVALID and reply.subcode == InvalidSubcode.DATA_SPEED:
             devs = speed_deviations(point, models, self.controller)
-            detail = _deviation_text(devs, "speed")
+            detail = _deviation_text(devs, "speed", models)
         return reply_error(
             reply.result, reply.subcode, reply.command, point=index, detail=detail, deviations=devs
         )
@@ -505,7 +517,7 @@ class TrajectoryStreamer:
                         InvalidSubcode.DATA_SPEED,
                         _message_type(groups),
                         point=index,
-                        detail=_deviation_text(devs, "speed") + "; checked before sending",
+                        detail=_deviation_text(devs, "speed", models) + "; checked before sending",
                         deviations=devs,
                     )
             message = build_message(point, index, groups, sizes)
@@ -595,6 +607,7 @@ class TrajectoryStreamer:
         )
         rest = _RestDetector(groups)
         progress_of = _Progress(trajectory)
+        models = [self.robot.groups[g] for g in groups]
         best_progress, best_at = -1.0, start
         state = states.state
         while True:
@@ -618,13 +631,16 @@ class TrajectoryStreamer:
                             ResultCode.FALSE,
                             readiness.subcode,
                             MotionCommand.CHECK_MOTION_READY,
-                            detail=f"the robot stopped {err:.4f} from the goal",
+                            detail=f"the robot stopped {farthest_text(positions, goal, models)} "
+                            "from the goal",
                         )
                 past_end = now > start + trajectory.duration + 1.0
                 if at_rest and past_end and now - best_at > STALL_TIMEOUT_S:
                     raise MotionIncompleteError(
-                        f"the robot came to rest {err:.5f} from the goal and is not moving "
-                        "(was the motion stopped?)"
+                        f"the robot came to rest {farthest_text(positions, goal, models)} "
+                        f"from the goal, at {joint_values_text(positions, models)}, and is not "
+                        "moving (was the motion stopped: STOP_MOTION from this client, HOLD or "
+                        "the queue cleared?)"
                     )
             if now > hard_deadline or (now > soft_deadline and now - best_at > STALL_TIMEOUT_S):
                 lag = monitor.report.max_lag_s
