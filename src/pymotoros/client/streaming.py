@@ -162,6 +162,20 @@ enough to smooth the encoder steps, short enough to see an FSU switch within a c
 ARRIVED_PROGRESS: Final = 0.999
 """Progress from which the following monitor counts the robot as arrived (no lag)."""
 
+SLOWED_SPEED_PCT: Final = 90.0
+"""Below this share of the planned speed in the robot's own velocity report (the state
+stream's feedback velocities), the robot is being slowed (FSU, override, HOLD); at or
+above it, a robot that still falls behind is waiting on a late controller or network."""
+
+STATE_PERIOD_S: Final = 0.025
+"""MotoROS sends a state cycle every 25 ms (reference §2.3)."""
+
+LATE_STATE_GAP_S: Final = 4 * STATE_PERIOD_S
+"""A gap between state messages this long (four cycles) means late feedback."""
+
+_STILL_PLAN: Final = 1e-12
+"""Squared planned speed under which the plan stands still (no speed to compare with)."""
+
 
 @dataclass(frozen=True, slots=True)
 class ExecuteOptions:
@@ -215,9 +229,17 @@ class FollowingReport:
     max_lag_s: float = 0.0
     max_error: float = 0.0
     slowed: bool = False
-    """True once the lag passed the warning threshold."""
+    """The robot fell more than the warning threshold behind the plan because it was
+    slowed: the speed it reports itself was below the plan's (FSU, override, HOLD)."""
+    late: bool = False
+    """It fell behind although it reported the planned speed: the controller or the
+    network was late (a loaded simulator, a stalled loop, delayed state messages)."""
+    reason: str = ""
+    """Why it fell behind, with the numbers used (the warning that was logged)."""
     min_speed_pct: float = 100.0
     """The lowest :attr:`FollowingSample.speed_pct` seen while the plan was moving."""
+    max_state_gap_s: float = 0.0
+    """The longest silence between two state messages while the monitor listened."""
 
     @property
     def max_lag_rad(self) -> float:
@@ -990,6 +1012,8 @@ class FollowingMonitor:
         self._best: list[float] = list(itertools.accumulate(self._raw[1:], max))
         self._recent: collections.deque[tuple[float, float]] = collections.deque()
         """(elapsed, plan time reached) of the samples in the last SPEED_WINDOW_S."""
+        self._previous = 0.0
+        """Elapsed time of the previous sample (for the gaps between state messages)."""
 
     def start(self, t0: float | None = None) -> None:
         if self._t0 is None:
@@ -1025,27 +1049,98 @@ class FollowingMonitor:
         sample = FollowingSample(elapsed, progress, lag, error, speed_pct)
         rep = self.report
         rep.samples += 1
+        gap = elapsed - self._previous
+        self._previous = elapsed
+        if gap > rep.max_state_gap_s:
+            rep.max_state_gap_s = gap
         if error > rep.max_error:
             rep.max_error = error
         if lag > rep.max_lag_s:
             rep.max_lag_s = lag
         if speed_pct < rep.min_speed_pct:
             rep.min_speed_pct = speed_pct
-        if lag > self.warn_lag_s and not rep.slowed:
-            rep.slowed = True
-            logger.warning(
-                "the robot runs %.2f s (%.4f rad) behind the plan at %.0f %% of the move, "
-                "moving at %.0f %% of the planned speed: a safety speed limit (FSU), a speed "
-                "override or HOLD is slowing it",
-                lag,
-                error,
-                progress * 100,
-                speed_pct,
-            )
+        if lag > self.warn_lag_s and not rep.reason:
+            self._blame(state, sample, reached)
         self.last = sample
         if self.on_sample is not None:
             self.on_sample(sample)
         return sample
+
+    def _blame(self, state: RobotState, sample: FollowingSample, reached: float) -> None:
+        """Say once why the robot fell behind: slowed (the speed it reports is below the
+        plan's) or a late controller/network (it reports the planned speed, or the state
+        messages came late), with the numbers used."""
+        rep = self.report
+        reported = self._reported_pct(state, reached)
+        gap_ms = rep.max_state_gap_s * 1000
+        head = (
+            f"the robot runs {sample.lag_s:.2f} s ({sample.error:.4f} rad) behind the plan at "
+            f"{sample.progress:.0%} of the move"
+        )
+        numbers = (
+            f"over the last {SPEED_WINDOW_S:g} s it gained {sample.speed_pct:.0f} % of the "
+            f"plan's time per second of the client's clock; state messages up to "
+            f"{gap_ms:.0f} ms apart (MotoROS sends a cycle every {STATE_PERIOD_S * 1000:.0f} ms)"
+        )
+        if reported is not None and reported < SLOWED_SPEED_PCT:
+            rep.slowed = True
+            rep.reason = (
+                f"{head}: it reports moving at {reported:.0f} % of the planned speed (its "
+                f"feedback velocity; {numbers}): the controller is slowing it: a safety "
+                "speed limit (FSU), a speed override or HOLD"
+            )
+        elif reported is not None or rep.max_state_gap_s > LATE_STATE_GAP_S:
+            rep.late = True
+            told = (
+                ""
+                if reported is None
+                else f", yet it reports moving at {reported:.0f} % of the planned speed"
+            )
+            rep.reason = (
+                f"{head}{told}: the controller or the network is late, the robot is not "
+                f"slowed ({numbers}): a loaded or stalled simulator loop, or a slow network"
+            )
+        elif sample.speed_pct < SLOWED_SPEED_PCT:  # no velocity in the feedback
+            rep.slowed = True
+            rep.reason = (
+                f"{head}, progressing at {sample.speed_pct:.0f} % of the planned speed "
+                f"({numbers}; the feedback carries no velocity): a safety speed limit (FSU), "
+                "a speed override or HOLD is slowing it"
+            )
+        else:
+            rep.reason = (
+                f"{head}, though it now progresses at {sample.speed_pct:.0f} % of the planned "
+                f"speed ({numbers}; the feedback carries no velocity): it was held up earlier"
+            )
+        logger.warning("%s", rep.reason)
+
+    def _reported_pct(self, state: RobotState, reached: float) -> float | None:
+        """The robot's own velocity report along the plan's velocity where it stands, in %
+        of the planned speed (None: no velocity in the feedback, or the plan stands)."""
+        velocities: list[float] = []
+        for g in self.groups:
+            joint = state.joints.get(g)
+            if joint is None or joint.velocities is None:
+                return None
+            velocities.extend(joint.velocities)
+        planned = self._planned_velocity_at(reached)
+        norm = sum(v * v for v in planned)
+        if norm <= _STILL_PLAN or len(planned) != len(velocities):
+            return None
+        return 100.0 * sum(a * b for a, b in zip(velocities, planned, strict=True)) / norm
+
+    def _planned_velocity_at(self, t: float) -> tuple[float, ...]:
+        """The plan's joint velocities at ``t`` (linear between the points' velocities)."""
+        pts = self.trajectory.points
+        i = bisect.bisect_right(self._times, t) - 1
+        if i < 0:
+            return pts[0].velocities
+        if i >= len(pts) - 1:
+            return pts[-1].velocities
+        a, b = pts[i], pts[i + 1]
+        h = b.time - a.time
+        s = 0.0 if h <= 0 else (t - a.time) / h
+        return tuple(va + s * (vb - va) for va, vb in zip(a.velocities, b.velocities, strict=True))
 
     def _speed_pct(self, elapsed: float, reached: float, progress: float) -> float:
         """Plan time gained per second over the last window, in % (100 outside motion)."""
