@@ -102,7 +102,7 @@ def _script(twin: RunningTwin, body: str) -> str:
         robot.wait_for_state()
         robot.enable()
         def progress(sample):
-            if sample.elapsed_s > 0.3:
+            if sample.progress > 0.05:  # 0.15 rad on the way to 3 rad
                 print("moving", flush=True)
         """
     ) + textwrap.dedent(body)
@@ -149,7 +149,7 @@ def test_ctrl_c_in_a_sync_script_stops_the_robot(pymotoros_twin: RunningTwin, tw
     pulses = _assert_still(pymotoros_twin)
     ratio = pymotoros_twin.call(lambda c: c.cell.groups[0].axes[0].pulses_per_unit)
     s_axis = pulses[0] / ratio
-    assert 0.05 < s_axis < 2.9  # stopped on the way, well short of the 3 rad goal
+    assert 0.1 < s_axis < 2.9  # stopped on the way, well short of the 3 rad goal
     stands = out.split("stands at [", 1)[1].split(",", 1)[0]
     assert math.isclose(float(stands), s_axis, abs_tol=0.01)  # where it says it stopped
 
