@@ -336,3 +336,32 @@ async def test_the_stop_is_bounded() -> None:
         with contextlib.suppress(asyncio.CancelledError):
             await task
         assert the_twin.clock.now() - t0 <= EARLY_STOP_BOUND_S
+
+
+async def test_leaving_async_with_while_a_move_runs_stops_the_robot() -> None:
+    """The block ends (here with an error) while a move runs in another task: __aexit__
+    stops the robot before it closes the connections (MotoROS itself would go on with
+    its queue after the motion connection closed, §2.2)."""
+    async with Twin(robot="hc10") as the_twin:
+        moving: list[asyncio.Task[object]] = []
+
+        async def script() -> None:
+            async with the_twin.client(timeout_s=2.0) as client:
+                await client.wait_for_state()
+                await client.enable()
+                moving.append(asyncio.create_task(client.move_joints(GOAL)))
+                await the_twin.sleep(0.5)
+                raise RuntimeError("the script failed")
+
+        with pytest.raises(RuntimeError, match="the script failed"):
+            await script()
+        (task,) = moving
+        assert task.done()
+        with pytest.raises(asyncio.CancelledError) as info:
+            task.result()
+        assert "the client is closing" in _all_notes(info.value)
+        assert "stands at [" in _all_notes(info.value)
+        pulses = the_twin.commanded_pulses(0)
+        await the_twin.sleep(QUIET_AFTER_S)
+        assert the_twin.commanded_pulses(0) == pulses
+        assert not the_twin.controller.has_queued_motion()

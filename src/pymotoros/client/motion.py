@@ -91,6 +91,7 @@ class Motion:
             )
         self._moving, self._move_name = task, name
         self._stop_requested = False
+        self._streamer.forget_stop()
         terminated = _catch_sigterm(task)
         try:
             yield

@@ -18,6 +18,10 @@
 * :meth:`~TrajectoryStreamer.wait_for_completion`: queue empty, ``in_motion`` false,
   feedback settled within a tolerance of the goal; judged against progress, not only
   the clock.
+* :meth:`~TrajectoryStreamer.stop_early`: whatever ends :meth:`~TrajectoryStreamer.execute`
+  before the goal (a cancel, a timeout, the caller's callback, an error) first stops
+  the robot (STOP_MOTION, then at rest, within :data:`EARLY_STOP_BOUND_S`) and then
+  lets the cancellation or error go on, saying where the robot stopped.
 
 Every wait ends: on success, on a typed error, on a timeout, or at once with
 :class:`ConnectionLostError` when a connection drops. The MotoROS rules used to
@@ -165,7 +169,9 @@ ARRIVED_PROGRESS: Final = 0.999
 SLOWED_SPEED_PCT: Final = 90.0
 """Below this share of the planned speed in the robot's own velocity report (the state
 stream's feedback velocities), the robot is being slowed (FSU, override, HOLD); at or
-above it, a robot that still falls behind is waiting on a late controller or network."""
+above it, a robot that still falls behind is waiting on a late controller or network.
+Chosen: a robot on the plan reports about 100 % (the twin 99–101 %), an FSU limit or an
+override far less, HOLD 0."""
 
 STATE_PERIOD_S: Final = 0.025
 """MotoROS sends a state cycle every 25 ms (reference §2.3)."""
@@ -828,7 +834,7 @@ class TrajectoryStreamer:
             try:
                 await self.wait_until_at_rest(groups, timeout_s=STOP_REST_TIMEOUT_S)
                 at_rest = True
-            except (MotionTimeoutError, ConnectionLostError) as exc:
+            except ClientError as exc:  # a timeout, the state stream gone
                 rest_note = f"; the feedback did not show it at rest ({exc})"
         models = [self.robot.groups[g] for g in groups]
         positions = _joined_positions(self.states.state, groups) or ()
@@ -864,6 +870,10 @@ class TrajectoryStreamer:
             f"STOP_MOTION refused (result {reply.result}, subcode {reply.subcode}): "
             f"{STOP_ON_THE_PENDANT}"
         )
+
+    def forget_stop(self) -> None:
+        """A new move starts: :attr:`last_stop` is no longer about it."""
+        self.last_stop = None
 
     def _stalled(self) -> bool:
         """Has the watchdog tripped during the current :meth:`execute`? (set by its callback)"""
