@@ -17,7 +17,7 @@ import asyncio
 import contextlib
 import logging
 import math
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field
 from typing import Final
 
@@ -35,6 +35,10 @@ MAX_TICKS_AFTER_CANCEL: Final = 10
 """The commanded pulses may change for this many 4 ms ticks after the cancel: the
 point in flight is answered, STOP_MOTION crosses to the controller and MotoROS waits up
 to 20 ms for its interpolators (§3.6): 5 ticks, doubled for margin."""
+MAX_COMMANDED_TRAVEL_RAD: Final = 0.02
+"""The S axis's largest increment at full speed is about 0.009 rad per 4 ms tick."""
+MAX_FEEDBACK_TRAVEL_RAD: Final = 0.1
+"""The feedback lags the command by the servo's delay: it may move on by that much."""
 QUIET_AFTER_S: Final = 1.0
 """How long the controller is watched after the move ended: no increment may come."""
 
@@ -198,6 +202,11 @@ def test_a_move_ended_early_stops_the_robot(way: str, at_s: float) -> None:
         f"{way} at {at_s:.3f} s: the commanded pulses changed {outcome.rest_after_s:.3f} s "
         "after the cancel"
     )
+    # At most one increment after the cancel (the tick at the same instant), and the
+    # feedback catches up with the command by at most what the servo lags (the issue
+    # saw 0.54 rad before this).
+    assert outcome.travelled_rad < MAX_COMMANDED_TRAVEL_RAD
+    assert outcome.feedback_travel_rad < MAX_FEEDBACK_TRAVEL_RAD
     notes = _all_notes(outcome.error)
     if outcome.log.ticks[0][1] == outcome.log.pulses_at(math.inf):
         return  # ended while it waited for rest or planned: nothing was sent, nothing moved
@@ -205,20 +214,20 @@ def test_a_move_ended_early_stops_the_robot(way: str, at_s: float) -> None:
     assert "] rad" in notes
 
 
-def test_the_worst_travel_after_a_cancel_is_small() -> None:
-    """The numbers of the run above (issue 29 asks for them): the worst commanded travel
-    after a cancel and the time to rest. At most 1.5 rad/s × 40 ms on the HC10's S axis."""
-    if not MEASURED:
-        pytest.skip("run with test_a_move_ended_early_stops_the_robot")
-    worst = max(MEASURED, key=lambda o: o.travelled_rad)
-    worst_fb = max(o.feedback_travel_rad for o in MEASURED)
-    slowest = max(o.rest_after_s for o in MEASURED)
-    print(
-        f"\n{len(MEASURED)} early ends: worst commanded travel after the cancel "
-        f"{worst.travelled_rad:.4f} rad ({math.degrees(worst.travelled_rad):.2f} deg), in the "
-        f"feedback {worst_fb:.4f} rad; commanded pulses still after {slowest * 1000:.0f} ms"
-    )
-    assert worst.travelled_rad < 0.1
+@pytest.fixture(scope="module", autouse=True)
+def _report_the_worst() -> Iterator[None]:
+    """After the run: the worst travel after a cancel and the time to rest (the figures
+    issue 29 asks for; ``pytest -s`` shows them, docs/client.md quotes them)."""
+    yield
+    if MEASURED:
+        worst = max(o.travelled_rad for o in MEASURED)
+        worst_fb = max(o.feedback_travel_rad for o in MEASURED)
+        slowest = max(o.rest_after_s for o in MEASURED)
+        print(
+            f"\n{len(MEASURED)} early ends: worst commanded travel after the cancel "
+            f"{worst:.4f} rad ({math.degrees(worst):.2f} deg), in the feedback "
+            f"{worst_fb:.4f} rad; commanded pulses still after {slowest * 1000:.0f} ms"
+        )
 
 
 async def test_a_cancelled_point_reply_is_consumed_not_logged(
