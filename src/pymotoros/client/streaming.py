@@ -804,7 +804,9 @@ class TrajectoryStreamer:
         it short; it is remembered, and a ``CancelledError`` goes on once the stop is
         done (at most :data:`EARLY_STOP_BOUND_S` later), so nothing is left half-done.
         """
-        stopping = asyncio.ensure_future(self.stop_early(groups, why))
+        # The client's own errors carry the stop in their message: no second line in a log.
+        level = logging.INFO if isinstance(exc, ClientError) else logging.WARNING
+        stopping = asyncio.ensure_future(self.stop_early(groups, why, quiet_level=level))
         cancelled_again = False
         while True:
             try:
@@ -819,12 +821,16 @@ class TrajectoryStreamer:
         if cancelled_again and not isinstance(exc, asyncio.CancelledError):
             raise asyncio.CancelledError(outcome.text) from exc
 
-    async def stop_early(self, groups: Sequence[int], why: str) -> EarlyStop:
+    async def stop_early(
+        self, groups: Sequence[int], why: str, *, quiet_level: int = logging.WARNING
+    ) -> EarlyStop:
         """Stop the robot after a move ended early: STOP_MOTION, then wait (at most
         :data:`STOP_REST_TIMEOUT_S`) until the feedback shows it at rest.
 
         Never raises for a stop that fails: the :class:`EarlyStop` says what happened,
-        with the last known position and "stop the robot on the pendant".
+        with the last known position and "stop the robot on the pendant" (logged as an
+        error). A stop that worked is logged at ``quiet_level``: a warning where only a
+        note carries it (a cancellation), INFO where the error's own message does.
         """
         started = self.clock.now()
         stopped, note = await self._send_stop(groups)
@@ -842,7 +848,9 @@ class TrajectoryStreamer:
         took = self.clock.now() - started
         if at_rest:
             detail = f"the robot was stopped (STOP_MOTION) and stands at {where}"
-            logger.warning("%s: %s (at rest %.3f s after the stop was sent)", why, detail, took)
+            logger.log(
+                quiet_level, "%s: %s (at rest %.3f s after the stop was sent)", why, detail, took
+            )
         else:
             detail = f"{note}{rest_note}; last known position {where}"
             if stopped:
