@@ -17,6 +17,7 @@ import asyncio
 import contextlib
 import logging
 import math
+import threading
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field
 from typing import Final
@@ -27,7 +28,7 @@ from hypothesis import strategies as st
 
 from pymotoros.client import FollowingSample
 from pymotoros.client.streaming import EARLY_STOP_BOUND_S
-from pymotoros.testing import Twin, twin
+from pymotoros.testing import Twin, sync_twin, twin
 
 GOAL: Final = (3.0, 0.0, 0.0, 0.0, 0.0, 0.0)
 """The issue's move: 3 rad on the S axis from home (about 1.6 s at full speed)."""
@@ -374,3 +375,28 @@ async def test_leaving_async_with_while_a_move_runs_stops_the_robot() -> None:
         await the_twin.sleep(QUIET_AFTER_S)
         assert the_twin.commanded_pulses(0) == pulses
         assert not the_twin.controller.has_queued_motion()
+
+
+def test_leaving_a_sync_with_block_while_another_thread_moves_stops_the_robot() -> None:
+    """``with SyncRobotClient(...)`` (here the sync twin) ends while a thread is blocked
+    in a move: the close stops the robot first; the moving thread gets the cancellation
+    with the note."""
+    errors: list[BaseException] = []
+    with sync_twin(robot="hc10", timeout_s=2.0) as (client, the_twin):
+        client.enable()
+        moving = threading.Event()
+
+        def move() -> None:
+            try:  # slow: the twin's virtual time runs as fast as its thread
+                client.move_joints(GOAL, speed_scale=0.01, on_progress=lambda _s: moving.set())
+            except BaseException as exc:
+                errors.append(exc)
+
+        thread = threading.Thread(target=move)
+        thread.start()
+        assert moving.wait(10)
+    thread.join(10)
+    assert not thread.is_alive()
+    assert len(errors) == 1
+    assert "stands at [" in _all_notes(errors[0]), repr(errors[0])
+    assert not the_twin.controller.has_queued_motion()

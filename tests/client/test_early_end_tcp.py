@@ -215,3 +215,46 @@ def test_sigint_to_an_asyncio_script_stops_the_robot(pymotoros_twin: RunningTwin
     assert "interrupted" in out, err
     assert "the robot was stopped (STOP_MOTION) and stands at [" in err  # the log line
     _assert_still(pymotoros_twin)
+
+
+def test_sigterm_to_an_asyncio_script_stops_the_robot(pymotoros_twin: RunningTwin) -> None:
+    """SIGTERM (default action) while a move runs on the main thread's loop: the move is
+    cancelled and stops the robot, then the process ends by SIGTERM."""
+    env = {"PYTHONPATH": str(SRC), **os.environ}
+    twin = pymotoros_twin
+    script = textwrap.dedent(
+        f"""
+        import asyncio
+        from pymotoros.client import RobotClient
+
+        async def main():
+            async with RobotClient({twin.host!r}, motion_port={twin.motion},
+                                   state_port={twin.state}, io_port={twin.io}) as robot:
+                await robot.wait_for_state()
+                await robot.enable()
+                def progress(sample):
+                    if sample.progress > 0.05:
+                        print("moving", flush=True)
+                await robot.move_joints([3.0, 0, 0, 0, 0, 0], on_progress=progress)
+                print("finished", flush=True)
+
+        asyncio.run(main())
+        """
+    )
+    process = subprocess.Popen(  # noqa: S603 - our own script
+        [sys.executable, "-c", script],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        env=env,
+    )
+    assert process.stdout is not None
+    assert process.stdout.readline().strip() == "moving"
+    process.send_signal(signal.SIGTERM)
+    out, err = process.communicate(timeout=30)
+    assert "finished" not in out
+    assert process.returncode == -signal.SIGTERM, (process.returncode, err)
+    assert "the move was cancelled (SIGTERM): the robot was stopped (STOP_MOTION)" in err
+    pulses = _assert_still(pymotoros_twin)
+    ratio = pymotoros_twin.call(lambda c: c.cell.groups[0].axes[0].pulses_per_unit)
+    assert pulses[0] / ratio < 2.9
