@@ -136,3 +136,22 @@ async def test_an_estop_mid_move_says_the_distance_in_rad(pair: tuple[RobotClien
     with pytest.raises(Exception, match="from the goal") as info:
         await move
     assert re.search(r"stopped \d+\.\d{4} rad \(joint_1_s\) from the goal", str(info.value))
+
+
+async def test_an_idle_client_whose_motion_connection_was_taken_over_is_told_why() -> None:
+    """MotoROS hands an idle motion connection to a newcomer (§2.2): the older client's
+    next request says so instead of a bare "closed by the controller"."""
+    async with Twin(robot="hc10") as the_twin:
+        first = the_twin.client(timeout_s=2.0)
+        await first.connect(state=False, io=False)
+        await first.check_motion_ready()  # answered: an established connection
+        second = the_twin.client(timeout_s=2.0)
+        await second.connect(state=False, io=False)
+        await second.check_motion_ready()
+        with pytest.raises(ConnectionLostError) as info:
+            await first.check_motion_ready()
+        text = str(info.value)
+        assert "MotoROS takes one motion connection" in text
+        assert "takes it over and the older connection is closed" in text
+        await first.close()
+        await second.close()
