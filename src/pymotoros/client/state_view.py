@@ -141,8 +141,7 @@ class StateView:
                             f"model mismatch: the controller's DH parameters are not "
                             f"{self._robot.name}'s (group {index} {group.name}, link {n + 1}: "
                             f"{field} {got:.4f} {_DH_UNIT[field]} on the controller, "
-                            f"{want:.4f} {_DH_UNIT[field]} in the model); "
-                            + _dh_hint(links)
+                            f"{want:.4f} {_DH_UNIT[field]} in the model); " + _dh_hint(links)
                         )
 
     def group_index(self, group: int | str) -> int:
