@@ -46,6 +46,7 @@ if TYPE_CHECKING:
     from pymotoros.client.errors import ModelMismatchError as ModelMismatchError
     from pymotoros.client.errors import MotionIncompleteError as MotionIncompleteError
     from pymotoros.client.errors import MotionTimeoutError as MotionTimeoutError
+    from pymotoros.client.errors import MoveInProgressError as MoveInProgressError
     from pymotoros.client.errors import MoveStoppedError as MoveStoppedError
     from pymotoros.client.errors import NotReadyError as NotReadyError
     from pymotoros.client.errors import ReplyError as ReplyError
@@ -121,6 +122,7 @@ _EXPORTS: Final[dict[str, tuple[str, ...]]] = {
         "ModelMismatchError",
         "MotionIncompleteError",
         "MotionTimeoutError",
+        "MoveInProgressError",
         "MoveStoppedError",
         "NotReadyError",
         "ReplyError",

@@ -130,7 +130,7 @@ def test_wrong_model_is_a_mismatch_not_a_timeout(sim: Sim) -> None:
 def test_same_axes_other_model_is_found_by_its_dh_parameters(sim: Sim) -> None:
     line = _one_line_error(invoke(sim, "status", "--robot", "gp12", "--check-model"), EXIT_USAGE)
     assert "model mismatch: the controller's DH parameters are not gp12's" in line
-    assert "d 0.2750 on the controller, 0.4500 in the model" in line
+    assert "d 0.2750 m on the controller, 0.4500 m in the model" in line
     assert "--robot hc10" in line
     assert invoke(sim, "status", "--check-model").exit_code == 0
 

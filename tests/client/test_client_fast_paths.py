@@ -208,7 +208,10 @@ def _sample_tuple(s: FollowingSample) -> tuple[float, ...]:
 
 def _report_tuple(m: FollowingMonitor) -> tuple[object, ...]:
     r = m.report
-    return (r.samples, r.max_lag_s, r.max_error, r.slowed, r.min_speed_pct)
+    # The former ``slowed`` meant "fell behind by more than the threshold"; issue 29 split
+    # it by cause (slowed, late), and ``reason`` is set whenever it fell behind.
+    behind = r.slowed if isinstance(m, _FormerMonitor) else bool(r.reason)
+    return (r.samples, r.max_lag_s, r.max_error, behind, r.min_speed_pct)
 
 
 # --------------------------------------------------------------------------- speed screen

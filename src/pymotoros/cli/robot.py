@@ -886,10 +886,15 @@ def _report_move(result: MoveResult, req: MoveRequest, goal: MoveGoal, robot: An
         f"reached [{pos}] {'deg' if req.deg else 'rad'} in {result.elapsed_s:.2f} s "
         f"(planned {result.trajectory.duration:.2f} s, {result.stream.points} points)"
     )
-    if result.following.slowed:
+    following = result.following
+    if following.slowed or following.late:
+        cause = (
+            "a safety speed limit, an override or HOLD slowed it"
+            if following.slowed
+            else "the controller or the network was late; the robot was not slowed"
+        )
         click.echo(
-            f"note: the robot ran up to {result.following.max_lag_s:.2f} s behind the plan "
-            "(a safety speed limit or override slowed it)"
+            f"note: the robot ran up to {following.max_lag_s:.2f} s behind the plan ({cause})"
         )
 
 

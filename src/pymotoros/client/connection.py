@@ -12,6 +12,7 @@ Every wait has a timeout (``asyncio.timeout``).
 from __future__ import annotations
 
 import asyncio
+import collections
 import contextlib
 import logging
 import socket
@@ -19,7 +20,13 @@ from collections.abc import Awaitable, Callable
 from dataclasses import dataclass
 from typing import Final, TypeAlias
 
-from pymotoros.client.errors import ConnectError, ConnectionLostError, RequestTimeoutError
+from pymotoros.client.errors import (
+    REPLACED_MOTION_CLIENT,
+    SECOND_MOTION_CLIENT,
+    ConnectError,
+    ConnectionLostError,
+    RequestTimeoutError,
+)
 from pymotoros.client.recorder import active_flow
 from pymotoros.errors import RemoteProtocolError
 from pymotoros.protocol.constants import (
@@ -48,6 +55,11 @@ READ_CHUNK: Final = 4096
 DEFAULT_CONNECT_TIMEOUT_S: Final = 5.0
 DEFAULT_REQUEST_TIMEOUT_S: Final = 5.0
 CLOSE_TIMEOUT_S: Final = 2.0
+
+MAX_ORPHANS: Final = 8
+"""Requests sent whose waiter gave up (cancelled or timed out) and whose reply may still
+come: their replies are recognised and discarded, not logged as unexpected. A peer
+answers in order, so a handful covers every real case (a cancel mid-request, a timeout)."""
 
 Connector: TypeAlias = Callable[
     [str, int], Awaitable[tuple[asyncio.StreamReader, asyncio.StreamWriter]]
@@ -142,7 +154,14 @@ class FrameConnection:
         self._on_lost = on_lost
         self._lock = asyncio.Lock()
         self._pending: tuple[asyncio.Future[WireMessage], WireMessage, type | None] | None = None
+        self._orphans: collections.deque[tuple[WireMessage, type | None]] = collections.deque(
+            maxlen=MAX_ORPHANS
+        )
+        """Requests sent and given up on (cancel, timeout): their replies are still owed."""
         self._error: ConnectionLostError | None = None
+        self._answered = False
+        """A reply has arrived on this connection (a motion port closed before any was
+        closed by MotoROS's one-motion-client rule)."""
         self._closing = False
         self.closed = asyncio.Event()
         """Set once the connection is gone, for whatever reason."""
@@ -255,6 +274,8 @@ class FrameConnection:
         finally:
             if self._closing:
                 reason = "closed by the client"
+            elif reason == "closed by the controller" and kind is Port.MOTION:
+                reason = REPLACED_MOTION_CLIENT if self._answered else SECOND_MOTION_CLIENT
             self._fail(self._lost(reason))
 
     def _decode_logged(self) -> None:
@@ -270,14 +291,36 @@ class FrameConnection:
 
     def _deliver(self, message: WireMessage) -> None:
         pending = self._pending
+        if self._orphans and self._orphan_reply(message, pending):
+            return
         if pending is None or pending[0].done():
             logger.warning("%s: unexpected reply %r dropped", self, message)
             return
         future, request, expected = pending
         if reply_matches(request, message, expected):
+            self._answered = True
             future.set_result(message)
         else:
             logger.warning("%s: reply %r does not answer %r; dropped", self, message, request)
+
+    def _orphan_reply(
+        self,
+        message: WireMessage,
+        pending: tuple[asyncio.Future[WireMessage], WireMessage, type | None] | None,
+    ) -> bool:
+        """Is ``message`` the late reply to a request its waiter gave up on? (discarded)
+
+        The controller answers in order, so the oldest orphan is tried first; a reply to
+        the pending request instead means the orphans before it will never be answered.
+        """
+        orphan, expected = self._orphans[0]
+        if reply_matches(orphan, message, expected):
+            self._orphans.popleft()
+            logger.debug("%s: late reply %r to a request given up on, discarded", self, message)
+            return True
+        if pending is not None and reply_matches(pending[1], message, pending[2]):
+            self._orphans.clear()
+        return False
 
     def _fail(self, error: ConnectionLostError) -> None:
         if self._error is not None:
@@ -306,6 +349,7 @@ class FrameConnection:
                         raise ConnectionLostError(str(self._error))
                     future: asyncio.Future[WireMessage] = asyncio.get_running_loop().create_future()
                     self._pending = (future, message, expected)
+                    sent = False
                     try:
                         data = encode(message, self.order)
                         if wire_logger.isEnabledFor(logging.DEBUG):
@@ -313,6 +357,7 @@ class FrameConnection:
                         if request_logger.isEnabledFor(logging.INFO):
                             request_logger.info("%s -> %r", self, message)
                         self._writer.write(data)
+                        sent = True
                         if self._flow is not None:
                             self._flow.sent(data)
                         await self._writer.drain()
@@ -327,6 +372,10 @@ class FrameConnection:
                         raise ConnectionLostError(str(self._error)) from exc
                     finally:
                         self._pending = None
+                        if sent and (not future.done() or future.cancelled()):
+                            # cancelled or timed out (the task's cancel cancels the future
+                            # it awaits): the reply is still owed, and will be recognised
+                            self._orphans.append((message, expected))
                         if not future.done():
                             future.cancel()
                         elif not future.cancelled():

@@ -11,6 +11,8 @@
           +-- RequestTimeoutError       (TimeoutError) no reply / no state within the timeout
           +-- MotionTimeoutError        (TimeoutError) the robot did not finish a move in time
           +-- MotionIncompleteError     the robot came to rest away from the goal
+          +-- MoveStoppedError          stop() ended the move (STOP_MOTION sent)
+          +-- MoveInProgressError       a second move while one runs: refused at once
           +-- ReplyError                the controller refused a request (.result, .subcode)
           |    +-- NotReadyError        result 5 (or FALSE to CHECK_MOTION_READY), .reason
           |    +-- InvalidRequestError  result 3
@@ -63,6 +65,23 @@ class ConnectError(ClientError, ConnectionError):
 
 class ConnectionLostError(ClientError, ConnectionError):
     """The connection closed while the client was using it; every waiter gets this at once."""
+
+
+SECOND_MOTION_CLIENT: Final = (
+    "closed by the controller before it answered anything: MotoROS takes one motion "
+    "connection, and while the robot moves (increments queued) it closes a new one at once "
+    "(reference §2.2): another client holds the motion connection and is moving the "
+    "robot. Wait until its move has ended, or stop it there (Ctrl-C in its terminal, HOLD "
+    "on the pendant), then connect again"
+)
+"""Why a motion connection closes before its first reply (the one-motion-client rule)."""
+
+REPLACED_MOTION_CLIENT: Final = (
+    "closed by the controller (MotoROS takes one motion connection: a client that connects "
+    "to the motion port while no motion is queued takes it over and the older connection "
+    "is closed, reference §2.2; was another client started?)"
+)
+"""Why an established motion connection may close (it was taken over)."""
 
 
 class StateStreamLostError(ConnectionLostError):
@@ -126,6 +145,14 @@ class MoveStoppedError(ClientError):
     def __init__(self, message: str, *, positions: tuple[float, ...] = ()) -> None:
         super().__init__(message)
         self.positions = positions
+
+
+class MoveInProgressError(ClientError):
+    """A move was asked for while another move of the same client still runs.
+
+    MotoROS executes one trajectory at a time; the second is refused before anything is
+    sent, and the message says how to wait for the first or stop it.
+    """
 
 
 @dataclass(frozen=True, slots=True)

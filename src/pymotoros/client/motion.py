@@ -10,13 +10,16 @@ from another task (STOP_MOTION).
 from __future__ import annotations
 
 import asyncio
-from collections.abc import Callable, Mapping, Sequence
+import contextlib
+import signal
+import threading
+from collections.abc import Callable, Iterator, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 
 from pymotoros.client.avoid import Avoidance
 from pymotoros.client.connection import DEFAULT_REQUEST_TIMEOUT_S
-from pymotoros.client.errors import ClientError, MoveStoppedError
+from pymotoros.client.errors import ClientError, MoveInProgressError, MoveStoppedError
 from pymotoros.client.link import Link
 from pymotoros.client.motion_commands import MotionCommands
 from pymotoros.client.planning import (
@@ -31,6 +34,7 @@ from pymotoros.client.state_view import StateView
 from pymotoros.client.streaming import (
     DEFAULT_BUSY_TIMEOUT_S,
     DEFAULT_GOAL_TOLERANCE,
+    EARLY_STOP_BOUND_S,
     ExecuteOptions,
     FollowingSample,
     MoveResult,
@@ -57,7 +61,67 @@ class Motion:
     _avoidance: Avoidance | None = None
     """The cell's obstacles, for moves with ``avoid=True`` (None: the client has no cell)."""
     _moving: asyncio.Task[object] | None = field(default=None, init=False)
+    """The task running this client's move, from its start (waiting for rest, planning)
+    to its end: one move at a time (:meth:`one_move`)."""
+    _move_name: str = field(default="", init=False)
     _stop_requested: bool = field(default=False, init=False)
+
+    @contextlib.contextmanager
+    def one_move(self, name: str) -> Iterator[None]:
+        """Hold the client's one move for the current task while the block runs.
+
+        MotoROS executes one trajectory at a time, and a second one streamed while the
+        first runs is refused mid-way or, planned from the same start, ends far from its
+        goal: a second move of this client is refused at once with
+        :class:`MoveInProgressError`. The same task may nest (``move_pose`` calls
+        ``move_joints``). A :meth:`stop` from elsewhere ends the block with
+        :class:`MoveStoppedError` (once the robot has stopped).
+        """
+        task = asyncio.current_task()
+        running = self._moving
+        if running is not None and running is task:
+            yield  # nested: the outer move holds it
+            return
+        if running is not None and not running.done():
+            raise MoveInProgressError(
+                f"{name}() refused: this client's {self._move_name}() is still running "
+                "(MotoROS executes one trajectory at a time). Wait for it to end (await the "
+                "task that runs it), or stop it first (await robot.stop(); from another "
+                "thread robot.stop() of SyncRobotClient or stop_threadsafe()), then move again"
+            )
+        self._moving, self._move_name = task, name
+        self._stop_requested = False
+        self._streamer.forget_stop()
+        terminated = _catch_sigterm(task)
+        try:
+            yield
+        except asyncio.CancelledError:
+            if not self._stop_requested or task is None:
+                raise
+            task.uncancel()
+            stop = self._streamer.last_stop
+            if stop is not None:
+                here, where = stop.positions, stop.detail
+            else:  # stopped before anything was streamed
+                groups = range(len(self._robot.groups))
+                here = tuple(v for g in groups for v in (self._view.state.positions(g) or ()))
+                where = "nothing was streamed yet"
+            raise MoveStoppedError(
+                f"move stopped on request (STOP_MOTION): {where}", positions=here
+            ) from None
+        finally:
+            self._moving = None
+            if terminated():  # SIGTERM came: the robot is stopped, end as it would have
+                signal.raise_signal(signal.SIGTERM)
+
+    async def end_move(self, why: str = "the client is closing") -> None:
+        """Cancel a move running in another task and wait (bounded) until it has stopped
+        the robot: what :meth:`RobotClient.close` does first."""
+        moving = self._moving
+        if moving is None or moving.done() or moving is asyncio.current_task():
+            return
+        moving.cancel(why)
+        await asyncio.wait([moving], timeout=EARLY_STOP_BOUND_S + 1.0)
 
     def limits(self, group: int | str = 0) -> JointLimits:
         """Planning limits of ``group`` from the robot model."""
@@ -182,24 +246,10 @@ class Motion:
         self, trajectory: JointTrajectory, groups: Sequence[int], options: ExecuteOptions
     ) -> MoveResult:
         """:meth:`execute` once its keywords are bundled (the moves here call it directly)."""
-        self._link.need(Port.STATE)  # completion is judged from the state stream
-        groups = tuple(self._view.group_index(g) for g in groups)
-        task = asyncio.current_task()
-        self._moving = task
-        self._stop_requested = False
-        try:
+        with self.one_move("execute"):
+            self._link.need(Port.STATE)  # completion is judged from the state stream
+            groups = tuple(self._view.group_index(g) for g in groups)
             return await self._streamer.execute(trajectory, groups, options)
-        except asyncio.CancelledError:
-            if not self._stop_requested or task is None:
-                raise
-            task.uncancel()
-            here = tuple(v for g in groups for v in (self._view.state.positions(g) or ()))
-            where = ", ".join(f"{v:.4f}" for v in here)
-            raise MoveStoppedError(
-                f"move stopped on request (STOP_MOTION) at [{where}]", positions=here
-            ) from None
-        finally:
-            self._moving = None
 
     async def stop(self) -> None:
         """Stop the robot now (STOP_MOTION) and end a move running in another task.
@@ -244,24 +294,27 @@ class Motion:
         the obstacles of the client's cell file (see :meth:`plan`); nothing is sent when
         the goal cannot be reached (:class:`~pymotoros.errors.PathBlockedError`).
         """
-        if isinstance(goal, Mapping):
-            groups = tuple(sorted(self._view.group_index(g) for g in goal))
-            by_index = {self._view.group_index(g): v for g, v in goal.items()}
-            target = tuple(v for g in groups for v in by_index[g])
-        else:
-            groups = (self._view.group_index(group),)
-            target = tuple(goal)
-        start = await self.current_positions(groups)
-        trajectory = self.plan(
-            start,
-            target,
-            groups=groups,
-            speed_scale=speed_scale,
-            accel_scale=accel_scale,
-            avoid=avoid,
-        )
-        options = ExecuteOptions(busy_timeout_s, goal_tolerance, timeout_s, on_progress=on_progress)
-        return await self._execute(trajectory, groups, options)
+        with self.one_move("move_joints"):
+            if isinstance(goal, Mapping):
+                groups = tuple(sorted(self._view.group_index(g) for g in goal))
+                by_index = {self._view.group_index(g): v for g, v in goal.items()}
+                target = tuple(v for g in groups for v in by_index[g])
+            else:
+                groups = (self._view.group_index(group),)
+                target = tuple(goal)
+            start = await self.current_positions(groups)
+            trajectory = self.plan(
+                start,
+                target,
+                groups=groups,
+                speed_scale=speed_scale,
+                accel_scale=accel_scale,
+                avoid=avoid,
+            )
+            options = ExecuteOptions(
+                busy_timeout_s, goal_tolerance, timeout_s, on_progress=on_progress
+            )
+            return await self._execute(trajectory, groups, options)
 
     def named_pose(
         self, name: str, *, srdf: str | Path | None = None, group: int | str = 0
@@ -283,13 +336,49 @@ class Motion:
     ) -> MoveResult:
         """Move to a named pose (``home``, or a ``group_state`` of ``srdf``)."""
         goal = self.named_pose(name, srdf=srdf, group=group)
-        return await self.move_joints(
-            goal,
-            group=group,
-            speed_scale=speed_scale,
-            accel_scale=accel_scale,
-            on_progress=on_progress,
-        )
+        with self.one_move("move_named"):
+            return await self.move_joints(
+                goal,
+                group=group,
+                speed_scale=speed_scale,
+                accel_scale=accel_scale,
+                on_progress=on_progress,
+            )
+
+
+def _catch_sigterm(task: asyncio.Task[object] | None) -> Callable[[], bool]:
+    """While a move runs on an event loop of the main thread, SIGTERM with its default
+    action (the process would end at once, the robot still moving) cancels the move
+    instead, so that it stops the robot; the returned function puts the default back and
+    says whether SIGTERM came (the caller then raises it again). A handler the program
+    installed (the CLI's, its own) is left alone."""
+    loop = asyncio.get_running_loop()
+    if (
+        task is None
+        or threading.current_thread() is not threading.main_thread()
+        or signal.getsignal(signal.SIGTERM) is not signal.SIG_DFL
+    ):
+        return _false
+    came: list[int] = []
+
+    def on_sigterm() -> None:
+        came.append(signal.SIGTERM)
+        task.cancel("SIGTERM")
+
+    try:
+        loop.add_signal_handler(signal.SIGTERM, on_sigterm)
+    except (NotImplementedError, RuntimeError, ValueError):  # no signals on this loop
+        return _false
+
+    def restore() -> bool:
+        loop.remove_signal_handler(signal.SIGTERM)  # back to SIG_DFL
+        return bool(came)
+
+    return restore
+
+
+def _false() -> bool:
+    return False
 
 
 def _in_loop(loop: asyncio.AbstractEventLoop) -> bool:

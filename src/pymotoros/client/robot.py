@@ -27,7 +27,7 @@ from __future__ import annotations
 
 import functools
 import inspect
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Coroutine, Mapping
 from pathlib import Path
 from typing import Any, Concatenate, ParamSpec, Self, TypeVar
 
@@ -46,7 +46,7 @@ from pymotoros.client.motion_commands import SLOW_COMMAND_TIMEOUT_S, MotionComma
 from pymotoros.client.registers import RegisterValues, read_register_outputs, s1cxg_table
 from pymotoros.client.state import RobotState, StateTracker, Status
 from pymotoros.client.state_view import DH_TOLERANCE, StateView
-from pymotoros.client.streaming import TrajectoryStreamer
+from pymotoros.client.streaming import MoveResult, TrajectoryStreamer
 from pymotoros.client.timing import REAL_TIME, ClientClock
 from pymotoros.client.tools import ToolTable
 from pymotoros.models import (
@@ -85,6 +85,23 @@ def _part(
             return getattr(getattr(self, part), name)(*args, **kwargs)
 
         forward = forward_plain
+    functools.update_wrapper(forward, method)
+    forward.__qualname__ = f"RobotClient.{name}"
+    return forward
+
+
+def _move_part(
+    method: Callable[Concatenate[Geometry, _P], Coroutine[Any, Any, MoveResult]],
+) -> Callable[Concatenate[RobotClient, _P], Coroutine[Any, Any, MoveResult]]:
+    """:func:`_part` for a Cartesian move of ``_geometry``, holding the client's one move
+    (:meth:`Motion.one_move`) from its first wait to its end: a second move is refused
+    at once, and a stop() ends it even while it plans."""
+    name = method.__name__
+
+    async def forward(self: RobotClient, /, *args: _P.args, **kwargs: _P.kwargs) -> MoveResult:
+        with self._motion.one_move(name):
+            return await method(self._geometry, *args, **kwargs)
+
     functools.update_wrapper(forward, method)
     forward.__qualname__ = f"RobotClient.{name}"
     return forward
@@ -192,7 +209,13 @@ class RobotClient:
         return self
 
     async def close(self) -> None:
-        """Close every connection (trajectory mode is left as it is). Idempotent."""
+        """Close every connection (trajectory mode is left as it is). Idempotent.
+
+        A move still running in another task is ended first, as a cancellation ends it:
+        STOP_MOTION, the robot at rest (at most ``EARLY_STOP_BOUND_S``, 3 s), then the
+        connections close. (MotoROS does not clear its queues when the motion
+        connection closes, §2.2: closing alone would leave the robot moving.)"""
+        await self._motion.end_move("the client is closing")
         await self._link.close()
 
     async def __aenter__(self) -> Self:
@@ -273,10 +296,10 @@ class RobotClient:
     # ------------------------------------------------------------------ geometry
 
     tcp_pose = _part("_geometry", Geometry.tcp_pose)
-    move_linear = _part("_geometry", Geometry.move_linear)
-    move_pose = _part("_geometry", Geometry.move_pose)
-    move_relative = _part("_geometry", Geometry.move_relative)
-    move_cartesian = _part("_geometry", Geometry.move_cartesian)
+    move_linear = _move_part(Geometry.move_linear)
+    move_pose = _move_part(Geometry.move_pose)
+    move_relative = _move_part(Geometry.move_relative)
+    move_cartesian = _move_part(Geometry.move_cartesian)
 
 
 async def connect(host: str = "127.0.0.1", **options: object) -> RobotClient:

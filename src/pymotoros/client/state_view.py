@@ -31,6 +31,8 @@ DH_TOLERANCE: Final = 1e-4
 far below any real difference between two robot models."""
 
 _DH_FIELDS: Final = ("theta", "d", "a", "alpha")
+_DH_UNIT: Final = {"theta": "rad", "d": "m", "a": "m", "alpha": "rad"}
+"""The unit of each DH parameter: angles in rad, lengths in m (``GroupModel.dh``)."""
 
 
 @dataclass(eq=False, repr=False)
@@ -138,8 +140,8 @@ class StateView:
                         raise ModelMismatchError(
                             f"model mismatch: the controller's DH parameters are not "
                             f"{self._robot.name}'s (group {index} {group.name}, link {n + 1}: "
-                            f"{field} {got:.4f} on the controller, {want:.4f} in the model); "
-                            + _dh_hint(links)
+                            f"{field} {got:.4f} {_DH_UNIT[field]} on the controller, "
+                            f"{want:.4f} {_DH_UNIT[field]} in the model); " + _dh_hint(links)
                         )
 
     def group_index(self, group: int | str) -> int:

@@ -18,6 +18,10 @@
 * :meth:`~TrajectoryStreamer.wait_for_completion`: queue empty, ``in_motion`` false,
   feedback settled within a tolerance of the goal; judged against progress, not only
   the clock.
+* :meth:`~TrajectoryStreamer.stop_early`: whatever ends :meth:`~TrajectoryStreamer.execute`
+  before the goal (a cancel, a timeout, the caller's callback, an error) first stops
+  the robot (STOP_MOTION, then at rest, within :data:`EARLY_STOP_BOUND_S`) and then
+  lets the cancellation or error go on, saying where the robot stopped.
 
 Every wait ends: on success, on a typed error, on a timeout, or at once with
 :class:`ConnectionLostError` when a connection drops. The MotoROS rules used to
@@ -40,6 +44,7 @@ from typing import Final
 
 from pymotoros.client.errors import (
     AxisDeviation,
+    ClientError,
     ConnectionLostError,
     MotionIncompleteError,
     MotionTimeoutError,
@@ -135,6 +140,19 @@ STALL_TIMEOUT_S: Final = 2.0
 STOP_TIMEOUT_S: Final = 1.0
 """How long STOP_MOTION may take after the state stream was lost."""
 
+STOP_REST_TIMEOUT_S: Final = 2.0
+"""After STOP_MOTION, how long the feedback may take to show the robot at rest
+(``in_motion`` false, still for :data:`SETTLE_SAMPLES` state cycles). MotoROS stops at
+once (no ramp, §3.6): what is left is the servo's own lag and three quiet state cycles
+(~75 ms), so 2 s is ample and still short enough for a person waiting on Ctrl-C."""
+
+EARLY_STOP_BOUND_S: Final = STOP_TIMEOUT_S + STOP_REST_TIMEOUT_S
+"""The longest a move that ends early holds up its cancellation or error to stop the
+robot: the STOP_MOTION reply plus the wait for rest (3 s; docs/client.md)."""
+
+STOP_ON_THE_PENDANT: Final = "stop the robot on the pendant"
+"""What to do when STOP_MOTION could not be sent or was not answered (one wording, here)."""
+
 LAG_WARNING_S: Final = 0.25
 """A robot this far behind the plan is being slowed (a safety speed limit, HOLD…)."""
 
@@ -147,6 +165,22 @@ SPEED_WINDOW_S: Final = 0.2
 enough to smooth the encoder steps, short enough to see an FSU switch within a cycle."""
 ARRIVED_PROGRESS: Final = 0.999
 """Progress from which the following monitor counts the robot as arrived (no lag)."""
+
+SLOWED_SPEED_PCT: Final = 90.0
+"""Below this share of the planned speed in the robot's own velocity report (the state
+stream's feedback velocities), the robot is being slowed (FSU, override, HOLD); at or
+above it, a robot that still falls behind is waiting on a late controller or network.
+Chosen: a robot on the plan reports about 100 % (the twin 99–101 %), an FSU limit or an
+override far less, HOLD 0."""
+
+STATE_PERIOD_S: Final = 0.025
+"""MotoROS sends a state cycle every 25 ms (reference §2.3)."""
+
+LATE_STATE_GAP_S: Final = 4 * STATE_PERIOD_S
+"""A gap between state messages this long (four cycles) means late feedback."""
+
+_STILL_PLAN: Final = 1e-12
+"""Squared planned speed under which the plan stands still (no speed to compare with)."""
 
 
 @dataclass(frozen=True, slots=True)
@@ -201,14 +235,53 @@ class FollowingReport:
     max_lag_s: float = 0.0
     max_error: float = 0.0
     slowed: bool = False
-    """True once the lag passed the warning threshold."""
+    """The robot fell more than the warning threshold behind the plan because it was
+    slowed: the speed it reports itself was below the plan's (FSU, override, HOLD)."""
+    late: bool = False
+    """It fell behind although it reported the planned speed: the controller or the
+    network was late (a loaded simulator, a stalled loop, delayed state messages)."""
+    reason: str = ""
+    """Why it fell behind, with the numbers used (the warning that was logged)."""
     min_speed_pct: float = 100.0
     """The lowest :attr:`FollowingSample.speed_pct` seen while the plan was moving."""
+    max_state_gap_s: float = 0.0
+    """The longest silence between two state messages while the monitor listened."""
 
     @property
     def max_lag_rad(self) -> float:
         """The largest lag in rad (or m): :attr:`max_error`."""
         return self.max_error
+
+
+@dataclass(frozen=True, slots=True)
+class EarlyStop:
+    """How a move that ended early was stopped (:meth:`TrajectoryStreamer.stop_early`)."""
+
+    stopped: bool
+    """STOP_MOTION was acknowledged (SUCCESS)."""
+    at_rest: bool
+    """The feedback then showed the robot at rest."""
+    positions: tuple[float, ...]
+    """Where the robot stands (or was last reported), joints of the moved groups."""
+    took_s: float
+    """From the stop's start to rest (or to giving up)."""
+    why: str
+    """What ended the move."""
+    detail: str
+    """Where the robot stopped, with units, or why it may not have."""
+
+    @property
+    def text(self) -> str:
+        return f"{self.why}: {self.detail}"
+
+    def tell(self, exc: BaseException) -> None:
+        """Put the stop into ``exc``: the client's own errors get it in their message
+        (what the CLI prints), anything else (``CancelledError``, ``KeyboardInterrupt``,
+        the caller's exception) a note, so its type and message stay as they were."""
+        if isinstance(exc, ClientError) and exc.args and isinstance(exc.args[0], str):
+            exc.args = (f"{exc.args[0]}; {self.detail}", *exc.args[1:])
+        else:
+            exc.add_note(self.text)
 
 
 @dataclass(frozen=True, slots=True)
@@ -260,14 +333,24 @@ def build_message(
     )
 
 
-def _deviation_text(devs: Sequence[AxisDeviation], kind: str) -> str:
+def _deviation_text(
+    devs: Sequence[AxisDeviation], kind: str, models: Sequence[GroupModel] = ()
+) -> str:
+    """The numbers of a refusal with their units (rad, rad/s; m, m/s for a linear axis
+    of ``models``, the refused groups' models in order)."""
+    linear = {i for i, a in enumerate(a for m in models for a in m.axes) if a.linear}
     if kind == "start":
         return "; ".join(
-            f"{d.name} {d.pulses} pulses ({d.difference:+.5f} rad) from the robot, "
-            f"tolerance {START_TOLERANCE_PULSES}"
+            f"{d.name} {d.pulses} pulses ({d.difference:+.5f} "
+            f"{'m' if d.axis in linear else 'rad'}) from the robot, "
+            f"tolerance {START_TOLERANCE_PULSES} pulses"
             for d in devs
         )
-    return "; ".join(f"{d.name} {d.value:+.4f} > limit {d.reference:.4f}" for d in devs)
+    return "; ".join(
+        f"{d.name} {d.value:+.4f} {unit} > limit {d.reference:.4f} {unit}"
+        for d in devs
+        for unit in ("m/s" if d.axis in linear else "rad/s",)
+    )
 
 
 deviation_text: Final = _deviation_text
@@ -357,6 +440,8 @@ class TrajectoryStreamer:
     _motion_gone: bool = field(default=False, init=False)
     _in_flight: int | None = field(default=None, init=False)
     """Sequence of the point sent and not yet answered, while there is one."""
+    last_stop: EarlyStop | None = field(default=None, init=False)
+    """How the latest :meth:`execute` that ended early stopped the robot (None: it did not)."""
 
     # ------------------------------------------------------------------ sending
 
@@ -373,10 +458,12 @@ class TrajectoryStreamer:
             groups = [self.robot.groups.index(m) for m in models]
             current = _joined_positions(self.states.state, groups)
             devs = start_deviations(point, models, current, self.controller)
-            detail = _deviation_text(devs, "start") or "compared with the commanded position"
+            detail = (
+                _deviation_text(devs, "start", models) or "compared with the commanded position"
+            )
         elif reply.result == ResultCode.INVALID and reply.subcode == InvalidSubcode.DATA_SPEED:
             devs = speed_deviations(point, models, self.controller)
-            detail = _deviation_text(devs, "speed")
+            detail = _deviation_text(devs, "speed", models)
         return reply_error(
             reply.result, reply.subcode, reply.command, point=index, detail=detail, deviations=devs
         )
@@ -458,7 +545,7 @@ class TrajectoryStreamer:
                         InvalidSubcode.DATA_SPEED,
                         _message_type(groups),
                         point=index,
-                        detail=_deviation_text(devs, "speed") + "; checked before sending",
+                        detail=_deviation_text(devs, "speed", models) + "; checked before sending",
                         deviations=devs,
                     )
             message = build_message(point, index, groups, sizes)
@@ -548,6 +635,7 @@ class TrajectoryStreamer:
         )
         rest = _RestDetector(groups)
         progress_of = _Progress(trajectory)
+        models = [self.robot.groups[g] for g in groups]
         best_progress, best_at = -1.0, start
         state = states.state
         while True:
@@ -571,13 +659,16 @@ class TrajectoryStreamer:
                             ResultCode.FALSE,
                             readiness.subcode,
                             MotionCommand.CHECK_MOTION_READY,
-                            detail=f"the robot stopped {err:.4f} from the goal",
+                            detail=f"the robot stopped {farthest_text(positions, goal, models)} "
+                            "from the goal",
                         )
                 past_end = now > start + trajectory.duration + 1.0
                 if at_rest and past_end and now - best_at > STALL_TIMEOUT_S:
                     raise MotionIncompleteError(
-                        f"the robot came to rest {err:.5f} from the goal and is not moving "
-                        "(was the motion stopped?)"
+                        f"the robot came to rest {farthest_text(positions, goal, models)} "
+                        f"from the goal, at {joint_values_text(positions, models)}, and is not "
+                        "moving (was the motion stopped: STOP_MOTION from this client, HOLD or "
+                        "the queue cleared?)"
                     )
             if now > hard_deadline or (now > soft_deadline and now - best_at > STALL_TIMEOUT_S):
                 lag = monitor.report.max_lag_s
@@ -596,19 +687,30 @@ class TrajectoryStreamer:
         groups: Sequence[int],
         options: ExecuteOptions = ExecuteOptions(),
     ) -> MoveResult:
-        """Stream ``trajectory``, follow the robot, and wait until it settled at the goal."""
+        """Stream ``trajectory``, follow the robot, and wait until it settled at the goal.
+
+        Whatever ends the move early (a cancellation, a timeout around it, an exception of
+        ``on_progress``, a refusal or error of the client's own) first stops the robot
+        (:meth:`stop_early`: STOP_MOTION, then the feedback at rest, within
+        :data:`EARLY_STOP_BOUND_S`), then goes on with the position where the robot stopped
+        in its message (a note and a log for a ``CancelledError``, which stays one).
+        """
         groups = tuple(groups)
-        monitor = FollowingMonitor(
-            trajectory, groups, on_sample=options.on_progress, clock=self.clock
-        )
+        task = asyncio.current_task()
+        failed: list[Exception] = []
+        """An exception of the caller's progress callback: the move ends with it."""
+        on_sample = options.on_progress
+        if on_sample is not None:
+            on_sample = _callback_guard(on_sample, failed, task)
+        monitor = FollowingMonitor(trajectory, groups, on_sample=on_sample, clock=self.clock)
         remove = self.states.add_listener(monitor.listen)
         started = self.clock.now()
         accepted_count = 0
-        task = asyncio.current_task()
         waiting = False
         cancel_later: list[asyncio.TimerHandle] = []
         self._stalled_for = None
         self._in_flight = None
+        self.last_stop = None
 
         def accepted(index: int) -> None:
             nonlocal accepted_count
@@ -659,14 +761,21 @@ class TrajectoryStreamer:
             raise await self._stream_lost(
                 groups, self._stalled_for, accepted_count, trajectory
             ) from None
-        except asyncio.CancelledError:
-            if task is None or not self._stalled():  # a cancel that is not the watchdog's
-                raise
+        except asyncio.CancelledError as cancel:
             disarm()
-            task.uncancel()
-            raise await self._stream_lost(
-                groups, self._stalled_for, accepted_count, trajectory
-            ) from None
+            if task is not None and self._stalled():  # the watchdog's cancel, not a caller's
+                task.uncancel()
+                raise await self._stream_lost(
+                    groups, self._stalled_for, accepted_count, trajectory
+                ) from None
+            if failed and task is not None:  # the progress callback raised: end with it
+                task.uncancel()
+                error = failed[0]
+                await self._stop_then(groups, error, "the progress callback raised")
+                raise error from None
+            reason = f" ({cancel.args[0]})" if cancel.args and cancel.args[0] else ""
+            await self._stop_then(groups, cancel, f"the move was cancelled{reason}")
+            raise
         except ConnectionLostError as exc:
             if self.states.error is None or isinstance(exc, StateStreamLostError):
                 raise  # the motion port went: nothing can be stopped from here
@@ -675,12 +784,104 @@ class TrajectoryStreamer:
             if not lost.stopped and self._motion_gone:
                 raise  # both went together (the controller closed): the plain loss says it
             raise lost from exc
+        except BaseException as exc:  # a refusal, a timeout, KeyboardInterrupt in this thread
+            disarm()
+            if accepted_count:  # points are queued: the robot may move
+                await self._stop_then(groups, exc, f"the move ended early ({type(exc).__name__})")
+            raise
         finally:
             disarm()
             remove()
         return MoveResult(
             trajectory, final, stats, monitor.report, self.clock.now() - started, groups
         )
+
+    async def _stop_then(self, groups: Sequence[int], exc: BaseException, why: str) -> None:
+        """:meth:`stop_early`, safe from further cancels, and ``exc`` told where it ended.
+
+        The stop runs as a task of its own, awaited through :func:`asyncio.shield`: a
+        second cancel (a ``wait_for`` around a ``wait_for``, a second Ctrl-C) does not cut
+        it short; it is remembered, and a ``CancelledError`` goes on once the stop is
+        done (at most :data:`EARLY_STOP_BOUND_S` later), so nothing is left half-done.
+        """
+        # The client's own errors carry the stop in their message: no second line in a log.
+        level = logging.INFO if isinstance(exc, ClientError) else logging.WARNING
+        stopping = asyncio.ensure_future(self.stop_early(groups, why, quiet_level=level))
+        cancelled_again = False
+        while True:
+            try:
+                outcome = await asyncio.shield(stopping)
+                break
+            except asyncio.CancelledError:
+                if stopping.done():  # the loop itself is going away
+                    raise
+                cancelled_again = True
+        self.last_stop = outcome
+        outcome.tell(exc)
+        if cancelled_again and not isinstance(exc, asyncio.CancelledError):
+            raise asyncio.CancelledError(outcome.text) from exc
+
+    async def stop_early(
+        self, groups: Sequence[int], why: str, *, quiet_level: int = logging.WARNING
+    ) -> EarlyStop:
+        """Stop the robot after a move ended early: STOP_MOTION, then wait (at most
+        :data:`STOP_REST_TIMEOUT_S`) until the feedback shows it at rest.
+
+        Never raises for a stop that fails: the :class:`EarlyStop` says what happened,
+        with the last known position and "stop the robot on the pendant" (logged as an
+        error). A stop that worked is logged at ``quiet_level``: a warning where only a
+        note carries it (a cancellation), INFO where the error's own message does.
+        """
+        started = self.clock.now()
+        stopped, note = await self._send_stop(groups)
+        at_rest = False
+        rest_note = ""
+        if stopped:
+            try:
+                await self.wait_until_at_rest(groups, timeout_s=STOP_REST_TIMEOUT_S)
+                at_rest = True
+            except ClientError as exc:  # a timeout, the state stream gone
+                rest_note = f"; the feedback did not show it at rest ({exc})"
+        models = [self.robot.groups[g] for g in groups]
+        positions = _joined_positions(self.states.state, groups) or ()
+        where = joint_values_text(positions, models)
+        took = self.clock.now() - started
+        if at_rest:
+            detail = f"the robot was stopped (STOP_MOTION) and stands at {where}"
+            logger.log(
+                quiet_level, "%s: %s (at rest %.3f s after the stop was sent)", why, detail, took
+            )
+        else:
+            detail = f"{note}{rest_note}; last known position {where}"
+            if stopped:
+                detail += ": check that the robot stands, stop it on the pendant if not"
+            logger.error("%s: %s", why, detail)
+        return EarlyStop(stopped, at_rest, positions, took, why, detail)
+
+    async def _send_stop(self, groups: Sequence[int]) -> tuple[bool, str]:
+        """STOP_MOTION within :data:`STOP_TIMEOUT_S`: (acknowledged, what happened). The one
+        place that words a failed stop ("stop the robot on the pendant")."""
+        self._motion_gone = False
+        try:
+            reply = await self.port.request_motion(
+                MotoMotionCtrl(groups[0], 0, int(MotionCommand.STOP_MOTION)),
+                timeout_s=STOP_TIMEOUT_S,
+            )
+        except (ConnectionLostError, RequestTimeoutError) as exc:
+            self._motion_gone = isinstance(exc, ConnectionLostError)
+            return False, f"STOP_MOTION could not be sent ({exc}): {STOP_ON_THE_PENDANT}"
+        except ClientError as exc:
+            return False, f"STOP_MOTION failed ({exc}): {STOP_ON_THE_PENDANT}"
+        if reply.result == ResultCode.SUCCESS:
+            return True, "STOP_MOTION acknowledged"
+        return False, (
+            f"STOP_MOTION refused (result {reply.result}, subcode {reply.subcode}): "
+            f"{STOP_ON_THE_PENDANT}"
+        )
+
+    def forget_stop(self) -> None:
+        """A new move starts: :attr:`last_stop` is no longer about it."""
+        self.last_stop = None
 
     def _stalled(self) -> bool:
         """Has the watchdog tripped during the current :meth:`execute`? (set by its callback)"""
@@ -694,22 +895,13 @@ class TrajectoryStreamer:
         trajectory: JointTrajectory,
     ) -> StateStreamLostError:
         """Stop the robot (STOP_MOTION, if the motion port still answers) and say what was lost."""
-        stopped = False
-        self._motion_gone = False
-        stop_note = "STOP_MOTION acknowledged"
-        try:
-            reply = await self.port.request_motion(
-                MotoMotionCtrl(groups[0], 0, int(MotionCommand.STOP_MOTION)),
-                timeout_s=STOP_TIMEOUT_S,
-            )
-            stopped = reply.result == ResultCode.SUCCESS
-            if not stopped:
-                stop_note = f"STOP_MOTION refused (result {reply.result}, subcode {reply.subcode})"
-        except (ConnectionLostError, RequestTimeoutError) as exc:
-            self._motion_gone = isinstance(exc, ConnectionLostError)
-            stop_note = f"STOP_MOTION could not be sent ({exc}): stop the robot on the pendant"
+        stopped, stop_note = await self._send_stop(groups)
         positions = _joined_positions(self.states.state, groups) or ()
-        where = ", ".join(f"{v:.4f}" for v in positions) or "unknown"
+        where = (
+            joint_values_text(positions, [self.robot.groups[g] for g in groups])
+            if positions
+            else "unknown"
+        )
         if silent_s is None:
             what = f"the state stream closed ({self.states.error})"
         else:
@@ -725,7 +917,7 @@ class TrajectoryStreamer:
         )
         message = (
             f"{what}; streaming stopped with {accepted} of {total} points accepted by the "
-            f"robot{unanswered}; {stop_note}; last known position [{where}]. Check the network "
+            f"robot{unanswered}; {stop_note}; last known position {where}. Check the network "
             "to the "
             "controller, then reconnect and move again from the current position"
         )
@@ -738,6 +930,60 @@ class TrajectoryStreamer:
             total_points=total,
             stopped=stopped,
         )
+
+
+def _callback_guard(
+    callback: Callable[[FollowingSample], None],
+    failed: list[Exception],
+    task: asyncio.Task[object] | None,
+) -> Callable[[FollowingSample], None]:
+    """``callback`` for the following monitor: its first exception is kept in ``failed``
+    and cancels the move's task (the move then stops the robot and raises it); later
+    samples are not passed on."""
+
+    def guarded(sample: FollowingSample) -> None:
+        if failed:
+            return
+        try:
+            callback(sample)
+        except Exception as exc:
+            failed.append(exc)
+            if task is not None:
+                task.cancel()
+
+    return guarded
+
+
+def joint_values_text(positions: Sequence[float], models: Sequence[GroupModel]) -> str:
+    """``[0.5724, 0.0000, …] rad`` (``rad``/``m`` after each value when a linear axis is
+    among them): joint values with their units, as every message of the client gives them."""
+    axes = [a for m in models for a in m.axes]
+    if len(axes) != len(positions):
+        return "[" + ", ".join(f"{v:.4f}" for v in positions) + "] (rad/m)"
+    if not any(a.linear for a in axes):
+        return "[" + ", ".join(f"{v:.4f}" for v in positions) + "] rad"
+    return (
+        "["
+        + ", ".join(
+            f"{v:.4f} {'m' if a.linear else 'rad'}" for v, a in zip(positions, axes, strict=True)
+        )
+        + "]"
+    )
+
+
+def farthest_text(
+    positions: Sequence[float], goal: Sequence[float], models: Sequence[GroupModel]
+) -> str:
+    """The largest joint distance to ``goal`` with its unit and joint: ``0.1056 rad
+    (joint_1_s)``, as every message that says how far the robot is from a goal gives it."""
+    axes = [a for m in models for a in m.axes]
+    gaps = [abs(p - g) for p, g in zip(positions, goal, strict=True)]
+    if not gaps:
+        return "0 rad"
+    i = max(range(len(gaps)), key=gaps.__getitem__)
+    if len(axes) != len(gaps):
+        return f"{gaps[i]:.4f} rad/m (axis {i + 1})"
+    return f"{gaps[i]:.4f} {'m' if axes[i].linear else 'rad'} ({axes[i].name})"
 
 
 class _StreamStalledError(Exception):
@@ -784,6 +1030,8 @@ class FollowingMonitor:
         self._best: list[float] = list(itertools.accumulate(self._raw[1:], max))
         self._recent: collections.deque[tuple[float, float]] = collections.deque()
         """(elapsed, plan time reached) of the samples in the last SPEED_WINDOW_S."""
+        self._previous = 0.0
+        """Elapsed time of the previous sample (for the gaps between state messages)."""
 
     def start(self, t0: float | None = None) -> None:
         if self._t0 is None:
@@ -819,27 +1067,98 @@ class FollowingMonitor:
         sample = FollowingSample(elapsed, progress, lag, error, speed_pct)
         rep = self.report
         rep.samples += 1
+        gap = elapsed - self._previous
+        self._previous = elapsed
+        if gap > rep.max_state_gap_s:
+            rep.max_state_gap_s = gap
         if error > rep.max_error:
             rep.max_error = error
         if lag > rep.max_lag_s:
             rep.max_lag_s = lag
         if speed_pct < rep.min_speed_pct:
             rep.min_speed_pct = speed_pct
-        if lag > self.warn_lag_s and not rep.slowed:
-            rep.slowed = True
-            logger.warning(
-                "the robot runs %.2f s (%.4f rad) behind the plan at %.0f %% of the move, "
-                "moving at %.0f %% of the planned speed: a safety speed limit (FSU), a speed "
-                "override or HOLD is slowing it",
-                lag,
-                error,
-                progress * 100,
-                speed_pct,
-            )
+        if lag > self.warn_lag_s and not rep.reason:
+            self._blame(state, sample, reached)
         self.last = sample
         if self.on_sample is not None:
             self.on_sample(sample)
         return sample
+
+    def _blame(self, state: RobotState, sample: FollowingSample, reached: float) -> None:
+        """Say once why the robot fell behind: slowed (the speed it reports is below the
+        plan's) or a late controller/network (it reports the planned speed, or the state
+        messages came late), with the numbers used."""
+        rep = self.report
+        reported = self._reported_pct(state, reached)
+        gap_ms = rep.max_state_gap_s * 1000
+        head = (
+            f"the robot runs {sample.lag_s:.2f} s ({sample.error:.4f} rad) behind the plan at "
+            f"{sample.progress:.0%} of the move"
+        )
+        numbers = (
+            f"over the last {SPEED_WINDOW_S:g} s it gained {sample.speed_pct:.0f} % of the "
+            f"plan's time per second of the client's clock; state messages up to "
+            f"{gap_ms:.0f} ms apart (MotoROS sends a cycle every {STATE_PERIOD_S * 1000:.0f} ms)"
+        )
+        if reported is not None and reported < SLOWED_SPEED_PCT:
+            rep.slowed = True
+            rep.reason = (
+                f"{head}: it reports moving at {reported:.0f} % of the planned speed (its "
+                f"feedback velocity; {numbers}): the controller is slowing it: a safety "
+                "speed limit (FSU), a speed override or HOLD"
+            )
+        elif reported is not None or rep.max_state_gap_s > LATE_STATE_GAP_S:
+            rep.late = True
+            told = (
+                ""
+                if reported is None
+                else f", yet it reports moving at {reported:.0f} % of the planned speed"
+            )
+            rep.reason = (
+                f"{head}{told}: the controller or the network is late, the robot is not "
+                f"slowed ({numbers}): a loaded or stalled simulator loop, or a slow network"
+            )
+        elif sample.speed_pct < SLOWED_SPEED_PCT:  # no velocity in the feedback
+            rep.slowed = True
+            rep.reason = (
+                f"{head}, progressing at {sample.speed_pct:.0f} % of the planned speed "
+                f"({numbers}; the feedback carries no velocity): a safety speed limit (FSU), "
+                "a speed override or HOLD is slowing it"
+            )
+        else:
+            rep.reason = (
+                f"{head}, though it now progresses at {sample.speed_pct:.0f} % of the planned "
+                f"speed ({numbers}; the feedback carries no velocity): it was held up earlier"
+            )
+        logger.warning("%s", rep.reason)
+
+    def _reported_pct(self, state: RobotState, reached: float) -> float | None:
+        """The robot's own velocity report along the plan's velocity where it stands, in %
+        of the planned speed (None: no velocity in the feedback, or the plan stands)."""
+        velocities: list[float] = []
+        for g in self.groups:
+            joint = state.joints.get(g)
+            if joint is None or joint.velocities is None:
+                return None
+            velocities.extend(joint.velocities)
+        planned = self._planned_velocity_at(reached)
+        norm = sum(v * v for v in planned)
+        if norm <= _STILL_PLAN or len(planned) != len(velocities):
+            return None
+        return 100.0 * sum(a * b for a, b in zip(velocities, planned, strict=True)) / norm
+
+    def _planned_velocity_at(self, t: float) -> tuple[float, ...]:
+        """The plan's joint velocities at ``t`` (linear between the points' velocities)."""
+        pts = self.trajectory.points
+        i = bisect.bisect_right(self._times, t) - 1
+        if i < 0:
+            return pts[0].velocities
+        if i >= len(pts) - 1:
+            return pts[-1].velocities
+        a, b = pts[i], pts[i + 1]
+        h = b.time - a.time
+        s = 0.0 if h <= 0 else (t - a.time) / h
+        return tuple(va + s * (vb - va) for va, vb in zip(a.velocities, b.velocities, strict=True))
 
     def _speed_pct(self, elapsed: float, reached: float, progress: float) -> float:
         """Plan time gained per second over the last window, in % (100 outside motion)."""

@@ -12,7 +12,12 @@ properties forward as they are (there is one implementation). A test compares th
 two classes (``tests/test_front_door.py``), so a new client method cannot be silently
 absent. There is deliberately no ``__getattr__`` fallback: it would make every attribute
 of this class type-check as ``Any``. Listeners run in the loop's thread.
-Interrupting a call (Ctrl-C) cancels the coroutine behind it.
+
+Interrupting a call (Ctrl-C: ``KeyboardInterrupt`` in the calling thread) cancels the
+coroutine behind it and waits until that cancellation has run its course: a move sends
+STOP_MOTION and waits for the robot at rest (at most ``EARLY_STOP_BOUND_S``, 3 s), and
+the ``KeyboardInterrupt`` then goes on with a note saying where the robot stopped. A
+second Ctrl-C during that wait does not cut the stop short.
 """
 
 from __future__ import annotations
@@ -21,7 +26,9 @@ import asyncio
 import concurrent.futures
 import contextlib
 import functools
+import signal
 import threading
+import time
 from collections.abc import AsyncIterator, Callable, Coroutine, Iterator
 from types import TracebackType
 from typing import Any, Concatenate, Final, ParamSpec, Self, TypeVar
@@ -29,6 +36,7 @@ from typing import Any, Concatenate, Final, ParamSpec, Self, TypeVar
 from pymotoros.client.connection import Ports
 from pymotoros.client.robot import RobotClient
 from pymotoros.client.state import DEFAULT_STATE_TIMEOUT_S, JointState, RobotState, Status
+from pymotoros.client.streaming import EARLY_STOP_BOUND_S, STOP_ON_THE_PENDANT
 from pymotoros.client.tools import ToolTable
 from pymotoros.models import ControllerModel, RobotModel
 from pymotoros.protocol.constants import ByteOrder
@@ -37,6 +45,10 @@ _P = ParamSpec("_P")
 _R = TypeVar("_R")
 
 _THREAD_JOIN_TIMEOUT_S: Final = 5.0
+
+INTERRUPT_WAIT_S: Final = EARLY_STOP_BOUND_S + 2.0
+"""How long an interrupted call waits for its coroutine to finish cancelling: a move's
+stop (:data:`EARLY_STOP_BOUND_S`) and a margin for the loop thread to get to it."""
 
 
 def _forward(
@@ -98,14 +110,61 @@ class SyncRobotClient:
 
         For async code that must share the client's loop: an in-memory twin
         (:func:`pymotoros.testing.sync_twin` starts its servers this way), or a coroutine
-        of :attr:`client` the facade does not wrap. Interrupting the call cancels ``coro``.
+        of :attr:`client` the facade does not wrap. Interrupting the call (Ctrl-C) cancels
+        ``coro``, waits (at most :data:`INTERRUPT_WAIT_S`) until it has ended, a moving
+        robot stopped, and re-raises the interrupt with the notes of that cancellation
+        (where the robot stopped).
         """
-        future = asyncio.run_coroutine_threadsafe(coro, self._loop)
+        loop = self._loop
+        done: concurrent.futures.Future[_R] = concurrent.futures.Future()
+        notes: list[str] = []
+        tasks: list[asyncio.Task[_R]] = []
+
+        async def watched() -> _R:
+            try:
+                return await coro
+            except asyncio.CancelledError as exc:
+                notes.extend(getattr(exc, "__notes__", ()))
+                raise
+
+        def finished(task: asyncio.Task[_R]) -> None:
+            if task.cancelled():
+                done.cancel()
+            elif (error := task.exception()) is not None:
+                done.set_exception(error)
+            else:
+                done.set_result(task.result())
+
+        def start() -> None:
+            task = loop.create_task(watched())
+            tasks.append(task)
+            task.add_done_callback(finished)
+
+        loop.call_soon_threadsafe(start)
+        restore = _catch_sigterm()
         try:
-            return future.result()
-        except BaseException:
-            future.cancel()
+            return done.result()
+        except concurrent.futures.CancelledError as exc:
+            for note in notes:  # cancelled from the loop's side (close() ended a move)
+                exc.add_note(note)
             raise
+        except BaseException as exc:
+            if done.done():
+                raise  # the coroutine's own error
+            loop.call_soon_threadsafe(lambda: tasks and tasks[0].cancel("interrupted"))
+            if not _wait_through_interrupts(done, INTERRUPT_WAIT_S):
+                exc.add_note(
+                    f"the interrupted call did not finish stopping within {INTERRUPT_WAIT_S:g} "
+                    f"s: check that the robot stands ({STOP_ON_THE_PENDANT} if not)"
+                )
+            for note in notes:
+                exc.add_note(note)
+            if isinstance(exc, _Terminated):  # the robot is stopped: end as SIGTERM would
+                restore()
+                signal.raise_signal(signal.SIGTERM)
+            raise
+        finally:
+            restore()
 
     def connect(self, *, motion: bool = True, state: bool = True, io: bool = True) -> Self:
         """Open the motion, state and IO connections (those asked for) and wait for them; returns
@@ -255,6 +314,52 @@ class SyncRobotClient:
     read_register_outputs = _forward(RobotClient.read_register_outputs)
     move_cartesian = _forward(RobotClient.move_cartesian)
     tcp_pose = _after_first_state(RobotClient.tcp_pose)
+
+
+class _Terminated(BaseException):
+    """SIGTERM arrived while a call blocked (raised by :func:`_catch_sigterm`'s handler)."""
+
+
+def _nothing() -> None:
+    return None
+
+
+def _catch_sigterm() -> Callable[[], None]:
+    """While a call blocks in the main thread, SIGTERM with its default action (the
+    process ends at once, the robot still moving) is caught instead: the call is
+    interrupted like Ctrl-C (the robot stopped), then SIGTERM is raised again with the
+    default action. A handler the program installed itself is left alone. Returns the
+    function that puts the default back (idempotent)."""
+    if threading.current_thread() is not threading.main_thread():
+        return _nothing
+    if signal.getsignal(signal.SIGTERM) is not signal.SIG_DFL:
+        return _nothing
+
+    def terminated(_sig: int, _frame: object) -> None:
+        raise _Terminated("SIGTERM")
+
+    signal.signal(signal.SIGTERM, terminated)
+
+    def restore() -> None:
+        if signal.getsignal(signal.SIGTERM) is terminated:
+            signal.signal(signal.SIGTERM, signal.SIG_DFL)
+
+    return restore
+
+
+def _wait_through_interrupts(done: concurrent.futures.Future[Any], timeout_s: float) -> bool:
+    """Wait until ``done`` is done, at most ``timeout_s``; a further Ctrl-C meanwhile is
+    absorbed (the stop it would cut short is what the first one asked for). True if done."""
+    deadline = time.monotonic() + timeout_s
+    while not done.done():
+        left = deadline - time.monotonic()
+        if left <= 0:
+            return False
+        try:
+            concurrent.futures.wait([done], timeout=left)
+        except (KeyboardInterrupt, _Terminated):
+            continue
+    return True
 
 
 async def _next(iterator: AsyncIterator[RobotState]) -> RobotState:
