@@ -74,12 +74,16 @@ async def cartesian_move(
     accel_scale: float,
     on_progress: Callable[[FollowingSample], None],
     tool: int | None = None,
+    avoid: bool = False,
+    force: bool = False,
 ) -> MoveResult:
     """A move to ``pose`` (base coordinates) or by ``relative``; straight with ``linear``.
 
     With ``tool`` the controller is told first (SELECT_TOOL), so the TCP the plan places
     is the one the controller moves with; without it, the tool must be known otherwise
     (:mod:`pymotoros.client.tools`), else the move is refused before anything moves.
+    With a cell that has obstacles the client checks the move against them (``force``
+    skips it); ``avoid``: a joint move to ``pose`` around them.
     """
     if tool is not None:
         await client.select_tool(tool, group)
@@ -91,12 +95,13 @@ async def cartesian_move(
         "speed_scale": speed_scale,
         "accel_scale": accel_scale,
         "on_progress": on_progress,
+        "force": force,
     }
     if relative is not None:
         return await client.move_relative(*relative, frame=frame, **options)
     if pose is None:
         raise click.UsageError("give --pose X Y Z RX RY RZ or --relative KEY=VALUE")
-    return await client.move_cartesian(pose, **options)
+    return await client.move_cartesian(pose, avoid=avoid, **options)
 
 
 # --------------------------------------------------------------------------- the tool
