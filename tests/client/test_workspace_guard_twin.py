@@ -52,7 +52,8 @@ async def test_move_pose_into_the_fixture_is_refused_before_anything_moves() -> 
         assert text.startswith("the planned move would hit: collision at ")
         assert "s: R1 tool touches obstacle 'fixture' (" in text
         assert "mm deep, until " in text
-        assert "nothing was sent" in text and "force=True" in text
+        assert "nothing was sent" in text
+        assert "force=True" in text
         assert await client.current_positions() == pytest.approx(before, abs=1e-9)
         assert the_twin.controller.snapshot().pfl == "idle"
         await client.close()
@@ -64,11 +65,13 @@ async def test_every_cartesian_move_is_guarded(how: str) -> None:
         client = await _ready(the_twin)
         await client.move_pose(ABOVE_THE_FIXTURE)  # clear: the guard lets it go
         before = await client.current_positions()
+        down = (
+            client.move_relative(dz=-0.2)
+            if how == "move_relative"
+            else getattr(client, how)(INTO_THE_FIXTURE)
+        )
         with pytest.raises(PathBlockedError, match="R1 tool touches obstacle 'fixture'"):
-            if how == "move_relative":
-                await client.move_relative(dz=-0.2)
-            else:
-                await getattr(client, how)(INTO_THE_FIXTURE)
+            await down
         assert await client.current_positions() == pytest.approx(before, abs=1e-9)
         assert _contacts(the_twin) == []
         await client.close()
@@ -81,7 +84,8 @@ async def test_forced_move_stops_at_the_fixture_and_the_error_names_the_contact(
             await client.move_pose(INTO_THE_FIXTURE, force=True)
         text = str(info.value)
         assert "PFL 5011 (power and force limiting): where it stopped, R1 tool touches " in text
-        assert "obstacle 'fixture' (" in text and "mm deep)" in text
+        assert "obstacle 'fixture' (" in text
+        assert "mm deep)" in text
         # it stands in the fixture: going deeper is refused, with the way out
         here = await client.current_positions()
         with pytest.raises(PathBlockedError) as deeper:
@@ -142,35 +146,38 @@ async def test_avoid_goes_around_the_ball_to_a_pose() -> None:
         "initial": {"joints": {"R1": LEFT}},
         "workspace": {"obstacles": [BALL]},
     }
-    async with Twin(cell_from_dict(data)) as the_twin:
-        async with the_twin.client(cell=cell_models_from_dict(data)) as client:
-            await client.wait_for_state()
-            await client.enable()
-            goal = client.tools.chain(0).pose(RIGHT, "tcp", "base")
-            with pytest.raises(PathBlockedError, match="the planned move would hit"):
-                await client.move_pose(goal)  # straight in joint space: not free
-            await client.move_pose(goal, avoid=True)
-            assert client.tcp_pose()[:3] == pytest.approx(goal[:3], abs=2e-3)
-            assert the_twin.controller.snapshot().workspace.contacts == ()
+    async with (
+        Twin(cell_from_dict(data)) as the_twin,
+        the_twin.client(cell=cell_models_from_dict(data)) as client,
+    ):
+        await client.wait_for_state()
+        await client.enable()
+        goal = client.tools.chain(0).pose(RIGHT, "tcp", "base")
+        with pytest.raises(PathBlockedError, match="the planned move would hit"):
+            await client.move_pose(goal)  # straight in joint space: not free
+        await client.move_pose(goal, avoid=True)
+        assert client.tcp_pose()[:3] == pytest.approx(goal[:3], abs=2e-3)
+        assert the_twin.controller.snapshot().workspace.contacts == ()
 
 
 GP7_BOX = {
     "robot": {"model": "gp7"},
-    "workspace": {
-        "obstacles": [{"name": "box", "box": [0.2, 0.2, 0.2], "xyz": [0.45, 0.0, 0.75]}]
-    },
+    "workspace": {"obstacles": [{"name": "box", "box": [0.2, 0.2, 0.2], "xyz": [0.45, 0.0, 0.75]}]},
 }
 
 
 async def test_a_collision_alarm_names_the_alarm_link_and_obstacle() -> None:
-    async with Twin(cell_from_dict(GP7_BOX)) as the_twin:
-        async with the_twin.client(cell=cell_models_from_dict(GP7_BOX)) as client:
-            await client.wait_for_state()
-            await client.enable()
-            with pytest.raises(PathBlockedError, match="obstacle 'box'"):
-                await client.move_joints([0.0, 1.0, 0.0, 0.0, 0.0, 0.0])
-            with pytest.raises(NotReadyError) as info:
-                await client.move_joints([0.0, 1.0, 0.0, 0.0, 0.0, 0.0], force=True)
-            text = str(info.value)
-            assert "alarm 4315 COLLISION DETECT: where it stopped, R1 link_" in text
-            assert "touches obstacle 'box' (" in text and "mm deep)" in text
+    async with (
+        Twin(cell_from_dict(GP7_BOX)) as the_twin,
+        the_twin.client(cell=cell_models_from_dict(GP7_BOX)) as client,
+    ):
+        await client.wait_for_state()
+        await client.enable()
+        with pytest.raises(PathBlockedError, match="obstacle 'box'"):
+            await client.move_joints([0.0, 1.0, 0.0, 0.0, 0.0, 0.0])
+        with pytest.raises(NotReadyError) as info:
+            await client.move_joints([0.0, 1.0, 0.0, 0.0, 0.0, 0.0], force=True)
+        text = str(info.value)
+        assert "alarm 4315 COLLISION DETECT: where it stopped, R1 link_" in text
+        assert "touches obstacle 'box' (" in text
+        assert "mm deep)" in text
