@@ -181,3 +181,53 @@ async def test_a_collision_alarm_names_the_alarm_link_and_obstacle() -> None:
         assert "alarm 4315 COLLISION DETECT: where it stopped, R1 link_" in text
         assert "touches obstacle 'box' (" in text
         assert "mm deep)" in text
+
+
+INSIDE = [0.0, 1.0, 0.0, 0.0, 0.0, 0.0]
+"""The elbow inside the ball (as a robot stopped in it stands)."""
+OUT = [0.0, 1.2, 0.0, 0.0, 0.0, 0.0]
+"""L tilted further forward: the upper arm leaves the ball (18 mm deep at INSIDE, clear
+from L = 1.1 rad on); tilting back would pass its middle (148 mm deep at L = 0.8)."""
+
+
+def _stuck_in_the_ball() -> dict[str, object]:
+    return {
+        "robot": {"model": "hc10"},
+        "initial": {"joints": {"R1": INSIDE}},
+        "workspace": {"obstacles": [BALL]},
+    }
+
+
+async def test_a_joint_move_backs_out_of_a_contact_and_nothing_else() -> None:
+    data = _stuck_in_the_ball()
+    async with (
+        Twin(cell_from_dict(data)) as the_twin,
+        the_twin.client(cell=cell_models_from_dict(data)) as client,
+    ):
+        await client.wait_for_state()
+        await client.enable()
+        with pytest.raises(PathBlockedError) as info:
+            await client.move_joints([0.0, 0.4, 0.0, 0.0, 0.0, 0.0])  # through its middle
+        text = str(info.value)
+        assert text.startswith("the robot starts touching obstacle 'ball' (R1 link_2_l)")
+        assert "the overlap grows to " in text
+        assert "A move along which the clearance only grows is allowed" in text
+        assert await client.current_positions() == pytest.approx(INSIDE, abs=1e-5)
+        result = await client.move_joints(OUT)  # out of it all the way: allowed
+        assert list(result.final_positions) == pytest.approx(OUT, abs=1e-3)
+        assert the_twin.controller.snapshot().pfl == "idle"
+
+
+async def test_avoid_from_a_start_in_contact_leaves_it_first() -> None:
+    data = _stuck_in_the_ball()
+    async with (
+        Twin(cell_from_dict(data)) as the_twin,
+        the_twin.client(cell=cell_models_from_dict(data)) as client,
+    ):
+        await client.wait_for_state()
+        await client.enable()
+        result = await client.move_joints(RIGHT, avoid=True)  # was "the start is in collision"
+        assert list(result.final_positions) == pytest.approx(RIGHT, abs=1e-3)
+        snapshot = the_twin.controller.snapshot()
+        assert snapshot.pfl == "idle"
+        assert snapshot.workspace.contacts == ()
