@@ -807,7 +807,6 @@ async def _move_watched(
     req: MoveRequest,
     goal: MoveGoal,
     timeout_s: float,
-    cell: Path | CellModels | None = None,
 ) -> MoveResult:
     """The move with its progress line; on Ctrl-C/SIGTERM STOP_MOTION, and a refusal
     mid-move says where the robot came to rest."""
@@ -956,7 +955,7 @@ def move(**kwargs: Any) -> None:
             if not req.cartesian:  # the tool whose shape the obstacle check mounts
                 use_tool(client, req.tool)
             _say_groups(client, req, goal)
-            return await _move_watched(client, req, goal, target.timeout_s, target.cell)
+            return await _move_watched(client, req, goal, target.timeout_s)
 
     result = run(target, work, stoppable=True)
     _report_move(result, req, goal, target.client().robot)
