@@ -54,6 +54,7 @@ class SweepWorld(Protocol):
     def probe(self, qs: Sequence[F64Array]) -> tuple[float, Sequence[ContactLike]]: ...
     def self_distances(self, qs: Sequence[F64Array]) -> Sequence[ContactLike]: ...
     def joint_reach(self, group_index: int) -> list[float]: ...
+    def lever_arms(self, group_index: int) -> list[float]: ...
 
 
 @dataclass(frozen=True, slots=True)
@@ -125,15 +126,7 @@ def sweep(
     result = SweepResult()
     if ticks == 0:
         return result
-    # metres any point of the robot may have moved up to each tick (a conservative sum)
-    reach = np.concatenate(
-        [
-            np.asarray(world.joint_reach(g) or [0.0] * n, dtype=float)  # no shapes: 0
-            for g, n in enumerate(sizes)
-        ]
-    )
-    steps = np.abs(np.diff(positions, axis=0)) @ reach if ticks > 1 else np.zeros(0)
-    travel = np.concatenate(([0.0], np.cumsum(steps)))
+    travel = _Travel(world, positions, sizes)
     open_: dict[tuple[str, str, str], list[float | bool]] = {}
     done: list[SweptContact] = []
     next_obstacle = next_self = 0
@@ -153,7 +146,7 @@ def sweep(
             clear_since_start = clear_since_start or clearance > 0.0
             best = max(best, clearance) if k else clearance
             last = clearance
-            next_obstacle = _next(k, clearance, travel, contacts)
+            next_obstacle = travel.next_check(k, clearance, contacts)
         else:  # the obstacles were not due: keep what is open against them
             seen.extend(_open_obstacles(open_))
         if k == next_self:
@@ -161,7 +154,7 @@ def sweep(
             hits = [c for c in distances if c.distance_m <= 0.0]
             seen.extend(hits)
             own = min((c.distance_m for c in distances), default=math.inf) / 2.0
-            next_self = _next(k, own, travel, hits)
+            next_self = travel.next_check(k, own, hits)
         else:
             seen.extend(_open_self(open_))
         _track(open_, done, seen, now, k == 0)
@@ -199,13 +192,58 @@ def _open_self(open_: dict[tuple[str, str, str], list[float | bool]]) -> list[Co
     return [_Kept(k, float(v[1]), True) for k, v in open_.items() if v[2]]
 
 
-def _next(k: int, clearance: float, travel: F64Array, hits: Sequence[ContactLike]) -> int:
-    """The next tick at which a check is due after one at ``k`` found ``clearance``."""
-    if hits or clearance <= MIN_STEP_M:
-        return k + 1
-    if not math.isfinite(clearance):
-        return len(travel)
-    return max(k + 1, int(np.searchsorted(travel, travel[k] + clearance, side="left")))
+class _Travel:
+    """How far any point of the robot can have moved since a tick (m): per tick, each
+    joint's |Δq| times its lever arm at the last check grown by the clearance (a lever
+    grows by at most the distance moved), never more than its reach in any pose."""
+
+    def __init__(self, world: SweepWorld, positions: F64Array, sizes: Sequence[int]) -> None:
+        self._world = world
+        self._sizes = tuple(sizes)
+        self._steps = np.abs(np.diff(positions, axis=0))
+        self._reach = np.concatenate(
+            [
+                np.asarray(world.joint_reach(g) or [0.0] * n, dtype=float)  # no shapes: 0
+                for g, n in enumerate(sizes)
+            ]
+        )
+        self.ticks = len(positions)
+
+    def _weights(self, step: float) -> F64Array:
+        levers = np.concatenate(
+            [
+                np.asarray(self._world.lever_arms(g) or [0.0] * n, dtype=float)
+                for g, n in enumerate(self._sizes)
+            ]
+        )
+        return np.minimum(self._reach, levers + step)
+
+    def next_check(self, k: int, clearance: float, hits: Sequence[ContactLike]) -> int:
+        """The next tick at which a check is due after one at ``k`` found ``clearance``
+        (the levers of that check: the world was just placed at tick ``k``)."""
+        if hits or clearance <= MIN_STEP_M:
+            return k + 1
+        if not math.isfinite(clearance):
+            return self.ticks
+        weights = self._weights(clearance)
+        done = 0.0
+        start = k
+        window = _WINDOW
+        while start < self.ticks - 1:
+            end = min(self.ticks - 1, start + window)
+            window *= 2
+            total = done + np.cumsum(self._steps[start:end] @ weights)
+            j = int(np.searchsorted(total, clearance, side="left"))
+            if j < len(total):
+                return start + j + 1
+            done = float(total[-1])
+            start = end
+        return self.ticks
+
+
+_WINDOW: Final = 64
+"""Ticks of travel summed first when looking for the next check (doubled each round):
+near an obstacle the next check is a few ticks away, far from all of them hundreds."""
 
 
 def _follow_start(
