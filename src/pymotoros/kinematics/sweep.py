@@ -216,7 +216,8 @@ class _Travel:
                 for g, n in enumerate(self._sizes)
             ]
         )
-        return np.minimum(self._reach, levers + step)
+        weights: F64Array = np.minimum(self._reach, levers + step)
+        return weights
 
     def next_check(self, k: int, clearance: float, hits: Sequence[ContactLike]) -> int:
         """The next tick at which a check is due after one at ``k`` found ``clearance``
