@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import re
 import sys
+import time
 from collections.abc import Iterator
 from pathlib import Path
 
@@ -24,8 +25,9 @@ CELL = str(Path(__file__).resolve().parents[2] / "examples" / "cells" / "hc10_ta
 INTO = ("0.70", "0.0", "-0.10", "180", "0", "0")
 """The issue's pose: the gripper 75 mm into the fixture (base coordinates, deg)."""
 ABOVE = ("0.70", "0.0", "0.10", "180", "0", "0")
-ENABLE_TRIES = 20
-"""Bound on the `enable` attempts while the PFL stop still holds (each takes a round trip)."""
+PFL_WAIT_S = 10.0
+"""Bound on the wait for the PFL stop (500 ms on the sim's clock) to let `enable` through."""
+POLL_S = 0.05
 
 
 @pytest.fixture
@@ -40,6 +42,16 @@ def invoke(sim: Sim, *args: str) -> Result:
 
 def move(sim: Sim, *args: str) -> Result:
     return invoke(sim, "move", *args, "--tool", "0", "--config", CELL)
+
+
+def _enable_after_pfl(sim: Sim) -> bool:
+    """``enable`` until it is accepted (the PFL stop still holds at first), bounded."""
+    deadline = time.monotonic() + PFL_WAIT_S
+    while time.monotonic() < deadline:
+        if invoke(sim, "enable").exit_code == 0:
+            return True
+        time.sleep(POLL_S)
+    return False
 
 
 def _positions(sim: Sim) -> list[float]:
@@ -64,6 +76,11 @@ def test_a_cartesian_move_into_the_fixture_is_refused_unless_forced(sim: Sim) ->
         assert _positions(sim) == before  # nothing was sent
         assert sim.api("/api/state")["pfl"] == "idle"
 
+
+def test_a_forced_contact_says_where_the_robot_stands_and_backs_out(sim: Sim) -> None:
+    """The issue's ``--force`` run: PFL 5011 at the fixture; the error said "the robot
+    stands; position unknown" although the position was known."""
+    assert invoke(sim, "enable").exit_code == 0
     forced = move(sim, "--pose", *INTO, "--deg", "--force")
     assert forced.exit_code == EXIT_REFUSED, forced.output
     assert "PFL_ACTIVE (5011)" in forced.stderr
@@ -86,7 +103,7 @@ def test_a_cartesian_move_into_the_fixture_is_refused_unless_forced(sim: Sim) ->
     assert hint is not None, deeper.stderr
     assert _positions(sim) == here
     # the PFL stop holds 500 ms; START_TRAJ_MODE clears it after that
-    assert any(invoke(sim, "enable").exit_code == 0 for _ in range(ENABLE_TRIES))
+    assert _enable_after_pfl(sim), sim.api("/api/state")["pfl"]
     out = move(sim, "--relative", hint.group(1))
     assert out.exit_code == 0, out.output
     assert "only takes it away" in out.stderr
