@@ -94,3 +94,26 @@ def test_tick_positions_are_motoros_cubic_at_each_tick(goal: list[float], scale:
     for k in range(0, len(times), max(1, len(times) // 17)):
         assert positions[k] == pytest.approx(plan.position_at(float(times[k])), abs=1e-9)
     assert positions[-1] == pytest.approx(goal, abs=1e-9)
+
+
+def test_the_guard_reads_a_trajectory_in_its_groups_order() -> None:
+    """``execute(trajectory, groups=(1, 0))``: the trajectory's first joints are R2's."""
+    from pymotoros import PathBlockedError
+    from pymotoros.client import RobotClient
+
+    cell = cell_models_from_dict(
+        {
+            "controller": {"model": "dx100"},
+            "groups": [{"robot": "hc10"}, {"robot": "hc10"}],
+            "workspace": {
+                "bases": {"R2": {"xyz": [0.0, 1.5, 0.0]}},
+                "obstacles": [{**BALL, "frame": "R2"}],  # before R2's upper arm only
+            },
+        }
+    )
+    client = RobotClient(cell=cell)  # not connected: the groups stand at their home
+    into = [0.0, 1.0, 0.0, 0.0, 0.0, 0.0]
+    plan = client.plan([0.0] * 12, into + [0.0] * 6, groups=(1, 0))
+    with pytest.raises(PathBlockedError, match="R2 link_2_l touches obstacle 'ball'"):
+        client.guard(plan, (1, 0))
+    assert client.guard(plan, (0, 1)) is None  # the same joints move R1: no ball there

@@ -99,13 +99,13 @@ class Avoidance:
         moving: Sequence[int],
         standing: Sequence[Sequence[float] | None],
     ) -> tuple[list[int], list[float]]:
-        """(columns of the moving groups in a joint vector of every group, that vector
-        with the other groups where they stand: their feedback, else their home)."""
-        columns: list[int] = []
+        """(columns of the moving groups, in the order of ``moving`` (a trajectory's
+        joints), in a joint vector of every group of the cell; that vector with the
+        groups where they stand: their feedback, else their home)."""
+        offsets = [sum(world.joint_counts[:g]) for g in range(len(world.groups))]
+        columns = [offsets[g] + i for g in moving for i in range(world.groups[g].num_axes)]
         joined: list[float] = []
         for g, group in enumerate(world.groups):
-            if g in moving:
-                columns.extend(range(len(joined), len(joined) + group.num_axes))
             here = standing[g] if g < len(standing) else None
             joined.extend(here if here is not None else group.home)
         return columns, joined
@@ -130,6 +130,8 @@ class Avoidance:
 
         from pymotoros.kinematics.sweep import sweep
 
+        if len(trajectory.points) < 2:  # nothing moves
+            return None
         world = self.world()
         self._mount_tools(world)
         columns, joined = self._joined(world, groups, standing)
