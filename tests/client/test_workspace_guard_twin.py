@@ -11,6 +11,7 @@ nothing else; ``avoid=True`` works for a pose goal and leaves a contact first.
 from __future__ import annotations
 
 import math
+import re
 from pathlib import Path
 
 import pytest
@@ -162,7 +163,7 @@ async def test_avoid_goes_around_the_ball_to_a_pose() -> None:
 
 GP7_BOX = {
     "robot": {"model": "gp7"},
-    "workspace": {"obstacles": [{"name": "box", "box": [0.2, 0.2, 0.2], "xyz": [0.45, 0.0, 0.75]}]},
+    "workspace": {"obstacles": [{"name": "box", "box": [0.2, 0.2, 0.2], "xyz": [0.6, 0.0, 0.3]}]},
 }
 
 
@@ -178,9 +179,22 @@ async def test_a_collision_alarm_names_the_alarm_link_and_obstacle() -> None:
         with pytest.raises(NotReadyError) as info:
             await client.move_joints([0.0, 1.0, 0.0, 0.0, 0.0, 0.0], force=True)
         text = str(info.value)
-        assert "alarm 4315 COLLISION DETECT: where it stopped, R1 link_" in text
-        assert "touches obstacle 'box' (" in text
-        assert "mm deep)" in text
+        assert text.startswith("point ")
+        assert "refused: ALARM (5001): an alarm is active." in text
+        named = re.search(
+            r"; alarm 4315 COLLISION DETECT: where it stopped, R1 (link_\w+) touches obstacle "
+            r"'box' \((\d+\.\d) mm deep\)$",
+            text,
+        )
+        assert named is not None, text
+        link, depth = named.groups()
+        assert 0.0 < float(depth) < 20.0  # stopped within a few ticks' travel
+        # standing in the box: the guard says how deep, from the same cell file
+        with pytest.raises(PathBlockedError) as deeper:
+            await client.move_joints([0.0, 1.2, 0.0, 0.0, 0.0, 0.0])
+        assert str(deeper.value).startswith(
+            f"the robot starts touching obstacle 'box' (R1 {link}) ({depth} mm deep)"
+        )
 
 
 INSIDE = [0.0, 1.0, 0.0, 0.0, 0.0, 0.0]

@@ -170,7 +170,6 @@ class Avoidance:
         """The refusal of a move that starts in contact and goes deeper: what it touches,
         how deep it would go, and how to back out."""
         touching = _start_contacts(found)
-        deepest = max(c.depth_mm for c in touching)
         start_mm = -found.start_clearance_m * 1000.0
         end_mm = -found.deepest_m * 1000.0
         if found.deepest_m < found.start_clearance_m - 5e-5:
@@ -181,7 +180,7 @@ class Avoidance:
             worse = "it touches again later"
         hint = self._back_out_hint(world, start, columns)
         return (
-            f"the robot starts touching {_names(touching)} ({deepest:.1f} mm deep) and this "
+            f"the robot starts touching {_names(touching)} ({start_mm:.1f} mm deep) and this "
             f"move does not take it away ({worse}); nothing was sent. A move along which the "
             f"clearance only grows is allowed: back out first{hint}, or move with --avoid "
             f"(avoid=True), which leaves the contact before it searches, {FORCE_HINT}"
