@@ -10,11 +10,14 @@ nothing else; ``avoid=True`` works for a pose goal and leaves a contact first.
 
 from __future__ import annotations
 
+import asyncio
 import math
 import re
 from pathlib import Path
 
 import pytest
+from hypothesis import HealthCheck, event, given, settings
+from hypothesis import strategies as st
 
 from pymotoros import PathBlockedError
 from pymotoros.client import NotReadyError, RobotClient
@@ -245,3 +248,39 @@ async def test_avoid_from_a_start_in_contact_leaves_it_first() -> None:
         snapshot = the_twin.controller.snapshot()
         assert snapshot.pfl == "idle"
         assert snapshot.workspace.contacts == ()
+
+
+@settings(max_examples=30, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(
+    goal=st.tuples(
+        st.floats(-0.6, 0.6),
+        st.floats(0.2, 1.4),
+        st.floats(-0.05, 1.2),
+        st.floats(-0.5, 0.5),
+        st.floats(-1.5, 0.5),
+        st.floats(-0.5, 0.5),
+    )
+)
+def test_the_guard_and_the_twin_agree(goal: tuple[float, ...]) -> None:
+    """Any joint move in the fixture cell: refused before anything moves, or run without
+    the twin (which checks every tick's commanded position) feeling any contact."""
+    asyncio.run(_guarded_move(goal))
+
+
+async def _guarded_move(goal: tuple[float, ...]) -> None:
+    async with Twin(load_cell(CELL)) as the_twin:
+        client = await _ready(the_twin)
+        felt: list[object] = []
+        the_twin.on_tick(lambda: felt.extend(the_twin.controller.workspace_contacts))
+        before = await client.current_positions()
+        try:
+            await client.move_joints(list(goal))
+        except PathBlockedError:
+            event("refused")
+            assert await client.current_positions() == pytest.approx(before, abs=1e-9)
+        else:
+            event("moved")
+            assert await client.current_positions() == pytest.approx(goal, abs=1e-3)
+        assert felt == []
+        assert the_twin.controller.snapshot().pfl == "idle"
+        await client.close()
