@@ -1,4 +1,15 @@
-"""Joint moves around the cell's obstacles: ``move_joints(..., avoid=True)``,
+"""The cell's obstacles in the client: the guard of every move, and moves around them.
+
+**The guard** (:meth:`Avoidance.check`): before anything is sent, every move of a client
+whose cell file has obstacles (joint, named, pose, straight line, relative, a user's
+``execute``) is sampled at every interpolation tick as MotoROS interpolates it
+(:func:`tick_positions`) and checked by :func:`pymotoros.kinematics.sweep.sweep`; a move
+that would touch something is a :class:`PathBlockedError` naming time, link, obstacle
+and depth, unless it only backs the robot out of a contact it starts in (the rule:
+:mod:`pymotoros.kinematics.sweep`). After a move a contact stopped,
+:meth:`Avoidance.contact_at` names what the robot touches where it stands.
+
+**Around the obstacles**: ``move_joints(..., avoid=True)``, ``move_pose(..., avoid=True)``,
 ``plan(..., avoid=True)`` and ``pymotoros move --avoid``.
 
 The client speaks only the wire, and MotoROS knows nothing of obstacles, so the client
@@ -281,6 +292,7 @@ class Avoidance:
         import numpy as np
 
         from pymotoros.kinematics.path_search import describe, split
+        from pymotoros.kinematics.sweep import RECEDE_TOLERANCE_M
 
         sizes = world.joint_counts
         qa = np.asarray(a, dtype=float)
@@ -306,7 +318,7 @@ class Avoidance:
                 if any(not ax.lower <= v <= ax.upper for ax, v in zip(axes, q, strict=True)):
                     break
                 clearance, _ = world.probe(split(q, sizes))
-                if clearance < previous - 1e-5:
+                if clearance < previous - RECEDE_TOLERANCE_M:
                     break  # deeper: not a way out
                 previous = clearance
                 if clearance >= ESCAPE_CLEARANCE_M:
