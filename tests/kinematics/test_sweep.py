@@ -14,7 +14,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from pymotoros.client.avoid import tick_positions
+from pymotoros.client.guard import tick_positions
 from pymotoros.client.planning import JointLimits, plan_joint_move
 from pymotoros.kinematics.collision import CollisionWorld, world_for_cell
 from pymotoros.kinematics.sweep import sweep

@@ -36,9 +36,17 @@ from collections.abc import Sequence
 from dataclasses import replace
 from typing import TYPE_CHECKING, Final
 
+from pymotoros.client.guard import (
+    FORCE_HINT,
+    contact_words,
+    names,
+    start_contacts,
+    stuck_refusal,
+    tick_positions,
+)
 from pymotoros.client.planning import JointLimits, JointTrajectory, PlanningError, plan_joint_move
 from pymotoros.client.tools import ToolTable
-from pymotoros.errors import KinematicsError, PathBlockedError, PymotorosError
+from pymotoros.errors import PathBlockedError
 from pymotoros.models.cell import CellModels
 
 if TYPE_CHECKING:  # Pinocchio, Coal and OMPL load only when a move avoids something
@@ -46,25 +54,17 @@ if TYPE_CHECKING:  # Pinocchio, Coal and OMPL load only when a move avoids somet
     import numpy.typing as npt
 
     from pymotoros.kinematics.collision import CollisionWorld
-    from pymotoros.kinematics.sweep import SweepResult, SweptContact
 
 logger = logging.getLogger(__name__)
 
 LABELS: Final = ("the start", "the goal")
 """How a refusal names the two ends of the move."""
-BACK_OUT_STEP_M: Final = 0.02
-"""TCP step (20 mm) tried along each base axis to find the way out of a contact named in
-a refusal: enough to clear a stop's overlap (a few mm), short enough to stay near."""
 ESCAPE_STEP_RAD: Final = 0.01
 """Joint step of the way out of a contact that ``avoid`` takes before its search."""
 ESCAPE_MAX_RAD: Final = 0.5
 """Farthest (largest joint travel, 29°) ``avoid`` looks for the way out of a contact."""
 ESCAPE_CLEARANCE_M: Final = 0.005
 """Clearance (5 mm) at which the way out of a contact ends and the search begins."""
-STOPPED_NEAR_M: Final = 0.005
-"""A link this close to an obstacle where a collision alarm stopped the robot is named
-as the contact (the twin and a real arm stop, or back off, within a few mm of it)."""
-FORCE_HINT: Final = "or give --force (force=True)"
 
 
 class Avoidance:
@@ -153,16 +153,16 @@ class Avoidance:
         blocking = found.blocking
         if not blocking:
             if found.starts_in_contact:
-                touching = _start_contacts(found)
                 note = (
-                    f"the robot starts touching {_names(touching)}; this move only takes it "
-                    f"away (the clearance grows all along the move), so it is allowed"
+                    f"the robot starts touching {names(start_contacts(found))}; this move "
+                    "only takes it away (the clearance grows all along the move), so it is "
+                    "allowed"
                 )
                 logger.warning("%s", note)
                 return note
             return None
         if found.starts_in_contact and not found.receding:
-            raise PathBlockedError(self._stuck(world, found, full[0], columns))
+            raise PathBlockedError(stuck_refusal(world, self._tools, found, full[0], columns))
         first = blocking[0]
         more = f" (and {len(blocking) - 1} more)" if len(blocking) > 1 else ""
         raise PathBlockedError(
@@ -171,90 +171,10 @@ class Avoidance:
             f"{FORCE_HINT}"
         )
 
-    def _stuck(
-        self,
-        world: CollisionWorld,
-        found: SweepResult,
-        start: npt.NDArray[np.float64],
-        columns: Sequence[int],
-    ) -> str:
-        """The refusal of a move that starts in contact and goes deeper: what it touches,
-        how deep it would go, and how to back out."""
-        touching = _start_contacts(found)
-        start_mm = -found.start_clearance_m * 1000.0
-        end_mm = -found.deepest_m * 1000.0
-        if found.deepest_m < found.start_clearance_m - 5e-5:
-            worse = f"the overlap grows to {end_mm:.1f} mm at {found.deepest_s:.3f} s"
-        elif found.deepest_m <= 0.0 and math.isfinite(found.deepest_m):
-            worse = f"it stays {start_mm:.1f} mm deep, sliding along it"
-        else:
-            worse = "it touches again later"
-        hint = self._back_out_hint(world, start, columns)
-        return (
-            f"the robot starts touching {_names(touching)} ({start_mm:.1f} mm deep) and this "
-            f"move does not take it away ({worse}); nothing was sent. A move along which the "
-            f"clearance only grows is allowed: back out first{hint}, or move with --avoid "
-            f"(avoid=True), which leaves the contact before it searches, {FORCE_HINT}"
-        )
-
-    def _back_out_hint(
-        self, world: CollisionWorld, start: npt.NDArray[np.float64], columns: Sequence[int]
-    ) -> str:
-        """``, e.g. dz=+0.020 m (...)``: the TCP step along a base axis that gains the
-        most clearance from where the robot stands ("" when none does, or no IK)."""
-        import numpy as np
-
-        from pymotoros.kinematics import pose_to_matrix
-        from pymotoros.kinematics.path_search import split
-
-        if not columns:
-            return ""
-        g = self._group_of(world, columns[0])
-        qs = split(start, world.joint_counts)
-        here, _ = world.probe(qs)
-        best: tuple[float, str] | None = None
-        try:
-            chain = self._tools.chain(g)
-        except PymotorosError:
-            return ""
-        pose = chain.fk(qs[g])
-        for axis, key in enumerate(("dx", "dy", "dz")):
-            for sign in (1.0, -1.0):
-                step = np.zeros(6)
-                step[axis] = sign * BACK_OUT_STEP_M
-                target = pose.copy()
-                target[:3, 3] = pose[:3, 3] + pose_to_matrix(step.tolist())[:3, 3]
-                try:
-                    q = chain.ik(target, qs[g]).q
-                except KinematicsError:
-                    continue
-                moved = [*qs]
-                moved[g] = np.asarray(q, dtype=float)
-                clearance, _ = world.probe(moved)
-                if clearance > here and (best is None or clearance > best[0]):
-                    value = f"{sign * BACK_OUT_STEP_M:+.3f}"
-                    best = (clearance, f"{key}={value}")
-        if best is None:
-            return ""
-        key, _, value = best[1].partition("=")
-        return (
-            f", e.g. {key} {value} m (`pymotoros move --relative {key}={value.lstrip('+')}`, "
-            f"move_relative({key}={value.lstrip('+')}))"
-        )
-
-    @staticmethod
-    def _group_of(world: CollisionWorld, column: int) -> int:
-        at = 0
-        for g, n in enumerate(world.joint_counts):
-            if column < at + n:
-                return g
-            at += n
-        return 0
-
     def contact_at(self, standing: Sequence[Sequence[float] | None]) -> str | None:
-        """What the robot touches (or nearly, :data:`STOPPED_NEAR_M`) where it stands,
-        in words with distances in mm; None without obstacles or when nothing is near.
-        Named in the error of a move a collision alarm stopped."""
+        """What the robot touches (or nearly) where it stands, in words with distances
+        in mm (:func:`~pymotoros.client.guard.contact_words`); None without obstacles or
+        when nothing is near. Named in the error of a move a collision alarm stopped."""
         if not self.guards or any(q is None for q in standing):
             return None
         import numpy as np
@@ -264,23 +184,7 @@ class Avoidance:
         world = self.world()
         self._mount_tools(world)
         _, joined = self._joined(world, (), standing)
-        qs = split(np.asarray(joined, dtype=float), world.joint_counts)
-        clearance, contacts = world.probe(qs)
-        if contacts:
-            c = min(contacts, key=lambda c: c.distance_m)
-            return (
-                f"{c.group} {c.link} touches obstacle {c.obstacle!r} "
-                f"({-c.distance_m * 1000.0:.1f} mm deep)"
-            )
-        if clearance > STOPPED_NEAR_M:
-            return None
-        nearest = world.nearest(qs)
-        if nearest is None:
-            return None
-        return (
-            f"{nearest.group} {nearest.link} stands {nearest.distance_m * 1000.0:.1f} mm from "
-            f"obstacle {nearest.obstacle!r}"
-        )
+        return contact_words(world, split(np.asarray(joined, dtype=float), world.joint_counts))
 
     def _way_out(
         self, world: CollisionWorld, a: Sequence[float], b: Sequence[float], moving: set[int]
@@ -409,40 +313,4 @@ def join(pieces: Sequence[JointTrajectory]) -> JointTrajectory:
     return JointTrajectory(tuple(points), optimal)
 
 
-def tick_positions(
-    trajectory: JointTrajectory, period_s: float
-) -> tuple[npt.NDArray[np.float64], npt.NDArray[np.float64]]:
-    """(times, positions) of ``trajectory`` at every interpolation tick (``period_s``)
-    and at its end: the cubic MotoROS fits between two points (positions and
-    velocities at both ends, :meth:`JointTrajectory.position_at`), vectorised."""
-    import numpy as np
-
-    pts = trajectory.points
-    t_points = np.array([p.time for p in pts], dtype=float)
-    pos = np.array([p.positions for p in pts], dtype=float)
-    if len(pts) == 1:
-        return t_points, pos
-    vel = np.array([p.velocities for p in pts], dtype=float)
-    times = np.arange(0.0, trajectory.duration, period_s)
-    times = np.append(times, trajectory.duration)
-    i = np.clip(np.searchsorted(t_points, times, side="right") - 1, 0, len(pts) - 2)
-    h = (t_points[i + 1] - t_points[i])[:, None]
-    s = np.clip((times[:, None] - t_points[i][:, None]) / np.where(h > 0, h, 1.0), 0.0, 1.0)
-    h00 = 2 * s**3 - 3 * s**2 + 1
-    h10 = s**3 - 2 * s**2 + s
-    h01 = -2 * s**3 + 3 * s**2
-    h11 = s**3 - s**2
-    out = h00 * pos[i] + h10 * h * vel[i] + h01 * pos[i + 1] + h11 * h * vel[i + 1]
-    return times, out
-
-
-def _start_contacts(found: SweepResult) -> list[SweptContact]:
-    return [c for c in found.contacts if c.at_start] or found.contacts[:1]
-
-
-def _names(contacts: Sequence[SweptContact]) -> str:
-    """``obstacle 'fixture' (R1 tool)`` for each contact, joined."""
-    return ", ".join(f"obstacle {c.obstacle!r} ({c.group} {c.link})" for c in contacts)
-
-
-__all__ = ["Avoidance", "join", "tick_positions"]
+__all__ = ["Avoidance", "join"]
