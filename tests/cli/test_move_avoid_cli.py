@@ -79,7 +79,7 @@ def test_a_blocked_goal_is_one_line_and_exit_1(sim: Sim, cell: Path) -> None:
     ("extra", "words"),
     [
         ((), "--avoid needs --config CELL.toml whose [workspace] has obstacles"),
-        (("--pose", "--config", "CELL"), "--avoid plans joint moves"),
+        (("--pose", "--linear", "--config", "CELL"), "a straight line (--linear, --relative)"),
     ],
 )
 def test_avoid_usage_errors(sim: Sim, cell: Path, extra: tuple[str, ...], words: str) -> None:

@@ -53,9 +53,12 @@ async def test_the_client_moves_around_the_ball_and_the_twin_feels_no_contact() 
             assert snapshot.pfl == "idle"
             assert not snapshot.alarms
             assert len(result.trajectory.points) > 2
-            # the plain move back goes through the ball: PFL stops it
-            with pytest.raises(NotReadyError) as info:
+            # the plain move back goes through the ball: the guard refuses it, and forced
+            # PFL stops it
+            with pytest.raises(PathBlockedError, match="link_2_l touches obstacle 'ball'"):
                 await client.move_joints(LEFT, speed_scale=0.5)
+            with pytest.raises(NotReadyError) as info:
+                await client.move_joints(LEFT, speed_scale=0.5, force=True)
             assert info.value.reason is NotReadySubcode.PFL_ACTIVE
 
 

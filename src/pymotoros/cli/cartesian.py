@@ -105,12 +105,16 @@ async def cartesian_move(
     accel_scale: float,
     on_progress: Callable[[FollowingSample], None],
     tool: int | None = None,
+    avoid: bool = False,
+    force: bool = False,
 ) -> MoveResult:
     """A move to ``pose`` (base coordinates) or by ``relative``; straight with ``linear``.
 
     With ``tool`` the controller is told first (SELECT_TOOL), so the TCP the plan places
     is the one the controller moves with; without it, the tool must be known otherwise
     (:mod:`pymotoros.client.tools`), else the move is refused before anything moves.
+    With a cell that has obstacles the client checks the move against them (``force``
+    skips it); ``avoid``: a joint move to ``pose`` around them.
     """
     if tool is not None:
         await client.select_tool(tool, group)
@@ -130,13 +134,14 @@ async def cartesian_move(
         "speed_scale": speed_scale,
         "accel_scale": accel_scale,
         "on_progress": on_progress,
+        "force": force,
     }
     if relative is not None:
         result = await client.move_relative(*relative, frame=frame, **options)
     elif pose is None:
         raise click.UsageError("give --pose X Y Z RX RY RZ or --relative KEY=VALUE")
     else:
-        result = await client.move_cartesian(pose, **options)
+        result = await client.move_cartesian(pose, avoid=avoid, **options)
     with contextlib.suppress(PymotorosError):  # no feedback: the joint line says it all
         reached = client.tcp_pose(group)
         click.echo(f"the TCP stands at {pose_text(reached)} {frame_note(model)}", err=True)

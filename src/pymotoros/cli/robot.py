@@ -673,9 +673,11 @@ class MoveRequest:
             raise click.UsageError("give either joint values J1 ... Jn or --named NAME")
         if self.srdf is not None and self.name is None:
             raise click.UsageError("--srdf goes with --named")
-        if self.avoid and self.cartesian:
+        if self.avoid and (self.linear or self.relative):
             raise click.UsageError(
-                "--avoid plans joint moves (J1 ... Jn or --named), not --pose/--relative"
+                "--avoid plans a joint move around the obstacles (J1 ... Jn, --named or "
+                "--pose without --linear); a straight line (--linear, --relative) cannot "
+                "go around them"
             )
 
 
@@ -754,6 +756,8 @@ async def _cartesian(
         accel_scale=req.accel_scale,
         on_progress=progress,
         tool=req.tool,
+        avoid=req.avoid,
+        force=req.force,
     )
 
 
@@ -798,60 +802,26 @@ async def _settled_where(
     return _where(client, goal.groups, goal.models, goal.goal, deg, what)
 
 
-def _refuse_collisions(
-    cell: Path | CellModels | None,
-    planned: JointTrajectory,
-    goal: MoveGoal,
-    tool: int | None = None,
-) -> None:
-    """With a ``--config`` cell that has obstacles, the planned joint move is checked as
-    ``pymotoros check --config`` checks a file (at the controller's increments): a
-    collision refuses it before anything is sent (``--force`` skips this)."""
-    if cell is None:
-        return
-    models = cell if isinstance(cell, CellModels) else load_cell_models(cell)
-    if not models.workspace.obstacles:
-        return
-    import numpy as np  # only for a cell with obstacles
-
-    from pymotoros.cli.trajectory import Loaded
-    from pymotoros.trajectory.files import Trajectory
-
-    names = tuple(n for g in goal.groups for n in models.robot.groups[g].joint_names)
-    traj = Trajectory(
-        names,
-        np.array([p.time for p in planned.points], dtype=float),
-        np.array([p.positions for p in planned.points], dtype=float),
-        np.array([p.velocities for p in planned.points], dtype=float),
-    )
-    collisions = Loaded(traj, models.robot, models.controller, models, tool).check().collisions
-    if collisions:
-        first = collisions[0]
-        more = f" (and {len(collisions) - 1} more)" if len(collisions) > 1 else ""
-        raise MoveBlockedError(
-            f"not started: the planned move would hit: {first.text()}{more}; plan around it "
-            "(`pymotoros plan --avoid --config`), move the obstacle, or give --force"
-        )
-
-
 async def _move_watched(
     client: RobotClient,
     req: MoveRequest,
     goal: MoveGoal,
     timeout_s: float,
-    cell: Path | CellModels | None = None,
 ) -> MoveResult:
     """The move with its progress line; on Ctrl-C/SIGTERM STOP_MOTION, and a refusal
     mid-move says where the robot came to rest."""
     try:
         planned = None if req.cartesian else await _joint_plan(client, req, goal)
-        if planned is not None and not req.force:
-            _refuse_collisions(cell, planned, goal, req.tool)
+        if planned is not None and not req.force:  # before the progress line starts
+            client.guard(planned, goal.groups)
         duration = None if planned is None else planned.duration
         with progress_bar("moving", client, goal.groups, duration_s=duration, deg=req.deg) as bar:
             if planned is None:
                 return await _cartesian(client, req, goal, bar)
-            return await client.execute(planned, groups=goal.groups, on_progress=bar)
+            # checked just above: the client's guard runs once
+            return await client.execute(planned, groups=goal.groups, on_progress=bar, force=True)
+    except PathBlockedError as exc:  # the client's guard, or --avoid finding no way
+        raise MoveBlockedError(f"not started: {exc}") from None
     except asyncio.CancelledError:
         with contextlib.suppress(PymotorosError):
             await asyncio.shield(client.stop_motion())
@@ -949,14 +919,16 @@ def _report_move(result: MoveResult, req: MoveRequest, goal: MoveGoal, robot: An
     "--force",
     is_flag=True,
     help="Move even if the --config cell's obstacles are in the planned move's way "
-    "(checked as `pymotoros check --config` does; joint moves only).",
+    "(every move, joint or Cartesian, is checked at the controller's 4 ms ticks with the "
+    "--tool's shape; a move that backs out of a contact is allowed without it).",
 )
 @click.option(
     "--avoid",
     is_flag=True,
-    help="Plan the joint move around the obstacles of the --config cell's [workspace] "
-    "(OMPL, as `pymotoros plan --avoid`), with the --tool's shape on the flange. A goal "
-    "that cannot be reached is refused before anything moves (exit 1).",
+    help="Plan the joint move (J1 ... Jn, --named, or --pose without --linear) around the "
+    "obstacles of the --config cell's [workspace] (OMPL, as `pymotoros plan --avoid`), "
+    "with the --tool's shape on the flange; a robot touching an obstacle backs out of it "
+    "first. A goal that cannot be reached is refused before anything moves (exit 1).",
 )
 def move(**kwargs: Any) -> None:
     """Move to joint positions J1 ... Jn (rad, or deg with --deg) or to a named pose.
@@ -966,8 +938,9 @@ def move(**kwargs: Any) -> None:
     several --group options the values are the groups' joints one group after the
     other, sent as one JOINT_TRAJ_PT_FULL_EX trajectory. --named moves every group the
     pose sets (all groups for home) unless --group names some, and says which.
-    With a --config cell that has obstacles, a joint move that would hit one is refused
-    before anything moves (exit 1), unless --force; with --avoid it goes around them.
+    With a --config cell that has obstacles, a move (joint or Cartesian) that would hit
+    one is refused before anything moves (exit 1), unless --force; with --avoid it goes
+    around them. A robot that touches an obstacle may move away from it.
     Ctrl-C or SIGTERM stops the robot (STOP_MOTION) and exits with 130 or 143.
     """
     target = _target(kwargs)
@@ -988,7 +961,7 @@ def move(**kwargs: Any) -> None:
             if not req.cartesian:  # the tool whose shape the obstacle check mounts
                 use_tool(client, req.tool)
             _say_groups(client, req, goal)
-            return await _move_watched(client, req, goal, target.timeout_s, target.cell)
+            return await _move_watched(client, req, goal, target.timeout_s)
 
     result = run(target, work, stoppable=True)
     _report_move(result, req, goal, target.client().robot)
@@ -1032,10 +1005,13 @@ def _where(
 ) -> str:
     """Where the robot stands and how far it still is from the goal, in the user's units."""
     here = [v for g in groups for v in (client.state.positions(g) or ())]
-    if len(here) != len(goal):
-        return f"{what}; position unknown"
     axes = [a for m in models for a in m.axes]
+    if len(here) != len(axes):
+        return f"{what}; position unknown (no joint feedback)"
+    unit = "deg" if deg else "rad"
     pos = ", ".join(f"{to_user(v, deg, a.linear):.4f}" for v, a in zip(here, axes, strict=True))
+    if len(here) != len(goal):  # a Cartesian move: the goal was a pose, say where the TCP is
+        return f"{what} at [{pos}] {unit}{_tcp_where(client, groups[0])}"
     left = max(
         (abs(to_user(g - v, deg, a.linear)), a.name)
         for g, v, a in zip(goal, here, axes, strict=True)
@@ -1044,6 +1020,15 @@ def _where(
         f"{what} at [{pos}] {'deg' if deg else 'rad'}, {left[0]:.4f} "
         f"{'deg' if deg else 'rad'} short of the goal ({left[1]})"
     )
+
+
+def _tcp_where(client: RobotClient, group: int) -> str:
+    """`` (TCP x … y … z … mm in base)`` of the tool in force ("" when it cannot be known)."""
+    try:
+        x, y, z, *_ = client.tcp_pose(group)
+    except PymotorosError:
+        return ""
+    return f" (TCP x {x * 1000:.1f} y {y * 1000:.1f} z {z * 1000:.1f} mm in base)"
 
 
 # --------------------------------------------------------------------------- io and mreg

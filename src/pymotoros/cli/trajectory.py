@@ -500,8 +500,10 @@ async def _stream_file(
     await check_start(client, joint, groups)
     with progress_bar("running", client, groups, duration_s=joint.duration) as progress:
         try:
+            # checked above as `check` does, obstacles included: the client's guard
+            # would only repeat it (and must not refuse what --force sends)
             return await client.execute(
-                joint, groups=groups, on_progress=progress, check_speed=not force
+                joint, groups=groups, on_progress=progress, check_speed=not force, force=True
             )
         except asyncio.CancelledError:
             with contextlib.suppress(PymotorosError):

@@ -19,6 +19,14 @@ MOTOROS_ALARMS: Final[Mapping[int, str]] = {
 """The alarms MotoROS 1.9.12 and its parameter library raise (reference §8)."""
 
 
+CONTROLLER_ALARMS: Final[Mapping[int, str]] = {
+    4315: "COLLISION DETECT",
+}
+"""Controller alarms (not MotoROS's) a client names in its errors: 4315, the collision
+detection (shock sensor) that stopped a robot which touched something (Yaskawa's alarm
+list; the twin raises it for a contact with a cell obstacle, docs/workspace.md)."""
+
+
 def alarm_text(code: int) -> str:
     """What an alarm number means, as far as the client can know it ("" if unknown)."""
-    return MOTOROS_ALARMS.get(code, "")
+    return MOTOROS_ALARMS.get(code) or CONTROLLER_ALARMS.get(code, "")

@@ -1,4 +1,15 @@
-"""Joint moves around the cell's obstacles: ``move_joints(..., avoid=True)``,
+"""The cell's obstacles in the client: the guard of every move, and moves around them.
+
+**The guard** (:meth:`Avoidance.check`): before anything is sent, every move of a client
+whose cell file has obstacles (joint, named, pose, straight line, relative, a user's
+``execute``) is sampled at every interpolation tick as MotoROS interpolates it
+(:func:`tick_positions`) and checked by :func:`pymotoros.kinematics.sweep.sweep`; a move
+that would touch something is a :class:`PathBlockedError` naming time, link, obstacle
+and depth, unless it only backs the robot out of a contact it starts in (the rule:
+:mod:`pymotoros.kinematics.sweep`). After a move a contact stopped,
+:meth:`Avoidance.contact_at` names what the robot touches where it stands.
+
+**Around the obstacles**: ``move_joints(..., avoid=True)``, ``move_pose(..., avoid=True)``,
 ``plan(..., avoid=True)`` and ``pymotoros move --avoid``.
 
 The client speaks only the wire, and MotoROS knows nothing of obstacles, so the client
@@ -19,20 +30,41 @@ path smoothly, and checks it at the controller's increments).
 
 from __future__ import annotations
 
+import logging
+import math
 from collections.abc import Sequence
 from dataclasses import replace
 from typing import TYPE_CHECKING, Final
 
+from pymotoros.client.guard import (
+    FORCE_HINT,
+    contact_words,
+    names,
+    start_contacts,
+    stuck_refusal,
+    tick_positions,
+)
 from pymotoros.client.planning import JointLimits, JointTrajectory, PlanningError, plan_joint_move
 from pymotoros.client.tools import ToolTable
 from pymotoros.errors import PathBlockedError
 from pymotoros.models.cell import CellModels
 
 if TYPE_CHECKING:  # Pinocchio, Coal and OMPL load only when a move avoids something
+    import numpy as np
+    import numpy.typing as npt
+
     from pymotoros.kinematics.collision import CollisionWorld
+
+logger = logging.getLogger(__name__)
 
 LABELS: Final = ("the start", "the goal")
 """How a refusal names the two ends of the move."""
+ESCAPE_STEP_RAD: Final = 0.01
+"""Joint step of the way out of a contact that ``avoid`` takes before its search."""
+ESCAPE_MAX_RAD: Final = 0.5
+"""Farthest (largest joint travel, 29°) ``avoid`` looks for the way out of a contact."""
+ESCAPE_CLEARANCE_M: Final = 0.005
+"""Clearance (5 mm) at which the way out of a contact ends and the search begins."""
 
 
 class Avoidance:
@@ -67,6 +99,146 @@ class Avoidance:
                 number = cell.default_tool(g)
             world.set_tool(g, self._tools.tool(g, number or 0))
 
+    @property
+    def guards(self) -> bool:
+        """Whether moves are checked at all: the client has a cell with obstacles."""
+        return self._cell is not None and bool(self._cell.workspace.obstacles)
+
+    def _joined(
+        self,
+        world: CollisionWorld,
+        moving: Sequence[int],
+        standing: Sequence[Sequence[float] | None],
+    ) -> tuple[list[int], list[float]]:
+        """(columns of the moving groups, in the order of ``moving`` (a trajectory's
+        joints), in a joint vector of every group of the cell; that vector with the
+        groups where they stand: their feedback, else their home)."""
+        offsets = [sum(world.joint_counts[:g]) for g in range(len(world.groups))]
+        columns = [offsets[g] + i for g in moving for i in range(world.groups[g].num_axes)]
+        joined: list[float] = []
+        for g, group in enumerate(world.groups):
+            here = standing[g] if g < len(standing) else None
+            joined.extend(here if here is not None else group.home)
+        return columns, joined
+
+    def check(
+        self,
+        trajectory: JointTrajectory,
+        groups: Sequence[int],
+        standing: Sequence[Sequence[float] | None],
+        period_s: float,
+    ) -> str | None:
+        """The guard of every move the client makes (docs/workspace.md): ``trajectory``
+        (the joints of ``groups``; the other groups stand at ``standing``) sampled at
+        every interpolation tick (``period_s``) as MotoROS interpolates it, checked
+        against the cell's obstacles and the arm itself with each group's tool.
+
+        Raises :class:`PathBlockedError` naming the first contact (time, link, obstacle,
+        depth) and what to do; a move that starts in contact and only backs out of it is
+        allowed, and the note saying so is returned (and logged). Nothing is sent either
+        way: the caller streams only after this returns."""
+        import numpy as np
+
+        from pymotoros.kinematics.sweep import sweep
+
+        if len(trajectory.points) < 2:  # nothing moves
+            return None
+        world = self.world()
+        self._mount_tools(world)
+        columns, joined = self._joined(world, groups, standing)
+        times, ticks = tick_positions(trajectory, period_s)
+        full = np.tile(np.asarray(joined, dtype=float), (len(times), 1))
+        full[:, columns] = ticks
+        found = sweep(world, times, full, world.joint_counts)
+        blocking = found.blocking
+        if not blocking:
+            if found.starts_in_contact:
+                note = (
+                    f"the robot starts touching {names(start_contacts(found))}; this move "
+                    "only takes it away (the clearance grows all along the move), so it is "
+                    "allowed"
+                )
+                logger.warning("%s", note)
+                return note
+            return None
+        if found.starts_in_contact and not found.receding:
+            raise PathBlockedError(stuck_refusal(world, self._tools, found, full[0], columns))
+        first = blocking[0]
+        more = f" (and {len(blocking) - 1} more)" if len(blocking) > 1 else ""
+        raise PathBlockedError(
+            f"the planned move would hit: {first.text()}{more}; nothing was sent. Plan "
+            "around it (--avoid, avoid=True), move the goal or the obstacle, "
+            f"{FORCE_HINT}"
+        )
+
+    def contact_at(self, standing: Sequence[Sequence[float] | None]) -> str | None:
+        """What the robot touches (or nearly) where it stands, in words with distances
+        in mm (:func:`~pymotoros.client.guard.contact_words`); None without obstacles or
+        when nothing is near. Named in the error of a move a collision alarm stopped."""
+        if not self.guards or any(q is None for q in standing):
+            return None
+        import numpy as np
+
+        from pymotoros.kinematics.path_search import split
+
+        world = self.world()
+        self._mount_tools(world)
+        _, joined = self._joined(world, (), standing)
+        return contact_words(world, split(np.asarray(joined, dtype=float), world.joint_counts))
+
+    def _way_out(
+        self, world: CollisionWorld, a: Sequence[float], b: Sequence[float], moving: set[int]
+    ) -> list[float] | None:
+        """Where ``avoid`` leaves a contact the robot starts in (None: it starts clear):
+        the nearest joint state, straight towards the goal or along one joint of a moving
+        group, reached while the clearance only grows and :data:`ESCAPE_CLEARANCE_M` from
+        every obstacle. A :class:`PathBlockedError` when no such way is found."""
+        import numpy as np
+
+        from pymotoros.kinematics.path_search import describe, split
+        from pymotoros.kinematics.sweep import RECEDE_TOLERANCE_M
+
+        sizes = world.joint_counts
+        qa = np.asarray(a, dtype=float)
+        here, contacts = world.probe(split(qa, sizes))
+        if not contacts:
+            return None
+        columns, _ = self._joined(world, sorted(moving), [None] * len(world.groups))
+        toward = np.asarray(b, dtype=float) - qa
+        directions = []
+        if float(np.max(np.abs(toward))) > 0.0:
+            directions.append(toward / float(np.max(np.abs(toward))))
+        for c in columns:
+            for sign in (1.0, -1.0):
+                d = np.zeros(len(qa))
+                d[c] = sign
+                directions.append(d)
+        axes = [ax for g in world.groups for ax in g.axes]
+        best: tuple[float, npt.NDArray[np.float64]] | None = None
+        for d in directions:
+            previous = here
+            for k in range(1, int(ESCAPE_MAX_RAD / ESCAPE_STEP_RAD) + 1):
+                q = qa + d * ESCAPE_STEP_RAD * k
+                if any(not ax.lower <= v <= ax.upper for ax, v in zip(axes, q, strict=True)):
+                    break
+                clearance, _ = world.probe(split(q, sizes))
+                if clearance < previous - RECEDE_TOLERANCE_M:
+                    break  # deeper: not a way out
+                previous = clearance
+                if clearance >= ESCAPE_CLEARANCE_M:
+                    travel = ESCAPE_STEP_RAD * k
+                    if best is None or travel < best[0]:
+                        best = (travel, q)
+                    break
+        if best is None:
+            raise PathBlockedError(
+                f"the start is in collision: {describe(contacts)}, and no joint move within "
+                f"{math.degrees(ESCAPE_MAX_RAD):.0f}° leaves it while the clearance only "
+                f"grows; back out by hand (a jog on the pendant), {FORCE_HINT}"
+            )
+        logger.info("avoid: leaving the contact at the start over %.3f rad first", best[0])
+        return [float(v) for v in best[1]]
+
     def plan(
         self,
         start: Sequence[Sequence[float]],
@@ -87,6 +259,7 @@ class Avoidance:
         moving = set(groups)
         a = [float(v) for q in start for v in q]
         b = [float(v) for q in goal for v in q]
+        escape = self._way_out(world, a, b, moving)
         lower: list[float] = []
         upper: list[float] = []
         columns: list[int] = []
@@ -102,9 +275,11 @@ class Avoidance:
             at = sum(world.joint_counts[:g])
             columns.extend(range(at, at + world.joint_counts[g]))
         path = world.free_waypoints(
-            [a, b], lower=lower, upper=upper, labels=LABELS, time_limit_s=time_limit_s
+            [escape or a, b], lower=lower, upper=upper, labels=LABELS, time_limit_s=time_limit_s
         )
-        for k in range(1, len(path)):
+        if escape is not None:  # out of the contact first (checked by guard(): receding)
+            path.insert(0, a)
+        for k in range(1 + (escape is not None), len(path)):
             hit = world.segment_contacts(path[k - 1], path[k])
             if hit:
                 from pymotoros.kinematics.path_search import describe

@@ -62,12 +62,15 @@ class Geometry:
         on_progress: Callable[[FollowingSample], None] | None = None,
         timeout_s: float | None = None,
         tool: int | None = None,
+        force: bool = False,
     ) -> MoveResult:
         """Move the TCP of the tool in force (or of ``tool``) in a straight line to ``pose``
         = (x, y, z, rx, ry, rz) in base coordinates (m, rad, R = Rz·Ry·Rx), at most
         ``tcp_speed_mm_s`` and within every joint limit (scaled as :meth:`move_joints`).
         A line through a singularity, out of reach or past a joint limit is refused before
-        anything is sent (:class:`PlanningError` with the joint and the numbers)."""
+        anything is sent (:class:`PlanningError` with the joint and the numbers); so is a
+        line that would touch an obstacle of the client's cell file
+        (:class:`~pymotoros.errors.PathBlockedError`, unless ``force``)."""
         from pymotoros.client.cartesian import plan_linear_move  # numpy, Pinocchio: lazily
 
         chain = self._tools.chain(group, tool)  # an unknown tool is refused before waiting
@@ -82,7 +85,7 @@ class Geometry:
             acceleration_scaling=accel_scale,
         )
         return await self._motion.execute(
-            trajectory, groups=(group,), on_progress=on_progress, timeout_s=timeout_s
+            trajectory, groups=(group,), on_progress=on_progress, timeout_s=timeout_s, force=force
         )
 
     async def move_pose(
@@ -94,10 +97,15 @@ class Geometry:
         accel_scale: float = 1.0,
         on_progress: Callable[[FollowingSample], None] | None = None,
         tool: int | None = None,
+        avoid: bool = False,
+        force: bool = False,
     ) -> MoveResult:
         """A joint move to the joint values nearest the current ones that put the TCP of
         the tool in force (or of ``tool``) at ``pose`` (base coordinates): not a straight
-        line (see :meth:`move_linear`)."""
+        line (see :meth:`move_linear`). Checked against the obstacles of the client's cell
+        file as :meth:`move_joints` is (``force`` skips the check); ``avoid``: around
+        them (a goal pose in collision is a :class:`~pymotoros.errors.PathBlockedError`
+        naming the obstacle)."""
         chain = self._tools.chain(group, tool)
         start = await self._motion.current_positions(group)
         try:
@@ -110,6 +118,8 @@ class Geometry:
             speed_scale=speed_scale,
             accel_scale=accel_scale,
             on_progress=on_progress,
+            avoid=avoid,
+            force=force,
         )
 
     async def move_relative(
@@ -129,9 +139,11 @@ class Geometry:
         accel_scale: float = 1.0,
         on_progress: Callable[[FollowingSample], None] | None = None,
         tool: int | None = None,
+        force: bool = False,
     ) -> MoveResult:
         """Move the TCP by (dx, dy, dz) m and (drx, dry, drz) rad in the ``base`` frame or
-        the ``tool`` frame, in a straight line (``linear=False``: a joint move)."""
+        the ``tool`` frame, in a straight line (``linear=False``: a joint move); checked
+        against the cell's obstacles as every move (``force`` skips the check)."""
         from pymotoros.client.cartesian import relative_target
         from pymotoros.kinematics import matrix_to_pose
 
@@ -142,6 +154,7 @@ class Geometry:
         return await self.move_cartesian(
             target, group=group, linear=linear, tcp_speed_mm_s=tcp_speed_mm_s,
             speed_scale=speed_scale, accel_scale=accel_scale, on_progress=on_progress, tool=tool,
+            force=force,
         )  # fmt: skip
 
     async def move_cartesian(
@@ -155,13 +168,22 @@ class Geometry:
         accel_scale: float = 1.0,
         on_progress: Callable[[FollowingSample], None] | None = None,
         tool: int | None = None,
+        avoid: bool = False,
+        force: bool = False,
     ) -> MoveResult:
         """The TCP to ``pose``: a straight line with ``linear`` (:meth:`move_linear`), else
-        a joint move (:meth:`move_pose`). The one place that chooses between the two."""
+        a joint move (:meth:`move_pose`, around the obstacles with ``avoid``). The one
+        place that chooses between the two."""
         options: dict[str, Any] = {
             "group": group, "speed_scale": speed_scale, "accel_scale": accel_scale,
-            "on_progress": on_progress, "tool": tool,
+            "on_progress": on_progress, "tool": tool, "force": force,
         }  # fmt: skip
         if linear:
+            if avoid:
+                raise PlanningError(
+                    "avoid plans a joint move around the obstacles; a straight line cannot "
+                    "go around them: move to the pose with linear=False (--pose without "
+                    "--linear)"
+                )
             return await self.move_linear(pose, tcp_speed_mm_s=tcp_speed_mm_s, **options)
-        return await self.move_pose(pose, **options)
+        return await self.move_pose(pose, avoid=avoid, **options)

@@ -16,10 +16,17 @@ import threading
 from collections.abc import Callable, Iterator, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Final
 
+from pymotoros.client.alarms import alarm_text
 from pymotoros.client.avoid import Avoidance
 from pymotoros.client.connection import DEFAULT_REQUEST_TIMEOUT_S
-from pymotoros.client.errors import ClientError, MoveInProgressError, MoveStoppedError
+from pymotoros.client.errors import (
+    ClientError,
+    MoveInProgressError,
+    MoveStoppedError,
+    NotReadyError,
+)
 from pymotoros.client.link import Link
 from pymotoros.client.motion_commands import MotionCommands
 from pymotoros.client.planning import (
@@ -41,8 +48,14 @@ from pymotoros.client.streaming import (
     TrajectoryStreamer,
 )
 from pymotoros.client.tools import ToolTable
+from pymotoros.errors import PymotorosError
 from pymotoros.models import ControllerModel, RobotModel
-from pymotoros.protocol.constants import Port
+from pymotoros.protocol.constants import NotReadySubcode, Port
+
+NAME_CONTACT_WAIT_S: Final = 2.0
+"""Longest wait for a robot a contact stopped to come to rest before its error names
+the contact (a collision alarm cuts servo power at once; a PFL stop backs off within
+half a second)."""
 
 JointGoal = Sequence[float] | Mapping[int, Sequence[float]] | Mapping[str, Sequence[float]]
 """A joint goal: positions for one group, or ``{group: positions}`` for several."""
@@ -230,17 +243,81 @@ class Motion:
         timeout_s: float | None = None,
         check_speed: bool = True,
         on_progress: Callable[[FollowingSample], None] | None = None,
+        force: bool = False,
     ) -> MoveResult:
         """Stream ``trajectory`` and wait until the robot has settled at its last point.
 
         The trajectory's joints are those of ``groups`` one after the other; one group
-        goes as JOINT_TRAJ_PT_FULL, several as JOINT_TRAJ_PT_FULL_EX.
+        goes as JOINT_TRAJ_PT_FULL, several as JOINT_TRAJ_PT_FULL_EX. With a cell that
+        has obstacles it is checked against them first (:meth:`guard`; ``force`` skips).
         """
         # in the signature's order, which is ExecuteOptions' field order
         options = ExecuteOptions(
             busy_timeout_s, goal_tolerance, timeout_s, check_speed, on_progress
         )
-        return await self._execute(trajectory, groups, options)
+        return await self._guarded(trajectory, groups, options, force)
+
+    def guard(self, trajectory: JointTrajectory, groups: Sequence[int] = (0,)) -> str | None:
+        """Check ``trajectory`` (the joints of ``groups``) against the obstacles of the
+        client's cell file at every interpolation tick, as every move of the client is
+        before anything is sent (docs/workspace.md): a
+        :class:`~pymotoros.errors.PathBlockedError` naming the time, link, obstacle and
+        depth of the first contact; the note of a move that backs out of a contact the
+        robot starts in; None when the way is clear or the client has no obstacles."""
+        avoidance = self._avoidance
+        if avoidance is None or not avoidance.guards:
+            return None
+        indices = [self._view.group_index(g) for g in groups]
+        standing = [self._view.state.positions(g) for g in range(len(self._robot.groups))]
+        period_s = self._controller.interpolation_period_ms / 1000.0
+        return avoidance.check(trajectory, indices, standing, period_s)
+
+    async def _guarded(
+        self,
+        trajectory: JointTrajectory,
+        groups: Sequence[int],
+        options: ExecuteOptions,
+        force: bool,
+    ) -> MoveResult:
+        """:meth:`_execute` after the workspace guard (unless ``force``); an error of a
+        move a contact stopped names the contact where the robot stopped."""
+        if not force:
+            self.guard(trajectory, groups)
+        try:
+            return await self._execute(trajectory, groups, options)
+        except MoveStoppedError:
+            raise
+        except ClientError as exc:
+            await self._name_contact(exc, groups)
+            raise
+
+    async def _name_contact(self, exc: ClientError, groups: Sequence[int]) -> None:
+        """Add to ``exc`` the alarm and what the robot touches where it stopped, when the
+        client's cell file has obstacles near it (the wire carries only the alarm
+        number; the client computes the contact from its own cell file, once the robot
+        has come to rest: at most :data:`NAME_CONTACT_WAIT_S`)."""
+        avoidance = self._avoidance
+        if avoidance is None or not avoidance.guards:
+            return
+        with contextlib.suppress(PymotorosError, TimeoutError):
+            await self._streamer.wait_until_at_rest(groups, timeout_s=NAME_CONTACT_WAIT_S)
+        state = self._view.state
+        standing = [state.positions(g) for g in range(len(self._robot.groups))]
+        try:
+            contact = avoidance.contact_at(standing)
+        except PymotorosError:  # the message stays as it was
+            return
+        if contact is None:
+            return
+        status = state.status
+        code = status.error_code if status is not None and status.in_error else 0
+        if isinstance(exc, NotReadyError) and exc.reason is NotReadySubcode.PFL_ACTIVE:
+            cause = f"PFL {NotReadySubcode.PFL_ACTIVE.value} (power and force limiting)"
+        elif code:
+            cause = f"alarm {code}" + (f" {alarm_text(code)}" if alarm_text(code) else "")
+        else:
+            cause = "the robot stopped"
+        exc.args = (f"{exc}; {cause}: where it stopped, {contact}", *exc.args[1:])
 
     async def _execute(
         self, trajectory: JointTrajectory, groups: Sequence[int], options: ExecuteOptions
@@ -285,6 +362,7 @@ class Motion:
         busy_timeout_s: float = DEFAULT_BUSY_TIMEOUT_S,
         timeout_s: float | None = None,
         avoid: bool = False,
+        force: bool = False,
     ) -> MoveResult:
         """Move to joint positions (rad/m, ROS order) from wherever the robot rests now.
 
@@ -292,7 +370,9 @@ class Motion:
         groups together. Waits for the robot to be at rest, plans with the model's
         limits, streams, and waits until it has settled at the goal. ``avoid``: around
         the obstacles of the client's cell file (see :meth:`plan`); nothing is sent when
-        the goal cannot be reached (:class:`~pymotoros.errors.PathBlockedError`).
+        the goal cannot be reached (:class:`~pymotoros.errors.PathBlockedError`). With
+        obstacles in the cell file, a move that would touch one is refused before
+        anything is sent (:meth:`guard`); ``force=True`` sends it anyway.
         """
         with self.one_move("move_joints"):
             if isinstance(goal, Mapping):
@@ -314,7 +394,7 @@ class Motion:
             options = ExecuteOptions(
                 busy_timeout_s, goal_tolerance, timeout_s, on_progress=on_progress
             )
-            return await self._execute(trajectory, groups, options)
+            return await self._guarded(trajectory, groups, options, force)
 
     def named_pose(
         self, name: str, *, srdf: str | Path | None = None, group: int | str = 0
@@ -333,8 +413,10 @@ class Motion:
         speed_scale: float = 1.0,
         accel_scale: float = 1.0,
         on_progress: Callable[[FollowingSample], None] | None = None,
+        force: bool = False,
     ) -> MoveResult:
-        """Move to a named pose (``home``, or a ``group_state`` of ``srdf``)."""
+        """Move to a named pose (``home``, or a ``group_state`` of ``srdf``); ``force``
+        as for :meth:`move_joints`."""
         goal = self.named_pose(name, srdf=srdf, group=group)
         with self.one_move("move_named"):
             return await self.move_joints(
@@ -343,6 +425,7 @@ class Motion:
                 speed_scale=speed_scale,
                 accel_scale=accel_scale,
                 on_progress=on_progress,
+                force=force,
             )
 
 

@@ -287,6 +287,7 @@ class RobotClient:
     current_positions = _part("_motion", Motion.current_positions)
     plan = _part("_motion", Motion.plan)
     execute = _part("_motion", Motion.execute)
+    guard = _part("_motion", Motion.guard)
     stop = _part("_motion", Motion.stop)
     stop_threadsafe = _part("_motion", Motion.stop_threadsafe)
     move_joints = _part("_motion", Motion.move_joints)

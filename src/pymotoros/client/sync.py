@@ -277,6 +277,7 @@ class SyncRobotClient:
     named_pose = _forward_plain(RobotClient.named_pose)
     group_index = _forward_plain(RobotClient.group_index)
     check_groups = _forward_plain(RobotClient.check_groups)
+    guard = _forward_plain(RobotClient.guard)
     stop_threadsafe = _forward_plain(RobotClient.stop_threadsafe)
 
     wait_for_state = _forward(RobotClient.wait_for_state)

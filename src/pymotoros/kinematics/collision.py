@@ -446,6 +446,7 @@ class CollisionWorld:
         self._obstacles = placed
         self._last_placed: list[tuple[GroupBody, _Part]] = []
         self._last_clearances = np.zeros(0)
+        self._last_gaps = np.zeros((0, 0))
         self._centers = np.array([p.center for p in placed], dtype=float).reshape(-1, 3)
         self._rotations = np.array(rotations, dtype=float).reshape(-1, 3, 3)
         self._halves = np.array(halves, dtype=float).reshape(-1, 3)
@@ -526,7 +527,18 @@ class CollisionWorld:
                 contacts.append(Contact(obst.obstacle.name, part.name, body.name, d))
         self._last_placed = placed
         self._last_clearances = gaps.min(axis=1)
+        self._last_gaps = gaps
         return float(self._last_clearances.min()), contacts
+
+    def nearest(self, qs: Sequence[Sequence[float] | FloatArray]) -> Contact | None:
+        """The link and obstacle nearest each other at ``qs``, with their signed distance
+        (exact within :data:`NEAR_M`); None without obstacles or moving parts."""
+        if not math.isfinite(self.probe(qs)[0]):
+            return None
+        i, j = np.unravel_index(int(np.argmin(self._last_gaps)), self._last_gaps.shape)
+        body, part = self._last_placed[int(i)]
+        name = self._obstacles[int(j)].obstacle.name
+        return Contact(name, part.name, body.name, float(self._last_gaps[i, j]))
 
     def part_budgets(self) -> list[tuple[int, FloatArray, FloatArray]]:
         """After :meth:`probe`, per group with shapes: (group index, each moving part's

@@ -1,0 +1,297 @@
+"""Every contact along a sampled joint motion: the check that guards each move of the client.
+
+The client plans a move (joint, pose, straight line, around obstacles) as trajectory
+points; MotoROS turns them into one increment per interpolation tick (a cubic between
+points). :func:`sweep` takes the positions at those ticks (every joint of every group of
+a :class:`~pymotoros.kinematics.collision.CollisionWorld`) and finds every contact with
+an obstacle or between two links of one arm, each reported once with the time it
+starts, the link, the obstacle, the deepest overlap and when it ends: the same record
+``pymotoros check --config`` prints for a file.
+
+Cost: a full check of the pose does not run every tick. After a check finds the robot
+``c`` metres from the nearest obstacle, no point of it can touch anything before the
+robot has moved that far, and one tick moves any point at most Σ |Δq| × reach
+(:meth:`CollisionWorld.joint_reach`, the farthest point each joint moves in any pose):
+the next check is found by a binary search over that summed travel. Two links of one
+arm approach each other at most twice as fast. Ticks in contact are checked one by one.
+
+A robot that starts touching an obstacle (stopped by a contact) must be able to leave
+it. :attr:`SweepResult.receding` says whether the move only takes it away: the smallest
+signed distance between the robot and the obstacles (negative: the depth of the
+overlap), taken at every tick while it is in contact, never falls more than
+:data:`RECEDE_TOLERANCE_M` below the largest it has had since the start, and once it is
+clear the robot touches nothing again; a move that ends still in contact must end with
+the overlap smaller than at its start by more than that tolerance (sliding along an
+obstacle at the same depth does not take the robot away). docs/workspace.md, "Backing
+out of a contact".
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from typing import Final, Protocol
+
+import numpy as np
+import numpy.typing as npt
+
+from pymotoros.models.workspace import ContactLike
+
+F64Array = npt.NDArray[np.float64]
+
+MIN_STEP_M: Final = 1e-6
+"""Clearance below this means "check the next tick" (contact, or grazing)."""
+RECEDE_TOLERANCE_M: Final = 1e-5
+"""How much the smallest distance may fall below its largest since the start and still
+count as "not going deeper" (0.01 mm: the distance solver's rounding, far below one pulse of
+travel at the arm's tip)."""
+
+
+class SweepWorld(Protocol):
+    """What the sweep needs of a collision model (a :class:`CollisionWorld` is one)."""
+
+    def probe(self, qs: Sequence[F64Array]) -> tuple[float, Sequence[ContactLike]]: ...
+    def self_distances(self, qs: Sequence[F64Array]) -> Sequence[ContactLike]: ...
+    def joint_reach(self, group_index: int) -> list[float]: ...
+    def lever_arms(self, group_index: int) -> list[float]: ...
+
+
+@dataclass(frozen=True, slots=True)
+class SweptContact:
+    """One contact along the motion: from ``time_s`` to ``end_s``, ``link`` touches
+    ``obstacle`` (for a self-collision: the other link), at most ``depth_mm`` deep."""
+
+    time_s: float
+    obstacle: str
+    link: str
+    group: str
+    depth_mm: float
+    self_collision: bool = False
+    end_s: float = 0.0
+    at_start: bool = False
+    """The robot already touched it where the move starts."""
+
+    def text(self) -> str:
+        what = "itself" if self.self_collision else "obstacle"
+        return (
+            f"collision at {self.time_s:.3f} s: {self.group} {self.link} touches {what} "
+            f"{self.obstacle!r} ({self.depth_mm:.1f} mm deep, until {self.end_s:.3f} s)"
+        )
+
+
+@dataclass(slots=True)
+class SweepResult:
+    """What :func:`sweep` found along the motion."""
+
+    contacts: list[SweptContact] = field(default_factory=list)
+    """Every contact, in time order (those already there at the start included)."""
+    start_clearance_m: float = math.inf
+    """Smallest signed distance to the obstacles at the start (negative: in contact)."""
+    receding: bool = True
+    """The robot starts in contact and only moves out of it (see the module docstring);
+    True too when it starts clear."""
+    deepest_m: float = math.inf
+    """While it starts in contact: the smallest signed distance reached after the start."""
+    deepest_s: float = 0.0
+    """When that was."""
+
+    @property
+    def starts_in_contact(self) -> bool:
+        return self.start_clearance_m <= 0.0
+
+    @property
+    def blocking(self) -> list[SweptContact]:
+        """The contacts that refuse the move: all of them, unless it starts in contact
+        and only backs out (then none)."""
+        if self.starts_in_contact and self.receding:
+            return [c for c in self.contacts if not c.at_start]
+        return self.contacts
+
+
+def _split(q: F64Array, sizes: Sequence[int]) -> list[F64Array]:
+    out, at = [], 0
+    for n in sizes:
+        out.append(q[at : at + n])
+        at += n
+    return out
+
+
+def sweep(
+    world: SweepWorld, times: F64Array, positions: F64Array, sizes: Sequence[int]
+) -> SweepResult:
+    """Every contact of the robot at ``positions`` (ticks × every joint of every group of
+    ``world``, ``sizes`` joints per group) sampled at ``times`` (s)."""
+    ticks = len(times)
+    result = SweepResult()
+    if ticks == 0:
+        return result
+    travel = _Travel(world, positions, sizes)
+    open_: dict[tuple[str, str, str], list[float | bool]] = {}
+    done: list[SweptContact] = []
+    next_obstacle = next_self = 0
+    best = last = math.inf  # the largest and the latest clearance
+    clear_since_start = False
+    while min(next_obstacle, next_self) < ticks:
+        k = min(next_obstacle, next_self)
+        qs = _split(positions[k], sizes)
+        now = float(times[k])
+        seen: list[ContactLike] = []
+        if k == next_obstacle:
+            clearance, contacts = world.probe(qs)
+            seen.extend(contacts)
+            _follow_start(result, k, now, clearance, best, clear_since_start)
+            if k == 0:
+                result.start_clearance_m = clearance
+            clear_since_start = clear_since_start or clearance > 0.0
+            best = max(best, clearance) if k else clearance
+            last = clearance
+            next_obstacle = travel.next_check(k, clearance, contacts)
+        else:  # the obstacles were not due: keep what is open against them
+            seen.extend(_open_obstacles(open_))
+        if k == next_self:
+            distances = world.self_distances(qs)
+            hits = [c for c in distances if c.distance_m <= 0.0]
+            seen.extend(hits)
+            own = min((c.distance_m for c in distances), default=math.inf) / 2.0
+            next_self = travel.next_check(k, own, hits)
+        else:
+            seen.extend(_open_self(open_))
+        _track(open_, done, seen, now, k == 0)
+    if result.starts_in_contact and not clear_since_start:
+        # still in contact at the end: it must at least have come out some way
+        result.receding = result.receding and last > result.start_clearance_m + RECEDE_TOLERANCE_M
+    end = float(times[-1])
+    for (group, link, obstacle), (start, depth, is_self, first) in open_.items():
+        done.append(
+            SweptContact(
+                float(start), obstacle, link, group, float(depth), bool(is_self), end, bool(first)
+            )
+        )
+    done.sort(key=lambda c: (c.time_s, c.group, c.link, c.obstacle))
+    result.contacts = done
+    return result
+
+
+class _Kept:
+    """A contact carried over a tick at which its kind was not checked."""
+
+    __slots__ = ("distance_m", "group", "link", "obstacle", "self_collision")
+
+    def __init__(self, key: tuple[str, str, str], depth_mm: float, is_self: bool) -> None:
+        self.group, self.link, self.obstacle = key
+        self.distance_m = -depth_mm / 1000.0
+        self.self_collision = is_self
+
+
+def _open_obstacles(open_: dict[tuple[str, str, str], list[float | bool]]) -> list[ContactLike]:
+    return [_Kept(k, float(v[1]), False) for k, v in open_.items() if not v[2]]
+
+
+def _open_self(open_: dict[tuple[str, str, str], list[float | bool]]) -> list[ContactLike]:
+    return [_Kept(k, float(v[1]), True) for k, v in open_.items() if v[2]]
+
+
+class _Travel:
+    """How far any point of the robot can have moved since a tick (m): per tick, each
+    joint's |Δq| times its lever arm at the last check grown by the clearance (a lever
+    grows by at most the distance moved), never more than its reach in any pose."""
+
+    def __init__(self, world: SweepWorld, positions: F64Array, sizes: Sequence[int]) -> None:
+        self._world = world
+        self._sizes = tuple(sizes)
+        self._steps = np.abs(np.diff(positions, axis=0))
+        self._reach = np.concatenate(
+            [
+                np.asarray(world.joint_reach(g) or [0.0] * n, dtype=float)  # no shapes: 0
+                for g, n in enumerate(sizes)
+            ]
+        )
+        self.ticks = len(positions)
+
+    def _weights(self, step: float) -> F64Array:
+        levers = np.concatenate(
+            [
+                np.asarray(self._world.lever_arms(g) or [0.0] * n, dtype=float)
+                for g, n in enumerate(self._sizes)
+            ]
+        )
+        weights: F64Array = np.minimum(self._reach, levers + step)
+        return weights
+
+    def next_check(self, k: int, clearance: float, hits: Sequence[ContactLike]) -> int:
+        """The next tick at which a check is due after one at ``k`` found ``clearance``
+        (the levers of that check: the world was just placed at tick ``k``)."""
+        if hits or clearance <= MIN_STEP_M:
+            return k + 1
+        if not math.isfinite(clearance):
+            return self.ticks
+        weights = self._weights(clearance)
+        done = 0.0
+        start = k
+        window = _WINDOW
+        while start < self.ticks - 1:
+            end = min(self.ticks - 1, start + window)
+            window *= 2
+            total = done + np.cumsum(self._steps[start:end] @ weights)
+            j = int(np.searchsorted(total, clearance, side="left"))
+            if j < len(total):
+                return start + j + 1
+            done = float(total[-1])
+            start = end
+        return self.ticks
+
+
+_WINDOW: Final = 64
+"""Ticks of travel summed first when looking for the next check (doubled each round):
+near an obstacle the next check is a few ticks away, far from all of them hundreds."""
+
+
+def _follow_start(
+    result: SweepResult, k: int, now: float, clearance: float, best: float, clear: bool
+) -> None:
+    """The receding rule for a robot that starts in contact (module docstring): the
+    clearance never falls below the largest it has had since the start."""
+    if k == 0 or result.start_clearance_m > 0.0:
+        return
+    if clearance < result.deepest_m:
+        result.deepest_m, result.deepest_s = clearance, now
+    if not result.receding:
+        return
+    if clear:
+        if clearance <= 0.0:  # clear once, touching again: a new contact
+            result.receding = False
+        return
+    if clearance < best - RECEDE_TOLERANCE_M:
+        result.receding = False
+
+
+def _track(
+    open_: dict[tuple[str, str, str], list[float | bool]],
+    done: list[SweptContact],
+    hits: Sequence[ContactLike],
+    now_s: float,
+    first: bool,
+) -> None:
+    """Open a contact for each new one, deepen the running ones, close the gone."""
+    seen = set()
+    for c in hits:
+        key = (c.group, c.link, c.obstacle)
+        seen.add(key)
+        depth = -c.distance_m * 1000.0
+        if key in open_:
+            open_[key][1] = max(float(open_[key][1]), depth)
+        else:
+            open_[key] = [now_s, depth, c.self_collision, first]
+    for key in [k for k in open_ if k not in seen]:
+        start, depth, is_self, at_start = open_.pop(key)
+        group, link, obstacle = key
+        done.append(
+            SweptContact(
+                float(start), obstacle, link, group, float(depth), bool(is_self), now_s,
+                bool(at_start),
+            )
+        )  # fmt: skip
+
+
+__all__ = ["RECEDE_TOLERANCE_M", "SweepResult", "SweepWorld", "SweptContact", "sweep"]
