@@ -44,13 +44,16 @@ def not_ready_reason(st: Status) -> str:
     return told(NotReadySubcode.NOT_STARTED, "pymotoros enable (START_TRAJ_MODE)")
 
 
-def twin_alarm_texts(host: str, http_port: int | None) -> dict[int, str]:
-    """Alarm number -> pendant text from the twin's control API ({} when unknown)."""
+def twin_alarm_texts(host: str, http_port: int | None, token: str | None = None) -> dict[int, str]:
+    """Alarm number -> pendant text from the twin's control API ({} when unknown), with
+    its ``token`` when given."""
     if http_port is None:
         return {}
+    from pymotoros.cli.sim_view import api_request
+
     url = f"http://{host}:{http_port}/api/state"
     try:
-        with urllib.request.urlopen(url, timeout=API_TIMEOUT_S) as response:
+        with urllib.request.urlopen(api_request(url, token), timeout=API_TIMEOUT_S) as response:  # noqa: S310 - http
             data = json.loads(response.read())
     except (OSError, urllib.error.URLError, ValueError):
         return {}

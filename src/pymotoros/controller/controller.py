@@ -353,6 +353,9 @@ class VirtualController:
     def alarm_history(self) -> tuple[Alarm, ...]:
         return self._keys.alarm_history()
 
+    def alarms_raised(self) -> int:
+        return self._keys.alarms_raised()
+
     def subscribe(self, observer: SnapshotObserver) -> None:
         """``observer(snapshot)`` after every operator-state change."""
         self._observers.append(observer)

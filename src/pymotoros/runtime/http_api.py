@@ -46,7 +46,7 @@ from pymotoros.controller.actions import (
 from pymotoros.controller.api import ControllerSnapshot
 from pymotoros.errors import PymotorosError
 from pymotoros.runtime.body_limit import BodyLimit
-from pymotoros.runtime.csrf import CsrfGuard
+from pymotoros.runtime.csrf import CsrfGuard, NoFraming
 from pymotoros.runtime.docs_page import install_offline_docs
 from pymotoros.runtime.log_limit import api_refusal_allowed
 from pymotoros.runtime.observers import CatchUpMiddleware, Observers
@@ -324,6 +324,7 @@ def _new_app(observers: Observers | None) -> FastAPI:
     app.router.route_class = StrictJsonRoute  # a JSON body naming a key twice: 422
     install_offline_docs(app)
     app.add_middleware(CsrfGuard)  # the pendant's buttons: refuse other sites' POSTs
+    app.add_middleware(NoFraming)  # no other site may frame the pendant or /docs
     if observers is not None:  # idle batching: every request sees an up-to-date controller
         app.add_middleware(CatchUpMiddleware, observers=observers)
     app.add_middleware(BodyLimit)  # outermost: no body read beyond MAX_BODY_BYTES
