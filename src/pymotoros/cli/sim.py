@@ -281,7 +281,6 @@ def _cell(
 )
 @click.option(
     "--allowed-host",
-    "allowed_hosts",
     multiple=True,
     metavar="NAME",
     help="A name the control API answers to besides its own (localhost, 127.0.0.1, "
@@ -307,7 +306,7 @@ def sim(
     no_idle_batching: bool = False,
     token: str | None = None,
     insecure_http: bool = False,
-    allowed_hosts: tuple[str, ...] = (),
+    allowed_host: tuple[str, ...] = (),
 ) -> None:
     """Run the virtual controller (MotoROS on 50240/50241/50242, control API on --http-port).
 
@@ -329,7 +328,7 @@ def sim(
             record_path=record_path,
             idle_batching=False if no_idle_batching else None,
             token=token,
-            allowed_hosts=allowed_hosts,
+            allowed_hosts=allowed_host,
         )
         return
     config_file = config_path[0] if config_path else None
@@ -341,7 +340,7 @@ def sim(
     _request_realtime(realtime)
     app = SimulatorApp(
         controller,
-        simulator_config(host, ports, cell, token, allowed_hosts),
+        simulator_config(host, ports, cell, token, allowed_host),
         idle_batching=False if no_idle_batching else None,
     )
     recorder = open_recorder(record_path, [app])  # before the coroutine: it may refuse
