@@ -367,9 +367,7 @@ class SimulatorApp(Served):
         install_metrics(app, self)  # GET /metrics (runtime/metrics.py)
         install_access(app, self.config.token, ready=lambda: self.motoros_listening)
         # outermost: a request for another name (DNS rebinding) is refused before anything
-        app.add_middleware(
-            HostGuard, names=own_names(self.config.host, self.config.allowed_hosts)
-        )
+        app.add_middleware(HostGuard, names=own_names(self.config.host, self.config.allowed_hosts))
         config = uvicorn.Config(
             app,
             # h11 with a deadline on each request: half-sent requests are closed
