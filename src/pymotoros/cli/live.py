@@ -55,6 +55,9 @@ def twin_alarm_texts(host: str, http_port: int | None, token: str | None = None)
     try:
         with urllib.request.urlopen(api_request(url, token), timeout=API_TIMEOUT_S) as response:  # noqa: S310 - http
             data = json.loads(response.read())
+    except urllib.error.HTTPError as exc:  # e.g. 401: no token given; the code suffices
+        exc.close()
+        return {}
     except (OSError, urllib.error.URLError, ValueError):
         return {}
     alarms = data.get("alarms", []) if isinstance(data, dict) else []

@@ -39,13 +39,14 @@ def api_request(url: str, token: str | None) -> urllib.request.Request:
 def refusal_text(url: str, exc: urllib.error.HTTPError, token: str | None) -> str:
     """What an HTTP error from the control API means for the user: a 401 says the token
     is missing or wrong and how to give it; others carry the twin's own error text."""
-    if exc.code == 401:
-        what = "a token is needed and none was given" if not token else "the token was refused"
-        return f"{url}: {what} (401); {HOW_TO_AUTHENTICATE}"
-    try:
-        body = json.loads(exc.read())
-    except ValueError:
-        body = None
+    with exc:  # its socket: closed whatever the answer
+        if exc.code == 401:
+            what = "a token is needed and none was given" if not token else "the token was refused"
+            return f"{url}: {what} (401); {HOW_TO_AUTHENTICATE}"
+        try:
+            body = json.loads(exc.read())
+        except (OSError, ValueError):
+            body = None
     detail = body.get("error") if isinstance(body, dict) else None
     return f"{url}: {exc.code} {exc.reason}" + (f": {detail}" if detail else "")
 
