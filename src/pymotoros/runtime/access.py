@@ -11,6 +11,14 @@ static files stay open (they hold no state) and the page asks for the token once
 keeping it in ``sessionStorage`` for the tab's session (``/pendant/access.js``, loaded
 before the pendant's own script: it adds the token to every ``fetch`` and feed).
 
+The configured token is trimmed of the whitespace around it (a Kubernetes Secret made
+from a file ends in a newline, and clients' headers are trimmed too); whitespace inside
+is refused at start. Beyond loopback a token must not be guessable: 16 characters at
+least and no placeholder copied from an example (:func:`weak_token`; the CLI and
+:class:`~pymotoros.runtime.app.SimulatorConfig` refuse it). With a token the OpenAPI
+document declares the bearer scheme and each guarded operation's 401
+(:func:`document_security`), so ``/docs`` has an Authorize button.
+
 ``GET /healthz`` (liveness: the process serves) and ``GET /readyz`` (readiness: the
 MotoROS ports listen, else 503) are always open: Kubernetes probes cannot read a Secret
 into a header, and they tell nothing an attacker could use.
