@@ -23,17 +23,16 @@ from collections.abc import Iterator
 from typing import Any
 
 import pytest
+import schemathesis  # the test extra (pyproject.toml): when missing, this fails loudly
+from hypothesis import HealthCheck, given, settings
+from hypothesis.errors import Unsatisfiable
+from schemathesis import GenerationMode
+from schemathesis.config import SchemathesisConfig
+from schemathesis.specs.openapi.checks import positive_data_acceptance
 
-schemathesis = pytest.importorskip("schemathesis")  # the test extra (pyproject.toml)
-from hypothesis import HealthCheck, given, settings  # noqa: E402 - after the skip
-from hypothesis.errors import Unsatisfiable  # noqa: E402
-from schemathesis import GenerationMode  # noqa: E402
-from schemathesis.config import SchemathesisConfig  # noqa: E402
-from schemathesis.specs.openapi.checks import positive_data_acceptance  # noqa: E402
-
-from pymotoros.controller import VirtualController  # noqa: E402
-from pymotoros.controller.actions import CONTROL_ACTIONS  # noqa: E402
-from pymotoros.runtime.app import SimulatorApp, SimulatorConfig  # noqa: E402
+from pymotoros.controller import VirtualController
+from pymotoros.controller.actions import CONTROL_ACTIONS
+from pymotoros.runtime.app import SimulatorApp, SimulatorConfig
 
 TOKEN = "a-token-for-the-fuzzer-0123456789"  # noqa: S105 - a test token
 AUTH = {"Authorization": f"Bearer {TOKEN}"}
