@@ -33,3 +33,18 @@ def test_sim_serves_the_names_it_is_given_and_refuses_others() -> None:
         status, error = get_state(sim, f"rebind.attacker.example:{sim.http}")
         assert status == 403
         assert "--allowed-host rebind.attacker.example" in error
+
+
+def test_every_cell_of_a_fleet_gets_the_allowed_names() -> None:
+    """``--config a.toml --config b.toml``: one list of names for every cell's API."""
+    from pymotoros.cli.sim_cells import _fleet_cell
+    from pymotoros.controller.cell import cell_from_file
+    from pymotoros.models.cell import read_cell_file
+
+    examples = Path(__file__).resolve().parents[2] / "examples" / "cells"
+    for name in ("hc10_yrc1000.toml", "two_hc10_dx100.toml"):
+        cell_file = read_cell_file(examples / name)
+        cell = _fleet_cell(
+            name, cell_from_file(cell_file), cell_file.ports, "127.0.0.1", None, ("twin.lab",)
+        )
+        assert cell.config.allowed_hosts == ("twin.lab",)
