@@ -244,7 +244,8 @@ def test_the_entrypoint_needs_a_token_for_its_control_api() -> None:
     host = sim.make_context("sim", argv[2:]).params["host"]
     with pytest.raises(click.UsageError, match="--token"):
         check_http_access(host, None, insecure=False)
-    assert check_http_access(host, "from-a-secret", insecure=False) == "from-a-secret"
+    secret = "from-a-kubernetes-secret\n"  # noqa: S105 - a test token, as a Secret file gives it
+    assert check_http_access(host, secret, insecure=False) == secret.strip()
     assert "PYMOTOROS_TOKEN" in DOCKERFILE.read_text()
 
 

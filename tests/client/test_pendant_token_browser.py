@@ -74,3 +74,21 @@ def test_the_pendant_asks_once_and_keeps_the_token(sim: Sim, browser: WebDriver)
     wait.until(lambda d: d.find_element(By.ID, "link").text == "live", "the feed again")
     with pytest.raises(NoAlertPresentException):
         browser.switch_to.alert.text  # noqa: B018 - raises when no prompt is open
+
+
+def test_the_docs_page_offers_to_send_the_token(sim: Sim, browser: WebDriver) -> None:
+    """The OpenAPI document declares the bearer scheme (issue 28): swagger-ui shows its
+    Authorize button, whose dialog takes the token for "Try it out"."""
+    wait = WebDriverWait(browser, WAIT_S, poll_frequency=0.05)
+    browser.get(f"http://localhost:{sim.http}/docs")  # another of the twin's own names
+    button = wait.until(
+        expected_conditions.element_to_be_clickable((By.CSS_SELECTOR, "button.authorize")),
+        "the Authorize button",
+    )
+    button.click()
+    dialog = wait.until(
+        expected_conditions.visibility_of_element_located((By.CSS_SELECTOR, ".auth-container")),
+        "the authorization dialog",
+    )
+    assert "bearerAuth" in dialog.text
+    assert "bearer" in dialog.text.lower()

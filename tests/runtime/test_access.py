@@ -26,7 +26,7 @@ from pymotoros.runtime.app import SimulatorApp
 
 from .support import LOCAL
 
-TOKEN = "s3cret-token"  # noqa: S105 - a test token
+TOKEN = "s3cret-token-of-the-tests"  # noqa: S105 - a test token (16+ characters)
 WS_TIMEOUT_S = 10.0
 
 

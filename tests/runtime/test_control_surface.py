@@ -316,8 +316,13 @@ def test_a_value_gets_the_same_answer_over_http_and_in_a_scenario_file(
     value = data.draw(_values(param), label=param.name)
     body = {p.name: _valid(p) for p in spec.params if p.required}
     body[param.name] = value
+    # JSON has one kind of number: 40.0 for an integer parameter is 40 over HTTP (as the
+    # OpenAPI document's "integer" says), where TOML tells 40.0 (a float) from 40
+    in_file = dict(body)
+    if param.kind == "int" and isinstance(value, float) and value.is_integer():
+        in_file[param.name] = int(value)
     lines = ["[[events]]", "at = 0.0", f'action = "{spec.name}"']
-    lines += [f"{k} = {_toml(v)}" for k, v in body.items()]
+    lines += [f"{k} = {_toml(v)}" for k, v in in_file.items()]
     refused = ""
     try:
         parse_scenario(tomllib.loads("\n".join(lines) + "\n"), source="f.toml")

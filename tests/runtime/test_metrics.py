@@ -82,6 +82,21 @@ async def test_counters_rise_with_traffic(sim: SimulatorApp) -> None:
     assert value(after, "pymotoros_loop_lateness_seconds_bucket", le="+Inf") == count
 
 
+async def test_every_alarm_is_counted_beyond_the_history(sim: SimulatorApp) -> None:
+    """120 alarms between two scrapes count 120, though the history keeps 100 (issue 28:
+    the count was derived from the history and stopped at its length)."""
+    before = await scrape(sim.ports.http)
+    for n in range(120):
+        sim.controller.raise_alarm(8001, n % 100, f"alarm {n}")
+    after = await scrape(sim.ports.http)
+    assert len(sim.controller.alarm_history()) == 100  # the history is bounded
+    raised = value(after, "pymotoros_alarms_total") - value(before, "pymotoros_alarms_total")
+    assert raised == 120
+    sim.controller.raise_error(3, 0, "one more")
+    again = await scrape(sim.ports.http)
+    assert value(again, "pymotoros_alarms_total") == value(after, "pymotoros_alarms_total") + 1
+
+
 async def test_alarms_pfl_and_fsu_are_counted(sim: SimulatorApp) -> None:
     controller = sim.controller
     assert isinstance(controller, VirtualController)

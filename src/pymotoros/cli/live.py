@@ -44,14 +44,20 @@ def not_ready_reason(st: Status) -> str:
     return told(NotReadySubcode.NOT_STARTED, "pymotoros enable (START_TRAJ_MODE)")
 
 
-def twin_alarm_texts(host: str, http_port: int | None) -> dict[int, str]:
-    """Alarm number -> pendant text from the twin's control API ({} when unknown)."""
+def twin_alarm_texts(host: str, http_port: int | None, token: str | None = None) -> dict[int, str]:
+    """Alarm number -> pendant text from the twin's control API ({} when unknown), with
+    its ``token`` when given."""
     if http_port is None:
         return {}
+    from pymotoros.cli.sim_view import api_request
+
     url = f"http://{host}:{http_port}/api/state"
     try:
-        with urllib.request.urlopen(url, timeout=API_TIMEOUT_S) as response:
+        with urllib.request.urlopen(api_request(url, token), timeout=API_TIMEOUT_S) as response:  # noqa: S310 - http
             data = json.loads(response.read())
+    except urllib.error.HTTPError as exc:  # e.g. 401: no token given; the code suffices
+        exc.close()
+        return {}
     except (OSError, urllib.error.URLError, ValueError):
         return {}
     alarms = data.get("alarms", []) if isinstance(data, dict) else []

@@ -343,6 +343,20 @@ def connection_options(func: _F) -> _F:
     )
 
 
+def token_option(func: _F) -> _F:
+    """``--token``: the bearer token of the twin's control API (``pymotoros sim
+    --token``), for a command that reads it over HTTP; also ``PYMOTOROS_TOKEN`` and
+    ``token`` in the settings file, as for ``sim`` itself."""
+    return click.option(
+        "--token",
+        default=None,
+        envvar=envvar("token"),
+        metavar="TOKEN",
+        help="The control API's token (pymotoros sim --token), sent as "
+        "'Authorization: Bearer TOKEN' with --api and the alarm texts.",
+    )(func)
+
+
 def robot_options(func: _F) -> _F:
     """The options every robot command takes: connection, models, timeout, debug, record,
     and ``--cell`` (which cell of a ports file)."""
@@ -458,4 +472,5 @@ __all__ = [
     "robot_options",
     "scale_options",
     "speed_scale_option",
+    "token_option",
 ]

@@ -43,6 +43,7 @@ from pymotoros.cli.options import (
     json_option,
     robot_options,
     scale_options,
+    token_option,
 )
 from pymotoros.cli.ports_file import ports_file_target, read_ports
 from pymotoros.cli.sim_view import fetch_state_async, safety_data, safety_lines
@@ -381,6 +382,7 @@ def _status_table(
     metavar="URL",
     help="pymotoros sim's control API (e.g. http://127.0.0.1:8080): adds PFL, FSU, alarm texts.",
 )
+@token_option
 @tool_option
 def status(
     as_json: bool,
@@ -391,6 +393,7 @@ def status(
     group: tuple[str, ...],
     check_model: bool,
     api: str | None,
+    token: str | None = None,
     tool: int | None = None,
     **kwargs: Any,
 ) -> None:
@@ -418,10 +421,10 @@ def status(
                         if st is not None and st.in_error and st.error_code not in texts:
                             texts.update(
                                 await asyncio.to_thread(
-                                    twin_alarm_texts, target.host, target.http_port
+                                    twin_alarm_texts, target.host, target.http_port, token
                                 )
                             )
-                        sim_state = await fetch_state_async(api) if api is not None else None
+                        sim_state = await fetch_state_async(api, token) if api is not None else None
                         if as_json:
                             _echo_json(_status_data(client, state, only) | safety_data(sim_state))
                         else:  # an unchanged frame is not printed again, but counts

@@ -61,6 +61,7 @@ SHARED_KEYS: Final = frozenset(
         "cell",
         "debug",
         "deg",
+        "token",
     }
 )
 """Keys allowed at the top of the settings file (options several commands share)."""

@@ -144,11 +144,16 @@ class RepeatableOption(click.Option):
 
 
 def simulator_config(
-    host: str, ports: Sequence[int], cell: CellConfig, token: str | None = None
+    host: str,
+    ports: Sequence[int],
+    cell: CellConfig,
+    token: str | None = None,
+    allowed_hosts: Sequence[str] = (),
 ) -> SimulatorConfig:
     """Where one cell listens (``ports``: motion, state, io, http; 0: the OS chooses),
-    in its controller's byte order (FS100 speaks big-endian, reference §1.1), and the
-    control API's bearer token (None: open, loopback only)."""
+    in its controller's byte order (FS100 speaks big-endian, reference §1.1), the
+    control API's bearer token (None: open, loopback only) and the names it answers to
+    besides its own (``--allowed-host``)."""
     motion, state, io, http = ports
     return SimulatorConfig(
         host=host,
@@ -158,6 +163,7 @@ def simulator_config(
         http_port=http,
         byte_order=cell.controller.byte_order,
         token=token,
+        allowed_hosts=tuple(allowed_hosts),
     )
 
 
@@ -283,6 +289,15 @@ def _cell(
     is_flag=True,
     help="Serve the control API beyond loopback without a token (a warning is logged).",
 )
+@click.option(
+    "--allowed-host",
+    multiple=True,
+    metavar="NAME",
+    help="A name the control API answers to besides its own (localhost, 127.0.0.1, "
+    "[::1], --host; on 0.0.0.0 also the machine's name and any IP address); other Host "
+    "headers are refused (DNS rebinding). Repeatable; .example.com allows every name "
+    "under it, * any name.",
+)
 @click.pass_context
 def sim(
     ctx: click.Context,
@@ -302,6 +317,7 @@ def sim(
     no_idle_batching: bool = False,
     token: str | None = None,
     insecure_http: bool = False,
+    allowed_host: tuple[str, ...] = (),
 ) -> None:
     """Run the virtual controller (MotoROS on 50240/50241/50242, control API on --http-port).
 
@@ -324,6 +340,7 @@ def sim(
             idle_batching=False if no_idle_batching else None,
             token=token,
             lint_report=lint_report,
+            allowed_hosts=allowed_host,
         )
         return
     config_file = config_path[0] if config_path else None
@@ -335,7 +352,7 @@ def sim(
     _request_realtime(realtime)
     app = SimulatorApp(
         controller,
-        simulator_config(host, ports, cell, token),
+        simulator_config(host, ports, cell, token, allowed_host),
         idle_batching=False if no_idle_batching else None,
     )
     recorder = open_recorder(record_path, [app])  # before the coroutine: it may refuse
@@ -380,15 +397,23 @@ def _request_realtime(realtime: bool) -> None:
 
 
 def check_http_access(host: str, token: str | None, insecure: bool) -> str | None:
-    """The token to serve with; a usage error (exit 2) for a control API beyond loopback
-    without one, unless ``--insecure-http`` (then a warning)."""
-    from pymotoros.runtime.access import loopback_or_token
+    """The token to serve with, trimmed of the whitespace around it; a usage error
+    (exit 2) for a token with whitespace inside, a control API beyond loopback without
+    one (unless ``--insecure-http``: then a warning) or with a weak one (too short, a
+    placeholder)."""
+    from pymotoros.runtime.access import clean_token, loopback_or_token, weak_token
     from pymotoros.runtime.tcp import is_loopback
 
-    token = token or None
+    source = _token_source(token)
+    try:
+        token = clean_token(token, source=source)
+    except ValueError as exc:
+        raise click.UsageError(str(exc)) from exc
     if is_loopback(host):
         return token
     refusal = loopback_or_token(host, token, insecure)
+    if refusal is None and token is not None:
+        refusal = weak_token(token, host, source=source)
     if refusal is not None:
         raise click.UsageError(refusal)
     if token is None:
@@ -398,6 +423,18 @@ def check_http_access(host: str, token: str | None, insecure: bool) -> str | Non
             host,
         )
     return token
+
+
+def _token_source(token: str | None) -> str:
+    """Where the token came from, in the words of an error: the flag, the environment
+    variable or the settings file."""
+    ctx = click.get_current_context(silent=True)
+    source = ctx.get_parameter_source("token") if ctx is not None and token else None
+    if source is click.core.ParameterSource.ENVIRONMENT:
+        return "PYMOTOROS_TOKEN"
+    if source is click.core.ParameterSource.DEFAULT_MAP:
+        return "token in the settings file"
+    return "--token"
 
 
 def serve(

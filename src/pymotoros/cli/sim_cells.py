@@ -84,6 +84,7 @@ def run_cells(
     idle_batching: bool | None = None,
     token: str | None = None,
     lint_report: Path | None = None,
+    allowed_hosts: Sequence[str] = (),
 ) -> None:
     """Load every cell, check their ports, serve them until SIGINT/SIGTERM."""
     _refuse_single_cell_options(ctx, scenario_path)
@@ -96,7 +97,7 @@ def run_cells(
         labels: list[CellLabel] = []
         for name, path, cell_file in zip(names, paths, files, strict=True):
             cell = cell_from_file(cell_file)
-            cells.append(_fleet_cell(name, cell, cell_file.ports, host, token))
+            cells.append(_fleet_cell(name, cell, cell_file.ports, host, token, allowed_hosts))
             labels.append(CellLabel.of(name, cell, path))
         fleet = Fleet(cells, idle_batching=idle_batching)
     except ConfigError as exc:
@@ -115,11 +116,17 @@ def run_cells(
 
 
 def _fleet_cell(
-    name: str, cell: CellConfig, ports: CellPorts, host: str, token: str | None
+    name: str,
+    cell: CellConfig,
+    ports: CellPorts,
+    host: str,
+    token: str | None,
+    allowed_hosts: Sequence[str] = (),
 ) -> FleetCell:
     """One cell of the fleet: its controller, on its file's ports (else 0, the OS chooses),
-    behind the one token every cell's control API shares."""
-    config = simulator_config(host, [ports.get(kind) or 0 for kind in PORT_KINDS], cell, token)
+    behind the one token (and the one list of names) every cell's control API shares."""
+    listen = [ports.get(kind) or 0 for kind in PORT_KINDS]
+    config = simulator_config(host, listen, cell, token, allowed_hosts)
     return FleetCell(name, VirtualController(cell), config)
 
 

@@ -21,16 +21,51 @@ from pymotoros.errors import ConfigError
 API_TIMEOUT_S: Final = 5.0
 
 
-def fetch_state(api: str) -> dict[str, Any]:
-    """``GET {api}/api/state`` (blocking); ConfigError with the URL when it fails."""
+HOW_TO_AUTHENTICATE: Final = (
+    "give the token the twin was started with (pymotoros sim --token): --token TOKEN, "
+    "the PYMOTOROS_TOKEN environment variable or token in the settings file"
+)
+"""How to give the control API's token, in the words of a 401."""
+
+
+def api_request(url: str, token: str | None) -> urllib.request.Request:
+    """A GET of ``url`` with ``Authorization: Bearer TOKEN`` when a token is given."""
+    headers = {"Accept": "application/json"}
+    if token:
+        headers["Authorization"] = f"Bearer {token.strip()}"
+    return urllib.request.Request(url, headers=headers)  # noqa: S310 - http(s) checked by callers
+
+
+def refusal_text(url: str, exc: urllib.error.HTTPError, token: str | None) -> str:
+    """What an HTTP error from the control API means for the user: a 401 says the token
+    is missing or wrong and how to give it; others carry the twin's own error text."""
+    with exc:  # its socket: closed whatever the answer
+        if exc.code == 401:
+            what = "a token is needed and none was given" if not token else "the token was refused"
+            return f"{url}: {what} (401); {HOW_TO_AUTHENTICATE}"
+        try:
+            body = json.loads(exc.read())
+        except (OSError, ValueError):
+            body = None
+    detail = body.get("error") if isinstance(body, dict) else None
+    return f"{url}: {exc.code} {exc.reason}" + (f": {detail}" if detail else "")
+
+
+def fetch_state(api: str, token: str | None = None) -> dict[str, Any]:
+    """``GET {api}/api/state`` (blocking), with the control API's ``token`` when given;
+    ConfigError with the URL (and, for a 401, how to give the token) when it fails."""
     url = api.rstrip("/") + "/api/state"
     if not url.startswith(("http://", "https://")):
         raise ConfigError(
             f"--api must be an http:// URL such as http://127.0.0.1:8080, not {api!r}"
         )
     try:
-        with urllib.request.urlopen(url, timeout=API_TIMEOUT_S) as reply:  # noqa: S310 - checked above
+        with urllib.request.urlopen(api_request(url, token), timeout=API_TIMEOUT_S) as reply:  # noqa: S310 - checked above
             doc = json.load(reply)
+    except urllib.error.HTTPError as exc:
+        raise ConfigError(
+            f"cannot read the simulator's state: {refusal_text(url, exc, token)}"
+        ) from exc
     except (OSError, ValueError) as exc:
         raise ConfigError(f"cannot read the simulator's state from {url}: {exc}") from exc
     if not isinstance(doc, dict):
@@ -38,8 +73,8 @@ def fetch_state(api: str) -> dict[str, Any]:
     return doc
 
 
-async def fetch_state_async(api: str) -> dict[str, Any]:
-    return await asyncio.to_thread(fetch_state, api)
+async def fetch_state_async(api: str, token: str | None = None) -> dict[str, Any]:
+    return await asyncio.to_thread(fetch_state, api, token)
 
 
 def safety_keys() -> tuple[str, ...]:

@@ -76,15 +76,20 @@ class Alarm:
 
 
 class AlarmHistory:
-    """Bounded history of every alarm and error ever raised (oldest dropped first)."""
+    """Bounded history of every alarm and error ever raised (oldest dropped first), and
+    how many were ever recorded (``GET /metrics``'s ``pymotoros_alarms_total``: a count
+    read from the bounded entries would stop at their length between two scrapes)."""
 
-    __slots__ = ("_entries",)
+    __slots__ = ("_entries", "recorded")
 
     def __init__(self, length: int = HISTORY_LENGTH) -> None:
         self._entries: deque[Alarm] = deque(maxlen=length)
+        self.recorded = 0
+        """Alarms and errors recorded since boot, the dropped ones included."""
 
     def record(self, alarm: Alarm) -> None:
         self._entries.append(alarm)
+        self.recorded += 1
 
     def entries(self) -> tuple[Alarm, ...]:
         return tuple(self._entries)

@@ -437,8 +437,12 @@ class OperatorPanel(Protocol):
     def raise_alarm(self, code: int, subcode: int, text: str) -> None: ...
 
     def alarm_history(self) -> tuple[Alarm, ...]:
-        """The last alarms and operator errors raised, oldest first (``GET /metrics``
-        counts the new ones)."""
+        """The last alarms and operator errors raised, oldest first (a bounded history)."""
+        ...
+
+    def alarms_raised(self) -> int:
+        """Alarms and operator errors raised since boot, however many the history keeps
+        (``GET /metrics``'s ``pymotoros_alarms_total``)."""
         ...
 
     def reset(self) -> None:

@@ -388,6 +388,9 @@ class VirtualController:
         """Alarms and errors raised so far, oldest first (bounded: the oldest drop out)."""
         return self._keys.alarm_history()
 
+    def alarms_raised(self) -> int:
+        return self._keys.alarms_raised()
+
     def subscribe(self, observer: SnapshotObserver) -> None:
         """``observer(snapshot)`` after every operator-state change."""
         self._observers.append(observer)

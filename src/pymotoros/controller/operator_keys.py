@@ -39,6 +39,10 @@ class OperatorKeys:
     def alarm_history(self) -> tuple[Alarm, ...]:
         return self._history.entries()
 
+    def alarms_raised(self) -> int:
+        """Alarms and operator errors raised since boot (boot alarms included)."""
+        return self._history.recorded
+
     def press_estop(self, pressed: bool, source: EstopSource = EstopSource.PENDANT) -> None:
         """E-stop: cuts servo power and stops the job; raises no alarm."""
         self.fire(Event.PRESS_ESTOP if pressed else Event.RELEASE_ESTOP, source=source)

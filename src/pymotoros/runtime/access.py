@@ -11,6 +11,14 @@ static files stay open (they hold no state) and the page asks for the token once
 keeping it in ``sessionStorage`` for the tab's session (``/pendant/access.js``, loaded
 before the pendant's own script: it adds the token to every ``fetch`` and feed).
 
+The configured token is trimmed of the whitespace around it (a Kubernetes Secret made
+from a file ends in a newline, and clients' headers are trimmed too); whitespace inside
+is refused at start. Beyond loopback a token must not be guessable: 16 characters at
+least and no placeholder copied from an example (:func:`weak_token`; the CLI and
+:class:`~pymotoros.runtime.app.SimulatorConfig` refuse it). With a token the OpenAPI
+document declares the bearer scheme and each guarded operation's 401
+(:func:`document_security`), so ``/docs`` has an Authorize button.
+
 ``GET /healthz`` (liveness: the process serves) and ``GET /readyz`` (readiness: the
 MotoROS ports listen, else 503) are always open: Kubernetes probes cannot read a Secret
 into a header, and they tell nothing an attacker could use.
@@ -25,7 +33,7 @@ from __future__ import annotations
 import hmac
 import logging
 from collections.abc import Callable
-from typing import Final
+from typing import Any, Final
 from urllib.parse import parse_qs
 
 from fastapi import FastAPI
@@ -36,17 +44,55 @@ from starlette.types import ASGIApp, Receive, Scope, Send
 from pymotoros.runtime.log_limit import api_refusal_allowed
 
 __all__ = [
+    "MIN_TOKEN_LENGTH",
+    "PLACEHOLDER_TOKENS",
     "TOKEN_ENV",
     "AccessGuard",
+    "clean_token",
+    "document_security",
     "guarded",
     "install_access",
     "loopback_or_token",
+    "weak_token",
 ]
 
 logger = logging.getLogger(__name__)
 
 TOKEN_ENV: Final = "PYMOTOROS_TOKEN"  # noqa: S105 - a variable's name, not a secret
 """Environment variable read by ``pymotoros sim`` when ``--token`` is not given."""
+
+MIN_TOKEN_LENGTH: Final = 16
+"""The shortest token accepted beyond loopback: 16 random characters (~95 bits from
+``python -c 'import secrets; print(secrets.token_urlsafe(16))'``, 22 characters) cannot
+be guessed over HTTP; a word or a PIN can."""
+PLACEHOLDER_TOKENS: Final = frozenset(
+    {
+        "change-me-before-applying",  # the example Secret once shipped in deploy/k8s
+        "changeme",
+        "change-me",
+        "change_me",
+        "changeit",
+        "replace-me",
+        "replaceme",
+        "secret",
+        "token",
+        "password",
+        "passw0rd",
+        "admin",
+        "default",
+        "example",
+        "test",
+        "pymotoros",
+        "s3cret",
+        "your-token-here",
+        "<token>",
+        "token-goes-here",
+    }
+)
+"""Tokens copied from an example rather than made (compared without case): refused
+beyond loopback whatever their length."""
+MAKE_ONE: Final = "make one with: python -c 'import secrets; print(secrets.token_urlsafe(24))'"
+"""How to make a token, in the words of a refusal."""
 
 GUARDED_PREFIXES: Final = ("/api/", "/ws/")
 GUARDED_PATHS: Final = frozenset({"/api", "/metrics"})
@@ -69,12 +115,47 @@ def _presented(scope: Scope) -> str | None:
     return None
 
 
+def clean_token(token: str | None, *, source: str = "--token") -> str | None:
+    """The token without the whitespace around it (a Kubernetes Secret made from a file
+    ends in a newline; clients' headers are trimmed too); None for none or an empty one.
+    A token with whitespace *inside* cannot be sent in one header value as given:
+    :class:`ValueError` saying so."""
+    if token is None:
+        return None
+    trimmed = token.strip()
+    if any(c.isspace() for c in trimmed):
+        raise ValueError(
+            f"{source}: the token contains whitespace inside ({len(trimmed)} characters); "
+            f"a bearer token is one word: {MAKE_ONE}"
+        )
+    return trimmed or None
+
+
+def weak_token(token: str, host: str, *, source: str = "--token") -> str | None:
+    """Why ``token`` is too weak to guard a control API on ``host`` beyond loopback
+    (None: it will do). The caller decides whether ``host`` is loopback."""
+    if token.lower() in PLACEHOLDER_TOKENS:
+        return (
+            f"{source}: the token is the placeholder {token!r}, not a secret: anybody who "
+            f"read the example can use the control API on {host}; {MAKE_ONE}"
+        )
+    if len(token) < MIN_TOKEN_LENGTH:
+        return (
+            f"{source}: the token has {len(token)} characters; beyond loopback ({host}) "
+            f"it needs at least {MIN_TOKEN_LENGTH} so that it cannot be guessed; "
+            f"{MAKE_ONE}"
+        )
+    return None
+
+
 class AccessGuard:
     """ASGI middleware: 401 for a guarded path without ``Authorization: Bearer TOKEN``."""
 
     def __init__(self, app: ASGIApp, token: str) -> None:
         self.app = app
-        self._token = token.encode()
+        self._token = (clean_token(token) or "").encode()
+        if not self._token:
+            raise ValueError("AccessGuard needs a token that is not empty")
 
     async def __call__(self, scope: Scope, receive: Receive, send: Send) -> None:
         kind = scope["type"]
@@ -136,5 +217,50 @@ def install_access(
             status_code=200 if listening else 503,
         )
 
+    token = clean_token(token)
     if token:
         api.add_middleware(AccessGuard, token=token)
+        document_security(api)
+
+
+BEARER_SCHEME: Final = "bearerAuth"
+"""The security scheme's name in the OpenAPI document."""
+
+
+def document_security(api: FastAPI) -> None:
+    """Declare the bearer token in ``api``'s OpenAPI document: the scheme (the /docs
+    page's Authorize button sends it), and on every guarded operation its requirement
+    and the 401 answer (generated clients then know both)."""
+    build = api.openapi
+
+    def openapi() -> dict[str, Any]:
+        if api.openapi_schema is not None:
+            return api.openapi_schema
+        schema = build()
+        components = schema.setdefault("components", {})
+        components.setdefault("securitySchemes", {})[BEARER_SCHEME] = {
+            "type": "http",
+            "scheme": "bearer",
+            "description": "the token given to pymotoros sim --token (or PYMOTOROS_TOKEN)",
+        }
+        error: dict[str, Any] = {"$ref": "#/components/schemas/ErrorModel"}
+        if "ErrorModel" not in components.get("schemas", {}):
+            error = {
+                "type": "object",
+                "properties": {"error": {"type": "string"}},
+                "required": ["error"],
+            }
+        for path, operations in schema.get("paths", {}).items():
+            if not guarded(path):
+                continue
+            for operation in operations.values():
+                operation["security"] = [{BEARER_SCHEME: []}]
+                operation.setdefault("responses", {})["401"] = {
+                    "description": "no token, or a wrong one (the error says how to send it)",
+                    "headers": {"WWW-Authenticate": {"schema": {"type": "string"}}},
+                    "content": {"application/json": {"schema": error}},
+                }
+        api.openapi_schema = schema
+        return schema
+
+    api.openapi = openapi  # type: ignore[method-assign]

@@ -29,6 +29,7 @@ from typing import Final, Self
 
 import uvicorn
 
+from pymotoros.errors import ConfigError
 from pymotoros.models.cell import PORT_KINDS
 from pymotoros.protocol.constants import (
     TCP_PORT_IO,
@@ -36,14 +37,16 @@ from pymotoros.protocol.constants import (
     TCP_PORT_STATE,
     ByteOrder,
 )
-from pymotoros.runtime.access import install_access
+from pymotoros.runtime.access import clean_token, install_access, weak_token
 from pymotoros.runtime.clock import Clock, LoopClock, precise_clock
+from pymotoros.runtime.hosts import HostGuard, own_names
 from pymotoros.runtime.http_api import create_http_app
 from pymotoros.runtime.io_server import IoServer
 from pymotoros.runtime.metrics import install_metrics
 from pymotoros.runtime.motion_server import MotionServer
 from pymotoros.runtime.observers import Observers
 from pymotoros.runtime.served import Served
+from pymotoros.runtime.slow_requests import REQUEST_READ_TIMEOUT_S, bounded
 from pymotoros.runtime.state_server import (
     STATE_MESSAGE_GAP_S,
     STATE_PERIOD_S,
@@ -89,7 +92,25 @@ class SimulatorConfig:
     state_period: float = STATE_PERIOD_S
     state_message_gap: float = STATE_MESSAGE_GAP_S
     token: str | None = None
-    """The control API's bearer token (``pymotoros sim --token``): None leaves it open."""
+    """The control API's bearer token (``pymotoros sim --token``): None leaves it open.
+    Whitespace around it is dropped; beyond loopback it must not be weak
+    (runtime/access.py: :func:`~pymotoros.runtime.access.weak_token`)."""
+    allowed_hosts: tuple[str, ...] = ()
+    """Names besides its own the control API answers to in ``Host``
+    (``pymotoros sim --allowed-host``; runtime/hosts.py)."""
+    request_timeout_s: float = REQUEST_READ_TIMEOUT_S
+    """Seconds a client has to send a whole HTTP request (runtime/slow_requests.py)."""
+
+    def __post_init__(self) -> None:
+        try:
+            token = clean_token(self.token)
+        except ValueError as exc:
+            raise ConfigError(str(exc)) from exc
+        object.__setattr__(self, "token", token)
+        if token is not None and not is_loopback(self.host):
+            weak = weak_token(token, self.host)
+            if weak is not None:
+                raise ConfigError(weak)
 
 
 @dataclass(frozen=True, slots=True)
@@ -345,8 +366,12 @@ class SimulatorApp(Served):
         )
         install_metrics(app, self)  # GET /metrics (runtime/metrics.py)
         install_access(app, self.config.token, ready=lambda: self.motoros_listening)
+        # outermost: a request for another name (DNS rebinding) is refused before anything
+        app.add_middleware(HostGuard, names=own_names(self.config.host, self.config.allowed_hosts))
         config = uvicorn.Config(
             app,
+            # h11 with a deadline on each request: half-sent requests are closed
+            http=bounded(self.config.request_timeout_s),
             log_level="warning",
             lifespan="off",
             access_log=False,

@@ -16,16 +16,26 @@ from urllib.parse import urlsplit
 
 from starlette.datastructures import Headers
 from starlette.responses import JSONResponse
-from starlette.types import ASGIApp, Receive, Scope, Send
+from starlette.types import ASGIApp, Message, Receive, Scope, Send
 
 from pymotoros.runtime.log_limit import api_refusal_allowed
 
-__all__ = ["CsrfGuard", "same_origin"]
+__all__ = ["FRAME_HEADERS", "CsrfGuard", "NoFraming", "same_origin"]
 
 logger = logging.getLogger(__name__)
 
 SAFE_METHODS: Final = frozenset({"GET", "HEAD", "OPTIONS"})
 """Methods that change nothing (RFC 9110 §9.2.1): never checked."""
+
+
+FRAME_HEADERS: Final = (
+    (b"x-frame-options", b"SAMEORIGIN"),
+    (b"content-security-policy", b"frame-ancestors 'self'"),
+)
+"""What stops another site from framing the pendant (or /docs) under a decoy and
+luring a click onto E-STOP or SERVO ("clickjacking"): the old header every browser
+knows, and its CSP successor. A response that has its own CSP (the docs pages) keeps
+it; that policy names ``frame-ancestors`` itself (runtime/docs_page.py)."""
 
 
 def _origin_of(url: str) -> str | None:
@@ -81,3 +91,26 @@ class CsrfGuard:
             await send({"type": "websocket.close", "code": 1008, "reason": "cross-site"})
             return
         await JSONResponse({"error": message}, status_code=403)(scope, receive, send)
+
+
+class NoFraming:
+    """ASGI middleware: every HTTP answer may be framed by this server's pages only
+    (:data:`FRAME_HEADERS`)."""
+
+    def __init__(self, app: ASGIApp) -> None:
+        self.app = app
+
+    async def __call__(self, scope: Scope, receive: Receive, send: Send) -> None:
+        if scope["type"] != "http":
+            await self.app(scope, receive, send)
+            return
+
+        async def with_headers(message: Message) -> None:
+            if message["type"] == "http.response.start":
+                headers = list(message.get("headers", []))
+                present = {name.lower() for name, _ in headers}
+                headers += [(k, v) for k, v in FRAME_HEADERS if k not in present]
+                message = {**message, "headers": headers}
+            await send(message)
+
+        await self.app(scope, receive, with_headers)

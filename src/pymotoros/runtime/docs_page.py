@@ -38,6 +38,7 @@ CONTENT_SECURITY_POLICY: Final = "; ".join(
         "script-src 'self' 'unsafe-inline'",  # FastAPI's page starts swagger-ui inline
         "worker-src 'self' blob:",  # ReDoc's search index runs in a blob: worker
         "connect-src 'self'",
+        "frame-ancestors 'self'",  # no other site may frame the pages (clickjacking)
     )
 )
 """What the two pages may load: from this server only."""

@@ -46,13 +46,13 @@ from pymotoros.controller.actions import (
 from pymotoros.controller.api import ControllerSnapshot
 from pymotoros.errors import PymotorosError
 from pymotoros.runtime.body_limit import BodyLimit
-from pymotoros.runtime.csrf import CsrfGuard
+from pymotoros.runtime.csrf import CsrfGuard, NoFraming
 from pymotoros.runtime.docs_page import install_offline_docs
 from pymotoros.runtime.log_limit import api_refusal_allowed
 from pymotoros.runtime.observers import CatchUpMiddleware, Observers
 from pymotoros.runtime.pendant import install_pendant
 from pymotoros.runtime.pendant.document import Ports, state_document
-from pymotoros.runtime.snapshot_document import Answer, document_model
+from pymotoros.runtime.snapshot_document import Answer, ErrorModel, document_model
 from pymotoros.runtime.strict_json import StrictJsonRoute
 from pymotoros.runtime.target import SimulatedController
 from pymotoros.runtime.ticker import TickStats
@@ -87,12 +87,35 @@ class ActionBody(BaseModel):
     @classmethod
     def _declared_values(cls, data: Any) -> Any:
         if isinstance(data, dict):
+            data = _as_documented(cls.spec, data)
             try:
                 cls.spec.check_values({k: v for k, v in data.items() if cls.spec.param(k)})
             except ActionParamError as exc:
                 message = {"message": str(exc)}
                 raise PydanticCustomError(ACTION_PARAM_ERROR, "{message}", message) from exc
         return data
+
+
+def _as_documented(spec: ActionSpec, data: dict[str, Any]) -> dict[str, Any]:
+    """The body as the OpenAPI document reads it, for the declaration's check:
+
+    * ``3080.0`` for an integer parameter is 3080: JSON has one kind of number, and the
+      document's ``"type": "integer"`` (JSON Schema) takes any number without a fraction,
+      as a generated client or JavaScript may send it (a fraction stays refused, in the
+      declaration's words);
+    * ``null`` for an optional parameter whose default is none is the parameter left
+      out (the document allows ``null`` there).
+    """
+    out = dict(data)
+    for key, value in data.items():
+        param = spec.param(key)
+        if param is None:
+            continue
+        if value is None and not param.required and param.default is None:
+            del out[key]
+        elif param.kind == "int" and isinstance(value, float) and value.is_integer():
+            out[key] = int(value)
+    return out
 
 
 _PYTHON_TYPES: dict[str, Any] = {
@@ -185,10 +208,6 @@ _STATE_MODELS: dict[type, type[Answer]] = {}
 
 StateModel = state_model_for(ControllerSnapshot)
 """``GET /api/state``'s schema, derived from :class:`ControllerSnapshot`."""
-
-
-class ErrorModel(BaseModel):
-    error: str
 
 
 class IoValueModel(BaseModel):
@@ -291,6 +310,10 @@ _NOT_FOUND: dict[int | str, dict[str, object]] = {
     404: {"model": ErrorModel, "description": "nothing of that name (the error lists what is)"},
 }
 
+_TOO_LARGE: dict[int | str, dict[str, Any]] = {
+    413: {"model": ErrorModel, "description": "the body is larger than the control API takes"},
+}
+
 StateFn = Callable[[], dict[str, Any]]
 
 
@@ -337,10 +360,12 @@ def _new_app(observers: Observers | None) -> FastAPI:
             "The operator of the virtual controller: pendant keys, E-stop, mode switch, "
             'alarms and forced IO. Errors are 4xx with {"error": "..."}.'
         ),
+        responses=_TOO_LARGE,  # any route: the body limit answers before the route
     )
     app.router.route_class = StrictJsonRoute  # a JSON body naming a key twice: 422
     install_offline_docs(app)
     app.add_middleware(CsrfGuard)  # the pendant's buttons: refuse other sites' POSTs
+    app.add_middleware(NoFraming)  # no other site may frame the pendant or /docs
     if observers is not None:  # idle batching: every request sees an up-to-date controller
         app.add_middleware(CatchUpMiddleware, observers=observers)
     app.add_middleware(BodyLimit)  # outermost: no body read beyond MAX_BODY_BYTES

@@ -50,7 +50,6 @@ from pymotoros.protocol.constants import MotionCommand, MsgType
 from pymotoros.runtime.traffic import OTHER
 
 if TYPE_CHECKING:
-    from pymotoros.controller.alarms import Alarm
     from pymotoros.runtime.app import SimulatorApp
 
 __all__ = ["LATENESS_BUCKETS_S", "TwinCollector", "install_metrics"]
@@ -110,9 +109,6 @@ class TwinCollector(Collector):
         self._unsampled = 0
         self._overruns = _Monotonic()
         self._skipped = _Monotonic()
-        self._alarms_seen = (-1, 0)
-        """(raised_at_ms of the newest alarm counted, how many alarms carry that time)."""
-        self._alarms_total = 0
 
     @property
     def cell(self) -> str | None:
@@ -227,11 +223,11 @@ class TwinCollector(Collector):
         active = GaugeMetricFamily("pymotoros_alarms_active", "Alarms active now.", labels=labels())
         active.add_metric(values(), float(len(snapshot.alarms)))
         yield active
-        self._count_alarms(controller.alarm_history())
         total = CounterMetricFamily(
             "pymotoros_alarms", "Alarms and operator errors raised.", labels=labels()
         )
-        total.add_metric(values(), float(self._alarms_total))
+        # counted by the controller as each is raised (its history keeps only the last 100)
+        total.add_metric(values(), float(controller.alarms_raised()))
         yield total
         safety = controller.safety
         pfl = CounterMetricFamily(
@@ -244,16 +240,6 @@ class TwinCollector(Collector):
         )
         fsu.add_metric(values(), float(safety.fsu.switches))
         yield fsu
-
-    def _count_alarms(self, entries: tuple[Alarm, ...]) -> None:
-        """Count alarms raised since the last scrape (the history keeps the last 100)."""
-        last_ms, at_last = self._alarms_seen
-        times = [alarm.raised_at_ms for alarm in entries]
-        fresh = sum(1 for t in times if t > last_ms)
-        fresh += max(0, sum(1 for t in times if t == last_ms) - at_last)
-        newest = max(times, default=last_ms)
-        self._alarms_total += fresh
-        self._alarms_seen = (newest, sum(1 for t in times if t == newest))
 
 
 def install_metrics(api: FastAPI, app: SimulatorApp) -> CollectorRegistry:

@@ -57,6 +57,7 @@ __all__ = [
     "FORMS",
     "SCHEMA_NAMES",
     "Answer",
+    "ErrorModel",
     "Form",
     "document_encoder",
     "document_model",
@@ -64,6 +65,12 @@ __all__ = [
 ]
 
 _SCALARS: Final = (int, float, str, bool, type(None))
+
+
+class ErrorModel(BaseModel):
+    """Every error answer of the control API: ``{"error": "<what was wrong>"}``."""
+
+    error: str
 
 
 class Answer(BaseModel):

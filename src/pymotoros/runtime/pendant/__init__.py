@@ -78,7 +78,7 @@ from pymotoros.runtime.pendant.document import (
     state_document,
 )
 from pymotoros.runtime.pendant.workspace_view import WorkspaceView
-from pymotoros.runtime.snapshot_document import document_encoder
+from pymotoros.runtime.snapshot_document import ErrorModel, document_encoder
 from pymotoros.runtime.target import SimulatedController
 from pymotoros.runtime.ticker import TickStats
 
@@ -436,7 +436,11 @@ def _install_actions_routes(
         parameters, units and bounds: the control API's declarations."""
         return listed
 
-    @app.post("/api/pendant/scenario", tags=["safety"])
+    @app.post(
+        "/api/pendant/scenario",
+        tags=["safety"],
+        responses={400: {"model": ErrorModel, "description": "the file is not a scenario"}},
+    )
     async def scenario_file(body: ScenarioFileBody) -> dict[str, Any]:
         """Load a scenario *file* (TOML, the format of ``pymotoros sim --scenario``), as
         the pendant's "Load scenario" button does; ``POST /api/scenario`` takes the same
