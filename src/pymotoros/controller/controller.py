@@ -389,6 +389,8 @@ class VirtualController:
         return self._keys.alarm_history()
 
     def alarms_raised(self) -> int:
+        """Every alarm raised since boot, counted as it is raised (the alarm history keeps
+        only the last 100, so a counter derived from it would miss alarms between scrapes)."""
         return self._keys.alarms_raised()
 
     def subscribe(self, observer: SnapshotObserver) -> None:
