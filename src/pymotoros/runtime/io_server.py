@@ -15,6 +15,7 @@ from collections.abc import Callable
 from typing import Final
 
 from pymotoros.controller.api import IoRead, MotoRosController
+from pymotoros.models.fidelity import Fidelity
 from pymotoros.protocol.constants import (
     ByteOrder,
     InvalidSubcode,
@@ -40,7 +41,7 @@ from pymotoros.protocol.messages import (
     MotoWriteMRegisterReply,
     WireMessage,
 )
-from pymotoros.protocol.sizes import Accept, Reject, check_request, expected_size
+from pymotoros.protocol.sizes import Accept, Reject, Verdict, expected_size
 from pymotoros.runtime.connections import IO_CLIENTS
 from pymotoros.runtime.tcp import Connection, FramedService
 
@@ -166,13 +167,23 @@ class IoServer(FramedService):
 
     name = "io"
 
-    def __init__(self, controller: MotoRosController, order: ByteOrder) -> None:
+    port_kind = Port.IO
+
+    def __init__(
+        self,
+        controller: MotoRosController,
+        order: ByteOrder,
+        *,
+        fidelity: Fidelity | None = None,
+    ) -> None:
+        """``fidelity``: exact or safe (docs/fidelity.md); None takes the controller's."""
         # The IO port's replacement rule tests the *motion* queues, as MotoROS does (§2.2).
         super().__init__(
             IO_CLIENTS,
             lambda: controller.has_queued_motion(),
             order,
             IoErrorReply(ResultCode.INVALID, InvalidSubcode.MSGSIZE),
+            controller.fidelity if fidelity is None else fidelity,
         )
         self._controller = controller
         self.requests = 0
@@ -181,13 +192,12 @@ class IoServer(FramedService):
         self._controller.io_connected()
 
     async def serve_connection(self, conn: Connection) -> None:
-        async with contextlib.aclosing(self.frames(conn)) as frames:
-            async for frame in frames:
-                await self.send(conn, self._reply(conn, frame))
+        async with contextlib.aclosing(self.read_requests(conn)) as requests:
+            async for frame, verdict in requests:
+                await self.send(conn, self._reply(conn, frame, verdict))
 
-    def _reply(self, conn: Connection, frame: Frame) -> Message:
+    def _reply(self, conn: Connection, frame: Frame, verdict: Verdict) -> Message:
         self.requests += 1
-        verdict = check_request(frame, self._order, Port.IO)
         if isinstance(verdict, Reject):
             log_rejection(conn, frame, verdict, self._order, Port.IO)
             return verdict.reply

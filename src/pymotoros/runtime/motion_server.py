@@ -24,10 +24,12 @@ from __future__ import annotations
 
 import asyncio
 import contextlib
+import enum
 import logging
 from typing import Final
 
 from pymotoros.controller.api import MotoRosController, Outcome, Pending, PointData
+from pymotoros.models.fidelity import Fidelity
 from pymotoros.protocol.constants import (
     MAX_JOINTS,
     ByteOrder,
@@ -53,7 +55,7 @@ from pymotoros.protocol.messages import (
     Ping,
     PingReply,
 )
-from pymotoros.protocol.sizes import Close, Reject, check_request
+from pymotoros.protocol.sizes import Close, Reject, Verdict
 from pymotoros.runtime.connections import MOTION_CLIENTS
 from pymotoros.runtime.io_server import handle_io_request, log_rejection
 from pymotoros.runtime.tcp import Connection, FramedService
@@ -93,6 +95,34 @@ _new_reply: Final = tuple.__new__
 """A message tuple from values already known valid (see ``MotionServer._reply``)."""
 
 
+ZERO_REPLY_BUFFER: Final = bytes(4)
+"""What MotoROS sends when it builds no reply on a connection that has had none: its
+reply buffer (uninitialised memory in C, taken as zeros here) is sent as
+``prefix.length + 4`` bytes (MotionServer.c), and a zero prefix makes that four zero
+bytes (fidelity exact; docs/fidelity.md)."""
+
+_KNOWN_COMMANDS: Final = frozenset(int(c) for c in MotionCommand)
+"""The MOTO_MOTION_CTRL commands of MotoROS 1.9.12 (§1.7); any other builds no reply."""
+
+
+class _Stale(enum.Enum):
+    """Internal: the request builds no reply; the reply buffer is sent again."""
+
+    STALE = "stale"
+
+
+_STALE: Final = _Stale.STALE
+
+
+def _describe_reply(message: Message) -> str:
+    if isinstance(message, MotoMotionReply):
+        return (
+            f"MOTO_MOTION_REPLY command {message.command} seq {message.sequence}: "
+            f"{ResultCode.describe(message.result)} / {message.subcode}"
+        )
+    return type(message).__name__
+
+
 class _CloseConnectionError(Exception):
     """Internal: the request closes the connection without a reply."""
 
@@ -102,19 +132,37 @@ class MotionServer(FramedService):
 
     name = "motion"
 
-    def __init__(self, controller: MotoRosController, order: ByteOrder) -> None:
+    def __init__(
+        self,
+        controller: MotoRosController,
+        order: ByteOrder,
+        *,
+        fidelity: Fidelity | None = None,
+    ) -> None:
+        """``fidelity``: exact or safe (docs/fidelity.md); None takes the controller's
+        (its cell's ``[motoros] fidelity``)."""
         super().__init__(
             MOTION_CLIENTS,
             lambda: controller.has_queued_motion(),
             order,
             MotoMotionReply(-1, -1, 0, ResultCode.INVALID, InvalidSubcode.MSGSIZE),
+            controller.fidelity if fidelity is None else fidelity,
         )
         self._controller = controller
         self._encoded: dict[MotoMotionReply, bytes] = {}
+        self._last_reply: dict[Connection, Message] = {}
+        """Per connection, the last reply built (sent or not): MotoROS's reply buffer,
+        which it sends again when it builds none (fidelity exact)."""
         self.requests = 0
 
     def on_connect(self, conn: Connection) -> None:
-        self._controller.motion_connected()
+        if self._controller.motion_connected():
+            self.resumed_motion_seen(conn)
+
+    def resumed_motion_seen(self, conn: Connection) -> None:
+        """``conn`` opened while a closed connection's increments were queued: the robot
+        resumes that motion now (fidelity exact, §2.2; the one place this is seen by a
+        server). The controller logs the warning."""
 
     async def send(self, conn: Connection, message: Message) -> None:
         """:meth:`FramedService.send`, with each distinct MOTO_MOTION_REPLY encoded once:
@@ -133,22 +181,24 @@ class MotionServer(FramedService):
         await conn.writer.drain()
 
     def on_disconnect(self, conn: Connection) -> None:
-        # Our improvement over MotoROS (§2.2): nothing keeps moving for a client that left.
+        # exact: the queues stay, as on MotoROS 1.9.12; safe: cleared (§2.2, fidelity.md).
         self._controller.motion_disconnected()
 
     # ----------------------------------------------------------- reading
 
     async def serve_connection(self, conn: Connection) -> None:
-        async with contextlib.aclosing(self.frames(conn)) as frames:
-            async for frame in frames:
-                try:
-                    await self._serve_frame(conn, frame)
-                except _CloseConnectionError:
-                    return
+        try:
+            async with contextlib.aclosing(self.read_requests(conn)) as requests:
+                async for frame, verdict in requests:
+                    try:
+                        await self._serve_frame(conn, frame, verdict)
+                    except _CloseConnectionError:
+                        return
+        finally:
+            self._last_reply.pop(conn, None)
 
-    async def _serve_frame(self, conn: Connection, frame: Frame) -> None:
+    async def _serve_frame(self, conn: Connection, frame: Frame, verdict: Verdict) -> None:
         self.requests += 1
-        verdict = check_request(frame, self._order, Port.MOTION)
         if isinstance(verdict, Close):
             # One line per connection, but a flood of connects can repeat it: the port's
             # allowance (runtime/log_limit.py).
@@ -161,7 +211,7 @@ class MotionServer(FramedService):
             raise _CloseConnectionError
         if isinstance(verdict, Reject):
             log_rejection(conn, frame, verdict, self._order, Port.MOTION, logger)
-            reply: Message = verdict.reply
+            reply: Message | _Stale = verdict.reply
         else:
             if verdict.surplus:
                 logger.debug(
@@ -171,17 +221,57 @@ class MotionServer(FramedService):
                     frame.msg_type,
                 )
             reply = await self._process(conn, verdict.message, frame.msg_type)
+        if reply is _STALE:
+            stale = self._last_reply.get(conn)
+        else:
+            self._last_reply[conn] = reply
         if frame.comm_type == CommType.SERVICE_REPLY:
             # MotoROS processes such a message but sends nothing back (§1.1).
             logger.debug("motion: client %s: request sent as SERVICE_REPLY, no reply", conn.peer)
             return
-        await self.send(conn, reply)
+        if reply is not _STALE:
+            await self.send(conn, reply)
+        elif stale is not None:
+            await self.send(conn, stale)
+        else:  # MotoROS's reply buffer before its first reply: taken as zeros
+            conn.write(ZERO_REPLY_BUFFER)
+            await conn.writer.drain()
+
+    def stale_reply_seen(self, conn: Connection, what: str) -> _Stale:
+        """``what`` builds no reply: MotoROS sends its reply buffer again, the previous
+        reply of this connection (fidelity exact; the one place this is decided)."""
+        previous = self._last_reply.get(conn)
+        if conn.log.allow("stale replies", logger, logging.WARNING):
+            logger.warning(
+                "motion: client %s: %s builds no reply; sent the previous reply again (%s), "
+                "as MotoROS 1.9.12 does (§3.1, §3.5): a stale reply can look like a success",
+                conn.peer,
+                what,
+                "none yet: 4 zero bytes" if previous is None else _describe_reply(previous),
+            )
+        return _STALE
+
+    def unknown_command_seen(self, conn: Connection, msg: MotoMotionCtrl) -> None:
+        """A MOTO_MOTION_CTRL command MotoROS does not know (the one place this is
+        decided): exact answers with a stale reply, safe with INVALID/3006."""
+        logger.debug(
+            "motion: client %s: unknown MOTO_MOTION_CTRL command %d (group %d, seq %d)",
+            conn.peer,
+            msg.command,
+            msg.group_no,
+            msg.sequence,
+        )
 
     # ----------------------------------------------------------- requests
 
-    async def _process(self, conn: Connection, msg: Message, msg_type: int) -> Message:
+    async def _process(self, conn: Connection, msg: Message, msg_type: int) -> Message | _Stale:
         c = self._controller
+        exact = self.fidelity is Fidelity.EXACT
         if isinstance(msg, MotoMotionCtrl):
+            if msg.command not in _KNOWN_COMMANDS:
+                self.unknown_command_seen(conn, msg)
+                if exact:  # §3.1: no reply is built, the buffer is sent again
+                    return self.stale_reply_seen(conn, _describe_ctrl(msg))
             outcome = await self._resolve(c.motion_ctrl(msg.group_no, msg.command))
             if outcome.close_connection and not self.log.allow(
                 "connections closed on request", logger, logging.INFO
@@ -205,6 +295,12 @@ class MotionServer(FramedService):
             self._log_outcome(conn, what, outcome)
             return self._reply(outcome, msg.group_no, msg.sequence, MsgType.JOINT_TRAJ_PT_FULL)
         if isinstance(msg, MotoJointTrajPtFullEx):
+            if exact and msg.number_of_valid_groups <= 0:  # §3.5: the reply buffer is left unset
+                return self.stale_reply_seen(
+                    conn,
+                    f"JOINT_TRAJ_PT_FULL_EX seq {msg.sequence} with numberOfValidGroups "
+                    f"{msg.number_of_valid_groups}",
+                )
             points = [
                 PointData(g.group_no, g.valid_fields, g.time, g.pos, g.vel, g.acc)
                 for g in msg.groups
