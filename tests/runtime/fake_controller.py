@@ -22,6 +22,7 @@ from pymotoros.controller.api import (
     PointData,
     StatusData,
 )
+from pymotoros.models.fidelity import Fidelity
 from pymotoros.protocol.constants import IoResultCode, MotionCommand, ResultCode
 
 
@@ -139,8 +140,12 @@ class FakeController:
         self.mregs[number % 1_000_000] = value
         return IoResultCode.OK
 
-    def motion_connected(self) -> None:
+    fidelity = Fidelity.EXACT
+    """The servers' setting (docs/fidelity.md); the fake keeps no queues to resume."""
+
+    def motion_connected(self) -> bool:
         self._record("motion_connected")
+        return False
 
     def motion_disconnected(self) -> None:
         self._record("motion_disconnected")
