@@ -79,7 +79,7 @@ async def test_without_the_stop_a_new_connection_resumes_the_lost_motion() -> No
         await lose_motion_connection_mid_move(the_twin, speed_scale=0.2)
         controller = the_twin.controller
         lost_at = list(controller.snapshot().groups[0].command_rad)
-        reader, writer = await the_twin.connect("bystander", TCP_PORT_MOTION)
+        _reader, writer = await the_twin.connect("bystander", TCP_PORT_MOTION)
         try:
             await the_twin.sleep(1.0)
             moved = list(controller.snapshot().groups[0].command_rad)
