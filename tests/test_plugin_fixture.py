@@ -71,3 +71,14 @@ def test_without_http_there_is_no_control_api(pymotoros_twin: RunningTwin) -> No
     assert pymotoros_twin.http is None
     with socket.create_connection(("127.0.0.1", pymotoros_twin.state), timeout=10) as sock:
         assert sock.recv(4096)
+
+
+def test_the_twin_is_exact_by_default(pymotoros_twin: RunningTwin) -> None:
+    assert pymotoros_twin.call(lambda c: c.fidelity) == "exact"
+
+
+@pytest.mark.pymotoros(robot="gp7", fidelity="safe")
+def test_fidelity_by_marker(pymotoros_twin: RunningTwin) -> None:
+    """The marker's fidelity reaches the controller (and so the servers, which read it)."""
+    assert pymotoros_twin.call(lambda c: c.fidelity) == "safe"
+    assert pymotoros_twin.call(lambda c: c.cell.robots) == ("gp7",)
