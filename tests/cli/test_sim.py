@@ -610,7 +610,7 @@ def test_fidelity_option_and_cell_table(
 
 
 def test_a_misspelt_fidelity_is_a_usage_error(tmp_path: Path) -> None:
-    done = subprocess.run(  # noqa: S603 - our own interpreter and arguments
+    done = subprocess.run(
         [sys.executable, "-m", "pymotoros", "sim", "--fidelity", "exakt"],
         capture_output=True,
         text=True,
