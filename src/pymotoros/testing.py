@@ -25,6 +25,13 @@ no file descriptors or system calls per message (a long trajectory is thousands 
 round trips), delivery in a fixed order on the loop, and it runs wherever asyncio
 does. The client and the servers use exactly the code they use over TCP.
 
+The twin is in fidelity ``exact`` unless asked otherwise (``twin(fidelity="safe")``,
+docs/fidelity.md): it behaves as MotoROS 1.9.12 where the robot is surprising. On the
+in-memory pair a client's write lands in the server's stream at once, and one read of
+the server returns what has landed, up to what it asks for (552 bytes in exact, as
+``recv`` on the robot): a message written in two pieces with a read in between is
+answered 3001, as the robot answers it.
+
 This module sits on top of every layer (like the CLI); nothing in the package
 imports it.
 """
