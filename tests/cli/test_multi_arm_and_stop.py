@@ -134,10 +134,10 @@ def test_reset_servo_and_verbose_requests(two_arms: tuple[Sim, Path]) -> None:
     # STOP_MOTION on connecting (docs/client.md), then STOP_SERVOS: each with its reply
     assert len(lines) == 4
     assert "->" in lines[0]
-    assert "STOP_MOTION" in lines[0]
+    assert "200111" in lines[0]  # STOP_MOTION
     assert "->" in lines[2]
     assert "MotoMotionCtrl" in lines[2]
-    assert "STOP_SERVOS" in lines[2]
+    assert "200113" in lines[2]  # STOP_SERVOS
     assert "<-" in lines[3]
     assert "MotoMotionReply" in lines[3]
     status = json.loads(invoke(ports, "status", "--json").stdout)["status"]
