@@ -30,6 +30,7 @@ from pymotoros.protocol.constants import (
 from pymotoros.protocol.framing import FrameDecoder, decode_reply, encode
 from pymotoros.protocol.messages import (
     IoErrorReply,
+    JointTrajPtExData,
     JointTrajPtFull,
     MotoMotionCtrl,
     MotoMotionReply,
@@ -293,3 +294,34 @@ async def test_a_nan_velocity_is_refused_in_both(fidelity: Fidelity) -> None:
         reply = await peer.reply()
         assert isinstance(reply, MotoMotionReply)
         assert (reply.result, reply.subcode) == (ResultCode.INVALID, InvalidSubcode.DATA_SPEED)
+
+
+@BOTH
+async def test_stale_reply_is_the_last_reply_built_even_unsent(fidelity: Fidelity) -> None:
+    """A request sent as SERVICE_REPLY is processed and its reply built but not sent
+    (§1.1); in exact that built reply is what an unknown command then gets."""
+    async with connected(fidelity) as peer:
+        as_reply = bytearray(queue_cnt(12))
+        struct.pack_into("<i", as_reply, 8, 3)  # comm_type SERVICE_REPLY
+        await peer.write(bytes(as_reply))
+        await peer.write(encode(MotoMotionCtrl(0, 13, 200199), LE))
+        reply = await peer.reply()
+        if fidelity is EXACT:
+            assert reply == counted(12)  # never sent before: built for the first request
+        else:
+            assert reply == MotoMotionReply(0, 13, 200199, ResultCode.INVALID, 3006)
+
+
+@BOTH
+async def test_a_full_ex_padded_to_552_bytes(fidelity: Fidelity) -> None:
+    """A FULL_EX with one group padded to the full 552 bytes (prefix 548): the padding is
+    ignored in both settings (§1.5), and the next request is served normally."""
+    async with connected(fidelity) as peer:
+        record = JointTrajPtExData.for_joints(0, 0.0, [0.0] * 6, [0.0] * 6).pack(LE)
+        body = (struct.pack("<ii", 1, 0) + record).ljust(536, b"\0")
+        await peer.write(struct.pack("<iiii", 548, MsgType.MOTO_JOINT_TRAJ_PT_FULL_EX, 2, 0) + body)
+        reply = await peer.reply()
+        assert isinstance(reply, MotoMotionReply)
+        assert (reply.command, reply.sequence) == (2016, 0)
+        assert reply.result == ResultCode.NOT_READY  # trajectory mode is not on: processed
+        assert isinstance(await peer.request_ping(), PingReply)
