@@ -151,7 +151,9 @@ class MotoRosReceiver:
             return Turn(frame, received, expected, sent_prefix, cut=True, joined=joined)
         frame = Frame(msg_type, comm_type, reply_type, body[: expected - FRAME_OVERHEAD])
         padded_ex = msg_type == MsgType.MOTO_JOINT_TRAJ_PT_FULL_EX and received == RECV_SIZE
-        if received > expected and not padded_ex:
+        if padded_ex:  # a whole 552-byte FULL_EX: MotoROS takes the padding as part of it
+            return Turn(frame, received, RECV_SIZE, sent_prefix, cut=False, joined=joined)
+        if received > expected:
             self._keep(buf[expected:])
         return Turn(frame, received, expected, sent_prefix, cut=False, joined=joined)
 

@@ -25,7 +25,7 @@ from pymotoros.models.fidelity import DEFAULT_FIDELITY, Fidelity
 from pymotoros.protocol.constants import ByteOrder, InvalidSubcode, Port
 from pymotoros.protocol.framing import Frame, FrameDecoder, encode
 from pymotoros.protocol.messages import Message
-from pymotoros.protocol.receiver import MotoRosReceiver, turn_verdict
+from pymotoros.protocol.receiver import RECV_SIZE, MotoRosReceiver, turn_verdict
 from pymotoros.protocol.sizes import Accept, Reject, Verdict, check_request, expected_size
 from pymotoros.runtime.connections import (
     AdmissionKind,
@@ -372,8 +372,10 @@ class FramedService(TcpService):
         async with contextlib.aclosing(self.frames(conn)) as frames:
             async for frame in frames:
                 verdict = check_request(frame, self._order, self.port_kind)
-                if isinstance(verdict, Accept) and verdict.surplus:
-                    self.length_mismatch_seen(conn, frame.msg_type, frame.size, frame.size)
+                if isinstance(verdict, Accept) and verdict.surplus and frame.size != RECV_SIZE:
+                    # (a FULL_EX padded to 552 bytes is one MotoROS accepts whole, §1.5)
+                    expected_total = frame.size - verdict.surplus
+                    self.length_mismatch_seen(conn, frame.msg_type, frame.size, expected_total)
                 elif isinstance(verdict, Reject) and verdict.subcode == InvalidSubcode.MSGSIZE:
                     kind, order = self.port_kind, self._order
                     expected = expected_size(frame.msg_type, kind, frame.body, order)
