@@ -12,9 +12,18 @@ connection; a successful DISCONNECT and a failed GET_DH_PARAMETERS close without
 reply; a request sent with comm_type SERVICE_REPLY is processed but not answered;
 IO bit/group requests are served here too (M-registers are not: 3003).
 
-Two documented improvements: frames split across reads are reassembled (logged at
-DEBUG), and the queues are cleared when the client goes away
-(``controller.motion_disconnected()``).
+Fidelity (docs/fidelity.md §1): in ``exact``, the default, requests are cut from the
+stream as MotoROS's receive loop cuts them (a message split across reads: 3001, then
+its tail as a new message), an unknown MOTION_CTRL command and a FULL_EX with
+``numberOfValidGroups`` ≤ 0 get the connection's previous reply again (four zero bytes
+before the first), and the queues survive the client's going away
+(``controller.motion_disconnected()``), resumed by the next connection. In ``safe``
+frames are reassembled, those requests get INVALID/3006 and 3010, and the queues are
+cleared when the client goes away.
+
+Where a client lint hooks in (one method each): :meth:`MotionServer.stale_reply_seen`,
+:meth:`MotionServer.unknown_command_seen`, :meth:`MotionServer.resumed_motion_seen`, and
+the framing's ``fragment_seen`` / ``length_mismatch_seen`` (runtime/tcp.py).
 
 Every reply leaves in a single ``write``: common clients read one reply per
 ``recv()``.
