@@ -8,6 +8,7 @@ import pytest
 
 from pymotoros.controller import PendantMode, VirtualController
 from pymotoros.controller.signals import PFL_STOP, ROS_READY
+from pymotoros.motion.constants import QUEUE_SIZE
 
 from .helpers import CMD, command
 from .states import moving, safe_cell, settle_monitor
@@ -71,6 +72,20 @@ def test_motion_connection_closed_keeps_the_queue_in_exact() -> None:
     assert vc.snapshot().groups[0].command_pulse != still
     assert not vc.has_queued_motion()
     assert vc.motion_connected() is False  # nothing left to resume
+
+
+@pytest.mark.parametrize("fidelity", ["exact", "safe"])
+def test_a_clear_while_a_segment_waits_for_room_queues_nothing_after(fidelity: str) -> None:
+    """docs/fidelity.md §1, the race of §3.6 (safe in both settings): the 2 s segment
+    has 500 steps, the queue holds 200 and the next step waits for room; after the
+    STOP_MOTION nothing more is queued and the pending point is gone."""
+    vc = moving(safe_cell() if fidelity == "safe" else None)
+    assert vc.cell.fidelity == fidelity
+    assert command(vc, CMD.CHECK_QUEUE_CNT).subcode == QUEUE_SIZE  # full: a step waits
+    assert command(vc, CMD.STOP_MOTION).ok
+    vc.run_ticks(50)
+    assert not vc.has_queued_motion()
+    assert not vc.motoros.interpolators[0].pending
 
 
 def test_operator_error_does_not_clear() -> None:
