@@ -137,3 +137,21 @@ def test_lint_error_fails_a_test_with_findings(tmp_path: Path) -> None:
     assert "FAILED test_linted.py::test_dirty_by_the_ini_option_fails" in out, out
     assert "unknown-command" in out
     assert "fix: Send only the commands" in out
+
+
+def test_the_twin_is_exact_by_default(pymotoros_twin: RunningTwin) -> None:
+    assert pymotoros_twin.call(lambda c: c.fidelity) == "exact"
+
+
+@pytest.mark.pymotoros(robot="gp7", fidelity="safe")
+def test_fidelity_by_marker(pymotoros_twin: RunningTwin) -> None:
+    """The marker's fidelity reaches the controller (and so the servers, which read it)."""
+    assert pymotoros_twin.call(lambda c: c.fidelity) == "safe"
+    assert pymotoros_twin.call(lambda c: c.cell.robots) == ("gp7",)
+
+
+@pytest.mark.pymotoros(fidelity="safe", lint="error")
+def test_fidelity_and_lint_in_one_marker(pymotoros_twin: RunningTwin) -> None:
+    """The marker takes both settings together (neither is an unknown argument)."""
+    assert pymotoros_twin.call(lambda c: c.fidelity) == "safe"
+    assert pymotoros_twin.lint_findings() == []

@@ -18,7 +18,8 @@ under pytest-xdist (``pytest -n auto``): one twin per test, in every worker.
 
 The cell comes from, in order: the test's ``@pytest.mark.pymotoros(cell=PATH)``
 marker, its ``robot=``/``controller=`` names, the ``pymotoros_cell`` ini option (a
-path relative to the rootdir), the default cell (HC10 on a YRC1000).
+path relative to the rootdir), the default cell (HC10 on a YRC1000). The marker's
+``fidelity="exact"|"safe"`` overrides the cell's (exact by default, docs/fidelity.md).
 
 Client lint (issue 31): ``twin.lint_findings()`` are what the code under test did that a
 real controller answers differently. With ``@pytest.mark.pymotoros(lint="error")`` (or
@@ -169,16 +170,35 @@ class _TwinThread:
 
 
 def _cell_for(request: pytest.FixtureRequest) -> tuple[CellConfig, bool]:
-    from pymotoros.controller.cell import default_cell, load_cell
-
+    """The marker's cell, with its ``fidelity=`` if given (else the cell's, exact by default)."""
     marker = request.node.get_closest_marker(MARKER)
     kwargs = dict(marker.kwargs) if marker is not None else {}
-    unknown = set(kwargs) - {"cell", "robot", "controller", "http", "lint"}
+    unknown = set(kwargs) - {"cell", "robot", "controller", "http", "fidelity", "lint"}
     if unknown:
         raise pytest.UsageError(
             f"@pytest.mark.{MARKER} got unknown arguments {sorted(unknown)}; "
-            'use cell=PATH, robot=NAME, controller=NAME, http=True, lint="error"'
+            "use cell=PATH, robot=NAME, controller=NAME, http=True, "
+            "fidelity='exact'|'safe', lint='error'|'ignore'"
         )
+    cell, http = _named_cell(request, kwargs)
+    if kwargs.get("fidelity") is None:
+        return cell, http
+    import dataclasses
+
+    from pymotoros.models.fidelity import Fidelity
+
+    try:
+        fidelity = Fidelity.parse(kwargs["fidelity"], f"@pytest.mark.{MARKER}(fidelity=...)")
+    except ValueError as exc:
+        raise pytest.UsageError(str(exc)) from None
+    return dataclasses.replace(cell, fidelity=fidelity), http
+
+
+def _named_cell(
+    request: pytest.FixtureRequest, kwargs: dict[str, object]
+) -> tuple[CellConfig, bool]:
+    from pymotoros.controller.cell import default_cell, load_cell
+
     http = bool(kwargs.get("http", False))
     names = {k: str(v) for k, v in kwargs.items() if k in ("robot", "controller")}
     path = kwargs.get("cell") or (None if names else request.config.getini("pymotoros_cell"))
@@ -268,7 +288,8 @@ def pytest_load_initial_conftests(early_config: pytest.Config, parser: pytest.Pa
 def pytest_configure(config: pytest.Config) -> None:
     config.addinivalue_line(
         "markers",
-        f"{MARKER}(cell=None, robot=None, controller=None, http=False, lint=None): "
+        f"{MARKER}(cell=None, robot=None, controller=None, http=False, fidelity=None, "
+        "lint=None): "
         "the cell and options of the pymotoros_twin fixture",
     )
 

@@ -25,6 +25,13 @@ no file descriptors or system calls per message (a long trajectory is thousands 
 round trips), delivery in a fixed order on the loop, and it runs wherever asyncio
 does. The client and the servers use exactly the code they use over TCP.
 
+The twin is in fidelity ``exact`` unless asked otherwise (``twin(fidelity="safe")``,
+docs/fidelity.md): it behaves as MotoROS 1.9.12 where the robot is surprising. On the
+in-memory pair a client's write lands in the server's stream at once, and one read of
+the server returns what has landed, up to what it asks for (552 bytes in exact, as
+``recv`` on the robot): a message written in two pieces with a read in between is
+answered 3001, as the robot answers it.
+
 This module sits on top of every layer (like the CLI); nothing in the package
 imports it.
 """
@@ -34,6 +41,7 @@ from __future__ import annotations
 import asyncio
 import collections.abc
 import contextlib
+import dataclasses
 import itertools
 from collections.abc import AsyncIterator, Callable, Iterator
 from typing import Any, Final, Self
@@ -43,6 +51,7 @@ from pymotoros.client.sync import SyncRobotClient
 from pymotoros.controller import CellConfig, VirtualController, default_cell
 from pymotoros.controller.lint import ClientLint, format_findings
 from pymotoros.models import DEFAULT_CONTROLLER, DEFAULT_ROBOT, ControllerType, RobotModel
+from pymotoros.models.fidelity import Fidelity
 from pymotoros.protocol.constants import TCP_PORT_IO, TCP_PORT_MOTION, TCP_PORT_STATE
 from pymotoros.runtime.clock import ManualClock
 from pymotoros.runtime.io_server import IoServer
@@ -333,10 +342,16 @@ class Twin:
         state_message_gap: float = TWIN_STATE_MESSAGE_GAP_S,
         start_time: float = 0.0,
         task_paths: bool = False,
+        fidelity: Fidelity | str | None = None,
     ) -> None:
+        """``fidelity``: "exact" (MotoROS 1.9.12's surprises, docs/fidelity.md) or "safe";
+        None keeps the cell's (``[motoros] fidelity``, exact by default)."""
         if cell is not None and (robot is not None or controller is not None):
             raise ValueError("give a cell, or robot/controller names, not both")
-        self.cell = cell or default_cell(controller or DEFAULT_CONTROLLER, robot or DEFAULT_ROBOT)
+        cell = cell or default_cell(controller or DEFAULT_CONTROLLER, robot or DEFAULT_ROBOT)
+        if fidelity is not None:
+            cell = dataclasses.replace(cell, fidelity=Fidelity.parse(fidelity))
+        self.cell = cell
         self.controller = VirtualController(self.cell)
         self.clock = VirtualClock(
             start_time, period=self.controller.period_ms / 1000.0, step=self.controller.tick
@@ -512,14 +527,16 @@ async def twin(
     controller: str | ControllerType | None = None,
     *,
     cell: CellConfig | None = None,
+    fidelity: Fidelity | str | None = None,
     **client_options: Any,
 ) -> AsyncIterator[tuple[RobotClient, Twin]]:
     """``async with twin(robot="hc10") as (client, twin):`` a connected client and its twin.
 
     The client has received its first state; trajectory mode is not enabled yet
-    (``await client.enable()``), as on a real controller at boot.
+    (``await client.enable()``), as on a real controller at boot. ``fidelity``: "exact"
+    (the default: MotoROS 1.9.12's surprises, docs/fidelity.md) or "safe".
     """
-    the_twin = Twin(cell, robot=robot, controller=controller)
+    the_twin = Twin(cell, robot=robot, controller=controller, fidelity=fidelity)
     async with the_twin, the_twin.client(**client_options) as client:
         await client.wait_for_state()
         yield client, the_twin
@@ -531,6 +548,7 @@ def sync_twin(
     controller: str | ControllerType | None = None,
     *,
     cell: CellConfig | None = None,
+    fidelity: Fidelity | str | None = None,
     **client_options: Any,
 ) -> Iterator[tuple[SyncRobotClient, Twin]]:
     """The blocking flavour: ``with sync_twin(robot="hc10") as (client, twin):``.
@@ -539,8 +557,9 @@ def sync_twin(
     between calls. That loop is idle between calls, so virtual time runs on meanwhile,
     as fast as the thread goes (the robot at rest, the state stream flowing): keep the
     script's own work between calls short, or use the async :func:`twin`.
+    ``fidelity`` as for :func:`twin`.
     """
-    the_twin = Twin(cell, robot=robot, controller=controller)
+    the_twin = Twin(cell, robot=robot, controller=controller, fidelity=fidelity)
     facade = SyncRobotClient(TWIN_HOST, **the_twin.client_options(**client_options))
     try:
         facade.run(the_twin.start())  # the facade's loop runs the twin too

@@ -14,9 +14,14 @@ from pymotoros.client.recording import (
     RecordedMessage,
     Recording,
 )
-from pymotoros.protocol.constants import ByteOrder, Port, ResultCode
+from pymotoros.protocol.constants import ByteOrder, MotionCommand, Port, ResultCode
 from pymotoros.protocol.framing import FrameDecoder, encode
-from pymotoros.protocol.messages import JointTrajPtFull, Message, MotoMotionReply
+from pymotoros.protocol.messages import (
+    JointTrajPtFull,
+    Message,
+    MotoMotionCtrl,
+    MotoMotionReply,
+)
 
 ORDER = ByteOrder.LITTLE
 MOTION, STATE = 50240, 50241
@@ -100,6 +105,24 @@ def test_a_reconnect_before_the_queue_ran_out_would_resume_it() -> None:
     first = _stream(1, 0.5, 1.5, [(1.0, 0, 0.0, 0.0, 0.0), (1.01, 1, 2.0, 0.4, 0.2)])
     second = _stream(2, 1.6, None, [(1.7, 2, 4.0, 0.8, 0.0)])  # carries on: 2 after 1
     assert _codes(_recording(_state(), first, second)) == ["reconnect-resumed-motion"]
+
+
+def test_a_reconnect_that_stops_first_is_no_finding() -> None:
+    """STOP_MOTION as the first request of the new connection (what our client sends):
+    the resumed increments are stopped at once, as on the twin."""
+    first = _stream(1, 0.5, 1.5, [(1.0, 0, 0.0, 0.0, 0.0), (1.01, 1, 2.0, 0.4, 0.0)])
+    stop = MotoMotionCtrl(0, 0, MotionCommand.STOP_MOTION, (0.0,) * 10)
+    stopped = MotoMotionReply(0, 0, MotionCommand.STOP_MOTION, ResultCode.SUCCESS, 0, (0.0,) * 10)
+    second = _connection(2, MOTION, 1.6, None, [(1.61, stop, stopped)])
+    assert _codes(_recording(_state(), first, second)) == []
+
+
+def test_a_silent_reconnect_before_the_queue_ran_out_is_found() -> None:
+    first = _stream(1, 0.5, 1.5, [(1.0, 0, 0.0, 0.0, 0.0), (1.01, 1, 2.0, 0.4, 0.0)])
+    closes = _connection(2, MOTION, 1.6, 1.8, [])
+    assert _codes(_recording(_state(), first, closes)) == ["reconnect-resumed-motion"]
+    stays = _connection(2, MOTION, 1.6, None, [])
+    assert _codes(_recording(_state(), first, stays)) == ["reconnect-resumed-motion"]
 
 
 def test_a_reconnect_after_the_queue_ran_out_resumes_nothing() -> None:

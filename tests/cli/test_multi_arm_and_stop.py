@@ -131,11 +131,15 @@ def test_reset_servo_and_verbose_requests(two_arms: tuple[Sim, Path]) -> None:
     assert result.exit_code == 0, result.output
     assert result.stdout.strip() == "servo power off"
     lines = [ln for ln in result.stderr.splitlines() if "pymotoros.client.requests" in ln]
-    assert len(lines) == 2
+    # STOP_MOTION on connecting (docs/client.md), then STOP_SERVOS: each with its reply
+    assert len(lines) == 4
     assert "->" in lines[0]
-    assert "MotoMotionCtrl" in lines[0]
-    assert "<-" in lines[1]
-    assert "MotoMotionReply" in lines[1]
+    assert "200111" in lines[0]  # STOP_MOTION
+    assert "->" in lines[2]
+    assert "MotoMotionCtrl" in lines[2]
+    assert "200113" in lines[2]  # STOP_SERVOS
+    assert "<-" in lines[3]
+    assert "MotoMotionReply" in lines[3]
     status = json.loads(invoke(ports, "status", "--json").stdout)["status"]
     assert status["drives_powered"] is False
     assert invoke(ports, "servo", "on").stdout.strip() == "servo power on"

@@ -84,7 +84,8 @@ def test_cli_session_recorded_and_opened_by_tshark(sim: Sim, tmp_path: Path) -> 
     assert result.exit_code == 0, result.output
     counts = _payloads(tshark, stop_pcap)
     (client_port,) = {s for s, d in counts if d == sim.motion}
-    assert counts == {(client_port, sim.motion): 1, (sim.motion, client_port): 1}
+    # the STOP_MOTION every motion connection starts with (docs/client.md), then the stop's
+    assert counts == {(client_port, sim.motion): 2, (sim.motion, client_port): 2}
     # the TCP stream is consistent: no retransmission, lost or out-of-order segment
     flags = subprocess.run(  # noqa: S603 - as above
         [tshark, "-r", str(stop_pcap), "-Y", "tcp.analysis.flags"],
@@ -114,8 +115,9 @@ def test_cli_recordings_read_back(sim: Sim, tmp_path: Path) -> None:
     assert [type(m.message) for m in io.sent()] == [MotoReadIoBit]
     (motion,) = read_recording(stop_pcap).on(Port.MOTION)
     assert motion.server_port == sim.motion
-    assert [type(m.message) for m in motion.sent()] == [MotoMotionCtrl]
-    assert [type(m.message) for m in motion.received()] == [MotoMotionReply]
+    # the connect-time STOP_MOTION (docs/client.md), then the command's own
+    assert [type(m.message) for m in motion.sent()] == [MotoMotionCtrl, MotoMotionCtrl]
+    assert [type(m.message) for m in motion.received()] == [MotoMotionReply, MotoMotionReply]
 
 
 async def test_record_session_context_manager_records_every_port(tmp_path: Path) -> None:

@@ -570,3 +570,53 @@ def test_port_in_use_is_a_clear_error(tmp_path: Path) -> None:
     assert "cannot listen on 127.0.0.1" in result.stderr
     assert "in use" in result.stderr
     assert result.stdout == ""
+
+
+@pytest.mark.parametrize(
+    ("args", "cell_fidelity", "expected"),
+    [
+        ((), None, "exact"),  # the default
+        (("--fidelity", "safe"), None, "safe"),
+        ((), "safe", "safe"),  # the cell file's [motoros] table
+        (("--fidelity", "exact"), "safe", "exact"),  # the option over the file
+    ],
+)
+def test_fidelity_option_and_cell_table(
+    tmp_path: Path, args: tuple[str, ...], cell_fidelity: str | None, expected: str
+) -> None:
+    """What a client sees: an unknown MOTO_MOTION_CTRL command on a fresh connection gets
+    four zero bytes in exact (MotoROS's zeroed reply buffer), INVALID/3006 in safe."""
+    config: tuple[str, ...] = ()
+    if cell_fidelity is not None:
+        cell = tmp_path / "cell.toml"
+        cell.write_text(f'[robot]\nmodel = "hc10"\n\n[motoros]\nfidelity = "{cell_fidelity}"\n')
+        config = ("--config", str(cell))
+    with running(tmp_path, *config, *args) as sim:
+        motion = Wire(sim.motion, Port.MOTION)
+        try:
+            motion.sock.sendall(encode(MotoMotionCtrl(0, 1, 200199), LE))
+            if expected == "exact":
+                data = b""
+                while len(data) < 4:
+                    chunk = motion.sock.recv(4 - len(data))
+                    assert chunk, "the simulator closed the connection"
+                    data += chunk
+                assert data == bytes(4)
+            else:
+                reply = motion.message()
+                assert reply == MotoMotionReply(0, 1, 200199, ResultCode.INVALID, 3006)
+        finally:
+            motion.close()
+
+
+def test_a_misspelt_fidelity_is_a_usage_error(tmp_path: Path) -> None:
+    done = subprocess.run(
+        [sys.executable, "-m", "pymotoros", "sim", "--fidelity", "exakt"],
+        capture_output=True,
+        text=True,
+        timeout=60,
+        check=False,
+    )
+    assert done.returncode == 2
+    assert "exact" in done.stderr
+    assert "safe" in done.stderr

@@ -364,8 +364,10 @@ async def test_fs100_is_big_endian_and_the_wrong_order_is_explained() -> None:
         goal = (0.3, 0.2, 0.1, 0.0, -1.0, 0.5)
         result = await robot.move_joints(goal)
         assert _off(goal, result.final_positions) < TOLERANCE
-        async with the_twin.client(controller="yrc1000") as wrong:
-            with pytest.raises(ConnectionLostError, match=r"other byte order.*--controller"):
+        # the motion port's first reply (to the STOP_MOTION every connect sends) already
+        # reads well only in the other byte order
+        with pytest.raises(ConnectionLostError, match=r"other byte order.*--controller"):
+            async with the_twin.client(controller="yrc1000") as wrong:
                 await wrong.wait_for_state(5.0)
 
 

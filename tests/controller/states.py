@@ -2,9 +2,10 @@
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Callable
 
-from pymotoros.controller import PendantMode, VirtualController
+from pymotoros.controller import CellConfig, PendantMode, VirtualController, default_cell
 from pymotoros.controller.signals import PFL_STOP
 
 from .helpers import CMD, command, complete, enter_traj_mode, point, tick_until
@@ -15,12 +16,12 @@ def settle_monitor(vc: VirtualController) -> None:
     vc.run_ticks(3)
 
 
-def boot() -> VirtualController:
-    return VirtualController()
+def boot(cell: CellConfig | None = None) -> VirtualController:
+    return VirtualController(cell)
 
 
-def ready() -> VirtualController:
-    vc = VirtualController()
+def ready(cell: CellConfig | None = None) -> VirtualController:
+    vc = VirtualController(cell)
     enter_traj_mode(vc)
     return vc
 
@@ -77,9 +78,9 @@ def pfl() -> VirtualController:
     return vc
 
 
-def moving() -> VirtualController:
+def moving(cell: CellConfig | None = None) -> VirtualController:
     """In trajectory mode with increments queued (a 2 s move under way)."""
-    vc = ready()
+    vc = ready(cell)
     here = list(vc.snapshot().groups[0].command_rad)
     assert complete(vc, vc.trajectory_point(0, point(0, 0.0, here))).ok
     there = [q + 0.5 for q in here]
@@ -138,3 +139,8 @@ STATES: dict[str, Callable[[], VirtualController]] = {
 }
 
 __all__ = ["CMD", "STATES", "command"]
+
+
+def safe_cell() -> CellConfig:
+    """The default cell in fidelity safe: the motion connection's close clears the queues."""
+    return dataclasses.replace(default_cell(), fidelity="safe")

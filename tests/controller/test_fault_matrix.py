@@ -23,12 +23,12 @@ from dataclasses import dataclass
 
 import pytest
 
-from pymotoros.controller import PendantMode, VirtualController, signals
+from pymotoros.controller import CellConfig, PendantMode, VirtualController, signals
 from pymotoros.protocol.constants import NotReadySubcode as Nr
 from pymotoros.protocol.constants import ResultCode
 
 from .helpers import CMD, command, current_pos, point, send, start_at_current, tick_until
-from .states import boot, moving, ready, settle_monitor
+from .states import boot, moving, ready, safe_cell, settle_monitor
 
 Act = Callable[[VirtualController], None]
 
@@ -82,16 +82,16 @@ def finish(vc: VirtualController) -> None:
     tick_until(vc, lambda: idle_again(vc), "the move done", 5000)
 
 
-def last_segment() -> VirtualController:
+def last_segment(cell: CellConfig | None = None) -> VirtualController:
     """Every point accepted; the queue holds the tail of the last segment."""
-    vc = moving()
+    vc = moving(cell)
     interp = vc.motoros.interpolators[0]
     tick_until(vc, lambda: not interp.pending, "the last segment fully queued")
     assert vc.has_queued_motion()
     return vc
 
 
-PHASES: dict[str, Callable[[], VirtualController]] = {
+PHASES: dict[str, Callable[[CellConfig | None], VirtualController]] = {
     "idle": boot,
     "motion-ready": ready,
     "streaming": moving,
@@ -103,7 +103,9 @@ PHASES: dict[str, Callable[[], VirtualController]] = {
 @pytest.mark.parametrize("fault", list(FAULTS))
 def test_fault_in_phase(fault: str, phase: str) -> None:
     f = FAULTS[fault]
-    vc = PHASES[phase]()
+    # A disconnect clears the queues only in fidelity safe; exact keeps them, as MotoROS
+    # does (tests/controller/test_queue_clear.py::..._keeps_the_queue_in_exact).
+    vc = PHASES[phase](safe_cell() if fault == "disconnect" else None)
     f.inject(vc)
     settle_monitor(vc)
     # Outcome: the queues are cleared, nothing pending, the robot stands.
@@ -137,7 +139,7 @@ def test_eco_mode_in_phase(phase: str) -> None:
     """Eco mode saves servo power but does not change motion-ready (§4.1), so it clears
     nothing: the queue is kept, and once the drives are back the move completes; then a
     new trajectory runs."""
-    vc = PHASES[phase]()
+    vc = PHASES[phase](None)
     queued = vc.has_queued_motion()
     vc.set_eco(True)
     settle_monitor(vc)
@@ -191,7 +193,7 @@ def test_pfl_stop_signal_in_phase(phase: str) -> None:
     """PFL stop (81702) on, then off, as the safety unit signals it: in every phase the
     monitor clears the queues and latches "PFL during ROS move" (5011 while trajectory
     mode is on), which only START_TRAJ_MODE clears."""
-    vc = PHASES[phase]()
+    vc = PHASES[phase](None)
     vc.force_io(signals.PFL_STOP, 1)
     settle_monitor(vc)
     assert_stands_and_cleared(vc, ("PFL stop", phase))
@@ -214,7 +216,7 @@ MOVING_PHASES = ("streaming", "last segment")
 @pytest.mark.parametrize("phase", list(PHASES))
 @pytest.mark.parametrize("event", PFL_EVENTS)
 def test_pfl_event_in_phase(event: str, phase: str) -> None:
-    vc = PHASES[phase]()
+    vc = PHASES[phase](None)
     if phase not in MOVING_PHASES:
         # The robot stands: no contact to detect. Refused, saying why; nothing changes.
         queued = vc.has_queued_motion()
@@ -279,7 +281,7 @@ def test_fsu_limit_in_phase(limit: str, phase: str) -> None:
     """Nothing is cleared and nothing refused: the FSU clips increments without telling
     MotoROS; its compensation resends what was clipped, so the move (if any) still ends
     exactly at its target, later. Switching the limit off restores full speed."""
-    vc = PHASES[phase]()
+    vc = PHASES[phase](None)
     queued = vc.has_queued_motion()
     vc.set_fsu(**FSU_LIMITS[limit])  # type: ignore[arg-type]
     settle_monitor(vc)
@@ -292,7 +294,7 @@ def test_fsu_limit_in_phase(limit: str, phase: str) -> None:
         boot_pose = VirtualController().snapshot().groups[0].command_rad
         target = [q + MOVE_TARGET_OFFSET_RAD for q in boot_pose]
         assert current_pos(vc)[:6] == pytest.approx(target[:6], abs=1e-4), (limit, phase)
-        free = PHASES[phase]()
+        free = PHASES[phase](None)
         assert limited_ms > FSU_SLOWER * ticks_to_finish(free), (limit, phase)
     vc.set_fsu(off=True)
     recovery_move(vc)

@@ -137,11 +137,41 @@ def test_a_trajectory_that_ends_at_rest_is_not_starved() -> None:
     assert lint.findings() == []
 
 
-@pytest.mark.parametrize(("queued", "codes"), [(True, ["reconnect-resumed-motion"]), (False, [])])
-def test_a_motion_connection_opened_over_queued_increments(queued: bool, codes: list[str]) -> None:
+@pytest.mark.parametrize(
+    ("queued", "stops", "codes"),
+    [
+        (True, False, ["reconnect-resumed-motion"]),
+        (True, True, []),  # STOP_MOTION first: what a client must do (docs/client.md)
+        (False, False, []),
+    ],
+)
+def test_a_motion_connection_opened_over_queued_increments(
+    queued: bool, stops: bool, codes: list[str]
+) -> None:
     lint = ClientLint()
     lint.motion_opened(C, 4.2, queued=queued)
+    assert _codes(lint) == []  # not decided before the first request
+    lint.motion_request(C, stops=stops, what="CHECK_QUEUE_CNT")
+    lint.motion_request(C, stops=False, what="JOINT_TRAJ_PT_FULL")  # later: no matter
     assert _codes(lint) == codes
+    assert [f.first_s for f in lint.findings()] == [4.2] * len(codes)  # when it opened
+
+
+def test_a_resumed_connection_that_sends_nothing_is_found_when_it_closes_or_runs_out() -> None:
+    lint = ClientLint()
+    lint.motion_opened(C, 1.0, queued=True)
+    lint.motion_closed("other:1")  # another connection: not this one
+    assert lint.resume_pending
+    lint.motion_closed(C)
+    assert _codes(lint) == ["reconnect-resumed-motion"]
+    assert "closed without sending STOP_MOTION" in lint.findings()[0].text
+    lint.clear()
+    lint.motion_opened(C, 2.0, queued=True)
+    lint.resumed_motion_ended()
+    assert not lint.resume_pending
+    assert "queues ran empty" in lint.findings()[0].text
+    lint.motion_closed(C)  # already reported: not twice
+    assert lint.findings()[0].count == 1
 
 
 def test_the_simulator_guide_lists_every_code_with_its_reference() -> None:

@@ -4,12 +4,14 @@ from __future__ import annotations
 
 import math
 
+import pytest
+
 from pymotoros.controller import VirtualController, cell_from_dict
 from pymotoros.protocol.constants import InvalidSubcode as Inv
 from pymotoros.protocol.constants import ResultCode as R
 
 from .helpers import CMD, command, complete, point, send, tick_until
-from .states import ready
+from .states import ready, safe_cell
 
 
 def reply(vc: VirtualController, seq: int, p: object) -> tuple[int, int]:
@@ -68,12 +70,17 @@ def test_speed_check_truncates() -> None:
     assert reply(vc, 2, point(0, 2.0, [0.1] * 6, [over] + [0.0] * 5)) == (R.INVALID, Inv.DATA_SPEED)
 
 
-def test_busy_and_sequence_zero_without_busy_check() -> None:
-    vc = ready()
+@pytest.mark.parametrize("fidelity", ["exact", "safe"])
+def test_busy_and_sequence_zero_without_busy_check(fidelity: str) -> None:
+    """Also docs/fidelity.md §1's race row (safe in both settings): a sequence-0 point
+    while a segment is being generated abandons it and the pending point."""
+    vc = ready(safe_cell() if fidelity == "safe" else None)
     assert reply(vc, 0, point(0, 0.0, [0.0] * 6)) == (R.SUCCESS, 0)
     assert reply(vc, 1, point(0, 5.0, [0.5] * 6)) == (R.SUCCESS, 0)
     assert reply(vc, 2, point(0, 6.0, [0.6] * 6)) == (R.BUSY, 0)
     assert reply(vc, 7, point(0, 6.0, [0.6] * 6)) == (R.BUSY, 0)  # no continuity check
+    vc.run_ticks(5)  # the 5 s segment is being turned into increments
+    assert vc.motoros.interpolators[0].pending
     # sequence 0 is never BUSY; it re-initialises the group (start check passes: not moved)
     assert reply(vc, 0, point(0, 0.0, [0.0] * 6)) == (R.SUCCESS, 0)
     assert not vc.motoros.interpolators[0].pending

@@ -8,9 +8,10 @@ import pytest
 
 from pymotoros.controller import PendantMode, VirtualController
 from pymotoros.controller.signals import PFL_STOP, ROS_READY
+from pymotoros.motion.constants import QUEUE_SIZE
 
 from .helpers import CMD, command
-from .states import moving, settle_monitor
+from .states import moving, safe_cell, settle_monitor
 
 TRIGGERS: dict[str, Callable[[VirtualController], None]] = {
     "alarm": lambda vc: vc.raise_alarm(4100, 0, "minor alarm"),
@@ -24,7 +25,6 @@ TRIGGERS: dict[str, Callable[[VirtualController], None]] = {
     "PFL stop": lambda vc: vc.force_io(PFL_STOP, 1),
     "STOP_MOTION": lambda vc: command(vc, CMD.STOP_MOTION) and None,
     "STOP_SERVOS": lambda vc: command(vc, CMD.STOP_SERVOS) and None,
-    "motion connection closed": lambda vc: vc.motion_disconnected(),
 }
 
 
@@ -39,6 +39,53 @@ def test_trigger_clears_every_queue(trigger: str) -> None:
     assert not vc.has_queued_motion(), trigger
     assert not interp.pending, trigger
     assert command(vc, CMD.CHECK_QUEUE_CNT).subcode == 0
+
+
+def test_motion_connection_closed_clears_every_queue_in_safe() -> None:
+    vc = moving(safe_cell())
+    interp = vc.motoros.interpolators[0]
+    assert interp.pending
+    vc.motion_disconnected()
+    settle_monitor(vc)
+    assert not vc.has_queued_motion()
+    assert not interp.pending
+    assert command(vc, CMD.CHECK_QUEUE_CNT).subcode == 0
+
+
+def test_motion_connection_closed_keeps_the_queue_in_exact() -> None:
+    """§2.2: the tasks are deleted (nothing executes, the pending point is dropped), the
+    queue survives, and the next motion connection resumes it."""
+    vc = moving()
+    interp = vc.motoros.interpolators[0]
+    assert interp.pending
+    vc.motion_disconnected()
+    settle_monitor(vc)
+    queued = command(vc, CMD.CHECK_QUEUE_CNT).subcode
+    assert queued > 0
+    assert not interp.pending
+    still = vc.snapshot().groups[0].command_pulse
+    vc.run_ticks(50)
+    assert vc.snapshot().groups[0].command_pulse == still  # nobody executes the queue
+    assert command(vc, CMD.CHECK_QUEUE_CNT).subcode == queued
+    assert vc.motion_connected() is True  # the next connection resumes it
+    vc.run_ticks(queued + 10)
+    assert vc.snapshot().groups[0].command_pulse != still
+    assert not vc.has_queued_motion()
+    assert vc.motion_connected() is False  # nothing left to resume
+
+
+@pytest.mark.parametrize("fidelity", ["exact", "safe"])
+def test_a_clear_while_a_segment_waits_for_room_queues_nothing_after(fidelity: str) -> None:
+    """docs/fidelity.md §1, the race of §3.6 (safe in both settings): the 2 s segment
+    has 500 steps, the queue holds 200 and the next step waits for room; after the
+    STOP_MOTION nothing more is queued and the pending point is gone."""
+    vc = moving(safe_cell() if fidelity == "safe" else None)
+    assert vc.cell.fidelity == fidelity
+    assert command(vc, CMD.CHECK_QUEUE_CNT).subcode == QUEUE_SIZE  # full: a step waits
+    assert command(vc, CMD.STOP_MOTION).ok
+    vc.run_ticks(50)
+    assert not vc.has_queued_motion()
+    assert not vc.motoros.interpolators[0].pending
 
 
 def test_operator_error_does_not_clear() -> None:

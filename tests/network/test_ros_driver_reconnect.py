@@ -33,6 +33,8 @@ from collections.abc import AsyncIterator, Sequence
 from contextlib import asynccontextmanager
 from dataclasses import dataclass
 
+import pytest
+
 from pymotoros.client import RobotClient
 from pymotoros.protocol.constants import MotionCommand, ResultCode
 from pymotoros.protocol.messages import JointTrajPtFull, MotoMotionCtrl, MotoMotionReply
@@ -122,6 +124,19 @@ class Cell:
         await self.state.recorder.wait_until(there, timeout_s=5.0)
 
 
+async def still(cell: Cell, *, checks: int = 50) -> tuple[float, ...]:
+    """The operator's view of group 0 once two samples 0.1 s apart agree (bounded)."""
+    previous: tuple[float, ...] | None = None
+    for _ in range(checks):
+        await asyncio.sleep(0.1)
+        positions = cell.watcher.state.positions(0)
+        assert positions is not None
+        if previous is not None and distance(positions, previous) < 1e-6:
+            return tuple(positions)
+        previous = tuple(positions)
+    pytest.fail(f"the robot did not come to rest within {checks * 0.1:g} s")
+
+
 @asynccontextmanager
 async def cell_with_driver(twin: RunningTwin) -> AsyncIterator[Cell]:
     """Start the proxies, the operator's view and the stand-in driver (state node first,
@@ -197,9 +212,51 @@ def sever_driver_side(link: Link) -> None:
         task.cancel()
 
 
+async def test_reset_mid_trajectory_driver_resumes_and_reaches_the_goal(
+    pymotoros_twin: RunningTwin,
+) -> None:
+    """Exact (the default): the twin keeps the queued increments when the motion
+    connection is reset, as MotoROS 1.9.12 does (§2.2); the driver's new connection
+    resumes them and streams the rest, and the robot reaches the goal."""
+    async with cell_with_driver(pymotoros_twin) as cell:
+        motion = cell.motion
+        points = await enable_and_stream(cell, speed_scale=0.1)
+        await motion.recorder.wait_until(lambda: motion.current_point >= AT_POINT)
+        robot = cell.watcher.state.positions(0)
+        assert robot is not None
+        ahead = distance(points[motion.current_point - 1].pos[:6], robot)
+        assert ahead > 0.02, f"only {ahead:.4f} rad queued: the machine is too slow for this test"
+        cell.motion_proxy.gate.clear()  # the reconnect will wait at the door
+        cell.motion_proxy.reset()
+        await cell.motion_proxy.wait_until(lambda: cell.motion_proxy.held == 1)
+        failed_at = motion.current_point
+        # the twin meanwhile: motion connection gone, the robot still, the queue kept
+        # (so ROBOT_STATUS keeps in_motion 1, as MotoROS computes it from the queues)
+        stopped_at = await still(cell)
+        assert pymotoros_twin.call(lambda c: c.read_io_bit(MOTION_SERVER_OUTPUT).value) == 0
+        assert pymotoros_twin.call(lambda c: c.has_queued_motion())
+        status = cell.watcher.state.status
+        assert status is not None
+        assert status.in_motion is True
+        assert distance(stopped_at, GOAL) > 1e-2
+        cell.motion_proxy.gate.set()
+        await motion.recorder.wait_until(
+            lambda: motion.state is TransferState.IDLE, timeout_s=MOVE_TIMEOUT_S
+        )
+        assert motion.conn.connections == 2
+        assert motion.points_on(1)[0] == (failed_at, ResultCode.SUCCESS)
+        assert accepted_across(motion) == list(range(len(points)))
+        assert motion.aborted is None
+        # the kept increments ran on the new connection, then the rest: at the goal
+        assert distance(await cell.at_rest(), GOAL) < 1e-3
+
+
+@pytest.mark.pymotoros(fidelity="safe")
 async def test_reset_mid_trajectory_driver_resumes_and_application_recovers(
     pymotoros_twin: RunningTwin,
 ) -> None:
+    """Safe: the twin clears the queues at the reset, so the driver's resumed stream
+    ends short of the goal; the application recovers with a new goal."""
     async with cell_with_driver(pymotoros_twin) as cell:
         motion = cell.motion
         points = await enable_and_stream(cell, speed_scale=0.1)

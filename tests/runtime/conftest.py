@@ -20,12 +20,14 @@ from pymotoros.runtime.clock import ManualClock
 from pymotoros.runtime.http_api import create_http_app
 
 from .fake_controller import FakeController
-from .support import LOCAL, STATS, virtual_time
+from .support import LOCAL, STATS, cell_with_fidelity, virtual_time
 
 
 @pytest.fixture
-def controller() -> VirtualController:
-    return VirtualController()
+def controller(request: pytest.FixtureRequest) -> VirtualController:
+    """The default cell, in the fidelity of the test's ``@pytest.mark.fidelity("safe")``
+    marker (exact, the default, without one)."""
+    return VirtualController(cell_with_fidelity(request))
 
 
 @pytest.fixture

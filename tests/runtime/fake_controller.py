@@ -23,6 +23,7 @@ from pymotoros.controller.api import (
     StatusData,
 )
 from pymotoros.controller.lint import ClientLint
+from pymotoros.models.fidelity import Fidelity
 from pymotoros.protocol.constants import IoResultCode, MotionCommand, ResultCode
 
 
@@ -145,8 +146,12 @@ class FakeController:
         self.mregs[number % 1_000_000] = value
         return IoResultCode.OK
 
-    def motion_connected(self) -> None:
+    fidelity = Fidelity.EXACT
+    """The servers' setting (docs/fidelity.md); the fake keeps no queues to resume."""
+
+    def motion_connected(self) -> bool:
         self._record("motion_connected")
+        return False
 
     def motion_disconnected(self) -> None:
         self._record("motion_disconnected")

@@ -4,8 +4,13 @@ from __future__ import annotations
 
 import asyncio
 import contextlib
+import dataclasses
 from collections.abc import AsyncIterator
 
+import pytest
+
+from pymotoros.controller.cell import CellConfig, default_cell
+from pymotoros.models.fidelity import Fidelity
 from pymotoros.runtime.app import SimulatorConfig
 from pymotoros.runtime.clock import ManualClock
 from pymotoros.runtime.ticker import LatenessStats, TickStats
@@ -27,3 +32,15 @@ async def virtual_time(clock: ManualClock) -> AsyncIterator[None]:
         driver.cancel()
         with contextlib.suppress(asyncio.CancelledError):
             await driver
+
+
+def cell_with_fidelity(
+    request: pytest.FixtureRequest, cell: CellConfig | None = None
+) -> CellConfig:
+    """``cell`` (the default cell) in the fidelity the test's ``@pytest.mark.fidelity(...)``
+    names; without the marker, the cell's own (exact by default)."""
+    cell = cell or default_cell()
+    marker = request.node.get_closest_marker("fidelity")
+    if marker is None:
+        return cell
+    return dataclasses.replace(cell, fidelity=Fidelity.parse(marker.args[0]))

@@ -18,6 +18,7 @@ from pymotoros.protocol.constants import (
     TCP_PORT_IO,
     TCP_PORT_MOTION,
     TCP_PORT_STATE,
+    InvalidSubcode,
     MotionCommand,
     MsgType,
     Port,
@@ -156,9 +157,13 @@ async def test_a_prefix_that_disagrees_with_the_type_is_a_length_mismatch(
     length = struct.unpack(client.order + "i", data[:4])[0] + extra
     body = data[4:] + b"\0" * extra if extra > 0 else data[4:extra]
     client.write(struct.pack(client.order + "i", length) + body)
-    await client.reply()
+    reply = await client.reply()
+    assert isinstance(reply, MotoMotionReply)
+    if extra < 0:  # short of its type: 3001, as MotoROS answers a cut message (§1.5)
+        assert (reply.result, reply.subcode) == (ResultCode.INVALID, InvalidSubcode.MSGSIZE)
     await cell.sleep(0.01)
     assert _finding(cell, LintCode.LENGTH_MISMATCH).reference == "§1.1"
+    assert "fragmented-message" not in _codes(cell)  # one whole write: not a fragment
 
 
 async def test_the_io_port_finds_length_mismatches_too(cell: Twin) -> None:
@@ -288,9 +293,9 @@ async def test_a_moto_style_full_ex_stream_gives_nothing(cell: Twin) -> None:
 # ----------------------------------------------------------------- reconnects
 
 
-async def test_a_reconnect_is_found_exactly_when_increments_were_kept(cell: Twin) -> None:
-    """``safe`` clears the queues when the motion connection closes (nothing to find),
-    ``exact`` keeps them as MotoROS does (§2.2): the reconnect resumes them, a finding."""
+async def _reconnect_over_queued_motion(cell: Twin) -> RawClient:
+    """A motion connection streams a slow point, closes with increments queued, and a
+    new one opens: in exact the queues were kept and the new connection resumes them."""
     client = await _enabled(cell)
     await client.point(0, 0.0, 0.0)
     await client.point(1, 2.0, 0.4, vel=0.0)
@@ -298,28 +303,61 @@ async def test_a_reconnect_is_found_exactly_when_increments_were_kept(cell: Twin
     assert cell.controller.has_queued_motion()
     client.close()
     await cell.sleep(0.1)
-    kept = cell.controller.has_queued_motion()
-    await _connect(cell)
-    await cell.sleep(0.1)
-    assert ("reconnect-resumed-motion" in _codes(cell)) is kept
+    return await _connect(cell)
 
 
-async def test_a_reconnect_over_kept_increments_is_found(
-    cell: Twin, monkeypatch: pytest.MonkeyPatch
+@pytest.mark.parametrize(
+    ("fidelity", "first", "found"),
+    [
+        ("exact", MotionCommand.CHECK_QUEUE_CNT, True),
+        ("exact", MotionCommand.STOP_MOTION, False),
+        ("safe", MotionCommand.CHECK_QUEUE_CNT, False),
+    ],
+)
+async def test_a_reconnect_is_found_when_it_lets_the_kept_increments_run(
+    fidelity: str, first: int, found: bool
 ) -> None:
-    """What ``exact`` does (the queues kept when the connection closes, §2.2), here by
-    keeping them by hand: the next motion connection would resume the old motion."""
-    monkeypatch.setattr(cell.controller, "motion_disconnected", lambda: None)
-    client = await _enabled(cell)
-    await client.point(0, 0.0, 0.0)
-    await client.point(1, 2.0, 0.4, vel=0.0)
-    await cell.sleep(0.2)
+    """exact keeps the queues as MotoROS does (§2.2), and the next connection resumes
+    them: a finding unless its first request is STOP_MOTION (what our client sends,
+    docs/client.md), which stops the robot. safe cleared them: nothing resumes."""
+    async with Twin(robot="hc10", fidelity=fidelity) as cell:
+        try:
+            client = await _reconnect_over_queued_motion(cell)
+            await cell.sleep(0.1)
+            assert _codes(cell) == []  # nothing sent yet: not decided
+            assert (await client.ctrl(first)).result == ResultCode.SUCCESS
+            await cell.sleep(0.1)
+            assert ("reconnect-resumed-motion" in _codes(cell)) is found
+            if found:
+                finding = _finding(cell, LintCode.RECONNECT_RESUMED_MOTION)
+                assert "CHECK_QUEUE_CNT" in finding.text
+                assert finding.connection.startswith("twin-client-")
+            else:
+                assert not cell.controller.has_queued_motion()
+        finally:
+            while _OPEN:
+                _OPEN.pop().close()
+
+
+async def test_a_silent_reconnect_is_found_once_the_old_motion_ran_out(cell: Twin) -> None:
+    """A connection that sends nothing lets the resumed motion run to its end."""
+    await _reconnect_over_queued_motion(cell)
+    await cell.sleep(0.5)
+    assert _codes(cell) == []  # still moving, the connection may yet stop it
+    await cell.sleep(2.5)
+    assert not cell.controller.has_queued_motion()
+    assert _codes(cell) == ["reconnect-resumed-motion"]
+    assert "queues ran empty" in _finding(cell, LintCode.RECONNECT_RESUMED_MOTION).text
+
+
+async def test_a_reconnect_that_closes_silently_is_found(cell: Twin) -> None:
+    client = await _reconnect_over_queued_motion(cell)
+    await cell.sleep(0.1)
     client.close()
     await cell.sleep(0.1)
-    assert cell.controller.has_queued_motion()
-    await _connect(cell)
-    await cell.sleep(0.01)
-    assert "reconnect-resumed-motion" in _codes(cell)
+    finding = _finding(cell, LintCode.RECONNECT_RESUMED_MOTION)
+    assert "closed without sending STOP_MOTION" in finding.text
+    assert finding.first_s < cell.controller.time_ms / 1000.0 - 0.1  # when it opened
 
 
 async def test_a_flood_of_connections_cannot_grow_the_findings(cell: Twin) -> None:

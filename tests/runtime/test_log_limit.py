@@ -271,6 +271,7 @@ async def hang_up(app_port_tasks: list[asyncio.Task[None]], peer: Peer) -> None:
     assert len(done) == len(app_port_tasks), "the server did not notice the client leave"
 
 
+@pytest.mark.fidelity("safe")  # one write of many frames: safe answers each
 async def test_a_flood_of_bad_frames_logs_a_bounded_number_of_lines(
     app: SimulatorApp, caplog: pytest.LogCaptureFixture
 ) -> None:
@@ -389,6 +390,7 @@ async def test_a_flood_of_bad_http_requests_logs_a_bounded_number_of_lines(
     assert counted(summary) == requests - LOG_BURST
 
 
+@pytest.mark.fidelity("safe")  # one write of many frames: safe answers each
 async def test_each_ports_refusals_and_their_counts_are_logged_under_its_own_logger(
     app: SimulatorApp, caplog: pytest.LogCaptureFixture
 ) -> None:
@@ -421,6 +423,7 @@ async def test_each_ports_refusals_and_their_counts_are_logged_under_its_own_log
         assert {r.name for r in about} == {name}
 
 
+@pytest.mark.fidelity("safe")  # one write of many frames: safe answers each
 async def test_a_flood_that_stops_is_reported_while_the_client_stays_connected(
     app: SimulatorApp, caplog: pytest.LogCaptureFixture
 ) -> None:

@@ -124,6 +124,7 @@ async def test_each_cell_of_a_fleet_is_labelled() -> None:
             assert value(samples, "pymotoros_connections", cell=name, port="state") == 0
 
 
+@pytest.mark.fidelity("safe")  # exact answers made-up commands with stale replies
 async def test_made_up_commands_and_types_are_counted_under_one_label(sim: SimulatorApp) -> None:
     """A client sending random commands (a fuzzer) must not grow the counters, nor the
     exported labels, by one per distinct value: a million fuzzed frames grew the twin by

@@ -220,9 +220,12 @@ async def test_service_reply_comm_type_is_processed_without_reply(
     await peer.close()
 
 
+@pytest.mark.fidelity("safe")
 async def test_fragmented_and_pipelined_frames(
     app: SimulatorApp, caplog: pytest.LogCaptureFixture
 ) -> None:
+    """Safe: a request written a byte at a time is reassembled (exact: 3001,
+    tests/runtime/test_fidelity_wire.py)."""
     peer = await motion_peer(app)
     data = encode(MotoMotionCtrl(0, 1, MotionCommand.CHECK_QUEUE_CNT), LE)
     with caplog.at_level(logging.DEBUG, logger="pymotoros.runtime.motion_server"):
@@ -280,6 +283,7 @@ async def test_second_client_is_refused_while_motion_is_queued(
         await peer.close()
 
 
+@pytest.mark.fidelity("safe")
 async def test_dropping_the_motion_connection_clears_the_queues(
     vapp: SimulatorApp, controller: VirtualController
 ) -> None:

@@ -184,10 +184,15 @@ def _pairs(conn: RecordedConnection) -> list[tuple[RecordedMessage, MotoMotionRe
 def _motion(session: _Session, conn: RecordedConnection, previous_closed: float | None) -> None:
     lint, name = session.lint, _name(conn)
     end = session.queue_end_s()
-    if previous_closed is not None and end is not None and previous_closed < end > conn.opened:
-        lint.motion_opened(name, conn.opened, queued=True)
+    resumed = (
+        previous_closed is not None and end is not None and previous_closed < end > conn.opened
+    )
+    # as on the twin: a finding once the connection lets the resumed motion run
+    lint.motion_opened(name, conn.opened, queued=resumed)
     for request, reply in _pairs(conn):
         msg, t = request.message, request.offset
+        if lint.resume_pending:  # what the connection did first about the resumed motion
+            _first_request(lint, name, msg, t, end)
         if isinstance(msg, MotoMotionCtrl):
             if msg.command not in _KNOWN:
                 lint.record(LintCode.UNKNOWN_COMMAND, name, t, f"command {msg.command}")
@@ -212,6 +217,22 @@ def _motion(session: _Session, conn: RecordedConnection, previous_closed: float 
         lint.point_answered(name, [(g, v) for g, _, v in points], msg.sequence, reply.result, at)
         if reply.result == 0:
             _accepted(session, name, points, msg.sequence, at)
+    if lint.resume_pending and end is not None:  # it sent nothing: the old motion ran
+        if conn.closed is not None and conn.closed < end:
+            lint.motion_closed(name)
+        elif end <= session.recording.duration:
+            lint.resumed_motion_ended()
+
+
+def _first_request(
+    lint: ClientLint, name: str, msg: object, t: float, queue_end: float | None
+) -> None:
+    if queue_end is not None and t >= queue_end:
+        lint.resumed_motion_ended()
+        return
+    stops = isinstance(msg, MotoMotionCtrl) and msg.command == MotionCommand.STOP_MOTION
+    what = f"command {msg.command}" if isinstance(msg, MotoMotionCtrl) else type(msg).__name__
+    lint.motion_request(name, stops=stops, what=what)
 
 
 def _accepted(

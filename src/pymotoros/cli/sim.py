@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import asyncio
 import contextlib
+import dataclasses
 import errno
 import gc
 import logging
@@ -30,6 +31,7 @@ from pymotoros.controller import VirtualController
 from pymotoros.controller.cell import CellConfig, cell_from_file, default_cell
 from pymotoros.errors import ConfigError
 from pymotoros.models.cell import PORT_KINDS, CellFile, CellPorts, read_cell_file
+from pymotoros.models.fidelity import Fidelity
 from pymotoros.protocol.constants import TCP_PORT_IO, TCP_PORT_MOTION, TCP_PORT_STATE
 from pymotoros.runtime.app import DEFAULT_HTTP_PORT, SimulatorApp, SimulatorConfig
 from pymotoros.runtime.fleet import cell_names, short_name
@@ -298,6 +300,14 @@ def _cell(
     "headers are refused (DNS rebinding). Repeatable; .example.com allows every name "
     "under it, * any name.",
 )
+@click.option(
+    "--fidelity",
+    type=click.Choice([f.value for f in Fidelity]),
+    default=None,
+    help="exact: behave as MotoROS 1.9.12 where it is surprising (fragments answered 3001, "
+    "queues resumed by the next motion connection, stale replies); safe: the twin's kinder "
+    "behaviour (docs/fidelity.md). Default: the cell file's [motoros] fidelity, else exact.",
+)
 @click.pass_context
 def sim(
     ctx: click.Context,
@@ -318,6 +328,7 @@ def sim(
     token: str | None = None,
     insecure_http: bool = False,
     allowed_host: tuple[str, ...] = (),
+    fidelity: str | None = None,
 ) -> None:
     """Run the virtual controller (MotoROS on 50240/50241/50242, control API on --http-port).
 
@@ -341,12 +352,17 @@ def sim(
             token=token,
             lint_report=lint_report,
             allowed_hosts=allowed_host,
+            fidelity=None if fidelity is None else Fidelity(fidelity),
         )
         return
     config_file = config_path[0] if config_path else None
     ports = (motion_port, state_port, io_port, http_port)
     cell, controller, asked = _one_cell(
-        ctx, (controller_name, robot_name), config_file, scenario_path
+        ctx,
+        (controller_name, robot_name),
+        config_file,
+        scenario_path,
+        None if fidelity is None else Fidelity(fidelity),
     )
     ports = cell_file_ports(ctx, asked, ports)  # a [ports] table fills the flags not given
     _request_realtime(realtime)
@@ -372,6 +388,7 @@ def _one_cell(
     models: tuple[str, str],
     config_file: Path | None,
     scenario_path: Path | None,
+    fidelity: Fidelity | None = None,
 ) -> tuple[CellConfig, VirtualController, CellPorts]:
     """The one cell's controller (``models``: --controller and --robot, when no file),
     with the scenario loaded, and the ports its file asks for (none without a file); a
@@ -379,6 +396,8 @@ def _one_cell(
     try:
         cell_file = read_cell_file(config_file) if config_file is not None else None
         cell = _cell(ctx, *models, cell_file)
+        if fidelity is not None:  # --fidelity over the file's [motoros] fidelity
+            cell = dataclasses.replace(cell, fidelity=fidelity)
         controller = VirtualController(cell)
         if scenario_path is not None:
             from pymotoros.controller.scenario import load_scenario

@@ -19,6 +19,7 @@ are usage errors. ``--host`` applies to every cell.
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Sequence
 from pathlib import Path
 
@@ -30,6 +31,7 @@ from pymotoros.controller import VirtualController
 from pymotoros.controller.cell import CellConfig, cell_from_file
 from pymotoros.errors import ConfigError
 from pymotoros.models.cell import PORT_KINDS, CellPorts, read_cell_file
+from pymotoros.models.fidelity import Fidelity
 from pymotoros.runtime.fleet import Fleet, FleetCell, cell_names, check_port_clashes
 
 __all__ = ["run_cells", "run_fleet"]
@@ -85,8 +87,10 @@ def run_cells(
     token: str | None = None,
     lint_report: Path | None = None,
     allowed_hosts: Sequence[str] = (),
+    fidelity: Fidelity | None = None,
 ) -> None:
-    """Load every cell, check their ports, serve them until SIGINT/SIGTERM."""
+    """Load every cell, check their ports, serve them until SIGINT/SIGTERM (``fidelity``:
+    ``--fidelity``, over every cell's own ``[motoros] fidelity``)."""
     _refuse_single_cell_options(ctx, scenario_path)
     names = cell_names(paths)
     try:
@@ -97,6 +101,8 @@ def run_cells(
         labels: list[CellLabel] = []
         for name, path, cell_file in zip(names, paths, files, strict=True):
             cell = cell_from_file(cell_file)
+            if fidelity is not None:
+                cell = dataclasses.replace(cell, fidelity=fidelity)
             cells.append(_fleet_cell(name, cell, cell_file.ports, host, token, allowed_hosts))
             labels.append(CellLabel.of(name, cell, path))
         fleet = Fleet(cells, idle_batching=idle_batching)

@@ -35,12 +35,15 @@ from pymotoros.protocol.constants import (
     TCP_PORT_STATE,
     ByteOrder,
     CommType,
+    MotionCommand,
     Port,
+    ResultCode,
 )
 from pymotoros.protocol.framing import FrameDecoder, decode_reply, encode, prefix_fits
 from pymotoros.protocol.messages import (
     IoErrorReply,
     Message,
+    MotoMotionCtrl,
     MotoMotionReply,
     UnknownMessage,
     WireMessage,
@@ -400,3 +403,26 @@ class FrameConnection:
         with contextlib.suppress(OSError, TimeoutError):
             async with asyncio.timeout(CLOSE_TIMEOUT_S):
                 await self._writer.wait_closed()
+
+
+async def stop_queued_motion(conn: FrameConnection, *, timeout_s: float) -> None:
+    """STOP_MOTION on a motion connection that has just opened (docs/client.md).
+
+    MotoROS 1.9.12 keeps the increment queues when a motion connection closes, and the
+    next connection, whoever opens it, re-creates the task that executes them: the
+    robot resumes the old motion the moment we connect (reference §2.2). Stopping at
+    once is the only way a client can keep a lost trajectory's remainder from running
+    under it; the planner then waits for rest before reading the start from feedback.
+    On a controller with nothing queued the request only answers SUCCESS.
+    """
+    request = MotoMotionCtrl(0, 0, MotionCommand.STOP_MOTION)
+    reply = await conn.request(request, MotoMotionReply, timeout_s=timeout_s)
+    if not isinstance(reply, MotoMotionReply) or reply.result != ResultCode.SUCCESS:
+        # 2/0: a queue lock failed or the interpolators were slow; MotoROS cleared the
+        # queues anyway (§3.1). Anything else is a controller we do not know.
+        logger.warning(
+            "%s: STOP_MOTION on connecting answered %r; the queues of a closed "
+            "connection may still run: check that the robot is at rest",
+            conn,
+            reply,
+        )

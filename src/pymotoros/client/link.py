@@ -12,7 +12,12 @@ import asyncio
 from collections.abc import Callable
 from dataclasses import KW_ONLY, dataclass, field
 
-from pymotoros.client.connection import Connector, FrameConnection, Ports
+from pymotoros.client.connection import (
+    Connector,
+    FrameConnection,
+    Ports,
+    stop_queued_motion,
+)
 from pymotoros.client.errors import ClientError, ConnectionLostError
 from pymotoros.protocol.constants import ByteOrder, Port
 from pymotoros.protocol.messages import WireMessage
@@ -51,6 +56,8 @@ class Link:
         try:
             if motion:
                 self.motion = await self._open(Port.MOTION)
+                # A closed connection's queued increments run from now on (§2.2): stop them.
+                await stop_queued_motion(self.motion, timeout_s=self.timeout_s)
             if state:
                 self.state = await self._open(Port.STATE, on_state, on_state_lost)
             if io:

@@ -19,6 +19,7 @@ from dataclasses import dataclass, field
 from types import MappingProxyType
 from typing import TYPE_CHECKING, Final, Protocol, Unpack
 
+from pymotoros.models.fidelity import Fidelity
 from pymotoros.models.workspace import Obstacle
 from pymotoros.protocol.constants import IoResultCode, ResultCode
 from pymotoros.protocol.constants import PendantMode as PendantMode  # its old home
@@ -386,10 +387,18 @@ class MotoRosController(Protocol):
     def write_mregister(self, number: int, value: int) -> IoResultCode: ...
 
     # --- connections (the servers report them; MotoROS mirrors them on OT#893..895)
-    def motion_connected(self) -> None: ...
+    def motion_connected(self) -> bool:
+        """True when a closed connection's queued increments resume now (exact, §2.2)."""
+        ...
 
     def motion_disconnected(self) -> None:
-        """Clears the queues: our documented improvement over MotoROS (§2.2)."""
+        """The motion tasks end; the queues are kept (fidelity exact, as MotoROS 1.9.12,
+        §2.2) or cleared (safe)."""
+        ...
+
+    @property
+    def fidelity(self) -> Fidelity:
+        """exact or safe (``[motoros] fidelity``, docs/fidelity.md): what the servers copy."""
         ...
 
     def state_clients_changed(self, count: int) -> None: ...

@@ -43,6 +43,7 @@ from pymotoros.models.cell import (
     read_cell_file,
 )
 from pymotoros.models.cell_tools import CellTool
+from pymotoros.models.fidelity import DEFAULT_FIDELITY, Fidelity
 from pymotoros.models.robots import Transform
 from pymotoros.models.s1cxg import S1cxgTable, parse_s1cxg
 from pymotoros.models.toml_file import TomlTable
@@ -148,6 +149,9 @@ class CellConfig:
     :attr:`pymotoros.models.cell.CellModels.model_groups`."""
     workspace: Workspace = EMPTY_WORKSPACE
     """``[workspace]``: obstacles the robot may touch (docs/workspace.md)."""
+    fidelity: Fidelity = DEFAULT_FIDELITY
+    """``[motoros] fidelity``: exact (MotoROS 1.9.12's surprises kept, the default) or
+    safe (the twin's kinder behaviour); docs/fidelity.md §1."""
 
     def tool(self, group_index: int, number: int) -> ToolConfig:
         """Tool file ``number`` of a group: its own ``[[groups.tools]]`` entry, else the
@@ -228,6 +232,7 @@ def cell_from_file(cell_file: CellFile) -> CellConfig:
     numbers = {t.number for t in tools}.union(t.number for gt in group_tools for t in gt)
     initial = _initial(top.table("initial"), groups, numbers)
     peripherals = _peripherals(top, ctrl)
+    fidelity = _fidelity(top.table("motoros"))
     top.used.add("workspace")  # obstacles: read by models/cell.py (models/workspace.py)
     workspace = models.workspace
     top.finish()
@@ -251,7 +256,25 @@ def cell_from_file(cell_file: CellFile) -> CellConfig:
         peripherals=peripherals,
         model_groups=models.model_groups,
         workspace=workspace,
+        fidelity=fidelity,
     )
+
+
+def _fidelity(motoros_t: TomlTable) -> Fidelity:
+    """``[motoros] fidelity = "exact" | "safe"`` (default exact, docs/fidelity.md)."""
+    value = motoros_t.get("fidelity")
+    fidelity = DEFAULT_FIDELITY
+    if value is not None:
+        try:
+            fidelity = Fidelity.parse(value)
+        except ValueError:
+            raise motoros_t.error(
+                "fidelity",
+                f"must be 'exact' (as MotoROS 1.9.12 does it) or 'safe' (the twin's kinder "
+                f"behaviour), not {value!r}",
+            ) from None
+    motoros_t.finish()
+    return fidelity
 
 
 def _jobs(

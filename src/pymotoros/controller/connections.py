@@ -1,4 +1,5 @@
-"""Server connection events: the feedback outputs OT#891..894 and the disconnect queue clear."""
+"""Server connection events: the feedback outputs OT#891..894, and what the motion
+tasks do when the motion connection closes (fidelity exact or safe)."""
 
 from __future__ import annotations
 
@@ -6,6 +7,8 @@ import logging
 
 from pymotoros.controller import signals
 from pymotoros.controller.context import MotoRosContext
+from pymotoros.controller.incmove_task import IncMoveTask
+from pymotoros.models.fidelity import Fidelity
 
 logger = logging.getLogger(__name__)
 
@@ -13,19 +16,52 @@ logger = logging.getLogger(__name__)
 class ConnectionEvents:
     """What MotoROS does when a client connects to or leaves one of its servers."""
 
-    def __init__(self, ctx: MotoRosContext) -> None:
+    def __init__(self, ctx: MotoRosContext, inc_move: IncMoveTask) -> None:
         self._io = ctx.io
         self._queues = ctx.queues
+        self._inc_move = inc_move
+        self._fidelity = ctx.cell.fidelity
 
-    def motion_connected(self) -> None:
+    def motion_connected(self) -> bool:
+        """OT#893 on; the motion tasks exist again. True when increments a closed
+        connection left queued resume now (see :meth:`resumes_motion`)."""
         self._io.set(signals.MOTION_SERVER_CONNECTED, 1)
+        return self.resumes_motion(self._inc_move.start_tasks())
+
+    @staticmethod
+    def resumes_motion(resumed: bool) -> bool:
+        """The one place a connection is found to restart a closed connection's motion
+        (§2.2; only in fidelity exact, where the queues survive a close)."""
+        if resumed:
+            logger.warning(
+                "motion connection opened while a closed connection's increments were "
+                "queued: the robot resumes that motion now, as MotoROS 1.9.12 does "
+                "(send STOP_MOTION first on connecting; docs/client.md)"
+            )
+        return resumed
 
     def motion_disconnected(self) -> None:
+        """OT#893 off; the IncMove and AddToIncQueue tasks end (§2.2).
+
+        exact: the queues are kept, as MotoROS 1.9.12 keeps them, and the next motion
+        connection resumes them. safe: every queue and pending point is cleared, so
+        nothing moves for a client that left (our documented improvement).
+        """
         self._io.set(signals.MOTION_SERVER_CONNECTED, 0)
-        if self._queues.has_queued_motion():
+        queued = self._queues.has_queued_motion()
+        if self._fidelity is Fidelity.EXACT:
+            self._inc_move.end_tasks()
+            if queued:
+                logger.info(
+                    "motion connection closed with increments queued: kept, as MotoROS "
+                    "1.9.12 keeps them; the next motion connection resumes them"
+                )
+            return
+        if queued:
             logger.info(
                 "motion connection closed with increments queued: clearing them "
-                "(MotoROS 1.9.12 would keep them and resume on the next connection)"
+                "(MotoROS 1.9.12 would keep them and resume on the next connection; "
+                "fidelity safe)"
             )
         self._queues.clear()
 

@@ -75,6 +75,7 @@ from pymotoros.controller.trajectory import DhTable, TrajectoryPoints
 from pymotoros.controller.workspace_runtime import WorkspaceRuntime
 from pymotoros.kinematics.collision import Contact
 from pymotoros.models import robot_model
+from pymotoros.models.fidelity import Fidelity
 from pymotoros.models.workspace import Obstacle
 from pymotoros.protocol.constants import IoResultCode, MotionCommand
 
@@ -153,7 +154,7 @@ class VirtualController:
         self._trajectory = trajectory = TrajectoryPoints(ctx, readiness, commands)
         self._inc_move = inc_move = IncMoveTask(ctx, readiness)
         self._skills = skills = SkillListeners(ctx, readiness)
-        self._connections = ConnectionEvents(ctx)
+        self._connections = ConnectionEvents(ctx, inc_move)
         self._motoros = MotoRos(readiness, inc_move, trajectory, skills)
         self._scheduler = Scheduler(ctx.clock)
 
@@ -292,13 +293,21 @@ class VirtualController:
 
     # ================================================================== connections
 
-    def motion_connected(self) -> None:
-        """A client connected to the motion port: OT#893 (motion connected) on, as MotoROS."""
-        self._connections.motion_connected()
+    def motion_connected(self) -> bool:
+        """A client connected to the motion port: OT#893 (motion connected) on, as
+        MotoROS. True when the queued increments of a closed motion connection resume
+        now (fidelity exact, §2.2)."""
+        return self._connections.motion_connected()
 
     def motion_disconnected(self) -> None:
-        """Clears the queues: our documented improvement over MotoROS (§2.2)."""
+        """The IncMove and AddToIncQueue tasks end; the queues are kept and resumed by
+        the next motion connection (exact, as MotoROS 1.9.12, §2.2) or cleared (safe)."""
         self._connections.motion_disconnected()
+
+    @property
+    def fidelity(self) -> Fidelity:
+        """exact or safe: the cell's ``[motoros] fidelity`` (docs/fidelity.md)."""
+        return self.cell.fidelity
 
     def state_clients_changed(self, count: int) -> None:
         """The number of state-port clients changed: OT#894 is on while there is at least one."""

@@ -49,6 +49,10 @@ class IncMoveTask:
         self.interpolators = ctx.interpolators
         self._servos = ctx.servos
         self._num_groups = len(self.axes)
+        self.running = True
+        """The IncMove and AddToIncQueue tasks exist: False from a motion connection's
+        close (fidelity exact) until the next one opens. True before any connection, so
+        the controller works without servers (tests, offline use)."""
         self.last_motion_ms = 0
         """Controller time of the last increment the servos took (for the eco idle timer)."""
 
@@ -66,14 +70,38 @@ class IncMoveTask:
         # IncMove retry while the controller leaves eco mode (§5.6 step 6.2)
         self._eco_retry: tuple[tuple[tuple[int, ...], ...], int, int] | None = None
 
+    def end_tasks(self) -> None:
+        """The motion connection closed (§2.2): MotoROS deletes the IncMove task and
+        every AddToIncQueue task. A segment being generated ends where it stands and
+        the pending point is dropped (its flag is cleared); the queued increments stay
+        and nothing executes them until :meth:`start_tasks`. The IncMove task's own
+        state (the eco-mode retry, the FSU compensation) goes with it."""
+        self.running = False
+        self._eco_retry = None
+        self._fsu_reset()
+        for interp in self.interpolators:
+            interp.end_task()
+
+    def start_tasks(self) -> bool:
+        """A motion connection opened: the tasks exist again (§2.2). True when they
+        find increments a closed connection left queued, which run from the next tick:
+        the robot resumes the old motion."""
+        resumed = not self.running and self._queues.has_queued_motion()
+        self.running = True
+        return resumed
+
     def fill_tick(self) -> None:
         """Every AddToIncQueue task's turn."""
+        if not self.running:
+            return
         ready = self._flags.motion_ready
         for interp in self.interpolators:
             interp.fill(ready)
 
     def inc_move_tick(self) -> bool:
         """The IncMove task's turn; True if increments reached the servos this tick."""
+        if not self.running:  # no motion connection since one closed (exact fidelity)
+            return False
         if self._eco_retry is not None:
             return self._retry_eco()
         # motion-ready is false while the stop flag is up (Readiness computes it so)

@@ -129,8 +129,9 @@ RULES: Final[dict[LintCode, LintRule]] = {
     LintCode.RECONNECT_RESUMED_MOTION: LintRule(
         "§2.2",
         "A motion connection was opened while increments queued by a closed one were "
-        "still in the queues. MotoROS keeps them, and the new connection's IncMove task "
-        "resumes the old motion as soon as anybody connects.",
+        "still in the queues, and let them run. MotoROS keeps them, and the new "
+        "connection's IncMove task resumes the old motion as soon as anybody connects "
+        "(a connection whose first request is STOP_MOTION is not reported).",
         "After a reconnect send STOP_MOTION at once and wait for the robot to rest "
         "before planning from its feedback.",
     ),
@@ -205,6 +206,9 @@ class ClientLint:
         """Groups whose last accepted point had a non-zero velocity -> its connection."""
         self.state_clients = 0
         """Open state connections (the state server reports them through the controller)."""
+        self._resumed: tuple[str, float] | None = None
+        """A motion connection that opened over a closed one's queued increments and has
+        not yet shown what it does about them: (connection, controller time it opened)."""
 
     # ----------------------------------------------------------- findings
 
@@ -338,16 +342,57 @@ class ClientLint:
             )
 
     def motion_opened(self, connection: str, now_s: float, *, queued: bool) -> None:
-        """A motion connection took its slot; ``queued``: the controller still holds
-        increments (only a closed connection can have queued them: §2.2 refuses a
-        newcomer while motion is queued and a connection is open)."""
-        if queued:
-            self.record(
-                LintCode.RECONNECT_RESUMED_MOTION,
-                connection,
-                now_s,
-                "increments of a closed connection were still queued",
-            )
+        """A motion connection took its slot; ``queued``: increments a closed connection
+        left queued resume now (the controller's ``motion_connected()``, fidelity exact).
+
+        Not a finding yet: a client that sends STOP_MOTION as its first request does what
+        a robot needs (docs/client.md), and its reconnect works by design, not by luck.
+        The finding is recorded, dated when the connection opened, when the connection
+        lets the old motion run instead: its first request is anything else
+        (:meth:`motion_request`), it closes without a request (:meth:`motion_closed`),
+        or the old motion runs to its end first (:meth:`resumed_motion_ended`).
+        """
+        self._settle_resume("another motion connection opened before it sent anything")
+        self._resumed = (connection, now_s) if queued else None
+
+    @property
+    def resume_pending(self) -> bool:
+        """A motion connection opened over resumed increments and has sent nothing yet."""
+        return self._resumed is not None
+
+    def motion_request(self, connection: str, *, stops: bool, what: str) -> None:
+        """``connection`` sent a request on the motion port; ``stops``: it is STOP_MOTION
+        (``what`` names it otherwise). Only the first after a resume matters."""
+        pending = self._resumed
+        if pending is None or pending[0] != connection:
+            return
+        self._resumed = None
+        if not stops:
+            self._record_resumed(pending, f"its first request was {what}, not STOP_MOTION")
+
+    def motion_closed(self, connection: str) -> None:
+        """``connection`` left the motion port."""
+        if self._resumed is not None and self._resumed[0] == connection:
+            self._settle_resume("it closed without sending STOP_MOTION")
+
+    def resumed_motion_ended(self) -> None:
+        """The queues ran empty while a resumed connection had sent nothing: the old
+        motion ran its course."""
+        self._settle_resume("the queues ran empty before it sent STOP_MOTION")
+
+    def _settle_resume(self, why: str) -> None:
+        pending, self._resumed = self._resumed, None
+        if pending is not None:
+            self._record_resumed(pending, why)
+
+    def _record_resumed(self, pending: tuple[str, float], why: str) -> None:
+        connection, opened_s = pending
+        self.record(
+            LintCode.RECONNECT_RESUMED_MOTION,
+            connection,
+            opened_s,
+            f"increments of a closed connection were still queued and ran: {why}",
+        )
 
     def _sequence(self, group: int) -> _Sequence:
         state = self._sequences.get(group)

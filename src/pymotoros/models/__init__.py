@@ -10,6 +10,7 @@ from pymotoros.models.controllers import (
     IoRange,
     controller_model,
 )
+from pymotoros.models.fidelity import DEFAULT_FIDELITY, Fidelity
 from pymotoros.models.robots import (
     DEFAULT_ROBOT,
     ROBOTS,
@@ -24,12 +25,14 @@ from pymotoros.models.robots import (
 __all__ = [
     "CONTROLLERS",
     "DEFAULT_CONTROLLER",
+    "DEFAULT_FIDELITY",
     "DEFAULT_ROBOT",
     "ROBOTS",
     "AxisModel",
     "ControllerModel",
     "ControllerType",
     "DhLink",
+    "Fidelity",
     "FloatMode",
     "GroupKind",
     "GroupModel",

@@ -319,6 +319,14 @@ class GroupInterpolator:
         self.queue.clear()
         self._pending = None
 
+    def end_task(self) -> None:
+        """The AddToIncQueue task is deleted (the motion connection closed, §2.2): the
+        segment in progress ends at the step the task stood on, the pending point is
+        dropped; the queue is left as it is (the next IncMove task executes it)."""
+        if self._active is not None:
+            self._abort(self._active)
+        self._pending = None
+
     # ------------------------------------------------------------------ the task
 
     def fill(self, motion_ready: bool) -> None:

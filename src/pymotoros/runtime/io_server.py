@@ -16,6 +16,7 @@ from typing import Final
 
 from pymotoros.controller.api import IoRead, MotoRosController
 from pymotoros.controller.lint import LintCode
+from pymotoros.models.fidelity import Fidelity
 from pymotoros.protocol.constants import (
     ByteOrder,
     InvalidSubcode,
@@ -41,7 +42,7 @@ from pymotoros.protocol.messages import (
     MotoWriteMRegisterReply,
     WireMessage,
 )
-from pymotoros.protocol.sizes import Accept, Reject, check_request, expected_size
+from pymotoros.protocol.sizes import Accept, Reject, Verdict, expected_size
 from pymotoros.runtime.connections import IO_CLIENTS
 from pymotoros.runtime.tcp import Connection, FramedService
 
@@ -135,13 +136,6 @@ def log_rejection(
     )
 
 
-def length_detail(frame: Frame, order: ByteOrder, port: Port) -> str:
-    """The client lint's words for a prefix that disagrees with its type's size."""
-    expected = expected_size(frame.msg_type, port, frame.body, order)
-    needs = (expected or 0) - 4
-    return f"type {frame.msg_type}: prefix length {frame.size - 4}, the type needs {needs}"
-
-
 def handle_io_request(
     controller: MotoRosController,
     msg: WireMessage,
@@ -174,13 +168,23 @@ class IoServer(FramedService):
 
     name = "io"
 
-    def __init__(self, controller: MotoRosController, order: ByteOrder) -> None:
+    port_kind = Port.IO
+
+    def __init__(
+        self,
+        controller: MotoRosController,
+        order: ByteOrder,
+        *,
+        fidelity: Fidelity | None = None,
+    ) -> None:
+        """``fidelity``: exact or safe (docs/fidelity.md); None takes the controller's."""
         # The IO port's replacement rule tests the *motion* queues, as MotoROS does (§2.2).
         super().__init__(
             IO_CLIENTS,
             lambda: controller.has_queued_motion(),
             order,
             IoErrorReply(ResultCode.INVALID, InvalidSubcode.MSGSIZE),
+            controller.fidelity if fidelity is None else fidelity,
         )
         self._controller = controller
         self.requests = 0
@@ -193,26 +197,17 @@ class IoServer(FramedService):
         c.lint.record(code, conn.peer, c.time_ms / 1000.0, detail)
 
     async def serve_connection(self, conn: Connection) -> None:
-        async with contextlib.aclosing(self.frames(conn)) as frames:
-            async for frame in frames:
-                await self.send(conn, self._reply(conn, frame))
+        async with contextlib.aclosing(self.read_requests(conn)) as requests:
+            async for frame, verdict in requests:
+                await self.send(conn, self._reply(conn, frame, verdict))
 
-    def _reply(self, conn: Connection, frame: Frame) -> Message:
+    def _reply(self, conn: Connection, frame: Frame, verdict: Verdict) -> Message:
         self.requests += 1
-        verdict = check_request(frame, self._order, Port.IO)
         if isinstance(verdict, Reject):
             log_rejection(conn, frame, verdict, self._order, Port.IO)
-            if verdict.subcode == InvalidSubcode.MSGSIZE:
-                self.lint(
-                    LintCode.LENGTH_MISMATCH, conn, length_detail(frame, self._order, Port.IO)
-                )
             return verdict.reply
         reply = None
         if isinstance(verdict, Accept):
-            if verdict.surplus:
-                self.lint(
-                    LintCode.LENGTH_MISMATCH, conn, length_detail(frame, self._order, Port.IO)
-                )
             reply = handle_io_request(self._controller, verdict.message, "io", conn)
         if reply is None:  # pragma: no cover - check_request only accepts IO types here
             return IoErrorReply(ResultCode.INVALID, InvalidSubcode.MSGTYPE)

@@ -12,9 +12,18 @@ connection; a successful DISCONNECT and a failed GET_DH_PARAMETERS close without
 reply; a request sent with comm_type SERVICE_REPLY is processed but not answered;
 IO bit/group requests are served here too (M-registers are not: 3003).
 
-Two documented improvements: frames split across reads are reassembled (logged at
-DEBUG), and the queues are cleared when the client goes away
-(``controller.motion_disconnected()``).
+Fidelity (docs/fidelity.md §1): in ``exact``, the default, requests are cut from the
+stream as MotoROS's receive loop cuts them (a message split across reads: 3001, then
+its tail as a new message), an unknown MOTION_CTRL command and a FULL_EX with
+``numberOfValidGroups`` ≤ 0 get the connection's previous reply again (four zero bytes
+before the first), and the queues survive the client's going away
+(``controller.motion_disconnected()``), resumed by the next connection. In ``safe``
+frames are reassembled, those requests get INVALID/3006 and 3010, and the queues are
+cleared when the client goes away.
+
+Where a client lint hooks in (one method each): :meth:`MotionServer.stale_reply_seen`,
+:meth:`MotionServer.unknown_command_seen`, :meth:`MotionServer.resumed_motion_seen`, and
+the framing's ``fragment_seen`` / ``length_mismatch_seen`` (runtime/tcp.py).
 
 Every reply leaves in a single ``write``: common clients read one reply per
 ``recv()``.
@@ -24,11 +33,13 @@ from __future__ import annotations
 
 import asyncio
 import contextlib
+import enum
 import logging
 from typing import Final
 
 from pymotoros.controller.api import MotoRosController, Outcome, Pending, PointData
 from pymotoros.controller.lint import LintCode
+from pymotoros.models.fidelity import Fidelity
 from pymotoros.protocol.constants import (
     MAX_JOINTS,
     ByteOrder,
@@ -54,9 +65,9 @@ from pymotoros.protocol.messages import (
     Ping,
     PingReply,
 )
-from pymotoros.protocol.sizes import Close, Reject, check_request
+from pymotoros.protocol.sizes import Accept, Close, Reject, Verdict
 from pymotoros.runtime.connections import MOTION_CLIENTS
-from pymotoros.runtime.io_server import handle_io_request, length_detail, log_rejection
+from pymotoros.runtime.io_server import handle_io_request, log_rejection
 from pymotoros.runtime.tcp import Connection, FramedService
 
 __all__ = ["MotionServer"]
@@ -65,10 +76,6 @@ logger = logging.getLogger(__name__)
 
 _QUIET_COMMANDS = frozenset({MotionCommand.CHECK_QUEUE_CNT, MotionCommand.CHECK_MOTION_READY})
 """Queries: a FALSE answer is information, not a refusal (logged at DEBUG)."""
-
-
-_KNOWN_COMMANDS = frozenset(int(m) for m in MotionCommand)
-"""MOTO_MOTION_CTRL commands MotoROS answers (§3.1); any other gets its previous reply."""
 
 
 def _meaning(result: int, subcode: int) -> str:
@@ -81,6 +88,13 @@ def _describe_command(command: int) -> str:
         return MotionCommand(command).name
     except ValueError:
         return f"unknown command {command}"
+
+
+def _describe_type(msg_type: int) -> str:
+    try:
+        return MsgType(msg_type).name
+    except ValueError:
+        return f"type {msg_type}"
 
 
 def _describe_ctrl(msg: MotoMotionCtrl) -> str:
@@ -98,6 +112,34 @@ _new_reply: Final = tuple.__new__
 """A message tuple from values already known valid (see ``MotionServer._reply``)."""
 
 
+ZERO_REPLY_BUFFER: Final = bytes(4)
+"""What MotoROS sends when it builds no reply on a connection that has had none: its
+reply buffer (uninitialised memory in C, taken as zeros here) is sent as
+``prefix.length + 4`` bytes (MotionServer.c), and a zero prefix makes that four zero
+bytes (fidelity exact; docs/fidelity.md)."""
+
+_KNOWN_COMMANDS: Final = frozenset(int(c) for c in MotionCommand)
+"""The MOTO_MOTION_CTRL commands of MotoROS 1.9.12 (§1.7); any other builds no reply."""
+
+
+class _Stale(enum.Enum):
+    """Internal: the request builds no reply; the reply buffer is sent again."""
+
+    STALE = "stale"
+
+
+_STALE: Final = _Stale.STALE
+
+
+def _describe_reply(message: Message) -> str:
+    if isinstance(message, MotoMotionReply):
+        return (
+            f"MOTO_MOTION_REPLY command {message.command} seq {message.sequence}: "
+            f"{ResultCode.describe(message.result)} / {message.subcode}"
+        )
+    return type(message).__name__
+
+
 class _CloseConnectionError(Exception):
     """Internal: the request closes the connection without a reply."""
 
@@ -107,21 +149,41 @@ class MotionServer(FramedService):
 
     name = "motion"
 
-    def __init__(self, controller: MotoRosController, order: ByteOrder) -> None:
+    def __init__(
+        self,
+        controller: MotoRosController,
+        order: ByteOrder,
+        *,
+        fidelity: Fidelity | None = None,
+    ) -> None:
+        """``fidelity``: exact or safe (docs/fidelity.md); None takes the controller's
+        (its cell's ``[motoros] fidelity``)."""
         super().__init__(
             MOTION_CLIENTS,
             lambda: controller.has_queued_motion(),
             order,
             MotoMotionReply(-1, -1, 0, ResultCode.INVALID, InvalidSubcode.MSGSIZE),
+            controller.fidelity if fidelity is None else fidelity,
         )
         self._controller = controller
         self._encoded: dict[MotoMotionReply, bytes] = {}
+        self._last_reply: dict[Connection, Message] = {}
+        """Per connection, the last reply built (sent or not): MotoROS's reply buffer,
+        which it sends again when it builds none (fidelity exact)."""
         self.requests = 0
 
     def on_connect(self, conn: Connection) -> None:
         c = self._controller
-        c.lint.motion_opened(conn.peer, c.time_ms / 1000.0, queued=c.has_queued_motion())
-        c.motion_connected()
+        resumed = c.motion_connected()  # the one source of truth (ConnectionEvents)
+        c.lint.motion_opened(conn.peer, c.time_ms / 1000.0, queued=resumed)
+        if resumed:
+            self.resumed_motion_seen(conn)
+
+    def resumed_motion_seen(self, conn: Connection) -> None:
+        """``conn`` opened while a closed connection's increments were queued: the robot
+        resumes that motion now (fidelity exact, §2.2; the one place this is seen by a
+        server). The controller logs the warning; the client lint waits for the
+        connection's first request (STOP_MOTION at once is no finding, docs/sim.md)."""
 
     def lint(self, code: LintCode, conn: Connection, detail: str = "") -> None:
         c = self._controller
@@ -144,22 +206,27 @@ class MotionServer(FramedService):
         await conn.writer.drain()
 
     def on_disconnect(self, conn: Connection) -> None:
-        # Our improvement over MotoROS (§2.2): nothing keeps moving for a client that left.
+        self._controller.lint.motion_closed(conn.peer)
+        # exact: the queues stay, as on MotoROS 1.9.12; safe: cleared (§2.2, fidelity.md).
         self._controller.motion_disconnected()
 
     # ----------------------------------------------------------- reading
 
     async def serve_connection(self, conn: Connection) -> None:
-        async with contextlib.aclosing(self.frames(conn)) as frames:
-            async for frame in frames:
-                try:
-                    await self._serve_frame(conn, frame)
-                except _CloseConnectionError:
-                    return
+        try:
+            async with contextlib.aclosing(self.read_requests(conn)) as requests:
+                async for frame, verdict in requests:
+                    try:
+                        await self._serve_frame(conn, frame, verdict)
+                    except _CloseConnectionError:
+                        return
+        finally:
+            self._last_reply.pop(conn, None)
 
-    async def _serve_frame(self, conn: Connection, frame: Frame) -> None:
+    async def _serve_frame(self, conn: Connection, frame: Frame, verdict: Verdict) -> None:
         self.requests += 1
-        verdict = check_request(frame, self._order, Port.MOTION)
+        if self._controller.lint.resume_pending:  # the first request after a resume
+            self._first_request_seen(conn, frame, verdict)
         if isinstance(verdict, Close):
             # One line per connection, but a flood of connects can repeat it: the port's
             # allowance (runtime/log_limit.py).
@@ -172,16 +239,9 @@ class MotionServer(FramedService):
             raise _CloseConnectionError
         if isinstance(verdict, Reject):
             log_rejection(conn, frame, verdict, self._order, Port.MOTION, logger)
-            if verdict.subcode == InvalidSubcode.MSGSIZE:
-                self.lint(
-                    LintCode.LENGTH_MISMATCH, conn, length_detail(frame, self._order, Port.MOTION)
-                )
-            reply: Message = verdict.reply
+            reply: Message | _Stale = verdict.reply
         else:
             if verdict.surplus:
-                self.lint(
-                    LintCode.LENGTH_MISMATCH, conn, length_detail(frame, self._order, Port.MOTION)
-                )
                 logger.debug(
                     "motion: client %s: %d surplus bytes after type %d ignored",
                     conn.peer,
@@ -189,20 +249,70 @@ class MotionServer(FramedService):
                     frame.msg_type,
                 )
             reply = await self._process(conn, verdict.message, frame.msg_type)
+        if reply is _STALE:
+            stale = self._last_reply.get(conn)
+        else:
+            self._last_reply[conn] = reply
         if frame.comm_type == CommType.SERVICE_REPLY:
             # MotoROS processes such a message but sends nothing back (§1.1).
             logger.debug("motion: client %s: request sent as SERVICE_REPLY, no reply", conn.peer)
             return
-        await self.send(conn, reply)
+        if reply is not _STALE:
+            await self.send(conn, reply)
+        elif stale is not None:
+            await self.send(conn, stale)
+        else:  # MotoROS's reply buffer before its first reply: taken as zeros
+            conn.write(ZERO_REPLY_BUFFER)
+            await conn.writer.drain()
+
+    def _first_request_seen(self, conn: Connection, frame: Frame, verdict: Verdict) -> None:
+        """Tell the lint what a connection opened over resumed motion sent first: STOP_MOTION
+        (the right thing, no finding) or anything else (the old motion runs meanwhile)."""
+        msg = verdict.message if isinstance(verdict, Accept) else None
+        if isinstance(msg, MotoMotionCtrl):
+            stops, what = msg.command == MotionCommand.STOP_MOTION, _describe_ctrl(msg)
+        else:
+            stops, what = False, _describe_type(frame.msg_type)
+        self._controller.lint.motion_request(conn.peer, stops=stops, what=what)
+
+    def stale_reply_seen(self, conn: Connection, what: str) -> _Stale:
+        """``what`` builds no reply: MotoROS sends its reply buffer again, the previous
+        reply of this connection (fidelity exact; the one place this is decided)."""
+        previous = self._last_reply.get(conn)
+        if conn.log.allow("stale replies", logger, logging.WARNING):
+            logger.warning(
+                "motion: client %s: %s builds no reply; sent the previous reply again (%s), "
+                "as MotoROS 1.9.12 does (§3.1, §3.5): a stale reply can look like a success",
+                conn.peer,
+                what,
+                "none yet: 4 zero bytes" if previous is None else _describe_reply(previous),
+            )
+        return _STALE
+
+    def unknown_command_seen(self, conn: Connection, msg: MotoMotionCtrl) -> None:
+        """A MOTO_MOTION_CTRL command MotoROS does not know (the one place this is
+        decided): exact answers with a stale reply, safe with INVALID/3006. The lint
+        records both findings in either setting: the robot's answer is the stale one."""
+        self.lint(LintCode.UNKNOWN_COMMAND, conn, f"command {msg.command}")
+        self.lint(LintCode.STALE_REPLY, conn, f"MOTO_MOTION_CTRL command {msg.command}")
+        logger.debug(
+            "motion: client %s: unknown MOTO_MOTION_CTRL command %d (group %d, seq %d)",
+            conn.peer,
+            msg.command,
+            msg.group_no,
+            msg.sequence,
+        )
 
     # ----------------------------------------------------------- requests
 
-    async def _process(self, conn: Connection, msg: Message, msg_type: int) -> Message:
+    async def _process(self, conn: Connection, msg: Message, msg_type: int) -> Message | _Stale:
         c = self._controller
+        exact = self.fidelity is Fidelity.EXACT
         if isinstance(msg, MotoMotionCtrl):
             if msg.command not in _KNOWN_COMMANDS:
-                self.lint(LintCode.UNKNOWN_COMMAND, conn, f"command {msg.command}")
-                self.lint(LintCode.STALE_REPLY, conn, f"MOTO_MOTION_CTRL command {msg.command}")
+                self.unknown_command_seen(conn, msg)
+                if exact:  # §3.1: no reply is built, the buffer is sent again
+                    return self.stale_reply_seen(conn, _describe_ctrl(msg))
             elif msg.command not in _QUIET_COMMANDS:
                 c.lint.motion_reset()
             outcome = await self._resolve(c.motion_ctrl(msg.group_no, msg.command))
@@ -235,6 +345,15 @@ class MotionServer(FramedService):
             )
             return self._reply(outcome, msg.group_no, msg.sequence, MsgType.JOINT_TRAJ_PT_FULL)
         if isinstance(msg, MotoJointTrajPtFullEx):
+            n = msg.number_of_valid_groups
+            if n <= 0:  # a stale reply on the robot, whatever the setting answers (§3.5)
+                self.lint(LintCode.STALE_REPLY, conn, f"FULL_EX with {n} groups")
+            if exact and n <= 0:  # §3.5: the reply buffer is left unset
+                return self.stale_reply_seen(
+                    conn,
+                    f"JOINT_TRAJ_PT_FULL_EX seq {msg.sequence} with numberOfValidGroups "
+                    f"{msg.number_of_valid_groups}",
+                )
             points = [
                 PointData(g.group_no, g.valid_fields, g.time, g.pos, g.vel, g.acc)
                 for g in msg.groups
@@ -243,11 +362,7 @@ class MotionServer(FramedService):
             groups = ",".join(str(p.group_no) for p in points)
             what = f"JOINT_TRAJ_PT_FULL_EX seq {msg.sequence} (groups {groups or 'none'})"
             self._log_outcome(conn, what, outcome)
-            if msg.number_of_valid_groups <= 0:
-                self.lint(
-                    LintCode.STALE_REPLY, conn, f"FULL_EX with {msg.number_of_valid_groups} groups"
-                )
-            else:
+            if n > 0:
                 c.lint.point_answered(
                     conn.peer,
                     [(p.group_no, any(p.vel)) for p in points],

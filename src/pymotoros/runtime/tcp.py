@@ -22,9 +22,12 @@ from typing import Final
 from pymotoros.capture import Flow, SessionRecorder
 from pymotoros.controller.lint import LintCode
 from pymotoros.errors import RemoteProtocolError
-from pymotoros.protocol.constants import ByteOrder
+from pymotoros.models.fidelity import DEFAULT_FIDELITY, Fidelity
+from pymotoros.protocol.constants import ByteOrder, InvalidSubcode, MsgType, Port
 from pymotoros.protocol.framing import Frame, FrameDecoder, encode
 from pymotoros.protocol.messages import Message
+from pymotoros.protocol.receiver import RECV_SIZE, MotoRosReceiver, turn_verdict
+from pymotoros.protocol.sizes import Accept, Reject, Verdict, check_request, expected_size
 from pymotoros.runtime.connections import (
     AdmissionKind,
     SlotTable,
@@ -42,7 +45,8 @@ CLOSE_TIMEOUT_S: Final = 1.0
 """How long closing a client may wait for its transport to finish."""
 
 READ_CHUNK: Final = 4096
-"""Bytes asked of the socket per read (MotoROS reads at most 552)."""
+"""Bytes asked of the socket per read in fidelity safe (MotoROS reads at most 552, as
+fidelity exact does: ``protocol.receiver.RECV_SIZE``)."""
 
 
 def is_loopback(host: str) -> bool:
@@ -323,11 +327,22 @@ class TcpService(ABC):
 class FramedService(TcpService):
     """A port that reads Simple Message requests and answers each with one write.
 
-    Shared by the motion and IO servers: frames split across reads are reassembled
-    (a documented improvement: MotoROS answers the first piece with 3001), and a
-    length prefix outside the legal range is answered INVALID/3001 with the port's
-    own error reply, after which the buffered bytes are dropped to resynchronise.
+    Shared by the motion and IO servers. How requests are cut from the byte stream
+    depends on the fidelity (docs/fidelity.md §1):
+
+    - exact: as MotoROS 1.9.12 (:mod:`pymotoros.protocol.receiver`): reads of at most
+      552 bytes, sizes from the type, the prefix never read, a message split across
+      reads answered 3001 and its tail read as a new message;
+    - safe: frames are cut by their length prefix and reassembled across reads; a
+      prefix outside the legal range is answered INVALID/3001 with the port's own
+      error reply, after which the buffered bytes are dropped to resynchronise.
+
+    The decisions a client lint reports are each made in one method:
+    :meth:`fragment_seen`, :meth:`length_mismatch_seen`.
     """
+
+    port_kind: Port = Port.MOTION
+    """Which size table the port's requests follow (§1.5)."""
 
     def __init__(
         self,
@@ -335,18 +350,109 @@ class FramedService(TcpService):
         motion_queued: Callable[[], bool],
         order: ByteOrder,
         bad_prefix_reply: Message,
+        fidelity: Fidelity = DEFAULT_FIDELITY,
     ) -> None:
         super().__init__(capacity, motion_queued)
         self._order = order
         self._bad_prefix_reply = bad_prefix_reply
+        self.fidelity = fidelity
+        """exact or safe (docs/fidelity.md): fixed for the server's life."""
         self.traffic = Traffic()
         """Requests and replies counted for ``GET /metrics`` (plain ints, runtime/traffic.py)."""
         # Log as the concrete server's module (pymotoros.runtime.motion_server …), so that
         # a user filtering by logger sees its protocol events where they belong.
         self._log = logging.getLogger(type(self).__module__)
 
+    async def read_requests(self, conn: Connection) -> AsyncGenerator[tuple[Frame, Verdict], None]:
+        """Each request ``conn`` sends, with what MotoROS does with it, until EOF."""
+        if self.fidelity is Fidelity.EXACT:
+            async with contextlib.aclosing(self._exact_requests(conn)) as turns:
+                async for item in turns:
+                    yield item
+            return
+        async with contextlib.aclosing(self.frames(conn)) as frames:
+            async for frame in frames:
+                verdict = check_request(frame, self._order, self.port_kind)
+                padded_ex = (
+                    frame.msg_type == MsgType.MOTO_JOINT_TRAJ_PT_FULL_EX and frame.size == RECV_SIZE
+                )  # a FULL_EX padded to 552 bytes is one MotoROS accepts whole (§1.5)
+                if isinstance(verdict, Accept) and verdict.surplus and not padded_ex:
+                    expected_total = frame.size - verdict.surplus
+                    self.length_mismatch_seen(conn, frame.msg_type, frame.size, expected_total)
+                elif isinstance(verdict, Reject) and verdict.subcode == InvalidSubcode.MSGSIZE:
+                    kind, order = self.port_kind, self._order
+                    expected = expected_size(frame.msg_type, kind, frame.body, order)
+                    self.length_mismatch_seen(conn, frame.msg_type, frame.size, expected)
+                yield frame, verdict
+
+    async def _exact_requests(
+        self, conn: Connection
+    ) -> AsyncGenerator[tuple[Frame, Verdict], None]:
+        """MotoROS's receive loop (fidelity exact): one pass per reply."""
+        receiver = MotoRosReceiver(self._order, self.port_kind)
+        while True:
+            if receiver.wants_read:
+                data = await conn.read(receiver.read_size)
+                if not data:
+                    return
+                receiver.feed(data)
+            turn = receiver.turn()
+            # A short message whose prefix counts exactly the bytes that came is whole,
+            # only shorter than its type: MotoROS answers it 3001 as any cut message
+            # (the reply comes from turn_verdict, unchanged), but the lint names it a
+            # length mismatch, not a fragment: no tail follows it.
+            short = turn.cut and turn.prefix is not None and turn.prefix + 4 == turn.received
+            if (turn.cut or turn.joined) and not short:
+                self.fragment_seen(conn, turn.frame.msg_type, turn.received, turn.expected)
+            if (turn.length_mismatch or short) and turn.prefix is not None:
+                self.length_mismatch_seen(conn, turn.frame.msg_type, turn.prefix + 4, turn.expected)
+            self.traffic.request(turn.frame.msg_type)
+            yield turn.frame, turn_verdict(turn, self._order, self.port_kind)
+
+    def fragment_seen(
+        self, conn: Connection, msg_type: int, received: int, expected: int | None
+    ) -> None:
+        """A request arrived in more than one read (the one place this is decided).
+
+        exact: ``received`` bytes were answered 3001 (``expected`` is the type's size,
+        None under 16 bytes) or, joined with kept bytes, processed; safe: reassembled.
+        """
+        self.lint(LintCode.FRAGMENTED_MESSAGE, conn, f"type {msg_type}")
+        self._log.debug(
+            "%s: client %s: type %d arrived in more than one read (%d of %s bytes in one); %s",
+            self.name,
+            conn.peer,
+            msg_type,
+            received,
+            "?" if expected is None else expected,
+            "answered 3001 as MotoROS does"
+            if self.fidelity is Fidelity.EXACT
+            else "reassembled (a real controller would answer 3001)",
+        )
+
+    def length_mismatch_seen(
+        self, conn: Connection, msg_type: int, by_prefix: int, expected: int | None
+    ) -> None:
+        """A request whose length prefix says ``by_prefix`` bytes in all while its type
+        needs ``expected`` (the one place this is decided). MotoROS never reads the
+        prefix (§1.1); the safe setting frames by it."""
+        needs = "?" if expected is None else expected - 4
+        self.lint(
+            LintCode.LENGTH_MISMATCH,
+            conn,
+            f"type {msg_type}: prefix length {by_prefix - 4}, the type needs {needs}",
+        )
+        self._log.debug(
+            "%s: client %s: type %d: the prefix says %d bytes, the type needs %s",
+            self.name,
+            conn.peer,
+            msg_type,
+            by_prefix,
+            "?" if expected is None else expected,
+        )
+
     async def frames(self, conn: Connection) -> AsyncGenerator[Frame, None]:
-        """The whole frames ``conn`` sends, until EOF."""
+        """The whole frames ``conn`` sends, cut by their length prefix, until EOF (safe)."""
         decoder = FrameDecoder(self._order)
         while data := await conn.read(READ_CHUNK):
             fragmented = decoder.buffered > 0
@@ -370,14 +476,7 @@ class FramedService(TcpService):
                     break
                 if fragmented:
                     fragmented = False
-                    self.lint(LintCode.FRAGMENTED_MESSAGE, conn, f"type {frame.msg_type}")
-                    self._log.debug(
-                        "%s: client %s: type %d arrived in several pieces and was "
-                        "reassembled (a real controller would answer 3001)",
-                        self.name,
-                        conn.peer,
-                        frame.msg_type,
-                    )
+                    self.fragment_seen(conn, frame.msg_type, len(data), frame.size)
                 self.traffic.request(frame.msg_type)
                 yield frame
 

@@ -44,8 +44,9 @@ from pymotoros.motion import GroupAxes
 logger = logging.getLogger(__name__)
 
 COLLISION_ALARM: Final = 4315
-"""YRC1000 / DX200 alarm 4315 COLLISION DETECT: the collision detection function
-(shock sensor) stopped the robot (Yaskawa's alarm list, see docs/fidelity.md)."""
+"""The alarm a collision raises: 4315 COLLISION DETECT, as we remember the DX200 /
+YRC1000 alarm lists. A modelling choice: no source the project holds gives the number
+(MotoROS raises no such alarm, reference §8); see docs/fidelity.md §3."""
 COLLISION_ALARM_TEXT: Final = "COLLISION DETECT"
 DEEPER_M: Final = 1e-6
 """A link already touching an obstacle counts as a new contact only when it goes at
