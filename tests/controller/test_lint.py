@@ -137,6 +137,7 @@ def test_a_trajectory_that_ends_at_rest_is_not_starved() -> None:
     assert lint.findings() == []
 
 
+@pytest.mark.parametrize("cleared_s", [None, 0.8], ids=["exact", "safe"])
 @pytest.mark.parametrize(
     ("queued", "stops", "codes"),
     [
@@ -146,15 +147,40 @@ def test_a_trajectory_that_ends_at_rest_is_not_starved() -> None:
     ],
 )
 def test_a_motion_connection_opened_over_queued_increments(
-    queued: bool, stops: bool, codes: list[str]
+    queued: bool, stops: bool, codes: list[str], cleared_s: float | None
 ) -> None:
+    """The same rule in both settings; safe (``cleared_s``: the twin cleared the queues
+    at the close) says that a robot would have resumed them."""
     lint = ClientLint()
-    lint.motion_opened(C, 4.2, queued=queued)
+    lint.motion_opened(C, 4.2, queued=queued, cleared_s=cleared_s)
     assert _codes(lint) == []  # not decided before the first request
     lint.motion_request(C, stops=stops, what="CHECK_QUEUE_CNT")
     lint.motion_request(C, stops=False, what="JOINT_TRAJ_PT_FULL")  # later: no matter
     assert _codes(lint) == codes
     assert [f.first_s for f in lint.findings()] == [4.2] * len(codes)  # when it opened
+    safe_text = "safe cleared them, but a robot would have kept them and resumed them"
+    for f in lint.findings():
+        assert (safe_text in f.text) is (cleared_s is not None), f.text
+
+
+def test_the_tick_ends_a_silent_resume_when_the_queues_or_the_cleared_time_run_out() -> None:
+    """exact watches the real queues; safe, whose queues are empty from the close, the
+    time the cleared increments would have run on a robot, from the connect."""
+    lint = ClientLint()
+    lint.motion_opened(C, 1.0, queued=True)
+    lint.resumed_motion_tick(9.0, queued=True)  # exact: still queued, still running
+    assert lint.resume_pending
+    lint.resumed_motion_tick(9.0, queued=False)
+    assert "queues ran empty" in lint.findings()[0].text
+    lint.clear()
+    lint.motion_opened(C, 1.0, queued=True, cleared_s=0.8)
+    lint.resumed_motion_tick(1.796, queued=False)  # safe: the twin's queues do not count
+    assert lint.resume_pending
+    lint.resumed_motion_tick(1.8, queued=False)
+    assert not lint.resume_pending
+    (finding,) = lint.findings()
+    assert "the 0.800 s of increments a robot would have resumed ran out" in finding.text
+    assert finding.first_s == 1.0
 
 
 def test_a_resumed_connection_that_sends_nothing_is_found_when_it_closes_or_runs_out() -> None:

@@ -7,6 +7,7 @@ from collections.abc import Callable
 import pytest
 
 from pymotoros.controller import PendantMode, VirtualController
+from pymotoros.controller.lint import ResumedMotion
 from pymotoros.controller.signals import PFL_STOP, ROS_READY
 from pymotoros.motion.constants import QUEUE_SIZE
 
@@ -45,11 +46,38 @@ def test_motion_connection_closed_clears_every_queue_in_safe() -> None:
     vc = moving(safe_cell())
     interp = vc.motoros.interpolators[0]
     assert interp.pending
+    queued = command(vc, CMD.CHECK_QUEUE_CNT).subcode
+    assert queued > 0
     vc.motion_disconnected()
     settle_monitor(vc)
     assert not vc.has_queued_motion()
     assert not interp.pending
     assert command(vc, CMD.CHECK_QUEUE_CNT).subcode == 0
+    # what a robot would have kept and resumed: the client lint's reconnect-resumed-motion
+    resumed = vc.motion_connected()
+    assert resumed is not None
+    assert resumed.cleared_s is not None
+    assert resumed.cleared_s == pytest.approx(queued * vc.period_ms / 1000)
+    assert vc.motion_connected() is None  # the next connection: nothing left to resume
+
+
+@pytest.mark.parametrize(
+    ("fidelity", "trigger"),
+    [("exact", "alarm"), ("safe", "alarm"), ("safe", "servo off"), ("safe", None)],
+)
+def test_a_clear_while_disconnected_leaves_nothing_to_resume(
+    fidelity: str, trigger: str | None
+) -> None:
+    """Between the close and the next connection a clearing trigger empties the robot's
+    kept queues (exact); safe, which cleared them at the close, forgets what a robot would
+    have resumed for the same triggers. No trigger (safe): the next connection would resume."""
+    vc = moving(safe_cell() if fidelity == "safe" else None)
+    vc.motion_disconnected()
+    settle_monitor(vc)
+    if trigger is not None:
+        TRIGGERS[trigger](vc)
+        settle_monitor(vc)
+    assert (vc.motion_connected() is None) is (trigger is not None)
 
 
 def test_motion_connection_closed_keeps_the_queue_in_exact() -> None:
@@ -67,11 +95,11 @@ def test_motion_connection_closed_keeps_the_queue_in_exact() -> None:
     vc.run_ticks(50)
     assert vc.snapshot().groups[0].command_pulse == still  # nobody executes the queue
     assert command(vc, CMD.CHECK_QUEUE_CNT).subcode == queued
-    assert vc.motion_connected() is True  # the next connection resumes it
+    assert vc.motion_connected() == ResumedMotion()  # the next connection resumes it
     vc.run_ticks(queued + 10)
     assert vc.snapshot().groups[0].command_pulse != still
     assert not vc.has_queued_motion()
-    assert vc.motion_connected() is False  # nothing left to resume
+    assert vc.motion_connected() is None  # nothing left to resume
 
 
 @pytest.mark.parametrize("fidelity", ["exact", "safe"])

@@ -22,7 +22,7 @@ from pymotoros.controller.api import (
     PointData,
     StatusData,
 )
-from pymotoros.controller.lint import ClientLint
+from pymotoros.controller.lint import ClientLint, ResumedMotion
 from pymotoros.models.fidelity import Fidelity
 from pymotoros.protocol.constants import IoResultCode, MotionCommand, ResultCode
 
@@ -149,9 +149,9 @@ class FakeController:
     fidelity = Fidelity.EXACT
     """The servers' setting (docs/fidelity.md); the fake keeps no queues to resume."""
 
-    def motion_connected(self) -> bool:
+    def motion_connected(self) -> ResumedMotion | None:
         self._record("motion_connected")
-        return False
+        return None
 
     def motion_disconnected(self) -> None:
         self._record("motion_disconnected")

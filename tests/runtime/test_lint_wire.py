@@ -311,7 +311,8 @@ async def _reconnect_over_queued_motion(cell: Twin) -> RawClient:
     [
         ("exact", MotionCommand.CHECK_QUEUE_CNT, True),
         ("exact", MotionCommand.STOP_MOTION, False),
-        ("safe", MotionCommand.CHECK_QUEUE_CNT, False),
+        ("safe", MotionCommand.CHECK_QUEUE_CNT, True),
+        ("safe", MotionCommand.STOP_MOTION, False),
     ],
 )
 async def test_a_reconnect_is_found_when_it_lets_the_kept_increments_run(
@@ -319,7 +320,8 @@ async def test_a_reconnect_is_found_when_it_lets_the_kept_increments_run(
 ) -> None:
     """exact keeps the queues as MotoROS does (§2.2), and the next connection resumes
     them: a finding unless its first request is STOP_MOTION (what our client sends,
-    docs/client.md), which stops the robot. safe cleared them: nothing resumes."""
+    docs/client.md), which stops the robot. safe cleared them at the close, so nothing
+    moves, but the lint applies the same rule to what a robot would have resumed."""
     async with Twin(robot="hc10", fidelity=fidelity) as cell:
         try:
             client = await _reconnect_over_queued_motion(cell)
@@ -332,6 +334,8 @@ async def test_a_reconnect_is_found_when_it_lets_the_kept_increments_run(
                 finding = _finding(cell, LintCode.RECONNECT_RESUMED_MOTION)
                 assert "CHECK_QUEUE_CNT" in finding.text
                 assert finding.connection.startswith("twin-client-")
+                cleared = "safe cleared them, but a robot would have kept them and resumed"
+                assert (cleared in finding.text) is (fidelity == "safe"), finding.text
             else:
                 assert not cell.controller.has_queued_motion()
         finally:
@@ -339,18 +343,37 @@ async def test_a_reconnect_is_found_when_it_lets_the_kept_increments_run(
                 _OPEN.pop().close()
 
 
-async def test_a_silent_reconnect_is_found_once_the_old_motion_ran_out(cell: Twin) -> None:
-    """A connection that sends nothing lets the resumed motion run to its end."""
+@pytest.fixture(params=["exact", "safe"])
+async def either(request: pytest.FixtureRequest) -> AsyncIterator[Twin]:
+    """A twin in each fidelity setting: the lint's findings are the same in both."""
+    async with Twin(robot="hc10", fidelity=request.param) as the_twin:
+        try:
+            yield the_twin
+        finally:
+            while _OPEN:
+                _OPEN.pop().close()
+
+
+async def test_a_silent_reconnect_is_found_once_the_old_motion_ran_out(either: Twin) -> None:
+    """A connection that sends nothing lets the resumed motion run to its end. In safe
+    the queues are empty from the close: the end is when the cleared increments (the
+    queue held 0.8 s) would have run out on a robot, counted from the connect."""
+    cell = either
     await _reconnect_over_queued_motion(cell)
     await cell.sleep(0.5)
     assert _codes(cell) == []  # still moving, the connection may yet stop it
     await cell.sleep(2.5)
     assert not cell.controller.has_queued_motion()
     assert _codes(cell) == ["reconnect-resumed-motion"]
-    assert "queues ran empty" in _finding(cell, LintCode.RECONNECT_RESUMED_MOTION).text
+    text = _finding(cell, LintCode.RECONNECT_RESUMED_MOTION).text
+    if cell.cell.fidelity == "exact":
+        assert "queues ran empty" in text
+    else:
+        assert "0.800 s of increments a robot would have resumed ran out" in text
 
 
-async def test_a_reconnect_that_closes_silently_is_found(cell: Twin) -> None:
+async def test_a_reconnect_that_closes_silently_is_found(either: Twin) -> None:
+    cell = either
     client = await _reconnect_over_queued_motion(cell)
     await cell.sleep(0.1)
     client.close()
@@ -358,6 +381,23 @@ async def test_a_reconnect_that_closes_silently_is_found(cell: Twin) -> None:
     finding = _finding(cell, LintCode.RECONNECT_RESUMED_MOTION)
     assert "closed without sending STOP_MOTION" in finding.text
     assert finding.first_s < cell.controller.time_ms / 1000.0 - 0.1  # when it opened
+
+
+async def test_a_reconnect_after_a_close_at_rest_is_no_finding(either: Twin) -> None:
+    """Nothing was queued when the connection closed: nothing to resume, whatever the
+    next connection sends first."""
+    cell = either
+    client = await _enabled(cell)
+    await client.point(0, 0.0, 0.0)
+    await client.point(1, 0.2, 0.01)
+    await cell.sleep(0.6)
+    assert not cell.controller.has_queued_motion()
+    client.close()
+    await cell.sleep(0.1)
+    again = await _connect(cell)
+    assert (await again.ctrl(MotionCommand.CHECK_QUEUE_CNT)).result == ResultCode.SUCCESS
+    await cell.sleep(1.0)
+    assert _codes(cell) == []
 
 
 async def test_a_flood_of_connections_cannot_grow_the_findings(cell: Twin) -> None:

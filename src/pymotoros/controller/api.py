@@ -27,7 +27,7 @@ from pymotoros.protocol.constants import PendantMode as PendantMode  # its old h
 if TYPE_CHECKING:
     from pymotoros.controller.alarms import Alarm
     from pymotoros.controller.cell import CellConfig
-    from pymotoros.controller.lint import ClientLint
+    from pymotoros.controller.lint import ClientLint, ResumedMotion
     from pymotoros.controller.safety import SafetySnapshot, SafetyUnit
     from pymotoros.controller.safety.fsu import FsuRequest
     from pymotoros.controller.scenario import Scenario
@@ -387,8 +387,9 @@ class MotoRosController(Protocol):
     def write_mregister(self, number: int, value: int) -> IoResultCode: ...
 
     # --- connections (the servers report them; MotoROS mirrors them on OT#893..895)
-    def motion_connected(self) -> bool:
-        """True when a closed connection's queued increments resume now (exact, §2.2)."""
+    def motion_connected(self) -> ResumedMotion | None:
+        """Not None when a closed connection's queued increments resume now (exact,
+        §2.2), or would on a robot (safe cleared them: ``cleared_s``)."""
         ...
 
     def motion_disconnected(self) -> None:

@@ -55,7 +55,7 @@ from pymotoros.controller.drive_power import DrivePower
 from pymotoros.controller.forced_io import ForcedSignals
 from pymotoros.controller.incmove_task import IncMoveTask
 from pymotoros.controller.io_image import IoImage
-from pymotoros.controller.lint import ClientLint
+from pymotoros.controller.lint import ClientLint, ResumedMotion
 from pymotoros.controller.machine import EstopSource, Event, OperatorState
 from pymotoros.controller.motoros import MotoRos
 from pymotoros.controller.operator_keys import MAX_ALARM_CODE, OperatorKeys
@@ -293,10 +293,11 @@ class VirtualController:
 
     # ================================================================== connections
 
-    def motion_connected(self) -> bool:
+    def motion_connected(self) -> ResumedMotion | None:
         """A client connected to the motion port: OT#893 (motion connected) on, as
-        MotoROS. True when the queued increments of a closed motion connection resume
-        now (fidelity exact, §2.2)."""
+        MotoROS. Not None when the queued increments of a closed motion connection resume
+        now (fidelity exact, §2.2), or would on a robot (safe cleared them at the close:
+        ``cleared_s``)."""
         return self._connections.motion_connected()
 
     def motion_disconnected(self) -> None:

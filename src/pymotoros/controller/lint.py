@@ -36,6 +36,7 @@ __all__ = [
     "Finding",
     "LintCode",
     "LintRule",
+    "ResumedMotion",
     "format_findings",
 ]
 
@@ -131,7 +132,8 @@ RULES: Final[dict[LintCode, LintRule]] = {
         "A motion connection was opened while increments queued by a closed one were "
         "still in the queues, and let them run. MotoROS keeps them, and the new "
         "connection's IncMove task resumes the old motion as soon as anybody connects "
-        "(a connection whose first request is STOP_MOTION is not reported).",
+        "(a connection whose first request is STOP_MOTION is not reported; in fidelity "
+        "safe the twin cleared them at the close, but a robot would have resumed them).",
         "After a reconnect send STOP_MOTION at once and wait for the robot to rest "
         "before planning from its feedback.",
     ),
@@ -176,6 +178,30 @@ class Finding:
         }
 
 
+@dataclass(frozen=True, slots=True)
+class ResumedMotion:
+    """What a new motion connection finds of the increments a closed one left queued
+    (§2.2): the controller's ``motion_connected()`` answer, None when there were none."""
+
+    cleared_s: float | None = None
+    """None: the queues were kept and run now (fidelity exact, as MotoROS 1.9.12).
+    Fidelity safe: the twin cleared them at the close; a robot would have kept them and
+    would run them now, for this many seconds (the fullest group's queue)."""
+
+
+@dataclass(frozen=True, slots=True)
+class _Resume:
+    """A motion connection opened over a closed one's queued increments that has not
+    yet shown what it does about them."""
+
+    connection: str
+    opened_s: float
+    """Controller time it opened: the finding's ``first_s``."""
+    ends_s: float | None
+    """Fidelity safe: when the cleared increments would have run out on a robot (the
+    twin's queues are empty, so the tick watches this time instead). None in exact."""
+
+
 @dataclass(slots=True)
 class _Entry:
     count: int
@@ -206,9 +232,9 @@ class ClientLint:
         """Groups whose last accepted point had a non-zero velocity -> its connection."""
         self.state_clients = 0
         """Open state connections (the state server reports them through the controller)."""
-        self._resumed: tuple[str, float] | None = None
+        self._resumed: _Resume | None = None
         """A motion connection that opened over a closed one's queued increments and has
-        not yet shown what it does about them: (connection, controller time it opened)."""
+        not yet shown what it does about them."""
 
     # ----------------------------------------------------------- findings
 
@@ -341,19 +367,29 @@ class ClientLint:
                 f"group {group} at {now_s:.3f} s",
             )
 
-    def motion_opened(self, connection: str, now_s: float, *, queued: bool) -> None:
+    def motion_opened(
+        self, connection: str, now_s: float, *, queued: bool, cleared_s: float | None = None
+    ) -> None:
         """A motion connection took its slot; ``queued``: increments a closed connection
-        left queued resume now (the controller's ``motion_connected()``, fidelity exact).
+        left queued resume now, or would on a robot (the controller's
+        ``motion_connected()``); ``cleared_s``: fidelity safe, the twin cleared them at the
+        close, and a robot would run them for this long (:class:`ResumedMotion`).
 
         Not a finding yet: a client that sends STOP_MOTION as its first request does what
         a robot needs (docs/client.md), and its reconnect works by design, not by luck.
         The finding is recorded, dated when the connection opened, when the connection
         lets the old motion run instead: its first request is anything else
         (:meth:`motion_request`), it closes without a request (:meth:`motion_closed`),
-        or the old motion runs to its end first (:meth:`resumed_motion_ended`).
+        or the old motion runs to its end first (:meth:`resumed_motion_ended`,
+        :meth:`resumed_motion_tick`). In safe the same rule applies to what a robot would
+        have done, and the text says the twin cleared the queues.
         """
         self._settle_resume("another motion connection opened before it sent anything")
-        self._resumed = (connection, now_s) if queued else None
+        if not queued:
+            self._resumed = None
+            return
+        ends_s = None if cleared_s is None else now_s + cleared_s
+        self._resumed = _Resume(connection, now_s, ends_s)
 
     @property
     def resume_pending(self) -> bool:
@@ -364,7 +400,7 @@ class ClientLint:
         """``connection`` sent a request on the motion port; ``stops``: it is STOP_MOTION
         (``what`` names it otherwise). Only the first after a resume matters."""
         pending = self._resumed
-        if pending is None or pending[0] != connection:
+        if pending is None or pending.connection != connection:
             return
         self._resumed = None
         if not stops:
@@ -372,7 +408,7 @@ class ClientLint:
 
     def motion_closed(self, connection: str) -> None:
         """``connection`` left the motion port."""
-        if self._resumed is not None and self._resumed[0] == connection:
+        if self._resumed is not None and self._resumed.connection == connection:
             self._settle_resume("it closed without sending STOP_MOTION")
 
     def resumed_motion_ended(self) -> None:
@@ -380,18 +416,43 @@ class ClientLint:
         motion ran its course."""
         self._settle_resume("the queues ran empty before it sent STOP_MOTION")
 
+    def resumed_motion_tick(self, now_s: float, *, queued: bool) -> None:
+        """The tick's look at a pending resume (call only while :attr:`resume_pending`):
+        in exact the old motion ended when the queues ran empty (``queued`` False); in
+        safe, whose queues were cleared, when the cleared increments' time has passed on
+        the controller clock since the connection opened, as they would have on a robot
+        (a connection that is still silent then let all of it run)."""
+        pending = self._resumed
+        if pending is None:
+            return
+        if pending.ends_s is None:
+            if not queued:
+                self.resumed_motion_ended()
+        elif now_s >= pending.ends_s:
+            self._settle_resume(
+                f"the {pending.ends_s - pending.opened_s:.3f} s of increments a robot would "
+                "have resumed ran out before it sent STOP_MOTION"
+            )
+
     def _settle_resume(self, why: str) -> None:
         pending, self._resumed = self._resumed, None
         if pending is not None:
             self._record_resumed(pending, why)
 
-    def _record_resumed(self, pending: tuple[str, float], why: str) -> None:
-        connection, opened_s = pending
+    def _record_resumed(self, pending: _Resume, why: str) -> None:
+        if pending.ends_s is None:
+            what = "increments of a closed connection were still queued and ran"
+        else:
+            what = (
+                "increments of a closed connection were queued when it closed; fidelity "
+                "safe cleared them, but a robot would have kept them and resumed them "
+                "under this connection"
+            )
         self.record(
             LintCode.RECONNECT_RESUMED_MOTION,
-            connection,
-            opened_s,
-            f"increments of a closed connection were still queued and ran: {why}",
+            pending.connection,
+            pending.opened_s,
+            f"{what}: {why}",
         )
 
     def _sequence(self, group: int) -> _Sequence:

@@ -38,7 +38,7 @@ import logging
 from typing import Final
 
 from pymotoros.controller.api import MotoRosController, Outcome, Pending, PointData
-from pymotoros.controller.lint import LintCode
+from pymotoros.controller.lint import LintCode, ResumedMotion
 from pymotoros.models.fidelity import Fidelity
 from pymotoros.protocol.constants import (
     MAX_JOINTS,
@@ -175,15 +175,22 @@ class MotionServer(FramedService):
     def on_connect(self, conn: Connection) -> None:
         c = self._controller
         resumed = c.motion_connected()  # the one source of truth (ConnectionEvents)
-        c.lint.motion_opened(conn.peer, c.time_ms / 1000.0, queued=resumed)
-        if resumed:
-            self.resumed_motion_seen(conn)
+        if resumed is None:
+            c.lint.motion_opened(conn.peer, c.time_ms / 1000.0, queued=False)
+        else:
+            self.resumed_motion_seen(conn, resumed)
 
-    def resumed_motion_seen(self, conn: Connection) -> None:
+    def resumed_motion_seen(self, conn: Connection, resumed: ResumedMotion) -> None:
         """``conn`` opened while a closed connection's increments were queued: the robot
-        resumes that motion now (fidelity exact, §2.2; the one place this is seen by a
-        server). The controller logs the warning; the client lint waits for the
-        connection's first request (STOP_MOTION at once is no finding, docs/sim.md)."""
+        resumes that motion now (§2.2; the one place this is seen by a server), in
+        fidelity exact from the kept queues; in safe the twin cleared them at the close
+        (``resumed.cleared_s``), but a robot would resume them. The controller logs it;
+        the client lint waits for the connection's first request (STOP_MOTION at once is
+        no finding, docs/sim.md), the same rule in both settings."""
+        c = self._controller
+        c.lint.motion_opened(
+            conn.peer, c.time_ms / 1000.0, queued=True, cleared_s=resumed.cleared_s
+        )
 
     def lint(self, code: LintCode, conn: Connection, detail: str = "") -> None:
         c = self._controller
