@@ -249,6 +249,19 @@ async def test_reset_mid_trajectory_driver_resumes_and_reaches_the_goal(
         assert motion.aborted is None
         # the kept increments ran on the new connection, then the rest: at the goal
         assert distance(await cell.at_rest(), GOAL) < 1e-3
+    # it works because the driver relies on the resume: the lint says so
+    assert_reconnect_found(pymotoros_twin, safe=False)
+
+
+def assert_reconnect_found(twin: RunningTwin, *, safe: bool) -> None:
+    """The driver's reconnect carried on streaming (its first request a point, not
+    STOP_MOTION): the client lint reports it in either fidelity setting, in safe with
+    what a robot would have done (docs/sim.md, reconnect-resumed-motion)."""
+    found = [f for f in twin.lint_findings() if f.code == "reconnect-resumed-motion"]
+    assert len(found) == 1, twin.lint_findings()
+    assert "its first request was JOINT_TRAJ_PT_FULL, not STOP_MOTION" in found[0].text
+    cleared = "safe cleared them, but a robot would have kept them and resumed them"
+    assert (cleared in found[0].text) is safe, found[0].text
 
 
 @pytest.mark.pymotoros(fidelity="safe")
@@ -329,6 +342,8 @@ async def test_reset_mid_trajectory_driver_resumes_and_application_recovers(
         restart = accepted_sequences(cell.motion_proxy.links[1])[len(twin_side) :]
         assert restart == list(range(len(second)))
         assert distance(await cell.at_rest(), GOAL) < 1e-3
+    # on a robot the reconnect would have resumed the cleared increments: the lint says so
+    assert_reconnect_found(pymotoros_twin, safe=True)
 
 
 async def test_state_reset_driver_reconnects_after_its_delay(
