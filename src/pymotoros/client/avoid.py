@@ -141,7 +141,7 @@ class Avoidance:
 
         from pymotoros.kinematics.sweep import sweep
 
-        if len(trajectory.points) < 2:  # nothing moves
+        if len(trajectory.points) <= 1:  # one point or none: nothing moves
             return None
         world = self.world()
         self._mount_tools(world)
