@@ -166,8 +166,16 @@ def test_sigterm_mid_move_stops_short_and_exits_143(two_arms: tuple[Sim, Path]) 
             # a second motion client is refused while the robot moves: stop explains
             result = invoke(ports, "stop")
             assert result.exit_code == EXIT_CONNECTION
-            assert "one motion client" in result.stderr
-            assert "Ctrl-C" in result.stderr
+            # the rule and the remedies once: the library's text, then what stop adds
+            error = [ln for ln in result.stderr.splitlines() if ln.startswith("error: ")]
+            assert len(error) == 1, result.stderr
+            # the library states the rule (closed before any reply); a reset connection
+            # does not, and then stop states it
+            rules = ("MotoROS takes one motion connection", "MotoROS allows one motion client")
+            assert sum(error[0].count(rule) for rule in rules) == 1, error[0]
+            assert error[0].count("Ctrl-C") == 1, error[0]
+            assert "`pymotoros stop` cannot take over" in error[0]
+            assert "SIGTERM to the moving command" in error[0]
             assert f"http://127.0.0.1:{sim.http}" in result.stderr
             process.send_signal(signal.SIGTERM)
             _, stderr = process.communicate(timeout=SIGTERM_WAIT_S)
