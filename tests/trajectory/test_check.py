@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import asyncio
+import re
 from pathlib import Path
 
 import numpy as np
@@ -424,3 +425,13 @@ def test_the_refusal_line_gives_value_and_limit_with_units() -> None:
         line = next(ln for ln in text.splitlines() if ln.startswith("  value "))
         r = report.refusal
         assert line == f"  value {r.value:.6g} {unit}, limit {r.limit:.6g} {unit}", text
+
+
+def test_the_acceleration_warning_gives_the_rounding_allowance_its_unit() -> None:
+    goal = list(START)
+    goal[0] += 0.02  # 20 mrad in 8 ms from rest: far above joint_1_s's acceleration
+    traj = _traj([0.0, 0.008, 0.5], [START, goal, goal], [_still(0), _still(1), _still(2)])
+    report = check_trajectory(traj, HC10, YRC)
+    texts = [w.text for w in report.warnings if w.kind == "acceleration"]
+    assert texts, report.warnings
+    assert re.search(r"above its [\d.]+ rad/s² \(plus [\d.]+ rad/s² for whole-pulse", texts[0])
