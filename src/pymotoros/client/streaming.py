@@ -65,7 +65,7 @@ from pymotoros.client.preflight import (
 from pymotoros.client.state import RobotState
 from pymotoros.client.timing import REAL_TIME, ClientClock
 from pymotoros.client.watchdog import DEFAULT_STATE_STALL_S, StallWatchdog
-from pymotoros.log_tags import AS_STOP_REPORT
+from pymotoros.log_tags import AS_NOTE, AS_STOP_REPORT
 from pymotoros.models import ControllerModel, GroupModel, RobotModel
 from pymotoros.models.rules import START_TOLERANCE_PULSES
 from pymotoros.protocol.constants import InvalidSubcode, MotionCommand, MsgType, ResultCode
@@ -1147,7 +1147,7 @@ class FollowingMonitor:
                 f"{head}, though it now progresses at {sample.speed_pct:.0f} % of the planned "
                 f"speed ({numbers}; the feedback carries no velocity): it was held up earlier"
             )
-        logger.warning("%s", rep.reason)
+        logger.warning("%s", rep.reason, extra=AS_NOTE)  # the CLI: a `note: …` line
 
     def _reported_pct(self, state: RobotState, reached: float) -> float | None:
         """The robot's own velocity report along the plan's velocity where it stands, in %

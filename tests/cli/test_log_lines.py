@@ -1,0 +1,40 @@
+"""What the CLI makes of the client's tagged log records (``pymotoros.log_tags``): a note
+is a plain ``note: …`` line, a stop the CLI reports itself is not said twice, anything
+else stays a timestamped log line (issue 29)."""
+
+from __future__ import annotations
+
+import logging
+import re
+
+import pytest
+
+from pymotoros.cli.main import configure_logging
+from pymotoros.log_tags import AS_NOTE, AS_STOP_REPORT
+
+
+def test_a_note_is_a_plain_line_and_a_stop_report_is_left_to_the_cli(
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    root = logging.getLogger()
+    handlers, level = root.handlers[:], root.level
+    configure_logging(0, False)  # its handler writes to the captured stderr
+    try:
+        log = logging.getLogger("pymotoros.client.avoid")
+        log.warning("this move only takes it away, so it is allowed", extra=AS_NOTE)
+        logging.getLogger("pymotoros.client.streaming").warning(
+            "the move was cancelled: the robot was stopped (STOP_MOTION) and stands at [0.1] rad",
+            extra=AS_STOP_REPORT,
+        )
+        log.warning("an ordinary warning")
+    finally:
+        root.handlers[:] = handlers
+        root.setLevel(level)
+    lines = capsys.readouterr().err.splitlines()
+    assert lines[0] == "note: this move only takes it away, so it is allowed"
+    assert len(lines) == 2, lines  # the stop report is dropped
+    assert re.fullmatch(
+        r"\d{4}-\d\d-\d\d \d\d:\d\d:\d\d,\d{3} WARNING pymotoros\.client\.avoid: "
+        r"an ordinary warning",
+        lines[1],
+    )
