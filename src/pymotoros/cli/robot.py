@@ -839,7 +839,7 @@ async def _move_watched(
         where = await asyncio.shield(
             _settled_where(client, goal, req.deg, "stopped (STOP_MOTION)", timeout_s)
         )
-        click.echo("\n" + where, err=True)
+        click.echo(where, err=True)  # the progress line has ended its line already
         raise
     except ReplyError as exc:
         stop = exc.early_stop
