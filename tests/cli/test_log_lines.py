@@ -38,3 +38,25 @@ def test_a_note_is_a_plain_line_and_a_stop_report_is_left_to_the_cli(
         r"an ordinary warning",
         lines[1],
     )
+
+
+def test_a_second_motion_client_is_told_once_by_the_error(
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    """The loss of a motion connection MotoROS closed before its first reply fails the
+    waiting request with the same words, which the CLI prints as ``error: …``."""
+    from pymotoros.client.errors import SECOND_MOTION_CLIENT
+
+    root = logging.getLogger()
+    handlers, level = root.handlers[:], root.level
+    configure_logging(0, False)
+    try:
+        log = logging.getLogger("pymotoros.client.connection")
+        log.warning("motion connection to 127.0.0.1:1 lost: %s", SECOND_MOTION_CLIENT)
+        log.warning("state connection to 127.0.0.1:2 lost: closed by the controller")
+    finally:
+        root.handlers[:] = handlers
+        root.setLevel(level)
+    lines = capsys.readouterr().err.splitlines()
+    assert len(lines) == 1, lines
+    assert lines[0].endswith("state connection to 127.0.0.1:2 lost: closed by the controller")
