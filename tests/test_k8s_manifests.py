@@ -253,11 +253,12 @@ def test_the_scrape_sends_the_token_from_the_secret() -> None:
             if r.get("action") == "keep"}  # fmt: skip
     assert keep[("__meta_kubernetes_pod_container_port_name",)] == "http"
     labels = container_labels()
-    assert (
-        keep[("__meta_kubernetes_pod_label_app_kubernetes_io_name",)]
-        == labels["app.kubernetes.io/name"]
+    assert keep[("__meta_kubernetes_pod_label_app_kubernetes_io_name",)] == labels[
+        "app.kubernetes.io/name"
+    ]
+    annotations = manifests()["StatefulSet"]["spec"]["template"]["metadata"].get(
+        "annotations", {}
     )
-    annotations = manifests()["StatefulSet"]["spec"]["template"]["metadata"].get("annotations", {})
     assert "prometheus.io/scrape" not in annotations  # such a scrape has no token: 401
 
 

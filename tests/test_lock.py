@@ -63,7 +63,9 @@ def test_everything_in_it_is_pinned_and_hashed() -> None:
     """An indirect dependency is locked too (pip's hash-checking mode needs all of
     them), and the package itself is not in it (CI installs the checkout)."""
     text = LOCK.read_text()
-    requirements = [line for line in text.splitlines() if line and not line.startswith((" ", "#"))]
+    requirements = [
+        line for line in text.splitlines() if line and not line.startswith((" ", "#"))
+    ]
     assert requirements, "the lock is empty"
     assert all("==" in line for line in requirements), requirements
     assert text.count("--hash=sha256:") >= len(requirements)

@@ -278,3 +278,4 @@ def test_the_skillsend_detail_lists_every_missing_condition() -> None:
         'SKILLSND "ROS-START" not received for slave 1; '
         "OT#889 is on but its rising edge was not seen; a stop is in progress"
     )
+

@@ -194,6 +194,6 @@ def test_a_position_that_is_not_a_json_number_is_refused(value: str) -> None:
     (found by the bad-file Hypothesis test: ``true`` was read as 1.0 rad)."""
     good = to_json(_sample(HC10.groups[0].joint_names))
     head, sep, tail = good.partition('"positions": [')
-    bad = head + sep + value + tail[tail.index(",") :]
+    bad = head + sep + value + tail[tail.index(","):]
     with pytest.raises(TrajectoryFileError, match="not all numbers"):
         parse_json(bad)

@@ -68,7 +68,9 @@ class StateView:
             group_no, servo.feedback(ctx.clock.tick_count, powered), servo.speed()
         )
 
-    def _feedback(self, group_no: int, pulses: Sequence[int], speed: Sequence[int]) -> FeedbackData:
+    def _feedback(
+        self, group_no: int, pulses: Sequence[int], speed: Sequence[int]
+    ) -> FeedbackData:
         to_ros = self._to_ros[group_no]
         return FeedbackData(group_no, FEEDBACK_FIELDS, _pad(to_ros(pulses)), _pad(to_ros(speed)))
 

@@ -310,7 +310,7 @@ def group_rules(group: GroupModel, controller: ControllerModel) -> GroupRules:
         if known_group is group and known_controller is controller:
             return rules
     rules = _group_rules(group, controller)
-    _recent_rules = ((group, controller, rules), *recent[: RECENT_RULES - 1])
+    _recent_rules = ((group, controller, rules), *recent[:RECENT_RULES - 1])
     return rules
 
 

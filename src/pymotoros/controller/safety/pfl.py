@@ -137,7 +137,8 @@ class PflFunction:
             steps = min(len(r) for r in recorded)
             # newest first: each step undoes one recorded tick of every group
             self._retreat = [
-                tuple(tuple(-x for x in r[len(r) - 1 - k]) for r in recorded) for k in range(steps)
+                tuple(tuple(-x for x in r[len(r) - 1 - k]) for r in recorded)
+                for k in range(steps)
             ]
 
     def tick(self, now_ms: int) -> None:
