@@ -513,17 +513,19 @@ async def _stream_file(
     if enable_first:
         await client.start_trajectory_mode()
     await check_start(client, joint, groups)
-    with progress_bar("running", client, groups, duration_s=joint.duration) as progress:
-        try:
+    try:
+        with progress_bar("running", client, groups, duration_s=joint.duration) as progress:
             # checked above as `check` does, obstacles included: the client's guard
             # would only repeat it (and must not refuse what --force sends)
             return await client.execute(
                 joint, groups=groups, on_progress=progress, check_speed=not force, force=True
             )
-        except asyncio.CancelledError:
-            with contextlib.suppress(PymotorosError):
-                await asyncio.shield(client.stop_motion())
-            raise
+    except asyncio.CancelledError as exc:
+        with contextlib.suppress(PymotorosError):
+            await asyncio.shield(client.stop_motion())
+        for note in getattr(exc, "__notes__", ()):  # the client's stop: where it stands
+            click.echo(note, err=True)
+        raise
 
 
 @click.command(context_settings={"help_option_names": ["-h", "--help"]})
