@@ -6,11 +6,16 @@ from __future__ import annotations
 
 import logging
 import re
+import sys
+from pathlib import Path
 
 import pytest
 
 from pymotoros.cli.main import configure_logging
 from pymotoros.log_tags import AS_NOTE, AS_STOP_REPORT
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "client"))
+from client_sim import running_sim
 
 
 def test_a_note_is_a_plain_line_and_a_stop_report_is_left_to_the_cli(
@@ -60,3 +65,25 @@ def test_a_second_motion_client_is_told_once_by_the_error(
     lines = capsys.readouterr().err.splitlines()
     assert len(lines) == 1, lines
     assert lines[0].endswith("state connection to 127.0.0.1:2 lost: closed by the controller")
+
+
+def test_a_slowed_move_ends_with_notes_on_stderr_and_the_result_on_stdout() -> None:
+    """The FSU scenario slows a move: the following monitor's note during the move and
+    the summary after it are ``note: …`` lines on stderr; stdout holds the result."""
+    from click.testing import CliRunner
+
+    from pymotoros.cli.main import cli
+
+    scenario = Path(__file__).parents[2] / "examples" / "scenarios" / "fsu_long_move.toml"
+    with running_sim("--scenario", str(scenario)) as sim:
+        run = CliRunner().invoke(
+            cli, ["move", "2.5", "0", "0", "0", "0", "0", "--enable", *sim.cli_args()]
+        )
+    assert run.exit_code == 0, run.output
+    assert run.stdout.startswith("reached [2.5000, "), run.stdout
+    assert "note" not in run.stdout
+    notes = [ln for ln in run.stderr.splitlines() if ln.startswith("note: the robot ")]
+    assert any("behind the plan at " in n and "slowing it" in n for n in notes), run.stderr
+    assert notes[-1].startswith("note: the robot ran up to "), run.stderr
+    assert notes[-1].endswith("(a safety speed limit, an override or HOLD slowed it)")
+    assert "WARNING" not in run.stderr, run.stderr

@@ -879,8 +879,9 @@ def _report_move(result: MoveResult, req: MoveRequest, goal: MoveGoal, robot: An
             if following.slowed
             else "the controller or the network was late; the robot was not slowed"
         )
-        click.echo(
-            f"note: the robot ran up to {following.max_lag_s:.2f} s behind the plan ({cause})"
+        click.echo(  # a note, on stderr as every note: stdout is the result
+            f"note: the robot ran up to {following.max_lag_s:.2f} s behind the plan ({cause})",
+            err=True,
         )
 
 
