@@ -28,6 +28,7 @@ __version__``."""
 LIBRARY: Final = frozenset(
     {
         "errors",
+        "log_tags",
         "protocol",
         "models",
         "motion",
@@ -46,6 +47,9 @@ LIBRARY: Final = frozenset(
 ALLOWED: Final[dict[str, frozenset[str]]] = {
     # errors: the exception tree, imported by every layer, importing none
     "errors": frozenset(),
+    # log_tags: names of the tags on the client's log records (notes, stop reports) that
+    # the CLI prints its own way; a leaf, so the CLI's start-up does not import the client
+    "log_tags": frozenset(),
     # protocol: sans-I/O Simple Message codec; constants is its leaf
     "protocol.constants": frozenset({"errors"}),
     "protocol": frozenset({"errors", "protocol"}),
@@ -77,7 +81,9 @@ ALLOWED: Final[dict[str, frozenset[str]]] = {
         }
     ),
     # client: speaks only the wire (it must work against a real robot)
-    "client": frozenset({"errors", "protocol", "models", "kinematics", "capture", "client"}),
+    "client": frozenset(
+        {"errors", "log_tags", "protocol", "models", "kinematics", "capture", "client"}
+    ),
     # capture: the pcapng writer of the session recorder, bytes and ports only (dpkt and
     # the standard library), so that both the client and the runtime can use it
     "capture": frozenset(),

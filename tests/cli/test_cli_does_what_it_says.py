@@ -139,7 +139,8 @@ def test_estop_stands_at_is_where_the_robot_came_to_rest(sim: Sim) -> None:
         sim.api("/api/estop", {"pressed": False})
         invoke(sim, "reset")
     assert process.returncode == EXIT_REFUSED, stderr
-    match = re.search(r"the robot stands at \[([^\]]+)\] rad", stderr)
+    assert stderr.count("stands at [") == 1, stderr  # said once (the library's stop)
+    match = re.search(r"stands at \[([^\]]+)\] rad", stderr)
     assert match is not None, stderr
     told = [float(v) for v in match.group(1).split(",")]
     assert told == pytest.approx(list(rest), abs=2e-4)  # 4 decimals, a settled robot

@@ -170,8 +170,16 @@ def test_sigterm_mid_move_stops_short_and_exits_143(two_arms: tuple[Sim, Path]) 
             # a second motion client is refused while the robot moves: stop explains
             result = invoke(ports, "stop")
             assert result.exit_code == EXIT_CONNECTION
-            assert "one motion client" in result.stderr
-            assert "Ctrl-C" in result.stderr
+            # the rule and the remedies once: the library's text, then what stop adds
+            error = [ln for ln in result.stderr.splitlines() if ln.startswith("error: ")]
+            assert len(error) == 1, result.stderr
+            # the library states the rule (closed before any reply); a reset connection
+            # does not, and then stop states it
+            rules = ("MotoROS takes one motion connection", "MotoROS allows one motion client")
+            assert sum(error[0].count(rule) for rule in rules) == 1, error[0]
+            assert error[0].count("Ctrl-C") == 1, error[0]
+            assert "`pymotoros stop` cannot take over" in error[0]
+            assert "SIGTERM" in error[0]
             assert f"http://127.0.0.1:{sim.http}" in result.stderr
             process.send_signal(signal.SIGTERM)
             _, stderr = process.communicate(timeout=SIGTERM_WAIT_S)
@@ -182,6 +190,9 @@ def test_sigterm_mid_move_stops_short_and_exits_143(two_arms: tuple[Sim, Path]) 
         assert process.returncode == EXIT_TERMINATED, stderr
         assert "Traceback" not in stderr
         assert "stopped (STOP_MOTION) at [" in stderr
+        # said once, by the CLI's own line: not again in a log line of the client's stop
+        assert stderr.count("STOP_MOTION") == 1, stderr
+        assert "" not in stderr.splitlines(), stderr
         assert "short of the goal" in stderr
         state = watcher.wait_until(lambda s: s.status is not None and not s.status.in_motion, 10.0)
         assert (state.positions(0) or (goal,))[0] < goal - 0.1

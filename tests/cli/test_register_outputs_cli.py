@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import json
 import math
+import re
 import sys
 from collections.abc import Iterator
 from pathlib import Path
@@ -81,6 +82,8 @@ def test_outputs_human_report_names_units_and_frame(moved_sim: Sim) -> None:
     assert "mm/s" in lines["TCP speed (feedback)"]
     assert "raw" in lines["TCP speed (feedback)"]
     assert "deg/s" in lines["S speed (feedback)"]
+    for line in lines.values():  # every raw value with its unit, also where it is the same
+        assert re.search(r"raw -?\d+ \S+$", line), line
 
 
 def test_outputs_without_a_cell_file_says_what_it_needs() -> None:

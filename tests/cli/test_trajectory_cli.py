@@ -4,6 +4,7 @@ trajectory as ``rostopic echo`` prints it checked, run on ``pymotoros sim`` and 
 from __future__ import annotations
 
 import json
+import re
 import sys
 from collections.abc import Iterator
 from pathlib import Path
@@ -423,3 +424,47 @@ def test_check_names_a_gap_the_file_itself_makes_too_short(tmp_path: Path) -> No
     assert "(first: point 2, 1 ms after point 1); the file itself spaces them 1 ms apart" in text
     assert "sample it at 4 ms or more" in text
     assert "truncat" not in text
+
+
+def test_ctrl_c_during_run_says_where_the_robot_stopped(sim: Sim, tmp_path: Path) -> None:
+    """``pymotoros run`` interrupted: the client stops the robot, and the one line about
+    it says where it stands (the client's own log line of the stop is left to the CLI)."""
+    import os
+    import signal
+    import subprocess
+
+    from pymotoros.client import SyncRobotClient
+
+    way = tmp_path / "way.csv"
+    way.write_text("s,l,u,r,b,t\n0,0,0,0,0,0\n2.0,0,0,0,0,0\n")
+    slow = tmp_path / "slow.yaml"
+    planned = invoke("plan", str(way), "--speed-scale", "0.2", "-o", str(slow))
+    assert planned.exit_code == 0, planned.output
+    assert invoke("move", "0", "0", "0", "0", "0", "0", "--enable", *sim.cli_args()).exit_code == 0
+    with SyncRobotClient(**sim.client_options()) as watcher:
+        watcher.wait_for_state()
+        process = subprocess.Popen(  # noqa: S603 - our own CLI
+            [sys.executable, "-m", "pymotoros", "run", str(slow), *sim.cli_args()],
+            stderr=subprocess.PIPE,
+            stdout=subprocess.PIPE,
+            text=True,
+            env={**os.environ},
+        )
+        try:
+            watcher.wait_until(lambda s: (s.positions(0) or (0,))[0] > 0.2, 30.0, "motion")
+            process.send_signal(signal.SIGINT)
+            _, stderr = process.communicate(timeout=30)
+        finally:
+            if process.poll() is None:
+                process.kill()
+                process.communicate()
+        rest = watcher.wait_until(lambda s: s.status is not None and not s.status.in_motion, 10.0)
+    assert process.returncode == 130, stderr
+    assert "Traceback" not in stderr
+    assert stderr.count("stands at [") == 1, stderr
+    assert "WARNING" not in stderr, stderr  # a plain line, not a log record
+    told = re.search(r"stopped \(STOP_MOTION\) and stands at \[([^\]]+)\] rad", stderr)
+    assert told is not None, stderr
+    here = [float(v) for v in told.group(1).split(",")]
+    assert here == pytest.approx(list(rest.positions(0) or ()), abs=2e-4)
+    assert here[0] < 2.0 - 0.1  # stopped short of the goal

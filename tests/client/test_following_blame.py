@@ -20,6 +20,7 @@ from pymotoros.client.planning import JointLimits, plan_joint_move
 from pymotoros.client.state import JointState, RobotState
 from pymotoros.client.streaming import FollowingMonitor
 from pymotoros.controller.scenario import load_scenario
+from pymotoros.log_tags import NOTE
 from pymotoros.models import robot_model
 from pymotoros.testing import twin
 
@@ -49,6 +50,10 @@ async def test_the_fsu_scenario_is_blamed_on_the_robot_being_slowed(
     assert "safety speed limit (FSU), a speed override or HOLD" in report.reason
     assert "behind the plan" in report.reason
     assert not _contradiction(caplog.text)
+    # a note for the person at the robot: the CLI prints it as a plain `note: …` line
+    told = [r for r in caplog.records if r.getMessage() == report.reason]
+    assert told, caplog.text
+    assert all(getattr(r, NOTE, False) for r in told)
 
 
 def _stall(step: Callable[[], None], now: Callable[[], float], start: float, end: float):

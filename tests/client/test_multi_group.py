@@ -103,7 +103,12 @@ async def test_stop_from_another_task_ends_the_move_short(
         with pytest.raises(MoveStoppedError) as info:
             await move
     assert info.value.positions[0] < goal[0] - 0.1
-    assert "STOP_MOTION" in str(info.value)
+    assert str(info.value).startswith(
+        "move stopped on request: the robot was stopped (STOP_MOTION) and stands at ["
+    )
+    assert str(info.value).count("STOP_MOTION") == 1  # said once
+    assert info.value.early_stop is not None
+    assert info.value.early_stop.positions == info.value.positions
 
 
 def test_sync_stop_from_another_thread() -> None:

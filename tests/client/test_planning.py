@@ -117,8 +117,25 @@ def test_same_start_and_goal_is_one_point() -> None:
 def test_goal_outside_limits_is_refused() -> None:
     goal = list(HC10.home)
     goal[2] = math.radians(-10)
-    with pytest.raises(PlanningError, match="joint_3_u"):
+    with pytest.raises(PlanningError, match="joint_3_u") as refused:
         plan_joint_move(HC10.home, goal, LIMITS)
+    # every number with its unit (issue 29): the goal and the limits in rad and deg
+    lo, hi = LIMITS.lower[2], LIMITS.upper[2]
+    assert str(refused.value) == (
+        f"goal -0.174533 rad (-10.000 deg) for joint_3_u is outside its limits "
+        f"[{lo:.6f}, {hi:.6f}] rad ([{math.degrees(lo):.3f}, {math.degrees(hi):.3f}] deg); "
+        "give a goal within them"
+    )
+
+
+def test_a_linear_axis_goal_outside_its_limits_is_in_metres() -> None:
+    track = JointLimits(("base_x",), (0.0,), (2.0,), (1.0,), (2.0,), (20.0,), linear=(True,))
+    with pytest.raises(PlanningError) as refused:
+        plan_joint_move((0.5,), (2.5,), track)
+    assert str(refused.value) == (
+        "goal 2.500000 m for base_x is outside its limits [0.000000, 2.000000] m; "
+        "give a goal within them"
+    )
 
 
 @pytest.mark.parametrize("bad", [0.0, -0.1, 1.5, math.nan])

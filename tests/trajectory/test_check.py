@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import asyncio
+import re
 from pathlib import Path
 
 import numpy as np
@@ -404,3 +405,33 @@ def test_fsu_execution_equals_the_tick_by_tick_compensation(pct: int, seed: int)
     for f, s_, (_, inc) in zip(fast, slow, groups, strict=True):
         np.testing.assert_array_equal(f, s_)
         np.testing.assert_array_equal(f.sum(axis=0), inc.sum(axis=0))  # nothing is lost
+
+
+def test_the_refusal_line_gives_value_and_limit_with_units() -> None:
+    """``pymotoros check``'s "value …, limit …" line carries the unit of the subcode
+    (issue 29: every number in an error has its unit)."""
+    from pymotoros.cli.trajectory import render
+
+    goal = list(START)
+    goal[0] += 1.0
+    fast = _still(0)
+    fast[0] = 3.5
+    speed = _traj([0.0, 1.0, 2.0], [START, goal, goal], [_still(0), fast, _still(2)])
+    late = _traj([0.0, 14400.0], [START, START], [_still(0), _still(1)])
+    for traj, unit in ((speed, "rad/s"), (late, "s")):
+        report = check_trajectory(traj, HC10, YRC)
+        assert report.refusal is not None
+        text = render(report, traj, HC10, YRC)
+        line = next(ln for ln in text.splitlines() if ln.startswith("  value "))
+        r = report.refusal
+        assert line == f"  value {r.value:.6g} {unit}, limit {r.limit:.6g} {unit}", text
+
+
+def test_the_acceleration_warning_gives_the_rounding_allowance_its_unit() -> None:
+    goal = list(START)
+    goal[0] += 0.02  # 20 mrad in 8 ms from rest: far above joint_1_s's acceleration
+    traj = _traj([0.0, 0.008, 0.5], [START, goal, goal], [_still(0), _still(1), _still(2)])
+    report = check_trajectory(traj, HC10, YRC)
+    texts = [w.text for w in report.warnings if w.kind == "acceleration"]
+    assert texts, report.warnings
+    assert re.search(r"above its [\d.]+ rad/s² \(plus [\d.]+ rad/s² for whole-pulse", texts[0])

@@ -23,6 +23,7 @@ from pymotoros.cli.settings import (
     settings_path,
 )
 from pymotoros.errors import ConfigError
+from pymotoros.log_tags import NOTE, STOP_REPORT
 
 # name -> ("module:attribute" of a click.Command, one-line help for the listing)
 _COMMANDS: Final[dict[str, tuple[str, str]]] = {
@@ -114,11 +115,35 @@ def configure_logging(verbose: int, quiet: bool) -> None:
         level = logging.INFO
     else:
         level = logging.WARNING
-    logging.basicConfig(
-        level=level,
-        format="%(asctime)s %(levelname)-7s %(name)s: %(message)s",
-        force=True,
-    )
+    handler = logging.StreamHandler()
+    handler.setFormatter(_PersonFormatter("%(asctime)s %(levelname)-7s %(name)s: %(message)s"))
+    handler.addFilter(_drop_stop_reports)
+    logging.basicConfig(level=level, handlers=[handler], force=True)
+
+
+class _PersonFormatter(logging.Formatter):
+    """A note of the client (a move allowed with a remark) as a plain ``note: …`` line;
+    every other record as a timestamped log line."""
+
+    def format(self, record: logging.LogRecord) -> str:
+        if getattr(record, NOTE, False):
+            return f"note: {record.getMessage()}"
+        return super().format(record)
+
+
+def _drop_stop_reports(record: logging.LogRecord) -> bool:
+    """The client's report of a move it stopped: the CLI says where the robot stopped in
+    its error or its own line, so the log line would say it a second time. Likewise a
+    motion connection that MotoROS closed before its first reply (the one-motion-client
+    rule): the request waiting for that reply fails with the same words, which the CLI
+    prints as its ``error:`` line."""
+    if getattr(record, STOP_REPORT, False):
+        return False
+    if record.name == "pymotoros.client.connection" and record.levelno == logging.WARNING:
+        from pymotoros.client.errors import SECOND_MOTION_CLIENT  # loaded by then
+
+        return SECOND_MOTION_CLIENT not in record.getMessage()
+    return True
 
 
 @click.group(

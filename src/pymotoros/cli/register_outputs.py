@@ -102,7 +102,7 @@ def outputs_lines(
         return lines
     width = max(len(reading_label(group, r)) for r in values.readings) + 2
     for r in values.readings:
-        raw = f"raw {r.raw} {r.raw_unit}" if r.raw_unit != r.unit else f"raw {r.raw}"
+        raw = f"raw {r.raw} {r.raw_unit}"  # every number with its unit, the raw one too
         lines.append(f"  {reading_label(group, r):<{width}}{r.value:>14.4f} {r.unit:<6}  {raw}")
     words = ", ".join(f"M{n:03d}={w}" for n, w in sorted(values.words.items()))
     lines.append(f"  registers read: {words}")

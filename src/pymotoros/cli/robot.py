@@ -58,10 +58,11 @@ from pymotoros.client import (
     RequestTimeoutError,
     RobotClient,
 )
+from pymotoros.client.errors import SECOND_MOTION_CLIENT
 from pymotoros.client.planning import JointTrajectory, PlanningError
 from pymotoros.client.srdf import NamedPoseError
 from pymotoros.client.state import RobotState
-from pymotoros.client.streaming import FollowingSample, MoveResult
+from pymotoros.client.streaming import FollowingSample, MoveResult, joint_values_text
 from pymotoros.errors import ConfigError, PathBlockedError, PymotorosError
 from pymotoros.models import GroupModel
 from pymotoros.models.cell import CellModels, load_cell_models
@@ -485,6 +486,14 @@ ONE_MOTION_CLIENT: Final = (
 )
 """Reference §2.1: one motion connection; a new one is closed while increments are queued."""
 
+STOP_ELSEWHERE: Final = (
+    "That is why `pymotoros stop` cannot take over. SIGTERM to the moving command works "
+    "as well (it sends STOP_MOTION), so does E-stop on the pendant and, for the twin, its "
+    'control API (POST /api/hold {{"on": true}} or /api/estop {{"pressed": true}} on {api})'
+)
+"""What ``stop`` adds when the library's message already states the one-client rule and
+the Ctrl-C/HOLD remedies (:data:`~pymotoros.client.errors.SECOND_MOTION_CLIENT`)."""
+
 
 @click.command(epilog=EXIT_CODES_HELP)
 @robot_options
@@ -506,7 +515,9 @@ def stop(**kwargs: Any) -> None:
                 if target.http_port is not None
                 else "the sim's --http-port"
             )
-            raise ConnectionLostError(f"{exc}. " + ONE_MOTION_CLIENT.format(api=api)) from exc
+            rule_told = SECOND_MOTION_CLIENT in str(exc)  # say the rule once, not twice
+            more = (STOP_ELSEWHERE if rule_told else ONE_MOTION_CLIENT).format(api=api)
+            raise ConnectionLostError(f"{exc}. {more}") from exc
         click.echo("stopped")
 
     run(target, work)
@@ -831,10 +842,15 @@ async def _move_watched(
         where = await asyncio.shield(
             _settled_where(client, goal, req.deg, "stopped (STOP_MOTION)", timeout_s)
         )
-        click.echo("\n" + where, err=True)
+        click.echo(where, err=True)  # the progress line has ended its line already
         raise
     except ReplyError as exc:
-        if exc.point is not None:  # refused mid-move: say where the robot is
+        stop = exc.early_stop
+        if stop is not None:  # the library stopped it and said where: add only the distance
+            if stop.at_rest:
+                left = _short_of_goal(client, stop.positions, goal, req.deg)
+                exc.args = (f"{exc}{left}", *exc.args[1:])
+        elif exc.point is not None:  # refused mid-move: say where the robot is
             where = await _settled_where(client, goal, req.deg, "the robot stands", timeout_s)
             exc.args = (f"{exc}; {where}", *exc.args[1:])
         raise
@@ -866,8 +882,9 @@ def _report_move(result: MoveResult, req: MoveRequest, goal: MoveGoal, robot: An
             if following.slowed
             else "the controller or the network was late; the robot was not slowed"
         )
-        click.echo(
-            f"note: the robot ran up to {following.max_lag_s:.2f} s behind the plan ({cause})"
+        click.echo(  # a note, on stderr as every note: stdout is the result
+            f"note: the robot ran up to {following.max_lag_s:.2f} s behind the plan ({cause})",
+            err=True,
         )
 
 
@@ -1011,18 +1028,44 @@ def _where(
     axes = [a for m in models for a in m.axes]
     if len(here) != len(axes):
         return f"{what}; position unknown (no joint feedback)"
-    unit = "deg" if deg else "rad"
-    pos = ", ".join(f"{to_user(v, deg, a.linear):.4f}" for v, a in zip(here, axes, strict=True))
+    pos = joint_values_text(here, models, deg=deg)
     if len(here) != len(goal):  # a Cartesian move: the goal was a pose, say where the TCP is
-        return f"{what} at [{pos}] {unit}{_tcp_where(client, groups[0])}"
-    left = max(
-        (abs(to_user(g - v, deg, a.linear)), a.name)
-        for g, v, a in zip(goal, here, axes, strict=True)
+        return f"{what} at {pos}{_tcp_where(client, groups[0])}"
+    return f"{what} at {pos}, {_distance_left(here, goal, axes, deg)}"
+
+
+def _distance_left(
+    here: Sequence[float], goal: Sequence[float], axes: Sequence[Any], deg: bool
+) -> str:
+    """``1.5336 rad short of the goal (joint_1_s)``: the axis farthest from the goal, in
+    its unit (rad or deg for a rotary axis, m or mm for a linear one)."""
+    left, axis = max(
+        ((abs(g - v), a) for g, v, a in zip(goal, here, axes, strict=True)),
+        key=lambda pair: abs(to_user(pair[0], deg, pair[1].linear)),
     )
     return (
-        f"{what} at [{pos}] {'deg' if deg else 'rad'}, {left[0]:.4f} "
-        f"{'deg' if deg else 'rad'} short of the goal ({left[1]})"
+        f"{to_user(left, deg, axis.linear):.4f} {unit_of(deg, axis.linear)} "
+        f"short of the goal ({axis.name})"
     )
+
+
+def _short_of_goal(
+    client: RobotClient, stopped_at: Sequence[float], goal: MoveGoal, deg: bool
+) -> str:
+    """What the CLI adds to the library's "stands at [...] rad" of a stopped move: with
+    --deg the position in degrees, then how far from the goal (``; 1.5336 rad short of
+    the goal (joint_1_s)``), or for a pose goal where the TCP is; never the position
+    twice in the same unit."""
+    axes = [a for m in goal.models for a in m.axes]
+    if len(stopped_at) != len(axes):
+        return ""
+    said = [joint_values_text(stopped_at, goal.models, deg=True)] if deg else []
+    if len(stopped_at) != len(goal.goal):  # a pose goal: where the TCP is
+        said.append(_tcp_where(client, goal.groups[0]).strip(" ()"))
+    else:
+        said.append(_distance_left(stopped_at, goal.goal, axes, deg))
+    said = [s for s in said if s]
+    return f"; {', '.join(said)}" if said else ""
 
 
 def _tcp_where(client: RobotClient, group: int) -> str:

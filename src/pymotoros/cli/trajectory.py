@@ -51,7 +51,7 @@ from pymotoros.models import (
     robot_model,
 )
 from pymotoros.models.cell import CellModels, load_cell_models
-from pymotoros.protocol.constants import MAX_TOOL_NUMBER
+from pymotoros.protocol.constants import MAX_TOOL_NUMBER, InvalidSubcode
 from pymotoros.trajectory.check import (
     EXIT_OK,
     EXIT_REFUSED,
@@ -210,6 +210,20 @@ def load_models(
     return Loaded(traj, cell.robot, cell.controller, cell)
 
 
+def _refusal_unit(subcode: int, axis: str | None, robot: RobotModel) -> str:
+    """`` unit`` of a refusal's value and limit (:class:`pymotoros.models.rules.Refusal`):
+    pulses for a start-position deviation (3011), the axis's speed unit for 3013, s for a
+    point time (3016)."""
+    if subcode == InvalidSubcode.DATA_START_POS:
+        return " pulses"
+    if subcode == InvalidSubcode.DATA_SPEED:
+        linear = any(a.linear for g in robot.groups for a in g.axes if a.name == axis)
+        return " m/s" if linear else " rad/s"
+    if subcode == InvalidSubcode.DATA_TIME:
+        return " s"
+    return ""
+
+
 def render(
     report: CheckReport,
     traj: Trajectory,
@@ -231,7 +245,8 @@ def render(
             f"REFUSED: MotoROS would answer INVALID ({r.result}) subcode {r.subcode} to point "
             f"{r.point}" + (f", {r.axis}" if r.axis else "") + f": {r.meaning}"
         )
-        lines.append(f"  value {r.value:.6g}, limit {r.limit:.6g}")
+        unit = _refusal_unit(r.subcode, r.axis, robot)
+        lines.append(f"  value {r.value:.6g}{unit}, limit {r.limit:.6g}{unit}")
         lines.append(f"  {r.message}")
         lines.append(f"  remedy: {r.remedy}")
         return "\n".join(lines)
@@ -498,17 +513,19 @@ async def _stream_file(
     if enable_first:
         await client.start_trajectory_mode()
     await check_start(client, joint, groups)
-    with progress_bar("running", client, groups, duration_s=joint.duration) as progress:
-        try:
+    try:
+        with progress_bar("running", client, groups, duration_s=joint.duration) as progress:
             # checked above as `check` does, obstacles included: the client's guard
             # would only repeat it (and must not refuse what --force sends)
             return await client.execute(
                 joint, groups=groups, on_progress=progress, check_speed=not force, force=True
             )
-        except asyncio.CancelledError:
-            with contextlib.suppress(PymotorosError):
-                await asyncio.shield(client.stop_motion())
-            raise
+    except asyncio.CancelledError as exc:
+        with contextlib.suppress(PymotorosError):
+            await asyncio.shield(client.stop_motion())
+        for note in getattr(exc, "__notes__", ()):  # the client's stop: where it stands
+            click.echo(note, err=True)
+        raise
 
 
 @click.command(context_settings={"help_option_names": ["-h", "--help"]})
@@ -552,9 +569,12 @@ def run(traj: Path, force: bool, enable_first: bool, as_json: bool, **kwargs: An
     if as_json:
         click.echo(json.dumps(_move_data(result)))
     else:
-        pos = ", ".join(f"{p:.4f}" for p in result.final_positions)
+        from pymotoros.client.streaming import joint_values_text  # the client loads lazily
+
+        models = [loaded.robot.groups[g] for g in result.groups]
+        pos = joint_values_text(result.final_positions, models)
         click.echo(
-            f"reached [{pos}] in {result.elapsed_s:.2f} s (file "
+            f"reached {pos} in {result.elapsed_s:.2f} s (file "
             f"{loaded.trajectory.duration:.2f} s, MotoROS {report.duration_s:.3f} s "
             f"predicted, {result.stream.points} points)"
         )

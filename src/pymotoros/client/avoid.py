@@ -47,6 +47,7 @@ from pymotoros.client.guard import (
 from pymotoros.client.planning import JointLimits, JointTrajectory, PlanningError, plan_joint_move
 from pymotoros.client.tools import ToolTable
 from pymotoros.errors import PathBlockedError
+from pymotoros.log_tags import AS_NOTE
 from pymotoros.models.cell import CellModels
 
 if TYPE_CHECKING:  # Pinocchio, Coal and OMPL load only when a move avoids something
@@ -158,7 +159,7 @@ class Avoidance:
                     "only takes it away (the clearance grows all along the move), so it is "
                     "allowed"
                 )
-                logger.warning("%s", note)
+                logger.warning("%s", note, extra=AS_NOTE)  # the CLI: a `note: …` line
                 return note
             return None
         if found.starts_in_contact and not found.receding:

@@ -143,7 +143,7 @@ def _explain_failure(chain: Chain, target: FloatArray, seed: FloatArray, s: floa
                 side, limit, by = ("upper", hi, q - hi) if q > hi else ("lower", lo, lo - q)
                 return (
                     f"{name} would reach {q:.4f} rad, {by:.4f} rad ({math.degrees(by):.2f}°) "
-                    f"beyond its {side} limit {limit:.4f} at {_percent(s)}; choose another "
+                    f"beyond its {side} limit {limit:.4f} rad at {_percent(s)}; choose another "
                     f"line or {joint_move}"
                 )
     sing = _singularity(chain, seed)

@@ -33,7 +33,7 @@ from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
-from typing import Final
+from typing import TYPE_CHECKING, Final
 
 from pymotoros.errors import PymotorosError
 from pymotoros.models.rules import START_TOLERANCE_PULSES
@@ -49,9 +49,18 @@ from pymotoros.protocol.constants import (
     subcode_meaning,
 )
 
+if TYPE_CHECKING:
+    from pymotoros.client.streaming import EarlyStop
+
 
 class ClientError(PymotorosError):
     """Root of the errors the client raises."""
+
+    early_stop: EarlyStop | None = None
+    """Set when this error ended a move and the library then stopped the robot
+    (STOP_MOTION): whether the stop worked, where the robot came to rest (``positions``,
+    rad/m of the moved groups) and the sentence already appended to the message. A caller
+    that words its own message (the CLI) adds only what is new, not the position again."""
 
 
 class ConnectError(ClientError, ConnectionError):

@@ -113,15 +113,15 @@ class Motion:
                 raise
             task.uncancel()
             stop = self._streamer.last_stop
-            if stop is not None:
-                here, where = stop.positions, stop.detail
+            if stop is not None:  # its detail names STOP_MOTION already
+                here, where = stop.positions, f"move stopped on request: {stop.detail}"
             else:  # stopped before anything was streamed
                 groups = range(len(self._robot.groups))
                 here = tuple(v for g in groups for v in (self._view.state.positions(g) or ()))
-                where = "nothing was streamed yet"
-            raise MoveStoppedError(
-                f"move stopped on request (STOP_MOTION): {where}", positions=here
-            ) from None
+                where = "move stopped on request (STOP_MOTION): nothing was streamed yet"
+            stopped = MoveStoppedError(where, positions=here)
+            stopped.early_stop = stop
+            raise stopped from None
         finally:
             self._moving = None
             if terminated():  # SIGTERM came: the robot is stopped, end as it would have

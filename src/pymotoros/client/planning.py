@@ -53,6 +53,9 @@ class JointLimits:
     max_velocity: tuple[float, ...]
     max_acceleration: tuple[float, ...]
     max_jerk: tuple[float, ...]
+    linear: tuple[bool, ...] = ()
+    """Which joints are linear (m); empty: every joint is rotary (rad). For the units
+    of the errors."""
 
     @classmethod
     def from_group(
@@ -72,6 +75,7 @@ class JointLimits:
             ),
             max_acceleration=tuple(a.max_acceleration for a in axes),
             max_jerk=tuple(a.max_jerk for a in axes),
+            linear=tuple(a.linear for a in axes),
         )
 
     @classmethod
@@ -84,12 +88,24 @@ class JointLimits:
             max_velocity=tuple(v for p in parts for v in p.max_velocity),
             max_acceleration=tuple(v for p in parts for v in p.max_acceleration),
             max_jerk=tuple(v for p in parts for v in p.max_jerk),
+            linear=tuple(v for p in parts for v in (p.linear or (False,) * p.dof)),
         )
 
     @property
     def dof(self) -> int:
         """Number of joints (degrees of freedom) these limits cover."""
         return len(self.names)
+
+    def is_linear(self, i: int) -> bool:
+        """Is joint ``i`` linear (m), not rotary (rad)?"""
+        return bool(self.linear) and self.linear[i]
+
+    def value_text(self, i: int, value: float) -> str:
+        """``3.500000 rad (200.535 deg)`` or ``1.200000 m``: a value of joint ``i`` with its
+        unit, as every error of the client gives a distance."""
+        if self.is_linear(i):
+            return f"{value:.6f} m"
+        return f"{value:.6f} rad ({math.degrees(value):.3f} deg)"
 
 
 def motoros_speed_limit(
@@ -266,9 +282,17 @@ def plan_joint_move(
         raise PlanningError(f"sample_period must be at least {MIN_SAMPLE_PERIOD_S} s")
     for i, g in enumerate(goal):
         if not math.isfinite(g) or not limits.lower[i] <= g <= limits.upper[i]:
+            unit = "m" if limits.is_linear(i) else "rad"
+            degrees = (
+                ""
+                if limits.is_linear(i)
+                else f" ([{math.degrees(limits.lower[i]):.3f}, "
+                f"{math.degrees(limits.upper[i]):.3f}] deg)"
+            )
             raise PlanningError(
-                f"goal {g:.6f} for {limits.names[i]} is outside its limits "
-                f"[{limits.lower[i]:.6f}, {limits.upper[i]:.6f}]"
+                f"goal {limits.value_text(i, g)} for {limits.names[i]} is outside its limits "
+                f"[{limits.lower[i]:.6f}, {limits.upper[i]:.6f}] {unit}{degrees}; give a goal "
+                "within them"
             )
     start_t = tuple(float(x) for x in start)
     goal_t = tuple(float(x) for x in goal)

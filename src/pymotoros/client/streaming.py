@@ -37,6 +37,7 @@ import collections
 import enum
 import itertools
 import logging
+import math
 import operator
 from collections.abc import Callable, Sequence
 from dataclasses import KW_ONLY, dataclass, field
@@ -64,6 +65,7 @@ from pymotoros.client.preflight import (
 from pymotoros.client.state import RobotState
 from pymotoros.client.timing import REAL_TIME, ClientClock
 from pymotoros.client.watchdog import DEFAULT_STATE_STALL_S, StallWatchdog
+from pymotoros.log_tags import AS_NOTE, AS_STOP_REPORT
 from pymotoros.models import ControllerModel, GroupModel, RobotModel
 from pymotoros.models.rules import START_TOLERANCE_PULSES
 from pymotoros.protocol.constants import InvalidSubcode, MotionCommand, MsgType, ResultCode
@@ -280,6 +282,7 @@ class EarlyStop:
         the caller's exception) a note, so its type and message stay as they were."""
         if isinstance(exc, ClientError) and exc.args and isinstance(exc.args[0], str):
             exc.args = (f"{exc.args[0]}; {self.detail}", *exc.args[1:])
+            exc.early_stop = self
         else:
             exc.add_note(self.text)
 
@@ -849,7 +852,12 @@ class TrajectoryStreamer:
         if at_rest:
             detail = f"the robot was stopped (STOP_MOTION) and stands at {where}"
             logger.log(
-                quiet_level, "%s: %s (at rest %.3f s after the stop was sent)", why, detail, took
+                quiet_level,
+                "%s: %s (at rest %.3f s after the stop was sent)",
+                why,
+                detail,
+                took,
+                extra=AS_STOP_REPORT,
             )
         else:
             detail = f"{note}{rest_note}; last known position {where}"
@@ -954,18 +962,27 @@ def _callback_guard(
     return guarded
 
 
-def joint_values_text(positions: Sequence[float], models: Sequence[GroupModel]) -> str:
+def joint_values_text(
+    positions: Sequence[float], models: Sequence[GroupModel], *, deg: bool = False
+) -> str:
     """``[0.5724, 0.0000, …] rad`` (``rad``/``m`` after each value when a linear axis is
-    among them): joint values with their units, as every message of the client gives them."""
+    among them; ``deg`` for the rotary axes with ``deg``): joint values with their
+    units, as every message of the client gives them."""
     axes = [a for m in models for a in m.axes]
+    rotary = "deg" if deg else "rad"
+
+    def value(v: float, linear: bool) -> str:
+        return f"{v if linear or not deg else math.degrees(v):.4f}"
+
     if len(axes) != len(positions):
         return "[" + ", ".join(f"{v:.4f}" for v in positions) + "] (rad/m)"
     if not any(a.linear for a in axes):
-        return "[" + ", ".join(f"{v:.4f}" for v in positions) + "] rad"
+        return "[" + ", ".join(value(v, False) for v in positions) + f"] {rotary}"
     return (
         "["
         + ", ".join(
-            f"{v:.4f} {'m' if a.linear else 'rad'}" for v, a in zip(positions, axes, strict=True)
+            f"{value(v, a.linear)} {'m' if a.linear else rotary}"
+            for v, a in zip(positions, axes, strict=True)
         )
         + "]"
     )
@@ -1130,7 +1147,7 @@ class FollowingMonitor:
                 f"{head}, though it now progresses at {sample.speed_pct:.0f} % of the planned "
                 f"speed ({numbers}; the feedback carries no velocity): it was held up earlier"
             )
-        logger.warning("%s", rep.reason)
+        logger.warning("%s", rep.reason, extra=AS_NOTE)  # the CLI: a `note: …` line
 
     def _reported_pct(self, state: RobotState, reached: float) -> float | None:
         """The robot's own velocity report along the plan's velocity where it stands, in %

@@ -476,6 +476,7 @@ def _model_checks(
         axis = models[name]
         factor = float(axes.factors_ros[ros])
         slot = axes.axis_slots[col]
+        u = "m" if axis.linear else "rad"  # every number with its unit
         # positions between points
         lo = axis.lower * factor - POSITION_ROUNDING_PULSES
         hi = axis.upper * factor + POSITION_ROUNDING_PULSES
@@ -493,8 +494,8 @@ def _model_checks(
                     name,
                     worst,
                     limit,
-                    f"{group} {name} reaches {worst:.6g} rad at {time_ms[k]} ms, beyond its "
-                    f"limit {limit:.6g} rad (MotoROS checks no joint limits; the controller's "
+                    f"{group} {name} reaches {worst:.6g} {u} at {time_ms[k]} ms, beyond its "
+                    f"limit {limit:.6g} {u} (MotoROS checks no joint limits; the controller's "
                     "soft limits stop the robot with an alarm); add points or slow down there",
                 )
             )
@@ -531,9 +532,9 @@ def _model_checks(
                     name,
                     float(accel.max()),
                     amax,
-                    f"{group} {name} accelerates at up to {accel.max():.6g} rad/s² (first at "
-                    f"{time_ms[k]} ms), above its {amax:.6g} rad/s² (plus {allow - amax:.3g} for "
-                    "whole-pulse rounding); re-time with lower acceleration scaling",
+                    f"{group} {name} accelerates at up to {accel.max():.6g} {u}/s² (first at "
+                    f"{time_ms[k]} ms), above its {amax:.6g} {u}/s² (plus {allow - amax:.3g} "
+                    f"{u}/s² for whole-pulse rounding); re-time with lower acceleration scaling",
                 )
             )
         if len(d2) > 1 and axis.max_jerk > 0:
@@ -542,6 +543,7 @@ def _model_checks(
     # the points themselves
     for col, name in enumerate(axes.joint_names):
         axis = models[name]
+        u = "m" if axis.linear else "rad"
         bad = (pos[:, col] < axis.lower) | (pos[:, col] > axis.upper)
         if bad.any():
             i = int(np.argmax(bad))
@@ -554,8 +556,8 @@ def _model_checks(
                     name,
                     value,
                     limit,
-                    f"point {i}: {group} {name} = {value:.6g} rad is beyond its limit "
-                    f"{limit:.6g} rad",
+                    f"point {i}: {group} {name} = {value:.6g} {u} is beyond its limit "
+                    f"{limit:.6g} {u}",
                 )
             )
     return out
