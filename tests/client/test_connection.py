@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import asyncio
 import contextlib
+import socket
+import struct
 from collections.abc import AsyncIterator, Awaitable, Callable
 
 import pytest
@@ -154,3 +156,30 @@ def test_reply_matching_rules() -> None:
     # An unknown request is answered with its own type echoed and sequence -1 (3003).
     assert reply_matches(io, MotoMotionReply(-1, -1, 2003, 3, 3003), MotoReadIoBitReply)
     assert not reply_matches(io, PingReply(), MotoReadIoBitReply)
+
+
+async def test_a_reset_before_any_answer_on_the_motion_port_names_the_one_client_rule() -> None:
+    """A controller that closes a second motion client with its request unread resets the
+    socket (RST, not FIN): the client must say why (MotoROS's one motion connection), not
+    only "Connection reset by peer" (seen once in four runs of a second `pymotoros move`)."""
+    async def reset_after_the_first_request(
+        reader: asyncio.StreamReader, writer: asyncio.StreamWriter
+    ) -> None:
+        await reader.read(1)  # the request is there, most of it unread
+        sock = writer.get_extra_info("socket")
+        sock.setsockopt(socket.SOL_SOCKET, socket.SO_LINGER, struct.pack("ii", 1, 0))
+        writer.transport.abort()
+
+    server = await asyncio.start_server(reset_after_the_first_request, "127.0.0.1", 0)
+    async with server:
+        conn = await _open(server.sockets[0].getsockname()[1])
+        with pytest.raises(ConnectionLostError) as info:
+            await conn.request(
+                MotoMotionCtrl(0, 0, MotionCommand.CHECK_MOTION_READY),
+                MotoMotionReply,
+                timeout_s=2.0,
+            )
+        await conn.close()
+    text = str(info.value)
+    assert "MotoROS takes one motion connection" in text, text
+    assert "the socket was reset" in text, text

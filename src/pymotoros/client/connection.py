@@ -269,6 +269,12 @@ class FrameConnection:
             hint = _order_hint(exc.data, self.order)
             reason = f"undecodable data from the controller ({exc}){hint}"
             logger.error("%s: %s; data %s", self, exc, exc.data[:64].hex())
+        except ConnectionResetError as exc:
+            reason = f"socket error ({exc.strerror or exc})"
+            if kind is Port.MOTION and not self._answered and not self._closing:
+                # A controller that closes a newcomer with our request unread resets the
+                # socket rather than closing it: the same one-client rule as a plain close.
+                reason = f"{SECOND_MOTION_CLIENT} (the socket was reset)"
         except OSError as exc:
             reason = f"socket error ({exc.strerror or exc})"
         except Exception as exc:  # the connection boundary: fail the waiters, never leak
