@@ -36,7 +36,7 @@ from typing import Final, Protocol
 import numpy as np
 import numpy.typing as npt
 
-from pymotoros.models.workspace import ContactLike
+from pymotoros.models.workspace import ContactLike, tick_travel_reaches
 
 F64Array = npt.NDArray[np.float64]
 
@@ -227,24 +227,8 @@ class _Travel:
         if not math.isfinite(clearance):
             return self.ticks
         weights = self._weights(clearance)
-        done = 0.0
-        start = k
-        window = _WINDOW
-        while start < self.ticks - 1:
-            end = min(self.ticks - 1, start + window)
-            window *= 2
-            total = done + np.cumsum(self._steps[start:end] @ weights)
-            j = int(np.searchsorted(total, clearance, side="left"))
-            if j < len(total):
-                return start + j + 1
-            done = float(total[-1])
-            start = end
-        return self.ticks
-
-
-_WINDOW: Final = 64
-"""Ticks of travel summed first when looking for the next check (doubled each round):
-near an obstacle the next check is a few ticks away, far from all of them hundreds."""
+        steps = self._steps
+        return tick_travel_reaches(lambda a, b: steps[a:b] @ weights, k, self.ticks, clearance)
 
 
 def _follow_start(

@@ -25,7 +25,7 @@ import numpy as np
 import numpy.typing as npt
 
 from pymotoros.models.cell import CellModels
-from pymotoros.models.workspace import ContactLike
+from pymotoros.models.workspace import ContactLike, tick_travel_reaches
 from pymotoros.motion import GroupAxes, to_pulses
 from pymotoros.trajectory.files import Trajectory
 
@@ -140,27 +140,15 @@ class _Travel:
                 if for_self:
                     w[list(self._world.self_invariant_joints(g))] = 0.0
                 weights.append((g, w))
-        done = 0.0
-        start = k
-        window = _WINDOW
-        while start < self.ticks - 1:
-            end = min(self.ticks - 1, start + window)
-            window *= 2
-            per_tick = np.zeros(end - start)
+        steps = self._steps
+
+        def travel(a: int, b: int) -> npt.NDArray[np.float64]:
+            per_tick = np.zeros(b - a)
             for g, w in weights:
-                per_tick += self._steps[g][start:end] @ w
-            total = done + np.cumsum(per_tick)
-            j = int(np.searchsorted(total, step, side="left"))
-            if j < len(total):
-                return start + j + 1
-            done = float(total[-1])
-            start = end
-        return self.ticks
+                per_tick += steps[g][a:b] @ w
+            return per_tick
 
-
-_WINDOW: Final = 64
-"""Ticks of travel summed first when looking for the next check (doubled each round):
-near an obstacle the next check is a few ticks away, far from all of them thousands."""
+        return tick_travel_reaches(travel, k, self.ticks, step)
 
 
 def find_collisions(
