@@ -4,6 +4,7 @@ else stays a timestamped log line (issue 29)."""
 
 from __future__ import annotations
 
+import asyncio
 import logging
 import re
 import sys
@@ -12,7 +13,11 @@ from pathlib import Path
 import pytest
 
 from pymotoros.cli.main import configure_logging
+from pymotoros.client.connection import FrameConnection
+from pymotoros.client.errors import ConnectionLostError
 from pymotoros.log_tags import AS_NOTE, AS_STOP_REPORT
+from pymotoros.protocol.constants import ByteOrder, MotionCommand, Port
+from pymotoros.protocol.messages import MotoMotionCtrl, MotoMotionReply
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "client"))
 from client_sim import running_sim
@@ -45,26 +50,58 @@ def test_a_note_is_a_plain_line_and_a_stop_report_is_left_to_the_cli(
     )
 
 
-def test_a_second_motion_client_is_told_once_by_the_error(
+def test_a_lost_connection_is_told_once_by_the_waiting_request(
     capsys: pytest.CaptureFixture[str],
 ) -> None:
-    """The loss of a motion connection MotoROS closed before its first reply fails the
-    waiting request with the same words, which the CLI prints as ``error: …``."""
-    from pymotoros.client.errors import SECOND_MOTION_CLIENT
+    """A motion connection MotoROS closes before its first reply (the one-motion-client
+    rule) fails the waiting request with the loss's words, which the CLI prints as its
+    ``error:`` line: the client's log line about it must not say it again at the CLI's
+    default level. A loss nobody waits on (the state stream) stays a warning."""
+
+    async def close_after_the_request(
+        reader: asyncio.StreamReader, writer: asyncio.StreamWriter
+    ) -> None:
+        await reader.read(1)
+        writer.close()
+
+    async def close_at_once(_: asyncio.StreamReader, writer: asyncio.StreamWriter) -> None:
+        writer.close()
+
+    async def main() -> None:
+        motion_server = await asyncio.start_server(close_after_the_request, "127.0.0.1", 0)
+        state_server = await asyncio.start_server(close_at_once, "127.0.0.1", 0)
+        async with motion_server, state_server:
+            motion = await FrameConnection.open(
+                "127.0.0.1", _port(motion_server), Port.MOTION, ByteOrder.LITTLE
+            )
+            with pytest.raises(ConnectionLostError, match="MotoROS takes one motion"):
+                await motion.request(
+                    MotoMotionCtrl(0, 0, MotionCommand.CHECK_MOTION_READY),
+                    MotoMotionReply,
+                    timeout_s=2.0,
+                )
+            state = await FrameConnection.open(
+                "127.0.0.1", _port(state_server), Port.STATE, ByteOrder.LITTLE
+            )
+            await asyncio.wait_for(state.closed.wait(), 2.0)
+            await motion.close()
+            await state.close()
 
     root = logging.getLogger()
     handlers, level = root.handlers[:], root.level
     configure_logging(0, False)
     try:
-        log = logging.getLogger("pymotoros.client.connection")
-        log.warning("motion connection to 127.0.0.1:1 lost: %s", SECOND_MOTION_CLIENT)
-        log.warning("state connection to 127.0.0.1:2 lost: closed by the controller")
+        asyncio.run(main())
     finally:
         root.handlers[:] = handlers
         root.setLevel(level)
     lines = capsys.readouterr().err.splitlines()
     assert len(lines) == 1, lines
-    assert lines[0].endswith("state connection to 127.0.0.1:2 lost: closed by the controller")
+    assert re.search(r"WARNING pymotoros\.client\.connection: state connection .* lost", lines[0])
+
+
+def _port(server: asyncio.Server) -> int:
+    return int(server.sockets[0].getsockname()[1])
 
 
 def test_a_slowed_move_ends_with_notes_on_stderr_and_the_result_on_stdout() -> None:

@@ -133,17 +133,9 @@ class _PersonFormatter(logging.Formatter):
 
 def _drop_stop_reports(record: logging.LogRecord) -> bool:
     """The client's report of a move it stopped: the CLI says where the robot stopped in
-    its error or its own line, so the log line would say it a second time. Likewise a
-    motion connection that MotoROS closed before its first reply (the one-motion-client
-    rule): the request waiting for that reply fails with the same words, which the CLI
-    prints as its ``error:`` line."""
-    if getattr(record, STOP_REPORT, False):
-        return False
-    if record.name == "pymotoros.client.connection" and record.levelno == logging.WARNING:
-        from pymotoros.client.errors import SECOND_MOTION_CLIENT  # loaded by then
-
-        return SECOND_MOTION_CLIENT not in record.getMessage()
-    return True
+    its error or its own line, so the log line would say it a second time. (A connection
+    lost under a waiting request is logged at INFO by the client for the same reason.)"""
+    return not getattr(record, STOP_REPORT, False)
 
 
 @click.group(

@@ -335,11 +335,14 @@ class FrameConnection:
         if self._error is not None:
             return
         self._error = error
-        if self._pending is not None and not self._pending[0].done():
+        waiting = self._pending is not None and not self._pending[0].done()
+        if self._pending is not None and waiting:
             self._pending[0].set_exception(error)
         self.closed.set()
         if not self._closing:
-            logger.warning("%s", error)
+            # A request waiting for its reply fails with these very words, and its caller
+            # says them (the CLI's error line): the warning is for a loss nobody waits on.
+            logger.log(logging.INFO if waiting else logging.WARNING, "%s", error)
         if self._on_lost is not None:
             self._on_lost(error)
 
