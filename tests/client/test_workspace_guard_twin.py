@@ -13,6 +13,7 @@ from __future__ import annotations
 import asyncio
 import math
 import re
+import tomllib
 from pathlib import Path
 
 import pytest
@@ -78,6 +79,37 @@ async def test_every_cartesian_move_is_guarded(how: str) -> None:
             await down
         assert await client.current_positions() == pytest.approx(before, abs=1e-9)
         assert _contacts(the_twin) == []
+        await client.close()
+
+
+def _gripper_is_tool_1() -> dict[str, object]:
+    """The fixture cell with the gripper as tool 1: tool 0 (in force) is the bare flange."""
+    data = tomllib.loads(CELL.read_text())
+    data["tools"] = [dict(data["tools"][0], number=1)]
+    return data
+
+
+@pytest.mark.parametrize("how", ["move_linear", "move_relative", "move_pose"])
+async def test_the_guard_mounts_the_moves_own_tool(how: str) -> None:
+    """A move planned with ``tool=1``'s TCP is checked with tool 1's shape on the flange,
+    not with the tool in force (once refused nothing: tool 0 has no shape)."""
+    data = _gripper_is_tool_1()
+    async with Twin(cell_from_dict(data)) as the_twin:
+        client = the_twin.client(cell=cell_models_from_dict(data), tool=0)
+        await client.connect()
+        await client.wait_for_state()
+        await client.enable()
+        await client.move_pose(ABOVE_THE_FIXTURE, tool=1)
+        before = await client.current_positions()
+        down = (
+            client.move_relative(dz=-0.2, tool=1)
+            if how == "move_relative"
+            else getattr(client, how)(INTO_THE_FIXTURE, tool=1)
+        )
+        with pytest.raises(PathBlockedError, match="R1 tool touches obstacle 'fixture'"):
+            await down
+        assert await client.current_positions() == pytest.approx(before, abs=1e-9)
+        assert the_twin.controller.snapshot().pfl == "idle"
         await client.close()
 
 

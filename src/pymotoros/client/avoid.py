@@ -32,7 +32,7 @@ from __future__ import annotations
 
 import logging
 import math
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import replace
 from typing import TYPE_CHECKING, Final
 
@@ -90,12 +90,14 @@ class Avoidance:
             self._world = world_for_cell(cell)
         return self._world
 
-    def _mount_tools(self, world: CollisionWorld) -> None:
-        """Each group's tool on its flange: the tool in force as this client knows it,
-        else the one the cell boots with (what the twin and ``check`` assume too)."""
+    def _mount_tools(self, world: CollisionWorld, tools: Mapping[int, int] | None = None) -> None:
+        """Each group's tool on its flange: the move's own tool (``tools``: group index ->
+        tool number, the ``tool=`` of a Cartesian move, whose TCP the move was planned
+        with), else the tool in force as this client knows it, else the one the cell
+        boots with (what the twin and ``check`` assume too)."""
         cell = self._cell
         for g in range(len(world.groups)):
-            number = self._tools.selected.get(g)
+            number = (tools or {}).get(g, self._tools.selected.get(g))
             if number is None and cell is not None:
                 number = cell.default_tool(g)
             world.set_tool(g, self._tools.tool(g, number or 0))
@@ -128,11 +130,13 @@ class Avoidance:
         groups: Sequence[int],
         standing: Sequence[Sequence[float] | None],
         period_s: float,
+        tools: Mapping[int, int] | None = None,
     ) -> str | None:
         """The guard of every move the client makes (docs/workspace.md): ``trajectory``
         (the joints of ``groups``; the other groups stand at ``standing``) sampled at
         every interpolation tick (``period_s``) as MotoROS interpolates it, checked
-        against the cell's obstacles and the arm itself with each group's tool.
+        against the cell's obstacles and the arm itself with each group's tool
+        (``tools``: the move's own tool per group index, over the one in force).
 
         Raises :class:`PathBlockedError` naming the first contact (time, link, obstacle,
         depth) and what to do; a move that starts in contact and only backs out of it is
@@ -145,7 +149,7 @@ class Avoidance:
         if len(trajectory.points) <= 1:  # one point or none: nothing moves
             return None
         world = self.world()
-        self._mount_tools(world)
+        self._mount_tools(world, tools)
         columns, joined = self._joined(world, groups, standing)
         times, ticks = tick_positions(trajectory, period_s)
         full = np.tile(np.asarray(joined, dtype=float), (len(times), 1))
@@ -251,12 +255,14 @@ class Avoidance:
         acceleration_scaling: float,
         sample_period: float,
         time_limit_s: float | None = None,
+        tools: Mapping[int, int] | None = None,
     ) -> JointTrajectory:
         """A move of ``groups`` from ``start`` to ``goal`` around the obstacles (both per
         group of the cell: the groups that do not move stand where they are, and the
-        search moves only ``groups``), timed within ``limits`` (those of ``groups``)."""
+        search moves only ``groups``), timed within ``limits`` (those of ``groups``);
+        ``tools`` as in :meth:`check`."""
         world = self.world()
-        self._mount_tools(world)
+        self._mount_tools(world, tools)
         moving = set(groups)
         a = [float(v) for q in start for v in q]
         b = [float(v) for q in goal for v in q]

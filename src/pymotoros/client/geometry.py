@@ -85,7 +85,12 @@ class Geometry:
             acceleration_scaling=accel_scale,
         )
         return await self._motion.execute(
-            trajectory, groups=(group,), on_progress=on_progress, timeout_s=timeout_s, force=force
+            trajectory,
+            groups=(group,),
+            on_progress=on_progress,
+            timeout_s=timeout_s,
+            force=force,
+            tool=tool,
         )
 
     async def move_pose(
@@ -120,6 +125,7 @@ class Geometry:
             on_progress=on_progress,
             avoid=avoid,
             force=force,
+            tool=tool,
         )
 
     async def move_relative(

@@ -165,6 +165,7 @@ class Motion:
         accel_scale: float = 1.0,
         sample_period: float = DEFAULT_SAMPLE_PERIOD_S,
         avoid: bool = False,
+        tool: int | None = None,
     ) -> JointTrajectory:
         """A synchronised point-to-point move (see :func:`planning.plan_joint_move`).
 
@@ -172,11 +173,12 @@ class Motion:
         ...)``), searched as ``pymotoros plan --avoid`` searches (OMPL); the groups not in
         ``groups`` stand where the latest feedback has them. A goal that cannot be
         reached without a collision is a :class:`~pymotoros.errors.PathBlockedError`
-        naming the obstacle (see :mod:`pymotoros.client.avoid`)."""
+        naming the obstacle (see :mod:`pymotoros.client.avoid`); with ``tool``'s shape on
+        the flange of ``groups`` (default: the tool in force)."""
         limits = JointLimits.concat([self.limits(g) for g in groups])
         if avoid:
             return self._plan_avoiding(
-                start, goal, groups, limits, speed_scale, accel_scale, sample_period
+                start, goal, groups, limits, speed_scale, accel_scale, sample_period, tool
             )
         return plan_joint_move(
             start,
@@ -196,6 +198,7 @@ class Motion:
         speed_scale: float,
         accel_scale: float,
         sample_period: float,
+        tool: int | None = None,
     ) -> JointTrajectory:
         """:meth:`plan` with ``avoid``: every group's start and goal, then the search."""
         avoidance = self._avoidance
@@ -231,6 +234,7 @@ class Motion:
             velocity_scaling=speed_scale,
             acceleration_scaling=accel_scale,
             sample_period=sample_period,
+            tools=None if tool is None else dict.fromkeys(indices, tool),
         )
 
     async def execute(
@@ -244,33 +248,40 @@ class Motion:
         check_speed: bool = True,
         on_progress: Callable[[FollowingSample], None] | None = None,
         force: bool = False,
+        tool: int | None = None,
     ) -> MoveResult:
         """Stream ``trajectory`` and wait until the robot has settled at its last point.
 
         The trajectory's joints are those of ``groups`` one after the other; one group
         goes as JOINT_TRAJ_PT_FULL, several as JOINT_TRAJ_PT_FULL_EX. With a cell that
-        has obstacles it is checked against them first (:meth:`guard`; ``force`` skips).
+        has obstacles it is checked against them first (:meth:`guard`, with ``tool``'s
+        shape; ``force`` skips).
         """
         # in the signature's order, which is ExecuteOptions' field order
         options = ExecuteOptions(
             busy_timeout_s, goal_tolerance, timeout_s, check_speed, on_progress
         )
-        return await self._guarded(trajectory, groups, options, force)
+        return await self._guarded(trajectory, groups, options, force, tool)
 
-    def guard(self, trajectory: JointTrajectory, groups: Sequence[int] = (0,)) -> str | None:
+    def guard(
+        self, trajectory: JointTrajectory, groups: Sequence[int] = (0,), tool: int | None = None
+    ) -> str | None:
         """Check ``trajectory`` (the joints of ``groups``) against the obstacles of the
         client's cell file at every interpolation tick, as every move of the client is
         before anything is sent (docs/workspace.md): a
         :class:`~pymotoros.errors.PathBlockedError` naming the time, link, obstacle and
         depth of the first contact; the note of a move that backs out of a contact the
-        robot starts in; None when the way is clear or the client has no obstacles."""
+        robot starts in; None when the way is clear or the client has no obstacles.
+        ``tool``: the tool whose shape is on the flange of ``groups`` (the one the move
+        was planned with), default the tool in force."""
         avoidance = self._avoidance
         if avoidance is None or not avoidance.guards:
             return None
         indices = [self._view.group_index(g) for g in groups]
         standing = [self._view.state.positions(g) for g in range(len(self._robot.groups))]
         period_s = self._controller.interpolation_period_ms / 1000.0
-        return avoidance.check(trajectory, indices, standing, period_s)
+        tools = None if tool is None else dict.fromkeys(indices, tool)
+        return avoidance.check(trajectory, indices, standing, period_s, tools)
 
     async def _guarded(
         self,
@@ -278,11 +289,12 @@ class Motion:
         groups: Sequence[int],
         options: ExecuteOptions,
         force: bool,
+        tool: int | None = None,
     ) -> MoveResult:
         """:meth:`_execute` after the workspace guard (unless ``force``); an error of a
         move a contact stopped names the contact where the robot stopped."""
         if not force:
-            self.guard(trajectory, groups)
+            self.guard(trajectory, groups, tool)
         try:
             return await self._execute(trajectory, groups, options)
         except MoveStoppedError:
@@ -363,6 +375,7 @@ class Motion:
         timeout_s: float | None = None,
         avoid: bool = False,
         force: bool = False,
+        tool: int | None = None,
     ) -> MoveResult:
         """Move to joint positions (rad/m, ROS order) from wherever the robot rests now.
 
@@ -372,7 +385,8 @@ class Motion:
         the obstacles of the client's cell file (see :meth:`plan`); nothing is sent when
         the goal cannot be reached (:class:`~pymotoros.errors.PathBlockedError`). With
         obstacles in the cell file, a move that would touch one is refused before
-        anything is sent (:meth:`guard`); ``force=True`` sends it anyway.
+        anything is sent (:meth:`guard`, with ``tool``'s shape on the flange, default the
+        tool in force); ``force=True`` sends it anyway.
         """
         with self.one_move("move_joints"):
             if isinstance(goal, Mapping):
@@ -390,11 +404,12 @@ class Motion:
                 speed_scale=speed_scale,
                 accel_scale=accel_scale,
                 avoid=avoid,
+                tool=tool,
             )
             options = ExecuteOptions(
                 busy_timeout_s, goal_tolerance, timeout_s, on_progress=on_progress
             )
-            return await self._guarded(trajectory, groups, options, force)
+            return await self._guarded(trajectory, groups, options, force, tool)
 
     def named_pose(
         self, name: str, *, srdf: str | Path | None = None, group: int | str = 0
