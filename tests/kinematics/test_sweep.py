@@ -16,8 +16,8 @@ from hypothesis import strategies as st
 
 from pymotoros.client.guard import tick_positions
 from pymotoros.client.planning import JointLimits, plan_joint_move
-from pymotoros.kinematics.collision import CollisionWorld, world_for_cell
-from pymotoros.kinematics.sweep import sweep
+from pymotoros.kinematics.collision import CollisionWorld, Contact, world_for_cell
+from pymotoros.kinematics.sweep import SweepResult, sweep
 from pymotoros.models import robot_model
 from pymotoros.models.cell import cell_models_from_dict
 
@@ -117,3 +117,66 @@ def test_the_guard_reads_a_trajectory_in_its_groups_order() -> None:
     with pytest.raises(PathBlockedError, match="R2 link_2_l touches obstacle 'ball'"):
         client.guard(plan, (1, 0))
     assert client.guard(plan, (0, 1)) is None  # the same joints move R1: no ball there
+
+
+class _Scripted:
+    """A collision model that reports, at tick k (the first joint holds k), the signed
+    distance (mm) of each (link, obstacle) given for that tick: two contacts at once."""
+
+    def __init__(self, ticks: list[dict[tuple[str, str], float]]) -> None:
+        self.ticks = ticks
+
+    def probe(self, qs: list[np.ndarray]) -> tuple[float, list[Contact]]:
+        here = self.ticks[round(float(qs[0][0]))]
+        contacts = [Contact(o, link, "R1", mm / 1000.0) for (link, o), mm in here.items()]
+        return min((c.distance_m for c in contacts), default=0.05), contacts
+
+    def self_distances(self, qs: list[np.ndarray]) -> list[Contact]:
+        return []
+
+    def joint_reach(self, group_index: int) -> list[float]:
+        return [1.0]
+
+    def lever_arms(self, group_index: int) -> list[float]:
+        return [1.0]
+
+
+def _scripted(ticks: list[dict[tuple[str, str], float]]) -> SweepResult:
+    k = np.arange(len(ticks), dtype=float)
+    return sweep(_Scripted(ticks), k * TICK_S, k[:, None], [1])
+
+
+def _two_contacts(tool: list[float], link_5: list[float]) -> list[dict[tuple[str, str], float]]:
+    return [
+        {("tool", "fixture"): a, ("link_5", "table"): b} for a, b in zip(tool, link_5, strict=True)
+    ]
+
+
+def test_each_contact_is_judged_on_its_own_in_a_back_out() -> None:
+    """The tool 3 -> 2.5 mm out of the fixture while link_5 goes 1.0 -> 2.4 mm into the
+    table: the smallest distance grows (-3 -> -2.5 mm) but link_5 goes deeper: refused."""
+    found = _scripted(_two_contacts([-3.0, -2.8, -2.6, -2.5], [-1.0, -1.6, -2.0, -2.4]))
+    assert found.starts_in_contact
+    assert not found.receding
+    assert found.worse is not None
+    assert (found.worse.link, found.worse.obstacle) == ("link_5", "table")
+    assert found.worse.start_mm == pytest.approx(1.0)
+    assert found.worse.depth_mm == pytest.approx(1.6)
+    assert {c.link for c in found.blocking} == {"tool", "link_5"}
+    both_out = _scripted(_two_contacts([-3.0, -2.8, -2.6, -2.5], [-1.0, -0.8, -0.5, -0.2]))
+    assert both_out.receding
+    assert both_out.blocking == []
+
+
+def test_a_new_contact_during_a_back_out_is_refused() -> None:
+    """The tool leaves the fixture while link_5 touches the table for the first time."""
+    ticks = [
+        {("tool", "fixture"): -3.0},
+        {("tool", "fixture"): -2.0},
+        {("tool", "fixture"): -1.0, ("link_5", "table"): -0.5},
+    ]
+    found = _scripted(ticks)
+    assert not found.receding
+    assert found.worse is not None
+    assert (found.worse.link, found.worse.start_mm) == ("link_5", None)
+    assert [c.link for c in found.blocking if not c.at_start] == ["link_5"]

@@ -86,7 +86,23 @@ def stuck_refusal(
     touching = start_contacts(found)
     start_mm = -found.start_clearance_m * 1000.0
     end_mm = -found.deepest_m * 1000.0
-    if found.deepest_m < found.start_clearance_m - DEEPER_M:
+    step = found.worse
+    if step is not None and step.start_mm is None:
+        worse = (
+            f"{step.group} {step.link} touches obstacle {step.obstacle!r} at {step.time_s:.3f} s "
+            f"({step.depth_mm:.1f} mm deep)"
+        )
+    elif (
+        step is not None
+        and step.start_mm is not None
+        and step.start_mm < start_mm - DEEPER_M * 1000.0
+    ):
+        # a contact shallower than the deepest one goes deeper: name it
+        worse = (
+            f"{step.group} {step.link} goes deeper into obstacle {step.obstacle!r}: "
+            f"{step.start_mm:.1f} mm at the start, {step.depth_mm:.1f} mm at {step.time_s:.3f} s"
+        )
+    elif found.deepest_m < found.start_clearance_m - DEEPER_M:
         worse = f"the overlap grows to {end_mm:.1f} mm at {found.deepest_s:.3f} s"
     elif found.deepest_m <= 0.0 and math.isfinite(found.deepest_m):
         worse = f"it stays {start_mm:.1f} mm deep, sliding along it"

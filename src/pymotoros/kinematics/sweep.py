@@ -16,14 +16,15 @@ the next check is found by a binary search over that summed travel. Two links of
 arm approach each other at most twice as fast. Ticks in contact are checked one by one.
 
 A robot that starts touching an obstacle (stopped by a contact) must be able to leave
-it. :attr:`SweepResult.receding` says whether the move only takes it away: the smallest
-signed distance between the robot and the obstacles (negative: the depth of the
-overlap), taken at every tick while it is in contact, never falls more than
-:data:`RECEDE_TOLERANCE_M` below the largest it has had since the start, and once it is
-clear the robot touches nothing again; a move that ends still in contact must end with
-the overlap smaller than at its start by more than that tolerance (sliding along an
-obstacle at the same depth does not take the robot away). docs/workspace.md, "Backing
-out of a contact".
+it. :attr:`SweepResult.receding` says whether the move only takes it away, judged for
+each contact it starts in (a link and an obstacle) on its own, at every tick while the
+robot is in contact: the signed distance of that link to that obstacle (negative: the
+depth of the overlap) never falls more than :data:`RECEDE_TOLERANCE_M` below the largest
+it has had since the start, and no other contact begins (nor one that has ended begins
+again); a move that ends still in contact must have taken at least one of its contacts
+away by more than that tolerance (sliding along an obstacle at the same depth does not
+take the robot away). One shallow contact may not go deeper because a deeper one
+recedes: each is judged by itself. docs/workspace.md, "Backing out of a contact".
 """
 
 from __future__ import annotations
@@ -80,6 +81,19 @@ class SweptContact:
         )
 
 
+@dataclass(frozen=True, slots=True)
+class Worsening:
+    """A contact that goes deeper during a back-out (``start_mm`` -> ``depth_mm`` deep at
+    ``time_s``), or a new one (``start_mm`` is None: not touching where the move starts)."""
+
+    time_s: float
+    group: str
+    link: str
+    obstacle: str
+    start_mm: float | None
+    depth_mm: float
+
+
 @dataclass(slots=True)
 class SweepResult:
     """What :func:`sweep` found along the motion."""
@@ -95,6 +109,9 @@ class SweepResult:
     """While it starts in contact: the smallest signed distance reached after the start."""
     deepest_s: float = 0.0
     """When that was."""
+    worse: Worsening | None = None
+    """While it starts in contact: the first contact that makes the move not receding
+    (one going deeper, or a new one); None when it recedes or only slides."""
 
     @property
     def starts_in_contact(self) -> bool:
@@ -130,8 +147,7 @@ def sweep(
     open_: dict[tuple[str, str, str], list[float | bool]] = {}
     done: list[SweptContact] = []
     next_obstacle = next_self = 0
-    best = last = math.inf  # the largest and the latest clearance
-    clear_since_start = False
+    backing = _BackOut()
     while min(next_obstacle, next_self) < ticks:
         k = min(next_obstacle, next_self)
         qs = _split(positions[k], sizes)
@@ -140,12 +156,9 @@ def sweep(
         if k == next_obstacle:
             clearance, contacts = world.probe(qs)
             seen.extend(contacts)
-            _follow_start(result, k, now, clearance, best, clear_since_start)
             if k == 0:
                 result.start_clearance_m = clearance
-            clear_since_start = clear_since_start or clearance > 0.0
-            best = max(best, clearance) if k else clearance
-            last = clearance
+            backing.follow(result, k, now, clearance, contacts)
             next_obstacle = travel.next_check(k, clearance, contacts)
         else:  # the obstacles were not due: keep what is open against them
             seen.extend(_open_obstacles(open_))
@@ -158,9 +171,8 @@ def sweep(
         else:
             seen.extend(_open_self(open_))
         _track(open_, done, seen, now, k == 0)
-    if result.starts_in_contact and not clear_since_start:
-        # still in contact at the end: it must at least have come out some way
-        result.receding = result.receding and last > result.start_clearance_m + RECEDE_TOLERANCE_M
+    if result.starts_in_contact and not backing.came_out():
+        result.receding = False  # still in every contact at the end, none shallower
     end = float(times[-1])
     for (group, link, obstacle), (start, depth, is_self, first) in open_.items():
         done.append(
@@ -231,23 +243,55 @@ class _Travel:
         return tick_travel_reaches(lambda a, b: steps[a:b] @ weights, k, self.ticks, clearance)
 
 
-def _follow_start(
-    result: SweepResult, k: int, now: float, clearance: float, best: float, clear: bool
-) -> None:
-    """The receding rule for a robot that starts in contact (module docstring): the
-    clearance never falls below the largest it has had since the start."""
-    if k == 0 or result.start_clearance_m > 0.0:
-        return
-    if clearance < result.deepest_m:
-        result.deepest_m, result.deepest_s = clearance, now
-    if not result.receding:
-        return
-    if clear:
-        if clearance <= 0.0:  # clear once, touching again: a new contact
-            result.receding = False
-        return
-    if clearance < best - RECEDE_TOLERANCE_M:
-        result.receding = False
+class _BackOut:
+    """The receding rule for a robot that starts in contact (module docstring), per
+    contact: (group, link, obstacle) -> its signed distance at the start, the largest
+    since, and the latest; a contact that has ended is dropped (it may not come back)."""
+
+    def __init__(self) -> None:
+        self.start: dict[tuple[str, str, str], float] = {}
+        self.best: dict[tuple[str, str, str], float] = {}
+        self.last: dict[tuple[str, str, str], float] = {}
+
+    def follow(
+        self,
+        result: SweepResult,
+        k: int,
+        now: float,
+        clearance: float,
+        contacts: Sequence[ContactLike],
+    ) -> None:
+        touching = {(c.group, c.link, c.obstacle): c.distance_m for c in contacts}
+        touching = {key: d for key, d in touching.items() if d <= 0.0}
+        if k == 0:
+            self.start, self.best, self.last = dict(touching), dict(touching), dict(touching)
+            return
+        if result.start_clearance_m > 0.0:
+            return
+        if clearance < result.deepest_m:
+            result.deepest_m, result.deepest_s = clearance, now
+        for key in [key for key in self.last if key not in touching]:
+            del self.last[key]  # out of it: were it to come back, it would be a new one
+        for key, d in touching.items():
+            best = self.best.get(key) if key in self.last else None
+            if best is not None and d >= best - RECEDE_TOLERANCE_M:
+                self.best[key] = max(best, d)
+                self.last[key] = d
+                continue
+            if result.receding:
+                start = self.start.get(key) if best is not None else None
+                result.receding = False
+                result.worse = Worsening(
+                    now, *key, None if start is None else -start * 1000.0, -d * 1000.0
+                )
+
+    def came_out(self) -> bool:
+        """At least one contact has ended, or is shallower than at the start by more
+        than the tolerance."""
+        return any(
+            key not in self.last or self.last[key] > d + RECEDE_TOLERANCE_M
+            for key, d in self.start.items()
+        )
 
 
 def _track(
@@ -278,4 +322,11 @@ def _track(
         )  # fmt: skip
 
 
-__all__ = ["RECEDE_TOLERANCE_M", "SweepResult", "SweepWorld", "SweptContact", "sweep"]
+__all__ = [
+    "RECEDE_TOLERANCE_M",
+    "SweepResult",
+    "SweepWorld",
+    "SweptContact",
+    "Worsening",
+    "sweep",
+]
