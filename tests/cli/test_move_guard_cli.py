@@ -98,13 +98,14 @@ def test_a_forced_contact_says_where_the_robot_stands_and_backs_out(sim: Sim) ->
     assert "the robot starts touching obstacle 'fixture' (R1 tool)" in deeper.stderr
     hint = re.search(
         r"back out first, e\.g\. d[xyz] [+-]0\.020 m "
-        r"\(`pymotoros move --relative (d[xyz]=-?0\.020)`",
+        r"\(`pymotoros move --relative (d[xyz]=-?0\.020) --tool (0)` with this cell's --config",
         deeper.stderr,
     )
     assert hint is not None, deeper.stderr
     assert _positions(sim) == here
     # the PFL stop holds 500 ms; START_TRAJ_MODE clears it after that
     assert _enable_after_pfl(sim), sim.api("/api/state")["pfl"]
+    assert hint.group(2) == "0"  # the tool the check mounted: the step runs guarded
     out = move(sim, "--relative", hint.group(1))
     assert out.exit_code == 0, out.output
     # a plain note line for the person, not a timestamped log record

@@ -130,7 +130,7 @@ async def test_forced_move_stops_at_the_fixture_and_the_error_names_the_contact(
         assert words.startswith("the robot starts touching obstacle 'fixture' (R1 tool)")
         assert "this move does not take it away" in words
         assert "A move along which the clearance only grows is allowed" in words
-        assert "--relative dx=-0.020" in words  # the way out, found for this contact
+        assert "--relative dx=-0.020 --tool 0` with this cell's --config" in words  # guarded
         assert "--force" in words
         assert await client.current_positions() == pytest.approx(here, abs=1e-9)
         # backing out (the hint) is allowed, and the twin lets the arm leave

@@ -167,7 +167,8 @@ class Avoidance:
                 return note
             return None
         if found.starts_in_contact and not found.receding:
-            raise PathBlockedError(stuck_refusal(world, self._tools, found, full[0], columns))
+            refusal = stuck_refusal(world, self._tools, found, full[0], columns, tools)
+            raise PathBlockedError(refusal)
         first = blocking[0]
         more = f" (and {len(blocking) - 1} more)" if len(blocking) > 1 else ""
         raise PathBlockedError(

@@ -11,7 +11,7 @@ is :mod:`pymotoros.kinematics.sweep`'s.
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from typing import TYPE_CHECKING, Final
 
 from pymotoros.client.planning import JointTrajectory
@@ -80,6 +80,7 @@ def stuck_refusal(
     found: SweepResult,
     start: npt.NDArray[np.float64],
     columns: Sequence[int],
+    moves_tools: Mapping[int, int] | None = None,
 ) -> str:
     """The refusal of a move that starts in contact and goes deeper: what it touches,
     how deep it would go, and how to back out."""
@@ -108,7 +109,7 @@ def stuck_refusal(
         worse = f"it stays {start_mm:.1f} mm deep, sliding along it"
     else:
         worse = "it touches again later"
-    hint = back_out_hint(world, tools, start, columns)
+    hint = back_out_hint(world, tools, start, columns, moves_tools)
     return (
         f"the robot starts touching {names(touching)} ({start_mm:.1f} mm deep) and this "
         f"move does not take it away ({worse}); nothing was sent. A move along which the "
@@ -122,9 +123,13 @@ def back_out_hint(
     tools: ToolTable,
     start: npt.NDArray[np.float64],
     columns: Sequence[int],
+    moves_tools: Mapping[int, int] | None = None,
 ) -> str:
     """``, e.g. dz=+0.020 m (...)``: the TCP step along a base axis that gains the
-    most clearance from where the robot stands ("" when none does, or no IK)."""
+    most clearance from where the robot stands ("" when none does, or no IK), with the
+    TCP of the move's tool (``moves_tools``: group index -> tool number), else the one in
+    force; the command it prints names that tool (``--tool``), so the step runs guarded
+    with the same shape on the flange."""
     import numpy as np
 
     from pymotoros.kinematics import pose_to_matrix
@@ -135,9 +140,11 @@ def back_out_hint(
     g = group_of(world, columns[0])
     qs = split(start, world.joint_counts)
     here, _ = world.probe(qs)
-    best: tuple[float, str] | None = None
+    best: tuple[float, str, str] | None = None  # (clearance, "dz", "+0.020")
+    number = (moves_tools or {}).get(g)
     try:
-        chain = tools.chain(g)
+        number = tools.in_force(g) if number is None else number
+        chain = tools.chain(g, number)
     except PymotorosError:
         return ""
     pose = chain.fk(qs[g])
@@ -155,14 +162,15 @@ def back_out_hint(
             moved[g] = np.asarray(q, dtype=float)
             clearance, _ = world.probe(moved)
             if clearance > here and (best is None or clearance > best[0]):
-                value = f"{sign * BACK_OUT_STEP_M:+.3f}"
-                best = (clearance, f"{key}={value}")
+                best = (clearance, key, f"{sign * BACK_OUT_STEP_M:+.3f}")
     if best is None:
         return ""
-    key, _, value = best[1].partition("=")
+    _, key, value = best
+    relative = f"{key}={value.lstrip('+')}"
+    tool = "" if moves_tools is None or g not in moves_tools else f", tool={number}"
     return (
-        f", e.g. {key} {value} m (`pymotoros move --relative {key}={value.lstrip('+')}`, "
-        f"move_relative({key}={value.lstrip('+')}))"
+        f", e.g. {key} {value} m (`pymotoros move --relative {relative} --tool {number}` with "
+        f"this cell's --config, move_relative({relative}{tool}))"
     )
 
 
