@@ -28,6 +28,7 @@ from hypothesis import strategies as st
 
 from pymotoros.client import FollowingSample
 from pymotoros.client.streaming import EARLY_STOP_BOUND_S
+from pymotoros.protocol.constants import MotionCommand
 from pymotoros.testing import Twin, sync_twin, twin
 
 GOAL: Final = (3.0, 0.0, 0.0, 0.0, 0.0, 0.0)
@@ -400,3 +401,32 @@ def test_leaving_a_sync_with_block_while_another_thread_moves_stops_the_robot() 
     assert len(errors) == 1
     assert "stands at [" in _all_notes(errors[0]), repr(errors[0])
     assert not the_twin.controller.has_queued_motion()
+
+
+async def test_the_progress_callback_gets_no_samples_during_the_stop() -> None:
+    """The listener is detached before the stop: a callback that would raise during it
+    (or the following monitor's blame) cannot turn the move's own error into a
+    cancellation."""
+    async with twin(robot="hc10", timeout_s=2.0) as (client, the_twin):
+        await client.enable()
+        start = await client.current_positions()
+        plan = client.plan(start, GOAL, speed_scale=0.2)
+        streamer = client.streamer
+        original = streamer.port.request_motion
+        stopping: list[float] = []
+
+        async def watched(message: object, *, timeout_s: float | None = None) -> object:
+            if getattr(message, "command", None) == MotionCommand.STOP_MOTION:
+                stopping.append(the_twin.clock.now())
+            return await original(message, timeout_s=timeout_s)  # type: ignore[arg-type]
+
+        def progress(_sample: FollowingSample) -> None:
+            if stopping:
+                raise CallbackFailedError("a sample came during the stop")
+
+        streamer.port = _Port(streamer.port, watched)
+        with pytest.raises(Exception) as info:
+            await client.execute(plan, timeout_s=0.05, on_progress=progress)
+        assert stopping, "no STOP_MOTION was sent"
+        assert type(info.value).__name__ == "MotionTimeoutError", repr(info.value)
+        assert "the robot was stopped (STOP_MOTION) and stands at [" in str(info.value)

@@ -737,6 +737,10 @@ class TrajectoryStreamer:
         watchdog = StallWatchdog(self.states, self.state_stall_s, on_stall, clock=self.clock)
 
         def disarm() -> None:
+            # Before any stop: the callback and the monitor see no sample of it (a
+            # callback raising then would turn the move's error into a cancellation,
+            # and the monitor would blame FSU/HOLD for a robot the library stops).
+            remove()  # idempotent: disarm runs again in ``finally``
             watchdog.close()
             for handle in cancel_later:
                 handle.cancel()
@@ -794,7 +798,6 @@ class TrajectoryStreamer:
             raise
         finally:
             disarm()
-            remove()
         return MoveResult(
             trajectory, final, stats, monitor.report, self.clock.now() - started, groups
         )
