@@ -27,8 +27,9 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from pymotoros.client import FollowingSample
+from pymotoros.client.errors import ConnectionLostError
 from pymotoros.client.streaming import EARLY_STOP_BOUND_S
-from pymotoros.protocol.constants import MotionCommand
+from pymotoros.protocol.constants import TCP_PORT_MOTION, MotionCommand
 from pymotoros.testing import Twin, sync_twin, twin
 
 GOAL: Final = (3.0, 0.0, 0.0, 0.0, 0.0, 0.0)
@@ -430,3 +431,21 @@ async def test_the_progress_callback_gets_no_samples_during_the_stop() -> None:
         assert stopping, "no STOP_MOTION was sent"
         assert type(info.value).__name__ == "MotionTimeoutError", repr(info.value)
         assert "the robot was stopped (STOP_MOTION) and stands at [" in str(info.value)
+
+
+async def test_a_motion_connection_lost_mid_move_says_the_queue_may_still_run() -> None:
+    """The motion port closes while the state stream lives: MotoROS goes on with the
+    points it queued (§2.2) and STOP_MOTION cannot be sent: the error says so, what to do
+    and the last known position with its unit."""
+    async with twin(robot="hc10", timeout_s=2.0) as (client, the_twin):
+        await client.enable()
+        task = asyncio.create_task(client.move_joints(GOAL))
+        await the_twin.sleep(0.5)
+        await the_twin._services[TCP_PORT_MOTION].close_clients()
+        with pytest.raises(ConnectionLostError) as info:
+            await task
+        text = str(info.value)
+        assert "points already queued may still run" in text, text
+        assert "stop the robot on the pendant" in text
+        assert "last known position [" in text
+        assert "] rad" in text

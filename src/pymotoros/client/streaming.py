@@ -47,6 +47,7 @@ from pymotoros.client.errors import (
     AxisDeviation,
     ClientError,
     ConnectionLostError,
+    MotionConnectionLostError,
     MotionIncompleteError,
     MotionTimeoutError,
     ReplyError,
@@ -784,8 +785,13 @@ class TrajectoryStreamer:
             await self._stop_then(groups, cancel, f"the move was cancelled{reason}")
             raise
         except ConnectionLostError as exc:
-            if self.states.error is None or isinstance(exc, StateStreamLostError):
-                raise  # the motion port went: nothing can be stopped from here
+            if isinstance(exc, StateStreamLostError):
+                raise
+            if self.states.error is None:  # the motion port went: nothing can be stopped
+                disarm()
+                if accepted_count or self._in_flight is not None:
+                    raise self._motion_lost(exc, groups, accepted_count, trajectory) from exc
+                raise
             disarm()
             lost = await self._stream_lost(groups, None, accepted_count, trajectory)
             if not lost.stopped and self._motion_gone:
@@ -907,12 +913,7 @@ class TrajectoryStreamer:
     ) -> StateStreamLostError:
         """Stop the robot (STOP_MOTION, if the motion port still answers) and say what was lost."""
         stopped, stop_note = await self._send_stop(groups)
-        positions = _joined_positions(self.states.state, groups) or ()
-        where = (
-            joint_values_text(positions, [self.robot.groups[g] for g in groups])
-            if positions
-            else "unknown"
-        )
+        positions, where = self._last_known(groups)
         if silent_s is None:
             what = f"the state stream closed ({self.states.error})"
         else:
@@ -940,6 +941,36 @@ class TrajectoryStreamer:
             accepted_points=accepted,
             total_points=total,
             stopped=stopped,
+        )
+
+    def _last_known(self, groups: Sequence[int]) -> tuple[tuple[float, ...], str]:
+        """The last position the state stream reported and its text with units
+        ("unknown" without one): what every error after a lost connection quotes."""
+        positions = _joined_positions(self.states.state, groups) or ()
+        if not positions:
+            return (), "unknown"
+        return positions, joint_values_text(positions, [self.robot.groups[g] for g in groups])
+
+    def _motion_lost(
+        self,
+        exc: ConnectionLostError,
+        groups: Sequence[int],
+        accepted: int,
+        trajectory: JointTrajectory,
+    ) -> MotionConnectionLostError:
+        """The motion connection went mid-move while the state stream lives: MotoROS
+        goes on with its queue (§2.2) and nothing can stop it from here."""
+        positions, where = self._last_known(groups)
+        total = len(trajectory.points)
+        message = (
+            f"{exc}; streaming stopped with {accepted} of {total} points accepted by the "
+            "robot: the points already queued may still run (MotoROS goes on with its queue "
+            "after the motion connection closes, reference §2.2) and STOP_MOTION cannot be "
+            f"sent without it: {STOP_ON_THE_PENDANT}; last known position {where}"
+        )
+        logger.error("%s", message)
+        return MotionConnectionLostError(
+            message, positions=positions, accepted_points=accepted, total_points=total
         )
 
 
