@@ -29,7 +29,7 @@ from hypothesis import strategies as st
 from pymotoros.client import FollowingSample
 from pymotoros.client.errors import ConnectionLostError
 from pymotoros.client.streaming import EARLY_STOP_BOUND_S
-from pymotoros.protocol.constants import TCP_PORT_MOTION, MotionCommand
+from pymotoros.protocol.constants import TCP_PORT_MOTION, TCP_PORT_STATE, MotionCommand
 from pymotoros.testing import Twin, sync_twin, twin
 
 GOAL: Final = (3.0, 0.0, 0.0, 0.0, 0.0, 0.0)
@@ -449,3 +449,34 @@ async def test_a_motion_connection_lost_mid_move_says_the_queue_may_still_run() 
         assert "stop the robot on the pendant" in text
         assert "last known position [" in text
         assert "] rad" in text
+
+
+async def test_a_cancel_while_the_state_stream_is_lost_does_not_cut_the_stop_short() -> None:
+    """The state stream goes mid-move and the client sends STOP_MOTION; a second cancel
+    (a Ctrl-C) meanwhile must not keep it from going: the robot stops all the same."""
+    async with twin(robot="hc10", timeout_s=2.0) as (client, the_twin):
+        await client.enable()
+        task = asyncio.create_task(client.move_joints(GOAL))
+        await the_twin.sleep(0.5)
+        streamer = client.streamer
+        original = streamer.port.request_motion
+        stop_asked = asyncio.Event()
+
+        async def slow_stop(message: object, *, timeout_s: float | None = None) -> object:
+            if getattr(message, "command", None) == MotionCommand.STOP_MOTION:
+                stop_asked.set()
+                await the_twin.sleep(0.1)  # the stop is under way when the cancel lands
+            return await original(message, timeout_s=timeout_s)  # type: ignore[arg-type]
+
+        streamer.port = _Port(streamer.port, slow_stop)
+        await the_twin._services[TCP_PORT_STATE].close_clients()
+        await stop_asked.wait()
+        task.cancel()
+        with pytest.raises(asyncio.CancelledError) as info:
+            await task
+        assert "STOP_MOTION acknowledged" in _all_notes(info.value) + str(info.value)
+        await the_twin.sleep(0.2)
+        pulses = the_twin.commanded_pulses(0)
+        await the_twin.sleep(QUIET_AFTER_S)
+        assert the_twin.commanded_pulses(0) == pulses
+        assert not the_twin.controller.has_queued_motion()

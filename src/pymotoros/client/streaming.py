@@ -39,9 +39,9 @@ import itertools
 import logging
 import math
 import operator
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Coroutine, Sequence
 from dataclasses import KW_ONLY, dataclass, field
-from typing import Final
+from typing import Final, TypeVar
 
 from pymotoros.client.errors import (
     AxisDeviation,
@@ -766,14 +766,14 @@ class TrajectoryStreamer:
             )
         except _StreamStalledError:
             disarm()  # nothing may cancel the stop below
-            raise await self._stream_lost(
+            raise await self._lost_shielded(
                 groups, self._stalled_for, accepted_count, trajectory
             ) from None
         except asyncio.CancelledError as cancel:
             disarm()
             if task is not None and self._stalled():  # the watchdog's cancel, not a caller's
                 task.uncancel()
-                raise await self._stream_lost(
+                raise await self._lost_shielded(
                     groups, self._stalled_for, accepted_count, trajectory
                 ) from None
             if failed and task is not None:  # the progress callback raised: end with it
@@ -793,7 +793,7 @@ class TrajectoryStreamer:
                     raise self._motion_lost(exc, groups, accepted_count, trajectory) from exc
                 raise
             disarm()
-            lost = await self._stream_lost(groups, None, accepted_count, trajectory)
+            lost = await self._lost_shielded(groups, None, accepted_count, trajectory)
             if not lost.stopped and self._motion_gone:
                 raise  # both went together (the controller closed): the plain loss says it
             raise lost from exc
@@ -818,20 +818,27 @@ class TrajectoryStreamer:
         """
         # The client's own errors carry the stop in their message: no second line in a log.
         level = logging.INFO if isinstance(exc, ClientError) else logging.WARNING
-        stopping = asyncio.ensure_future(self.stop_early(groups, why, quiet_level=level))
-        cancelled_again = False
-        while True:
-            try:
-                outcome = await asyncio.shield(stopping)
-                break
-            except asyncio.CancelledError:
-                if stopping.done():  # the loop itself is going away
-                    raise
-                cancelled_again = True
+        outcome, cancelled_again = await _shielded(self.stop_early(groups, why, quiet_level=level))
         self.last_stop = outcome
         outcome.tell(exc)
         if cancelled_again and not isinstance(exc, asyncio.CancelledError):
             raise asyncio.CancelledError(outcome.text) from exc
+
+    async def _lost_shielded(
+        self,
+        groups: Sequence[int],
+        silent_s: float | None,
+        accepted: int,
+        trajectory: JointTrajectory,
+    ) -> StateStreamLostError:
+        """:meth:`_stream_lost` safe from further cancels, as :meth:`_stop_then`: a cancel
+        meanwhile goes on as a ``CancelledError`` (from the loss) once STOP_MOTION went."""
+        lost, cancelled_again = await _shielded(
+            self._stream_lost(groups, silent_s, accepted, trajectory)
+        )
+        if cancelled_again:
+            raise asyncio.CancelledError(str(lost)) from lost
+        return lost
 
     async def stop_early(
         self, groups: Sequence[int], why: str, *, quiet_level: int = logging.WARNING
@@ -972,6 +979,25 @@ class TrajectoryStreamer:
         return MotionConnectionLostError(
             message, positions=positions, accepted_points=accepted, total_points=total
         )
+
+
+_T = TypeVar("_T")
+
+
+async def _shielded(work: Coroutine[object, object, _T]) -> tuple[_T, bool]:
+    """Run ``work`` as a task of its own, awaited through :func:`asyncio.shield` until it
+    is done: (its result, whether the caller was cancelled meanwhile). A stop that a
+    second cancel (a ``wait_for`` around a ``wait_for``, a second Ctrl-C) cut short
+    would leave the robot moving; the caller re-raises the cancel once it is done."""
+    running = asyncio.ensure_future(work)
+    cancelled_again = False
+    while True:
+        try:
+            return await asyncio.shield(running), cancelled_again
+        except asyncio.CancelledError:
+            if running.done():  # the loop itself is going away
+                raise
+            cancelled_again = True
 
 
 def _callback_guard(
