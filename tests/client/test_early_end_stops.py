@@ -20,6 +20,7 @@ import math
 import threading
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field
+from pathlib import Path
 from typing import Final
 
 import pytest
@@ -27,8 +28,10 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from pymotoros.client import FollowingSample
-from pymotoros.client.errors import ConnectionLostError
+from pymotoros.client.errors import ConnectionLostError, MoveInProgressError
 from pymotoros.client.streaming import EARLY_STOP_BOUND_S
+from pymotoros.controller.cell import load_cell
+from pymotoros.models.cell import load_cell_models
 from pymotoros.protocol.constants import TCP_PORT_MOTION, TCP_PORT_STATE, MotionCommand
 from pymotoros.testing import Twin, sync_twin, twin
 
@@ -42,6 +45,10 @@ MAX_COMMANDED_TRAVEL_RAD: Final = 0.02
 """The S axis's largest increment at full speed is about 0.009 rad per 4 ms tick."""
 MAX_FEEDBACK_TRAVEL_RAD: Final = 0.1
 """The feedback lags the command by the servo's delay: it may move on by that much."""
+FIXTURE_CELL: Final = (
+    Path(__file__).resolve().parents[2] / "examples" / "cells" / "hc10_table_fixture.toml"
+)
+"""A cell with obstacles: every move of its client is guarded."""
 QUIET_AFTER_S: Final = 1.0
 """How long the controller is watched after the move ended: no increment may come."""
 
@@ -480,3 +487,27 @@ async def test_a_cancel_while_the_state_stream_is_lost_does_not_cut_the_stop_sho
         await the_twin.sleep(QUIET_AFTER_S)
         assert the_twin.commanded_pulses(0) == pulses
         assert not the_twin.controller.has_queued_motion()
+
+
+async def test_a_second_execute_with_a_guarded_cell_is_refused_at_once() -> None:
+    """With a cell that has obstacles, a second ``execute()`` while a move streams is
+    refused before the workspace guard and without waiting for the first move's rest."""
+    cell = FIXTURE_CELL
+    async with Twin(load_cell(cell)) as the_twin:
+        client = the_twin.client(cell=load_cell_models(cell), tool=0, timeout_s=2.0)
+        await client.connect()
+        await client.wait_for_state()
+        await client.enable()
+        start = await client.current_positions()
+        goal = (start[0] + 0.5, *start[1:])
+        moving = asyncio.create_task(client.move_joints(goal, speed_scale=0.2))
+        await the_twin.sleep(0.3)
+        plan = client.plan(client.state.positions(0) or start, start)
+        t0 = the_twin.clock.now()
+        with pytest.raises(MoveInProgressError, match=r"execute\(\) refused") as info:
+            await client.execute(plan)
+        assert the_twin.clock.now() == t0, "the refusal waited for the first move"
+        assert "where it stopped" not in str(info.value)
+        assert not moving.done()
+        await moving
+        await client.close()

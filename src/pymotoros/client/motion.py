@@ -255,7 +255,8 @@ class Motion:
         options = ExecuteOptions(
             busy_timeout_s, goal_tolerance, timeout_s, check_speed, on_progress
         )
-        return await self._guarded(trajectory, groups, options, force)
+        with self.one_move("execute"):  # a second move is refused before the guard
+            return await self._guarded(trajectory, groups, options, force)
 
     def guard(self, trajectory: JointTrajectory, groups: Sequence[int] = (0,)) -> str | None:
         """Check ``trajectory`` (the joints of ``groups``) against the obstacles of the
@@ -285,7 +286,7 @@ class Motion:
             self.guard(trajectory, groups)
         try:
             return await self._execute(trajectory, groups, options)
-        except MoveStoppedError:
+        except (MoveStoppedError, MoveInProgressError):
             raise
         except ClientError as exc:
             await self._name_contact(exc, groups)
@@ -299,8 +300,10 @@ class Motion:
         avoidance = self._avoidance
         if avoidance is None or not avoidance.guards:
             return
-        with contextlib.suppress(PymotorosError, TimeoutError):
-            await self._streamer.wait_until_at_rest(groups, timeout_s=NAME_CONTACT_WAIT_S)
+        stop = exc.early_stop
+        if stop is None or not stop.at_rest:  # else the library's stop saw it at rest
+            with contextlib.suppress(PymotorosError, TimeoutError):
+                await self._streamer.wait_until_at_rest(groups, timeout_s=NAME_CONTACT_WAIT_S)
         state = self._view.state
         standing = [state.positions(g) for g in range(len(self._robot.groups))]
         try:
