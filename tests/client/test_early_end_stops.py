@@ -511,3 +511,24 @@ async def test_a_second_execute_with_a_guarded_cell_is_refused_at_once() -> None
         assert not moving.done()
         await moving
         await client.close()
+
+
+async def test_a_callback_error_does_not_swallow_the_callers_cancel() -> None:
+    """The caller cancels the move in the same instant as its progress callback raises:
+    after the stop the cancellation goes on (it is not swallowed by the callback's error)."""
+    async with twin(robot="hc10", timeout_s=2.0) as (client, the_twin):
+        await client.enable()
+        moving: list[asyncio.Task[object]] = []
+
+        def progress(_sample: FollowingSample) -> None:
+            if the_twin.clock.now() - t0 >= 0.5:
+                moving[0].cancel()  # the caller's cancel...
+                raise CallbackFailedError("...and the callback's error at once")
+
+        t0 = the_twin.clock.now()
+        moving.append(asyncio.create_task(client.move_joints(GOAL, on_progress=progress)))
+        with pytest.raises(asyncio.CancelledError):
+            await moving[0]
+        pulses = the_twin.commanded_pulses(0)
+        await the_twin.sleep(QUIET_AFTER_S)
+        assert the_twin.commanded_pulses(0) == pulses

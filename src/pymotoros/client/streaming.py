@@ -773,13 +773,19 @@ class TrajectoryStreamer:
             disarm()
             if task is not None and self._stalled():  # the watchdog's cancel, not a caller's
                 task.uncancel()
-                raise await self._lost_shielded(
+                lost = await self._lost_shielded(
                     groups, self._stalled_for, accepted_count, trajectory
-                ) from None
+                )
+                if task.cancelling():  # the caller cancelled too: that goes on
+                    raise asyncio.CancelledError(str(lost)) from lost
+                raise lost from None
             if failed and task is not None:  # the progress callback raised: end with it
                 task.uncancel()
                 error = failed[0]
                 await self._stop_then(groups, error, "the progress callback raised")
+                if task.cancelling():  # the caller cancelled too: that goes on
+                    stop = self.last_stop
+                    raise asyncio.CancelledError(stop.text if stop else "") from error
                 raise error from None
             reason = f" ({cancel.args[0]})" if cancel.args and cancel.args[0] else ""
             await self._stop_then(groups, cancel, f"the move was cancelled{reason}")
@@ -995,9 +1001,11 @@ async def _shielded(work: Coroutine[object, object, _T]) -> tuple[_T, bool]:
         try:
             return await asyncio.shield(running), cancelled_again
         except asyncio.CancelledError:
-            if running.done():  # the loop itself is going away
-                raise
             cancelled_again = True
+            if running.done():  # cancelled as it finished: keep what it did
+                if running.cancelled():  # the loop itself is going away
+                    raise
+                return running.result(), cancelled_again
 
 
 def _callback_guard(
