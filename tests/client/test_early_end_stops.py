@@ -20,6 +20,7 @@ import math
 import threading
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field
+from pathlib import Path
 from typing import Final
 
 import pytest
@@ -27,7 +28,11 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from pymotoros.client import FollowingSample
+from pymotoros.client.errors import ConnectionLostError, MoveInProgressError
 from pymotoros.client.streaming import EARLY_STOP_BOUND_S
+from pymotoros.controller.cell import load_cell
+from pymotoros.models.cell import load_cell_models
+from pymotoros.protocol.constants import TCP_PORT_MOTION, TCP_PORT_STATE, MotionCommand
 from pymotoros.testing import Twin, sync_twin, twin
 
 GOAL: Final = (3.0, 0.0, 0.0, 0.0, 0.0, 0.0)
@@ -40,6 +45,10 @@ MAX_COMMANDED_TRAVEL_RAD: Final = 0.02
 """The S axis's largest increment at full speed is about 0.009 rad per 4 ms tick."""
 MAX_FEEDBACK_TRAVEL_RAD: Final = 0.1
 """The feedback lags the command by the servo's delay: it may move on by that much."""
+FIXTURE_CELL: Final = (
+    Path(__file__).resolve().parents[2] / "examples" / "cells" / "hc10_table_fixture.toml"
+)
+"""A cell with obstacles: every move of its client is guarded."""
 QUIET_AFTER_S: Final = 1.0
 """How long the controller is watched after the move ended: no increment may come."""
 
@@ -400,3 +409,126 @@ def test_leaving_a_sync_with_block_while_another_thread_moves_stops_the_robot() 
     assert len(errors) == 1
     assert "stands at [" in _all_notes(errors[0]), repr(errors[0])
     assert not the_twin.controller.has_queued_motion()
+
+
+async def test_the_progress_callback_gets_no_samples_during_the_stop() -> None:
+    """The listener is detached before the stop: a callback that would raise during it
+    (or the following monitor's blame) cannot turn the move's own error into a
+    cancellation."""
+    async with twin(robot="hc10", timeout_s=2.0) as (client, the_twin):
+        await client.enable()
+        start = await client.current_positions()
+        plan = client.plan(start, GOAL, speed_scale=0.2)
+        streamer = client.streamer
+        original = streamer.port.request_motion
+        stopping: list[float] = []
+
+        async def watched(message: object, *, timeout_s: float | None = None) -> object:
+            if getattr(message, "command", None) == MotionCommand.STOP_MOTION:
+                stopping.append(the_twin.clock.now())
+            return await original(message, timeout_s=timeout_s)  # type: ignore[arg-type]
+
+        def progress(_sample: FollowingSample) -> None:
+            if stopping:
+                raise CallbackFailedError("a sample came during the stop")
+
+        streamer.port = _Port(streamer.port, watched)
+        with pytest.raises(Exception) as info:
+            await client.execute(plan, timeout_s=0.05, on_progress=progress)
+        assert stopping, "no STOP_MOTION was sent"
+        assert type(info.value).__name__ == "MotionTimeoutError", repr(info.value)
+        assert "the robot was stopped (STOP_MOTION) and stands at [" in str(info.value)
+
+
+async def test_a_motion_connection_lost_mid_move_says_the_queue_may_still_run() -> None:
+    """The motion port closes while the state stream lives: MotoROS goes on with the
+    points it queued (§2.2) and STOP_MOTION cannot be sent: the error says so, what to do
+    and the last known position with its unit."""
+    async with twin(robot="hc10", timeout_s=2.0) as (client, the_twin):
+        await client.enable()
+        task = asyncio.create_task(client.move_joints(GOAL))
+        await the_twin.sleep(0.5)
+        await the_twin._services[TCP_PORT_MOTION].close_clients()
+        with pytest.raises(ConnectionLostError) as info:
+            await task
+        text = str(info.value)
+        assert "points already queued may still run" in text, text
+        assert "stop the robot on the pendant" in text
+        assert "last known position [" in text
+        assert "] rad" in text
+
+
+async def test_a_cancel_while_the_state_stream_is_lost_does_not_cut_the_stop_short() -> None:
+    """The state stream goes mid-move and the client sends STOP_MOTION; a second cancel
+    (a Ctrl-C) meanwhile must not keep it from going: the robot stops all the same."""
+    async with twin(robot="hc10", timeout_s=2.0) as (client, the_twin):
+        await client.enable()
+        task = asyncio.create_task(client.move_joints(GOAL))
+        await the_twin.sleep(0.5)
+        streamer = client.streamer
+        original = streamer.port.request_motion
+        stop_asked = asyncio.Event()
+
+        async def slow_stop(message: object, *, timeout_s: float | None = None) -> object:
+            if getattr(message, "command", None) == MotionCommand.STOP_MOTION:
+                stop_asked.set()
+                await the_twin.sleep(0.1)  # the stop is under way when the cancel lands
+            return await original(message, timeout_s=timeout_s)  # type: ignore[arg-type]
+
+        streamer.port = _Port(streamer.port, slow_stop)
+        await the_twin._services[TCP_PORT_STATE].close_clients()
+        await stop_asked.wait()
+        task.cancel()
+        with pytest.raises(asyncio.CancelledError) as info:
+            await task
+        assert "STOP_MOTION acknowledged" in _all_notes(info.value) + str(info.value)
+        await the_twin.sleep(0.2)
+        pulses = the_twin.commanded_pulses(0)
+        await the_twin.sleep(QUIET_AFTER_S)
+        assert the_twin.commanded_pulses(0) == pulses
+        assert not the_twin.controller.has_queued_motion()
+
+
+async def test_a_second_execute_with_a_guarded_cell_is_refused_at_once() -> None:
+    """With a cell that has obstacles, a second ``execute()`` while a move streams is
+    refused before the workspace guard and without waiting for the first move's rest."""
+    cell = FIXTURE_CELL
+    async with Twin(load_cell(cell)) as the_twin:
+        client = the_twin.client(cell=load_cell_models(cell), tool=0, timeout_s=2.0)
+        await client.connect()
+        await client.wait_for_state()
+        await client.enable()
+        start = await client.current_positions()
+        goal = (start[0] + 0.5, *start[1:])
+        moving = asyncio.create_task(client.move_joints(goal, speed_scale=0.2))
+        await the_twin.sleep(0.3)
+        plan = client.plan(client.state.positions(0) or start, start)
+        t0 = the_twin.clock.now()
+        with pytest.raises(MoveInProgressError, match=r"execute\(\) refused") as info:
+            await client.execute(plan)
+        assert the_twin.clock.now() == t0, "the refusal waited for the first move"
+        assert "where it stopped" not in str(info.value)
+        assert not moving.done()
+        await moving
+        await client.close()
+
+
+async def test_a_callback_error_does_not_swallow_the_callers_cancel() -> None:
+    """The caller cancels the move in the same instant as its progress callback raises:
+    after the stop the cancellation goes on (it is not swallowed by the callback's error)."""
+    async with twin(robot="hc10", timeout_s=2.0) as (client, the_twin):
+        await client.enable()
+        moving: list[asyncio.Task[object]] = []
+
+        def progress(_sample: FollowingSample) -> None:
+            if the_twin.clock.now() - t0 >= 0.5:
+                moving[0].cancel()  # the caller's cancel...
+                raise CallbackFailedError("...and the callback's error at once")
+
+        t0 = the_twin.clock.now()
+        moving.append(asyncio.create_task(client.move_joints(GOAL, on_progress=progress)))
+        with pytest.raises(asyncio.CancelledError):
+            await moving[0]
+        pulses = the_twin.commanded_pulses(0)
+        await the_twin.sleep(QUIET_AFTER_S)
+        assert the_twin.commanded_pulses(0) == pulses

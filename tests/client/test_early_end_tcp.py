@@ -25,7 +25,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from pymotoros.client import RobotClient
-from pymotoros.pytest_plugin import RunningTwin
+from pymotoros.pytest_plugin import RunningTwin, _cell_for, _TwinThread
 
 GOALS: Final = ((3.0, 0.0, 0.0, 0.0, 0.0, 0.0), (0.0, 0.0, 0.0, 0.0, 0.0, 0.0))
 """Back and forth on the S axis (1.6 s each at full speed)."""
@@ -258,3 +258,62 @@ def test_sigterm_to_an_asyncio_script_stops_the_robot(pymotoros_twin: RunningTwi
     pulses = _assert_still(pymotoros_twin)
     ratio = pymotoros_twin.call(lambda c: c.cell.groups[0].axes[0].pulses_per_unit)
     assert pulses[0] / ratio < 2.9
+
+
+def test_sigterm_to_an_asyncio_script_moving_two_robots_stops_both(
+    pymotoros_twin: RunningTwin, request: pytest.FixtureRequest
+) -> None:
+    """Two clients' moves in one loop (``gather``): SIGTERM cancels both, each stops its
+    robot, and only then does the process end by SIGTERM."""
+    cell, http = _cell_for(request)
+    runner = _TwinThread(cell, http)
+    other = runner.start()
+    try:
+        connect = ", ".join(
+            f"RobotClient({t.host!r}, motion_port={t.motion}, state_port={t.state}, io_port={t.io})"
+            for t in (pymotoros_twin, other)
+        )
+        script = textwrap.dedent(
+            f"""
+            import asyncio
+            from pymotoros.client import RobotClient
+
+            async def move(robot, seen):
+                await robot.connect()
+                await robot.wait_for_state()
+                await robot.enable()
+                def progress(sample):
+                    if sample.progress > 0.05 and not seen:
+                        seen.append(1)
+                        print("moving", flush=True)
+                await robot.move_joints([3.0, 0, 0, 0, 0, 0], on_progress=progress)
+
+            async def main():
+                robots = [{connect}]
+                await asyncio.gather(*(move(r, []) for r in robots))
+                print("finished", flush=True)
+
+            asyncio.run(main())
+            """
+        )
+        env = {"PYTHONPATH": str(SRC), **os.environ}
+        process = subprocess.Popen(  # noqa: S603 - our own script
+            [sys.executable, "-c", script],
+            stdout=subprocess.PIPE,
+            stderr=subprocess.PIPE,
+            text=True,
+            env=env,
+        )
+        assert process.stdout is not None
+        for _ in range(2):
+            assert process.stdout.readline().strip() == "moving"
+        process.send_signal(signal.SIGTERM)
+        out, err = process.communicate(timeout=30)
+        assert "finished" not in out
+        assert process.returncode == -signal.SIGTERM, (process.returncode, err)
+        assert err.count("the move was cancelled (SIGTERM): the robot was stopped") == 2, (out, err)
+        ratio = pymotoros_twin.call(lambda c: c.cell.groups[0].axes[0].pulses_per_unit)
+        for twin in (pymotoros_twin, other):
+            assert _assert_still(twin)[0] / ratio < 2.9
+    finally:
+        runner.stop()

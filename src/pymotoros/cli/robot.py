@@ -837,11 +837,18 @@ async def _move_watched(
     except PathBlockedError as exc:  # the client's guard, or --avoid finding no way
         raise MoveBlockedError(f"not started: {exc}") from None
     except asyncio.CancelledError:
-        with contextlib.suppress(PymotorosError):
-            await asyncio.shield(client.stop_motion())
-        where = await asyncio.shield(
-            _settled_where(client, goal, req.deg, "stopped (STOP_MOTION)", timeout_s)
-        )
+        stop = client.streamer.last_stop  # the library's own stop of this move, if any
+        if stop is None or not stop.stopped:  # none (e.g. still planning), or it failed
+            with contextlib.suppress(PymotorosError):
+                await asyncio.shield(client.stop_motion())
+        if stop is not None and stop.at_rest:  # it waited for rest already
+            where = _where(
+                client, goal.groups, goal.models, goal.goal, req.deg, "stopped (STOP_MOTION)"
+            )
+        else:
+            where = await asyncio.shield(
+                _settled_where(client, goal, req.deg, "stopped (STOP_MOTION)", timeout_s)
+            )
         click.echo(where, err=True)  # the progress line has ended its line already
         raise
     except ReplyError as exc:

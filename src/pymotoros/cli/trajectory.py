@@ -521,8 +521,10 @@ async def _stream_file(
                 joint, groups=groups, on_progress=progress, check_speed=not force, force=True
             )
     except asyncio.CancelledError as exc:
-        with contextlib.suppress(PymotorosError):
-            await asyncio.shield(client.stop_motion())
+        stop = client.streamer.last_stop  # the library's own stop of this run, if any
+        if stop is None or not stop.stopped:  # none, or it failed: STOP_MOTION here
+            with contextlib.suppress(PymotorosError):
+                await asyncio.shield(client.stop_motion())
         for note in getattr(exc, "__notes__", ()):  # the client's stop: where it stands
             click.echo(note, err=True)
         raise

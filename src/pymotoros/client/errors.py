@@ -124,6 +124,31 @@ class StateStreamLostError(ConnectionLostError):
         """True when STOP_MOTION was answered with SUCCESS."""
 
 
+class MotionConnectionLostError(ConnectionLostError):
+    """The motion connection closed while a trajectory was streamed or followed.
+
+    MotoROS goes on with the points it had queued after its motion connection closed
+    (reference §2.2) and STOP_MOTION cannot be sent without it: the message says so, asks
+    to stop the robot on the pendant, and gives the last position the state stream
+    reported. Exit code 3 in the CLI, as every lost connection.
+    """
+
+    def __init__(
+        self,
+        message: str,
+        *,
+        positions: tuple[float, ...],
+        accepted_points: int,
+        total_points: int,
+    ) -> None:
+        super().__init__(message)
+        self.positions = positions
+        """The last position the state stream reported (joints of the moved groups)."""
+        self.accepted_points = accepted_points
+        """Points the controller accepted (SUCCESS): they may still run."""
+        self.total_points = total_points
+
+
 class RequestTimeoutError(ClientError, TimeoutError):
     """No reply (or no state message) arrived within the timeout."""
 

@@ -261,7 +261,8 @@ class Motion:
         options = ExecuteOptions(
             busy_timeout_s, goal_tolerance, timeout_s, check_speed, on_progress
         )
-        return await self._guarded(trajectory, groups, options, force, tool)
+        with self.one_move("execute"):  # a second move is refused before the guard
+            return await self._guarded(trajectory, groups, options, force, tool)
 
     def guard(
         self, trajectory: JointTrajectory, groups: Sequence[int] = (0,), tool: int | None = None
@@ -297,7 +298,7 @@ class Motion:
             self.guard(trajectory, groups, tool)
         try:
             return await self._execute(trajectory, groups, options)
-        except MoveStoppedError:
+        except (MoveStoppedError, MoveInProgressError):
             raise
         except ClientError as exc:
             await self._name_contact(exc, groups)
@@ -311,8 +312,10 @@ class Motion:
         avoidance = self._avoidance
         if avoidance is None or not avoidance.guards:
             return
-        with contextlib.suppress(PymotorosError, TimeoutError):
-            await self._streamer.wait_until_at_rest(groups, timeout_s=NAME_CONTACT_WAIT_S)
+        stop = exc.early_stop
+        if stop is None or not stop.at_rest:  # else the library's stop saw it at rest
+            with contextlib.suppress(PymotorosError, TimeoutError):
+                await self._streamer.wait_until_at_rest(groups, timeout_s=NAME_CONTACT_WAIT_S)
         state = self._view.state
         standing = [state.positions(g) for g in range(len(self._robot.groups))]
         try:
@@ -338,7 +341,11 @@ class Motion:
         with self.one_move("execute"):
             self._link.need(Port.STATE)  # completion is judged from the state stream
             groups = tuple(self._view.group_index(g) for g in groups)
-            return await self._streamer.execute(trajectory, groups, options)
+            try:
+                return await self._streamer.execute(trajectory, groups, options)
+            except asyncio.CancelledError:
+                await _others_stopped()  # SIGTERM: end only once every robot stands
+                raise
 
     async def stop(self) -> None:
         """Stop the robot now (STOP_MOTION) and end a move running in another task.
@@ -444,35 +451,90 @@ class Motion:
             )
 
 
+@dataclass
+class _SigtermGuard:
+    """The moves running on one event loop of the main thread, and the one SIGTERM
+    handler that cancels them all (so that each stops its robot)."""
+
+    loop: asyncio.AbstractEventLoop
+    installed_as: object
+    """What ``signal.getsignal(SIGTERM)`` gave right after the handler went in: when it
+    differs at the end, the program installed its own since, and it is left alone."""
+    tasks: set[asyncio.Task[object]] = field(default_factory=set)
+    came: bool = False
+    stopped: set[asyncio.Task[object]] = field(default_factory=set)
+    """Moves that SIGTERM ended and that stopped their robot."""
+    all_stopped: asyncio.Event = field(default_factory=asyncio.Event)
+
+    def on_sigterm(self) -> None:
+        self.came = True
+        for task in tuple(self.tasks):
+            task.cancel("SIGTERM")
+
+    def check(self) -> None:
+        """Every move SIGTERM ended has stopped: they may all go on (the first one's
+        CancelledError must not end ``asyncio.run``, which would cancel the others'
+        stops and close their connections)."""
+        if self.came and self.stopped >= self.tasks:
+            self.all_stopped.set()
+
+
+async def _others_stopped() -> None:
+    """After SIGTERM ended the current task's move (its robot stopped): wait until every
+    other move of the loop has stopped its robot too; at once otherwise."""
+    task = asyncio.current_task()
+    guard = _SIGTERM_GUARDS.get(asyncio.get_running_loop())
+    if guard is None or not guard.came or task is None:
+        return
+    guard.stopped.add(task)
+    guard.check()
+    waiting = asyncio.ensure_future(guard.all_stopped.wait())
+    while not waiting.done():
+        with contextlib.suppress(asyncio.CancelledError):
+            await asyncio.shield(waiting)
+
+
+_SIGTERM_GUARDS: dict[asyncio.AbstractEventLoop, _SigtermGuard] = {}
+"""One guard per loop while a move runs on it (a process's signal disposition is
+process-wide: one handler per loop, not one per move)."""
+
+
 def _catch_sigterm(task: asyncio.Task[object] | None) -> Callable[[], bool]:
-    """While a move runs on an event loop of the main thread, SIGTERM with its default
-    action (the process would end at once, the robot still moving) cancels the move
-    instead, so that it stops the robot; the returned function puts the default back and
-    says whether SIGTERM came (the caller then raises it again). A handler the program
-    installed (the CLI's, its own) is left alone."""
+    """While moves run on an event loop of the main thread, SIGTERM with its default
+    action (the process would end at once, the robots still moving) cancels every one of
+    them instead, so that each stops its robot. The handler goes in with the first move
+    (only while SIGTERM has its default action: a handler the program or the CLI
+    installed is left alone) and out with the last (only if still ours). The returned
+    function releases ``task``'s move and says whether SIGTERM came and this was the
+    last move (the caller then raises it again, every robot stopped)."""
+    if task is None or threading.current_thread() is not threading.main_thread():
+        return _false
     loop = asyncio.get_running_loop()
-    if (
-        task is None
-        or threading.current_thread() is not threading.main_thread()
-        or signal.getsignal(signal.SIGTERM) is not signal.SIG_DFL
-    ):
-        return _false
-    came: list[int] = []
+    guard = _SIGTERM_GUARDS.get(loop)
+    if guard is None:
+        if signal.getsignal(signal.SIGTERM) is not signal.SIG_DFL:
+            return _false
+        guard = _SigtermGuard(loop, None)
+        try:
+            loop.add_signal_handler(signal.SIGTERM, guard.on_sigterm)
+        except (NotImplementedError, RuntimeError, ValueError):  # no signals on this loop
+            return _false
+        guard.installed_as = signal.getsignal(signal.SIGTERM)
+        _SIGTERM_GUARDS[loop] = guard
+    guard.tasks.add(task)
 
-    def on_sigterm() -> None:
-        came.append(signal.SIGTERM)
-        task.cancel("SIGTERM")
+    def release() -> bool:
+        guard.tasks.discard(task)
+        guard.check()
+        if guard.tasks:
+            return False  # another move still runs: it re-raises SIGTERM when it ends
+        if _SIGTERM_GUARDS.get(loop) is guard:
+            del _SIGTERM_GUARDS[loop]
+        if signal.getsignal(signal.SIGTERM) is guard.installed_as:
+            loop.remove_signal_handler(signal.SIGTERM)  # back to SIG_DFL
+        return guard.came
 
-    try:
-        loop.add_signal_handler(signal.SIGTERM, on_sigterm)
-    except (NotImplementedError, RuntimeError, ValueError):  # no signals on this loop
-        return _false
-
-    def restore() -> bool:
-        loop.remove_signal_handler(signal.SIGTERM)  # back to SIG_DFL
-        return bool(came)
-
-    return restore
+    return release
 
 
 def _false() -> bool:

@@ -39,14 +39,15 @@ import itertools
 import logging
 import math
 import operator
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Coroutine, Sequence
 from dataclasses import KW_ONLY, dataclass, field
-from typing import Final
+from typing import Final, TypeVar
 
 from pymotoros.client.errors import (
     AxisDeviation,
     ClientError,
     ConnectionLostError,
+    MotionConnectionLostError,
     MotionIncompleteError,
     MotionTimeoutError,
     ReplyError,
@@ -737,6 +738,10 @@ class TrajectoryStreamer:
         watchdog = StallWatchdog(self.states, self.state_stall_s, on_stall, clock=self.clock)
 
         def disarm() -> None:
+            # Before any stop: the callback and the monitor see no sample of it (a
+            # callback raising then would turn the move's error into a cancellation,
+            # and the monitor would blame FSU/HOLD for a robot the library stops).
+            remove()  # idempotent: disarm runs again in ``finally``
             watchdog.close()
             for handle in cancel_later:
                 handle.cancel()
@@ -761,29 +766,40 @@ class TrajectoryStreamer:
             )
         except _StreamStalledError:
             disarm()  # nothing may cancel the stop below
-            raise await self._stream_lost(
+            raise await self._lost_shielded(
                 groups, self._stalled_for, accepted_count, trajectory
             ) from None
         except asyncio.CancelledError as cancel:
             disarm()
             if task is not None and self._stalled():  # the watchdog's cancel, not a caller's
                 task.uncancel()
-                raise await self._stream_lost(
+                lost = await self._lost_shielded(
                     groups, self._stalled_for, accepted_count, trajectory
-                ) from None
+                )
+                if task.cancelling():  # the caller cancelled too: that goes on
+                    raise asyncio.CancelledError(str(lost)) from lost
+                raise lost from None
             if failed and task is not None:  # the progress callback raised: end with it
                 task.uncancel()
                 error = failed[0]
                 await self._stop_then(groups, error, "the progress callback raised")
+                if task.cancelling():  # the caller cancelled too: that goes on
+                    stop = self.last_stop
+                    raise asyncio.CancelledError(stop.text if stop else "") from error
                 raise error from None
             reason = f" ({cancel.args[0]})" if cancel.args and cancel.args[0] else ""
             await self._stop_then(groups, cancel, f"the move was cancelled{reason}")
             raise
         except ConnectionLostError as exc:
-            if self.states.error is None or isinstance(exc, StateStreamLostError):
-                raise  # the motion port went: nothing can be stopped from here
+            if isinstance(exc, StateStreamLostError):
+                raise
+            if self.states.error is None:  # the motion port went: nothing can be stopped
+                disarm()
+                if accepted_count or self._in_flight is not None:
+                    raise self._motion_lost(exc, groups, accepted_count, trajectory) from exc
+                raise
             disarm()
-            lost = await self._stream_lost(groups, None, accepted_count, trajectory)
+            lost = await self._lost_shielded(groups, None, accepted_count, trajectory)
             if not lost.stopped and self._motion_gone:
                 raise  # both went together (the controller closed): the plain loss says it
             raise lost from exc
@@ -794,7 +810,6 @@ class TrajectoryStreamer:
             raise
         finally:
             disarm()
-            remove()
         return MoveResult(
             trajectory, final, stats, monitor.report, self.clock.now() - started, groups
         )
@@ -809,20 +824,27 @@ class TrajectoryStreamer:
         """
         # The client's own errors carry the stop in their message: no second line in a log.
         level = logging.INFO if isinstance(exc, ClientError) else logging.WARNING
-        stopping = asyncio.ensure_future(self.stop_early(groups, why, quiet_level=level))
-        cancelled_again = False
-        while True:
-            try:
-                outcome = await asyncio.shield(stopping)
-                break
-            except asyncio.CancelledError:
-                if stopping.done():  # the loop itself is going away
-                    raise
-                cancelled_again = True
+        outcome, cancelled_again = await _shielded(self.stop_early(groups, why, quiet_level=level))
         self.last_stop = outcome
         outcome.tell(exc)
         if cancelled_again and not isinstance(exc, asyncio.CancelledError):
             raise asyncio.CancelledError(outcome.text) from exc
+
+    async def _lost_shielded(
+        self,
+        groups: Sequence[int],
+        silent_s: float | None,
+        accepted: int,
+        trajectory: JointTrajectory,
+    ) -> StateStreamLostError:
+        """:meth:`_stream_lost` safe from further cancels, as :meth:`_stop_then`: a cancel
+        meanwhile goes on as a ``CancelledError`` (from the loss) once STOP_MOTION went."""
+        lost, cancelled_again = await _shielded(
+            self._stream_lost(groups, silent_s, accepted, trajectory)
+        )
+        if cancelled_again:
+            raise asyncio.CancelledError(str(lost)) from lost
+        return lost
 
     async def stop_early(
         self, groups: Sequence[int], why: str, *, quiet_level: int = logging.WARNING
@@ -904,12 +926,7 @@ class TrajectoryStreamer:
     ) -> StateStreamLostError:
         """Stop the robot (STOP_MOTION, if the motion port still answers) and say what was lost."""
         stopped, stop_note = await self._send_stop(groups)
-        positions = _joined_positions(self.states.state, groups) or ()
-        where = (
-            joint_values_text(positions, [self.robot.groups[g] for g in groups])
-            if positions
-            else "unknown"
-        )
+        positions, where = self._last_known(groups)
         if silent_s is None:
             what = f"the state stream closed ({self.states.error})"
         else:
@@ -938,6 +955,57 @@ class TrajectoryStreamer:
             total_points=total,
             stopped=stopped,
         )
+
+    def _last_known(self, groups: Sequence[int]) -> tuple[tuple[float, ...], str]:
+        """The last position the state stream reported and its text with units
+        ("unknown" without one): what every error after a lost connection quotes."""
+        positions = _joined_positions(self.states.state, groups) or ()
+        if not positions:
+            return (), "unknown"
+        return positions, joint_values_text(positions, [self.robot.groups[g] for g in groups])
+
+    def _motion_lost(
+        self,
+        exc: ConnectionLostError,
+        groups: Sequence[int],
+        accepted: int,
+        trajectory: JointTrajectory,
+    ) -> MotionConnectionLostError:
+        """The motion connection went mid-move while the state stream lives: MotoROS
+        goes on with its queue (§2.2) and nothing can stop it from here."""
+        positions, where = self._last_known(groups)
+        total = len(trajectory.points)
+        message = (
+            f"{exc}; streaming stopped with {accepted} of {total} points accepted by the "
+            "robot: the points already queued may still run (MotoROS goes on with its queue "
+            "after the motion connection closes, reference §2.2) and STOP_MOTION cannot be "
+            f"sent without it: {STOP_ON_THE_PENDANT}; last known position {where}"
+        )
+        logger.error("%s", message)
+        return MotionConnectionLostError(
+            message, positions=positions, accepted_points=accepted, total_points=total
+        )
+
+
+_T = TypeVar("_T")
+
+
+async def _shielded(work: Coroutine[object, object, _T]) -> tuple[_T, bool]:
+    """Run ``work`` as a task of its own, awaited through :func:`asyncio.shield` until it
+    is done: (its result, whether the caller was cancelled meanwhile). A stop that a
+    second cancel (a ``wait_for`` around a ``wait_for``, a second Ctrl-C) cut short
+    would leave the robot moving; the caller re-raises the cancel once it is done."""
+    running = asyncio.ensure_future(work)
+    cancelled_again = False
+    while True:
+        try:
+            return await asyncio.shield(running), cancelled_again
+        except asyncio.CancelledError:
+            cancelled_again = True
+            if running.done():  # cancelled as it finished: keep what it did
+                if running.cancelled():  # the loop itself is going away
+                    raise
+                return running.result(), cancelled_again
 
 
 def _callback_guard(
