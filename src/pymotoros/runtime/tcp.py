@@ -295,7 +295,15 @@ class TcpService(ABC):
                 logger.exception("%s: client %s: handler failed; closing it", self.name, conn.peer)
         finally:
             self._tasks.pop(conn, None)
-            released = self._slots.release(conn)
+            # on_disconnect before any await: once the slot is free a new client may
+            # connect and start its tasks, which a late on_disconnect would end (§2.2)
+            if self._slots.release(conn):
+                try:
+                    self.on_disconnect(conn)
+                except Exception:
+                    logger.exception(
+                        "%s: client %s: disconnect handling failed", self.name, conn.peer
+                    )
             conn.close()
             with contextlib.suppress(Exception, asyncio.CancelledError):
                 async with asyncio.timeout(CLOSE_TIMEOUT_S):
@@ -303,13 +311,6 @@ class TcpService(ABC):
             if conn.logged:
                 logger.info("%s: client %s disconnected", self.name, conn.peer)
             conn.log.close()  # the totals of what this client's flood left unlogged
-            if released:
-                try:
-                    self.on_disconnect(conn)
-                except Exception:
-                    logger.exception(
-                        "%s: client %s: disconnect handling failed", self.name, conn.peer
-                    )
 
     # ----------------------------------------------------------- hooks
 
