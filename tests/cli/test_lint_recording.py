@@ -117,12 +117,24 @@ def test_a_reconnect_that_stops_first_is_no_finding() -> None:
     assert _codes(_recording(_state(), first, second)) == []
 
 
-def test_a_silent_reconnect_before_the_queue_ran_out_is_found() -> None:
+def test_a_silent_reconnect_is_found_when_it_closes() -> None:
+    """Decided at the first request or at a close without one, as on the twin: not
+    when the queue would have run out (a connection that stays open is undecided)."""
     first = _stream(1, 0.5, 1.5, [(1.0, 0, 0.0, 0.0, 0.0), (1.01, 1, 2.0, 0.4, 0.0)])
     closes = _connection(2, MOTION, 1.6, 1.8, [])
     assert _codes(_recording(_state(), first, closes)) == ["reconnect-resumed-motion"]
+    closes_late = _connection(2, MOTION, 1.6, 4.0, [])  # after the queue would have run out
+    assert _codes(_recording(_state(), first, closes_late)) == ["reconnect-resumed-motion"]
     stays = _connection(2, MOTION, 1.6, None, [])
-    assert _codes(_recording(_state(), first, stays)) == ["reconnect-resumed-motion"]
+    assert _codes(_recording(_state(), first, stays)) == []
+
+
+def test_a_reconnect_that_stops_after_the_queue_ran_out_is_no_finding() -> None:
+    first = _stream(1, 0.5, 1.5, [(1.0, 0, 0.0, 0.0, 0.0), (1.01, 1, 2.0, 0.4, 0.0)])
+    stop = MotoMotionCtrl(0, 0, MotionCommand.STOP_MOTION, (0.0,) * 10)
+    stopped = MotoMotionReply(0, 0, MotionCommand.STOP_MOTION, ResultCode.SUCCESS, 0, (0.0,) * 10)
+    late = _connection(2, MOTION, 1.6, None, [(4.0, stop, stopped)])  # the queue ended ~3 s
+    assert _codes(_recording(_state(), first, late)) == []
 
 
 def test_a_reconnect_after_the_queue_ran_out_resumes_nothing() -> None:

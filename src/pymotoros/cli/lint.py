@@ -192,7 +192,7 @@ def _motion(session: _Session, conn: RecordedConnection, previous_closed: float 
     for request, reply in _pairs(conn):
         msg, t = request.message, request.offset
         if lint.resume_pending:  # what the connection did first about the resumed motion
-            _first_request(lint, name, msg, t, end)
+            _first_request(lint, name, msg)
         if isinstance(msg, MotoMotionCtrl):
             if msg.command not in _KNOWN:
                 lint.record(LintCode.UNKNOWN_COMMAND, name, t, f"command {msg.command}")
@@ -217,19 +217,11 @@ def _motion(session: _Session, conn: RecordedConnection, previous_closed: float 
         lint.point_answered(name, [(g, v) for g, _, v in points], msg.sequence, reply.result, at)
         if reply.result == 0:
             _accepted(session, name, points, msg.sequence, at)
-    if lint.resume_pending and end is not None:  # it sent nothing: the old motion ran
-        if conn.closed is not None and conn.closed < end:
-            lint.motion_closed(name)
-        elif end <= session.recording.duration:
-            lint.resumed_motion_ended()
+    if lint.resume_pending and conn.closed is not None:  # it closed without a request
+        lint.motion_closed(name)
 
 
-def _first_request(
-    lint: ClientLint, name: str, msg: object, t: float, queue_end: float | None
-) -> None:
-    if queue_end is not None and t >= queue_end:
-        lint.resumed_motion_ended()
-        return
+def _first_request(lint: ClientLint, name: str, msg: object) -> None:
     stops = isinstance(msg, MotoMotionCtrl) and msg.command == MotionCommand.STOP_MOTION
     what = f"command {msg.command}" if isinstance(msg, MotoMotionCtrl) else type(msg).__name__
     lint.motion_request(name, stops=stops, what=what)
