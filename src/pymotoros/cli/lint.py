@@ -42,7 +42,7 @@ from pymotoros.client.recording import (
 )
 from pymotoros.controller.lint import ClientLint, LintCode, format_findings
 from pymotoros.errors import RemoteProtocolError
-from pymotoros.protocol.constants import InvalidSubcode, MotionCommand, Port
+from pymotoros.protocol.constants import MotionCommand, Port
 from pymotoros.protocol.framing import FrameDecoder
 from pymotoros.protocol.messages import (
     JointTrajPtFull,
@@ -50,7 +50,7 @@ from pymotoros.protocol.messages import (
     MotoMotionCtrl,
     MotoMotionReply,
 )
-from pymotoros.protocol.sizes import Accept, Reject, check_request
+from pymotoros.protocol.sizes import check_request, is_length_mismatch
 
 __all__ = ["lint", "lint_recording", "write_lint_report"]
 
@@ -154,11 +154,7 @@ def _sizes(session: _Session, conn: RecordedConnection, kind: Port) -> None:
     if conn.order is None:
         return
     for m in conn.sent():
-        verdict = check_request(m.frame, conn.order, kind)
-        mismatch = (isinstance(verdict, Reject) and verdict.subcode == InvalidSubcode.MSGSIZE) or (
-            isinstance(verdict, Accept) and verdict.surplus > 0
-        )
-        if mismatch:
+        if is_length_mismatch(m.frame, check_request(m.frame, conn.order, kind)):
             session.lint.record(
                 LintCode.LENGTH_MISMATCH,
                 _name(conn),

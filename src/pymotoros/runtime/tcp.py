@@ -23,11 +23,17 @@ from pymotoros.capture import Flow, SessionRecorder
 from pymotoros.controller.lint import LintCode
 from pymotoros.errors import RemoteProtocolError
 from pymotoros.models.fidelity import DEFAULT_FIDELITY, Fidelity
-from pymotoros.protocol.constants import ByteOrder, InvalidSubcode, MsgType, Port
+from pymotoros.protocol.constants import ByteOrder, Port
 from pymotoros.protocol.framing import Frame, FrameDecoder, encode
 from pymotoros.protocol.messages import Message
-from pymotoros.protocol.receiver import RECV_SIZE, MotoRosReceiver, turn_verdict
-from pymotoros.protocol.sizes import Accept, Reject, Verdict, check_request, expected_size
+from pymotoros.protocol.receiver import MotoRosReceiver, turn_verdict
+from pymotoros.protocol.sizes import (
+    Accept,
+    Verdict,
+    check_request,
+    expected_size,
+    is_length_mismatch,
+)
 from pymotoros.runtime.connections import (
     AdmissionKind,
     SlotTable,
@@ -374,15 +380,13 @@ class FramedService(TcpService):
         async with contextlib.aclosing(self.frames(conn)) as frames:
             async for frame in frames:
                 verdict = check_request(frame, self._order, self.port_kind)
-                padded_ex = (
-                    frame.msg_type == MsgType.MOTO_JOINT_TRAJ_PT_FULL_EX and frame.size == RECV_SIZE
-                )  # a FULL_EX padded to 552 bytes is one MotoROS accepts whole (§1.5)
-                if isinstance(verdict, Accept) and verdict.surplus and not padded_ex:
-                    expected_total = frame.size - verdict.surplus
-                    self.length_mismatch_seen(conn, frame.msg_type, frame.size, expected_total)
-                elif isinstance(verdict, Reject) and verdict.subcode == InvalidSubcode.MSGSIZE:
+                if is_length_mismatch(frame, verdict):
                     kind, order = self.port_kind, self._order
-                    expected = expected_size(frame.msg_type, kind, frame.body, order)
+                    expected = (
+                        frame.size - verdict.surplus
+                        if isinstance(verdict, Accept)
+                        else expected_size(frame.msg_type, kind, frame.body, order)
+                    )
                     self.length_mismatch_seen(conn, frame.msg_type, frame.size, expected)
                 yield frame, verdict
 
