@@ -166,6 +166,19 @@ async def test_a_prefix_that_disagrees_with_the_type_is_a_length_mismatch(
     assert "fragmented-message" not in _codes(cell)  # one whole write: not a fragment
 
 
+@pytest.mark.parametrize("prefix", [100_000, 4])
+async def test_a_prefix_outside_12_to_548_is_a_length_mismatch(either: Twin, prefix: int) -> None:
+    """exact serves it (the prefix is never read), safe answers INVALID/3001 and drops
+    the bytes: a finding in both settings."""
+    cell = either
+    client = await _connect(cell)
+    data = client.frame(MotoMotionCtrl(0, 0, MotionCommand.CHECK_QUEUE_CNT, ZEROS))
+    client.write(struct.pack(client.order + "i", prefix) + data[4:])
+    assert isinstance(await client.reply(), MotoMotionReply)
+    await cell.sleep(0.01)
+    assert "length-mismatch" in _codes(cell)
+
+
 async def test_the_io_port_finds_length_mismatches_too(cell: Twin) -> None:
     client = await _connect(cell, TCP_PORT_IO)
     data = client.frame(MotoReadIoBit(10010))

@@ -15,6 +15,7 @@ import contextlib
 import ipaddress
 import logging
 import socket
+import struct
 from abc import ABC, abstractmethod
 from collections.abc import AsyncGenerator, Callable
 from typing import Final
@@ -475,6 +476,7 @@ class FramedService(TcpService):
                             exc,
                             len(dropped),
                         )
+                    self._bad_prefix_seen(conn, dropped)
                     await self.send(conn, self._bad_prefix_reply)
                     break
                 if frame is None:
@@ -484,6 +486,15 @@ class FramedService(TcpService):
                     self.fragment_seen(conn, frame.msg_type, len(data), frame.size)
                 self.traffic.request(frame.msg_type)
                 yield frame
+
+    def _bad_prefix_seen(self, conn: Connection, dropped: bytes) -> None:
+        """A prefix outside 12..548 (safe refuses it): a length mismatch, as exact finds
+        the same bytes (its reads never look at the prefix)."""
+        if len(dropped) < 8:
+            return  # not even a type: nothing to name
+        prefix, msg_type = struct.unpack(self._order.value + "ii", dropped[:8])
+        expected = expected_size(msg_type, self.port_kind, dropped[16:], self._order)
+        self.length_mismatch_seen(conn, msg_type, prefix + 4, expected)
 
     def lint(self, code: LintCode, conn: Connection, detail: str = "") -> None:
         """Hook: a client lint finding on ``conn`` (issue 31); the motion and IO servers
