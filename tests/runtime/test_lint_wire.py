@@ -393,6 +393,20 @@ async def test_a_reconnect_that_closes_silently_is_found(either: Twin) -> None:
     assert finding.first_s < cell.controller.time_ms / 1000.0 - 0.1  # when it opened
 
 
+async def test_a_replaced_connections_pending_point_is_dropped(cell: Twin) -> None:
+    """A new motion client replaces the old one while nothing is queued: MotoROS closes
+    the old connection and deletes its tasks, which drops the pending point (§2.2), so
+    the arm does not move to it under the new connection."""
+    client = await _enabled(cell)
+    await client.point(0, 0.0, 0.0)
+    assert (await client.point(1, 1.0, 0.2)).result == ResultCode.SUCCESS  # pending
+    assert not cell.controller.has_queued_motion()  # no tick has run: a replace is allowed
+    await _connect(cell)  # replaces it
+    await cell.sleep(1.5)
+    assert cell.motion.replaced == 1
+    assert abs(cell.controller.snapshot().groups[0].command_rad[0]) < 1e-6
+
+
 async def test_a_reconnect_after_a_close_at_rest_is_no_finding(either: Twin) -> None:
     """Nothing was queued when the connection closed: nothing to resume, whatever the
     next connection sends first."""

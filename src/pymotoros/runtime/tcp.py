@@ -261,6 +261,10 @@ class TcpService(ABC):
                     self._slots.capacity,
                 )
             self._evict(admission.evicted)
+            # MotoROS closes the old connection and deletes its tasks before the new one
+            # takes the slot (§2.2): its disconnect now, as its own close no longer frees
+            # a slot (the pending point is dropped; the new client starts the tasks again)
+            self._disconnected(admission.evicted)
         self.accepted += 1
         configure_socket(writer)
         if self.recorder is not None:
@@ -305,12 +309,7 @@ class TcpService(ABC):
             # on_disconnect before any await: once the slot is free a new client may
             # connect and start its tasks, which a late on_disconnect would end (§2.2)
             if self._slots.release(conn):
-                try:
-                    self.on_disconnect(conn)
-                except Exception:
-                    logger.exception(
-                        "%s: client %s: disconnect handling failed", self.name, conn.peer
-                    )
+                self._disconnected(conn)
             conn.close()
             with contextlib.suppress(Exception, asyncio.CancelledError):
                 async with asyncio.timeout(CLOSE_TIMEOUT_S):
@@ -318,6 +317,12 @@ class TcpService(ABC):
             if conn.logged:
                 logger.info("%s: client %s disconnected", self.name, conn.peer)
             conn.log.close()  # the totals of what this client's flood left unlogged
+
+    def _disconnected(self, conn: Connection) -> None:
+        try:
+            self.on_disconnect(conn)
+        except Exception:
+            logger.exception("%s: client %s: disconnect handling failed", self.name, conn.peer)
 
     # ----------------------------------------------------------- hooks
 
