@@ -51,15 +51,13 @@ from pymotoros.protocol.messages import (
     MotoMotionReply,
 )
 from pymotoros.protocol.sizes import check_request, is_length_mismatch
+from pymotoros.runtime.motion_server import KNOWN_COMMANDS, QUIET_COMMANDS
 
 __all__ = ["lint", "lint_recording", "write_lint_report"]
 
 EXIT_CLEAN: Final = 0
 EXIT_FINDINGS: Final = 1
 EXIT_USAGE: Final = 2
-
-_QUIET: Final = frozenset({MotionCommand.CHECK_QUEUE_CNT, MotionCommand.CHECK_MOTION_READY})
-_KNOWN: Final = frozenset(int(c) for c in MotionCommand)
 
 
 # --------------------------------------------------------------------------- sim's report
@@ -190,10 +188,10 @@ def _motion(session: _Session, conn: RecordedConnection, previous_closed: float 
         if lint.resume_pending:  # what the connection did first about the resumed motion
             _first_request(lint, name, msg)
         if isinstance(msg, MotoMotionCtrl):
-            if msg.command not in _KNOWN:
+            if msg.command not in KNOWN_COMMANDS:
                 lint.record(LintCode.UNKNOWN_COMMAND, name, t, f"command {msg.command}")
                 lint.record(LintCode.STALE_REPLY, name, t, f"MOTO_MOTION_CTRL {msg.command}")
-            elif msg.command not in _QUIET:
+            elif msg.command not in QUIET_COMMANDS:  # queries reset nothing
                 lint.motion_reset()
                 session.trajectories.clear()
             continue
