@@ -4,6 +4,7 @@ across connections."""
 
 from __future__ import annotations
 
+import struct
 from pathlib import Path
 
 from pymotoros.cli.lint import lint_recording
@@ -14,9 +15,10 @@ from pymotoros.client.recording import (
     RecordedMessage,
     Recording,
 )
-from pymotoros.protocol.constants import ByteOrder, MotionCommand, Port, ResultCode
+from pymotoros.protocol.constants import ByteOrder, MotionCommand, MsgType, Port, ResultCode
 from pymotoros.protocol.framing import FrameDecoder, encode
 from pymotoros.protocol.messages import (
+    JointTrajPtExData,
     JointTrajPtFull,
     Message,
     MotoMotionCtrl,
@@ -27,13 +29,21 @@ ORDER = ByteOrder.LITTLE
 MOTION, STATE = 50240, 50241
 
 
-def _message(conn: int, port: int, t: float, direction: Direction, msg: Message) -> RecordedMessage:
+def _wire(msg: Message | bytes) -> bytes:
+    """A message's bytes; raw bytes as they are (a frame no encoder writes)."""
+    return msg if isinstance(msg, bytes) else encode(msg, ORDER)
+
+
+def _message(
+    conn: int, port: int, t: float, direction: Direction, msg: Message | bytes
+) -> RecordedMessage:
     decoder = FrameDecoder(ORDER)
-    decoder.feed(encode(msg, ORDER))
+    decoder.feed(_wire(msg))
     frame = decoder.next_frame()
     assert frame is not None
     kind = Port.MOTION if port == MOTION else Port.STATE
-    return RecordedMessage(t, t, conn, port, 40000 + conn, kind, direction, frame, msg)
+    decoded = None if isinstance(msg, bytes) else msg  # raw: no decoder reads it
+    return RecordedMessage(t, t, conn, port, 40000 + conn, kind, direction, frame, decoded)
 
 
 def _connection(
@@ -41,7 +51,7 @@ def _connection(
     port: int,
     opened: float,
     closed: float | None,
-    exchanges: list[tuple[float, Message, Message]],
+    exchanges: list[tuple[float, Message | bytes, Message]],
 ) -> RecordedConnection:
     messages: list[RecordedMessage] = []
     chunks: list[RecordedChunk] = []
@@ -53,7 +63,7 @@ def _connection(
             recorded = _message(index, port, when, direction, msg)
             messages.append(recorded)
             chunks.append(
-                RecordedChunk(when, when, index, port, 40000 + index, direction, encode(msg, ORDER))
+                RecordedChunk(when, when, index, port, 40000 + index, direction, _wire(msg))
             )
     kind = Port.MOTION if port == MOTION else Port.STATE
     return RecordedConnection(
@@ -117,12 +127,24 @@ def test_a_reconnect_that_stops_first_is_no_finding() -> None:
     assert _codes(_recording(_state(), first, second)) == []
 
 
-def test_a_silent_reconnect_before_the_queue_ran_out_is_found() -> None:
+def test_a_silent_reconnect_is_found_when_it_closes() -> None:
+    """Decided at the first request or at a close without one, as on the twin: not
+    when the queue would have run out (a connection that stays open is undecided)."""
     first = _stream(1, 0.5, 1.5, [(1.0, 0, 0.0, 0.0, 0.0), (1.01, 1, 2.0, 0.4, 0.0)])
     closes = _connection(2, MOTION, 1.6, 1.8, [])
     assert _codes(_recording(_state(), first, closes)) == ["reconnect-resumed-motion"]
+    closes_late = _connection(2, MOTION, 1.6, 4.0, [])  # after the queue would have run out
+    assert _codes(_recording(_state(), first, closes_late)) == ["reconnect-resumed-motion"]
     stays = _connection(2, MOTION, 1.6, None, [])
-    assert _codes(_recording(_state(), first, stays)) == ["reconnect-resumed-motion"]
+    assert _codes(_recording(_state(), first, stays)) == []
+
+
+def test_a_reconnect_that_stops_after_the_queue_ran_out_is_no_finding() -> None:
+    first = _stream(1, 0.5, 1.5, [(1.0, 0, 0.0, 0.0, 0.0), (1.01, 1, 2.0, 0.4, 0.0)])
+    stop = MotoMotionCtrl(0, 0, MotionCommand.STOP_MOTION, (0.0,) * 10)
+    stopped = MotoMotionReply(0, 0, MotionCommand.STOP_MOTION, ResultCode.SUCCESS, 0, (0.0,) * 10)
+    late = _connection(2, MOTION, 1.6, None, [(4.0, stop, stopped)])  # the queue ended ~3 s
+    assert _codes(_recording(_state(), first, late)) == []
 
 
 def test_a_reconnect_after_the_queue_ran_out_resumes_nothing() -> None:
@@ -158,3 +180,20 @@ def test_the_motion_starts_with_the_first_point_after_sequence_0() -> None:
         [(1.0, 0, 0.0, 0.0, 0.0), (6.0, 1, 0.5, 0.05, 0.2), (6.3, 2, 1.0, 0.1, 0.0)],
     )
     assert _codes(_recording(_state(), slow_start)) == []
+
+
+def test_a_full_ex_padded_to_552_bytes_is_no_length_mismatch() -> None:
+    """MotoROS takes a 552-byte FULL_EX whole (its message struct, §1.5), as the twin
+    does: spare bytes elsewhere are a length mismatch."""
+    record = JointTrajPtExData.for_joints(0, 0.0, [0.0] * 6, [0.0] * 6).pack("<")
+    body = struct.pack("<ii", 1, 0) + record
+    ex = MsgType.MOTO_JOINT_TRAJ_PT_FULL_EX
+    reply = MotoMotionReply(0, 0, 2016, ResultCode.SUCCESS, 0, (0.0,) * 10)
+
+    def full_ex(size: int) -> bytes:
+        return struct.pack("<iiii", size - 4, ex, 2, 0) + body.ljust(size - 16, b"\0")
+
+    padded = _connection(1, MOTION, 0.5, None, [(1.0, full_ex(552), reply)])
+    assert "length-mismatch" not in _codes(_recording(_state(), padded))
+    spare = _connection(1, MOTION, 0.5, None, [(1.0, full_ex(548), reply)])
+    assert "length-mismatch" in _codes(_recording(_state(), spare))

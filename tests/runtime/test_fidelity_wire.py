@@ -325,3 +325,32 @@ async def test_a_full_ex_padded_to_552_bytes(fidelity: Fidelity) -> None:
         assert (reply.command, reply.sequence) == (2016, 0)
         assert reply.result == ResultCode.NOT_READY  # trajectory mode is not on: processed
         assert isinstance(await peer.request_ping(), PingReply)
+
+
+# ------------------------------------------------------------ connections (§2.2)
+
+
+@BOTH
+async def test_a_closed_connections_late_close_leaves_the_next_one_running(
+    fidelity: Fidelity,
+) -> None:
+    """Client A closes and B connects before A's close has finished: B keeps its motion
+    tasks and OT#893 (the robot ends them only when no motion connection is left)."""
+    async with Twin(fidelity=fidelity) as twin:
+        first = Raw(*await twin.connect("a", TCP_PORT_MOTION), Port.MOTION)
+        assert isinstance(await first.request_ping(), PingReply)
+        first.writer.close()
+        for _ in range(100):  # bounded: a few loop turns
+            if twin.motion.clients == 0:
+                break  # A's slot is free; its close is still under way
+            await asyncio.sleep(0)
+        second = Raw(*await twin.connect("b", TCP_PORT_MOTION), Port.MOTION)
+        io = Raw(*await twin.connect("io", TCP_PORT_IO), Port.IO)
+        await twin.sleep(0.1)  # A's close completes
+        assert isinstance(await second.request_ping(), PingReply)
+        await io.write(encode(MotoReadIoBit(11124), LE))  # OT#893: motion server connected
+        read = await io.reply()
+        assert isinstance(read, MotoReadIoBitReply)
+        assert read.value == 1, "a closed connection's late close ended the new one's tasks"
+        for peer in (second, io):
+            await peer.close()

@@ -166,6 +166,19 @@ async def test_a_prefix_that_disagrees_with_the_type_is_a_length_mismatch(
     assert "fragmented-message" not in _codes(cell)  # one whole write: not a fragment
 
 
+@pytest.mark.parametrize("prefix", [100_000, 4])
+async def test_a_prefix_outside_12_to_548_is_a_length_mismatch(either: Twin, prefix: int) -> None:
+    """exact serves it (the prefix is never read), safe answers INVALID/3001 and drops
+    the bytes: a finding in both settings."""
+    cell = either
+    client = await _connect(cell)
+    data = client.frame(MotoMotionCtrl(0, 0, MotionCommand.CHECK_QUEUE_CNT, ZEROS))
+    client.write(struct.pack(client.order + "i", prefix) + data[4:])
+    assert isinstance(await client.reply(), MotoMotionReply)
+    await cell.sleep(0.01)
+    assert "length-mismatch" in _codes(cell)
+
+
 async def test_the_io_port_finds_length_mismatches_too(cell: Twin) -> None:
     client = await _connect(cell, TCP_PORT_IO)
     data = client.frame(MotoReadIoBit(10010))
@@ -354,22 +367,19 @@ async def either(request: pytest.FixtureRequest) -> AsyncIterator[Twin]:
                 _OPEN.pop().close()
 
 
-async def test_a_silent_reconnect_is_found_once_the_old_motion_ran_out(either: Twin) -> None:
-    """A connection that sends nothing lets the resumed motion run to its end. In safe
-    the queues are empty from the close: the end is when the cleared increments (the
-    queue held 0.8 s) would have run out on a robot, counted from the connect."""
+async def test_a_reconnect_that_stops_after_the_old_motion_ran_out_is_no_finding(
+    either: Twin,
+) -> None:
+    """The old motion running out before the first request decides nothing: over TCP
+    a connection lost in a move's last ticks would give a client that sends STOP_MOTION
+    first a finding. The first request decides (or a close without one)."""
     cell = either
-    await _reconnect_over_queued_motion(cell)
-    await cell.sleep(0.5)
-    assert _codes(cell) == []  # still moving, the connection may yet stop it
-    await cell.sleep(2.5)
+    client = await _reconnect_over_queued_motion(cell)
+    await cell.sleep(3.0)
     assert not cell.controller.has_queued_motion()
-    assert _codes(cell) == ["reconnect-resumed-motion"]
-    text = _finding(cell, LintCode.RECONNECT_RESUMED_MOTION).text
-    if cell.cell.fidelity == "exact":
-        assert "queues ran empty" in text
-    else:
-        assert "0.800 s of increments a robot would have resumed ran out" in text
+    assert (await client.ctrl(MotionCommand.STOP_MOTION)).result == ResultCode.SUCCESS
+    await cell.sleep(0.1)
+    assert _codes(cell) == []
 
 
 async def test_a_reconnect_that_closes_silently_is_found(either: Twin) -> None:
@@ -381,6 +391,20 @@ async def test_a_reconnect_that_closes_silently_is_found(either: Twin) -> None:
     finding = _finding(cell, LintCode.RECONNECT_RESUMED_MOTION)
     assert "closed without sending STOP_MOTION" in finding.text
     assert finding.first_s < cell.controller.time_ms / 1000.0 - 0.1  # when it opened
+
+
+async def test_a_replaced_connections_pending_point_is_dropped(cell: Twin) -> None:
+    """A new motion client replaces the old one while nothing is queued: MotoROS closes
+    the old connection and deletes its tasks, which drops the pending point (§2.2), so
+    the arm does not move to it under the new connection."""
+    client = await _enabled(cell)
+    await client.point(0, 0.0, 0.0)
+    assert (await client.point(1, 1.0, 0.2)).result == ResultCode.SUCCESS  # pending
+    assert not cell.controller.has_queued_motion()  # no tick has run: a replace is allowed
+    await _connect(cell)  # replaces it
+    await cell.sleep(1.5)
+    assert cell.motion.replaced == 1
+    assert abs(cell.controller.snapshot().groups[0].command_rad[0]) < 1e-6
 
 
 async def test_a_reconnect_after_a_close_at_rest_is_no_finding(either: Twin) -> None:

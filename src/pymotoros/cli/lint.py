@@ -42,7 +42,7 @@ from pymotoros.client.recording import (
 )
 from pymotoros.controller.lint import ClientLint, LintCode, format_findings
 from pymotoros.errors import RemoteProtocolError
-from pymotoros.protocol.constants import InvalidSubcode, MotionCommand, Port
+from pymotoros.protocol.constants import MotionCommand, Port
 from pymotoros.protocol.framing import FrameDecoder
 from pymotoros.protocol.messages import (
     JointTrajPtFull,
@@ -50,16 +50,14 @@ from pymotoros.protocol.messages import (
     MotoMotionCtrl,
     MotoMotionReply,
 )
-from pymotoros.protocol.sizes import Accept, Reject, check_request
+from pymotoros.protocol.sizes import check_request, is_length_mismatch
+from pymotoros.runtime.motion_server import KNOWN_COMMANDS, QUIET_COMMANDS
 
 __all__ = ["lint", "lint_recording", "write_lint_report"]
 
 EXIT_CLEAN: Final = 0
 EXIT_FINDINGS: Final = 1
 EXIT_USAGE: Final = 2
-
-_QUIET: Final = frozenset({MotionCommand.CHECK_QUEUE_CNT, MotionCommand.CHECK_MOTION_READY})
-_KNOWN: Final = frozenset(int(c) for c in MotionCommand)
 
 
 # --------------------------------------------------------------------------- sim's report
@@ -154,11 +152,7 @@ def _sizes(session: _Session, conn: RecordedConnection, kind: Port) -> None:
     if conn.order is None:
         return
     for m in conn.sent():
-        verdict = check_request(m.frame, conn.order, kind)
-        mismatch = (isinstance(verdict, Reject) and verdict.subcode == InvalidSubcode.MSGSIZE) or (
-            isinstance(verdict, Accept) and verdict.surplus > 0
-        )
-        if mismatch:
+        if is_length_mismatch(m.frame, check_request(m.frame, conn.order, kind)):
             session.lint.record(
                 LintCode.LENGTH_MISMATCH,
                 _name(conn),
@@ -192,12 +186,12 @@ def _motion(session: _Session, conn: RecordedConnection, previous_closed: float 
     for request, reply in _pairs(conn):
         msg, t = request.message, request.offset
         if lint.resume_pending:  # what the connection did first about the resumed motion
-            _first_request(lint, name, msg, t, end)
+            _first_request(lint, name, msg)
         if isinstance(msg, MotoMotionCtrl):
-            if msg.command not in _KNOWN:
+            if msg.command not in KNOWN_COMMANDS:
                 lint.record(LintCode.UNKNOWN_COMMAND, name, t, f"command {msg.command}")
                 lint.record(LintCode.STALE_REPLY, name, t, f"MOTO_MOTION_CTRL {msg.command}")
-            elif msg.command not in _QUIET:
+            elif msg.command not in QUIET_COMMANDS:  # queries reset nothing
                 lint.motion_reset()
                 session.trajectories.clear()
             continue
@@ -217,19 +211,11 @@ def _motion(session: _Session, conn: RecordedConnection, previous_closed: float 
         lint.point_answered(name, [(g, v) for g, _, v in points], msg.sequence, reply.result, at)
         if reply.result == 0:
             _accepted(session, name, points, msg.sequence, at)
-    if lint.resume_pending and end is not None:  # it sent nothing: the old motion ran
-        if conn.closed is not None and conn.closed < end:
-            lint.motion_closed(name)
-        elif end <= session.recording.duration:
-            lint.resumed_motion_ended()
+    if lint.resume_pending and conn.closed is not None:  # it closed without a request
+        lint.motion_closed(name)
 
 
-def _first_request(
-    lint: ClientLint, name: str, msg: object, t: float, queue_end: float | None
-) -> None:
-    if queue_end is not None and t >= queue_end:
-        lint.resumed_motion_ended()
-        return
+def _first_request(lint: ClientLint, name: str, msg: object) -> None:
     stops = isinstance(msg, MotoMotionCtrl) and msg.command == MotionCommand.STOP_MOTION
     what = f"command {msg.command}" if isinstance(msg, MotoMotionCtrl) else type(msg).__name__
     lint.motion_request(name, stops=stops, what=what)

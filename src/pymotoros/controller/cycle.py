@@ -109,8 +109,6 @@ class TickCycle:
         inc_move.fill_tick()
         if moved and self._lint.watching_queues:  # queue-starved: only after a moving point
             self._starved(now)
-        if self._lint.resume_pending:  # reconnect-resumed-motion: the silent case
-            self._lint.resumed_motion_tick(now / 1000.0, queued=ctx.queues.has_queued_motion())
         if self._has_registers:  # S1CxG register outputs: only when configured
             self._registers.step(
                 ctx.servos, ctx.interpolators, clock.tick_count, machine.state.drives_powered

@@ -379,10 +379,11 @@ class ClientLint:
         a robot needs (docs/client.md), and its reconnect works by design, not by luck.
         The finding is recorded, dated when the connection opened, when the connection
         lets the old motion run instead: its first request is anything else
-        (:meth:`motion_request`), it closes without a request (:meth:`motion_closed`),
-        or the old motion runs to its end first (:meth:`resumed_motion_ended`,
-        :meth:`resumed_motion_tick`). In safe the same rule applies to what a robot would
-        have done, and the text says the twin cleared the queues.
+        (:meth:`motion_request`), or it closes without a request (:meth:`motion_closed`).
+        Not when the old motion ran out first: over TCP a connection lost in the last
+        ticks of a move would give a client that stops first a finding. In safe the same
+        rule applies to what a robot would have done, and the text says the twin cleared
+        the queues.
         """
         self._settle_resume("another motion connection opened before it sent anything")
         if not queued:
@@ -410,29 +411,6 @@ class ClientLint:
         """``connection`` left the motion port."""
         if self._resumed is not None and self._resumed.connection == connection:
             self._settle_resume("it closed without sending STOP_MOTION")
-
-    def resumed_motion_ended(self) -> None:
-        """The queues ran empty while a resumed connection had sent nothing: the old
-        motion ran its course."""
-        self._settle_resume("the queues ran empty before it sent STOP_MOTION")
-
-    def resumed_motion_tick(self, now_s: float, *, queued: bool) -> None:
-        """The tick's look at a pending resume (call only while :attr:`resume_pending`):
-        in exact the old motion ended when the queues ran empty (``queued`` False); in
-        safe, whose queues were cleared, when the cleared increments' time has passed on
-        the controller clock since the connection opened, as they would have on a robot
-        (a connection that is still silent then let all of it run)."""
-        pending = self._resumed
-        if pending is None:
-            return
-        if pending.ends_s is None:
-            if not queued:
-                self.resumed_motion_ended()
-        elif now_s >= pending.ends_s:
-            self._settle_resume(
-                f"the {pending.ends_s - pending.opened_s:.3f} s of increments a robot would "
-                "have resumed ran out before it sent STOP_MOTION"
-            )
 
     def _settle_resume(self, why: str) -> None:
         pending, self._resumed = self._resumed, None

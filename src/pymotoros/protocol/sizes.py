@@ -24,6 +24,7 @@ from types import MappingProxyType
 from typing import Final, TypeAlias
 
 from pymotoros.protocol.constants import (
+    MAX_MESSAGE_SIZE,
     ByteOrder,
     CommType,
     InvalidSubcode,
@@ -54,6 +55,7 @@ __all__ = [
     "Verdict",
     "check_request",
     "expected_size",
+    "is_length_mismatch",
     "short_message_reply",
     "unknown_type_reply",
 ]
@@ -248,3 +250,16 @@ def check_request(frame: Frame, order: ByteOrder, port: Port) -> Verdict:
         raise RuntimeError(f"bug: type {msg_type} has a size on {port} but no class")
     reply_expected = not (port is _MOTION and frame.comm_type == _SERVICE_REPLY)
     return Accept(message, received - expected, reply_expected)
+
+
+def is_length_mismatch(frame: Frame, verdict: Verdict) -> bool:
+    """Whether a whole frame's length prefix disagrees with its type's size (the client
+    lint's length-mismatch; the one place this is decided for frames cut by the prefix):
+    a short one (3001 MSGSIZE) or one with spare bytes, except a FULL_EX padded to 552
+    bytes, which MotoROS takes whole as its message struct (§1.5)."""
+    if isinstance(verdict, Reject):
+        return verdict.subcode == InvalidSubcode.MSGSIZE
+    padded_ex = (
+        frame.msg_type == MsgType.MOTO_JOINT_TRAJ_PT_FULL_EX and frame.size == MAX_MESSAGE_SIZE
+    )
+    return isinstance(verdict, Accept) and verdict.surplus > 0 and not padded_ex

@@ -74,7 +74,7 @@ __all__ = ["MotionServer"]
 
 logger = logging.getLogger(__name__)
 
-_QUIET_COMMANDS = frozenset({MotionCommand.CHECK_QUEUE_CNT, MotionCommand.CHECK_MOTION_READY})
+QUIET_COMMANDS = frozenset({MotionCommand.CHECK_QUEUE_CNT, MotionCommand.CHECK_MOTION_READY})
 """Queries: a FALSE answer is information, not a refusal (logged at DEBUG)."""
 
 
@@ -118,7 +118,7 @@ reply buffer (uninitialised memory in C, taken as zeros here) is sent as
 ``prefix.length + 4`` bytes (MotionServer.c), and a zero prefix makes that four zero
 bytes (fidelity exact; docs/fidelity.md)."""
 
-_KNOWN_COMMANDS: Final = frozenset(int(c) for c in MotionCommand)
+KNOWN_COMMANDS: Final = frozenset(int(c) for c in MotionCommand)
 """The MOTO_MOTION_CTRL commands of MotoROS 1.9.12 (§1.7); any other builds no reply."""
 
 
@@ -316,11 +316,11 @@ class MotionServer(FramedService):
         c = self._controller
         exact = self.fidelity is Fidelity.EXACT
         if isinstance(msg, MotoMotionCtrl):
-            if msg.command not in _KNOWN_COMMANDS:
+            if msg.command not in KNOWN_COMMANDS:
                 self.unknown_command_seen(conn, msg)
                 if exact:  # §3.1: no reply is built, the buffer is sent again
                     return self.stale_reply_seen(conn, _describe_ctrl(msg))
-            elif msg.command not in _QUIET_COMMANDS:
+            elif msg.command not in QUIET_COMMANDS:
                 c.lint.motion_reset()
             outcome = await self._resolve(c.motion_ctrl(msg.group_no, msg.command))
             if outcome.close_connection and not self.log.allow(
@@ -335,7 +335,7 @@ class MotionServer(FramedService):
                 )
                 raise _CloseConnectionError
             if not outcome.ok:  # described only when logged: most requests succeed
-                quiet = msg.command in _QUIET_COMMANDS
+                quiet = msg.command in QUIET_COMMANDS
                 self._log_outcome(conn, _describe_ctrl(msg), outcome, quiet=quiet)
             return self._reply(outcome, msg.group_no, msg.sequence, msg.command)
         if isinstance(msg, JointTrajPtFull):

@@ -15,6 +15,7 @@ import contextlib
 import ipaddress
 import logging
 import socket
+import struct
 from abc import ABC, abstractmethod
 from collections.abc import AsyncGenerator, Callable
 from typing import Final
@@ -23,11 +24,17 @@ from pymotoros.capture import Flow, SessionRecorder
 from pymotoros.controller.lint import LintCode
 from pymotoros.errors import RemoteProtocolError
 from pymotoros.models.fidelity import DEFAULT_FIDELITY, Fidelity
-from pymotoros.protocol.constants import ByteOrder, InvalidSubcode, MsgType, Port
+from pymotoros.protocol.constants import ByteOrder, Port
 from pymotoros.protocol.framing import Frame, FrameDecoder, encode
 from pymotoros.protocol.messages import Message
-from pymotoros.protocol.receiver import RECV_SIZE, MotoRosReceiver, turn_verdict
-from pymotoros.protocol.sizes import Accept, Reject, Verdict, check_request, expected_size
+from pymotoros.protocol.receiver import MotoRosReceiver, turn_verdict
+from pymotoros.protocol.sizes import (
+    Accept,
+    Verdict,
+    check_request,
+    expected_size,
+    is_length_mismatch,
+)
 from pymotoros.runtime.connections import (
     AdmissionKind,
     SlotTable,
@@ -254,6 +261,10 @@ class TcpService(ABC):
                     self._slots.capacity,
                 )
             self._evict(admission.evicted)
+            # MotoROS closes the old connection and deletes its tasks before the new one
+            # takes the slot (§2.2): its disconnect now, as its own close no longer frees
+            # a slot (the pending point is dropped; the new client starts the tasks again)
+            self._disconnected(admission.evicted)
         self.accepted += 1
         configure_socket(writer)
         if self.recorder is not None:
@@ -295,7 +306,10 @@ class TcpService(ABC):
                 logger.exception("%s: client %s: handler failed; closing it", self.name, conn.peer)
         finally:
             self._tasks.pop(conn, None)
-            released = self._slots.release(conn)
+            # on_disconnect before any await: once the slot is free a new client may
+            # connect and start its tasks, which a late on_disconnect would end (§2.2)
+            if self._slots.release(conn):
+                self._disconnected(conn)
             conn.close()
             with contextlib.suppress(Exception, asyncio.CancelledError):
                 async with asyncio.timeout(CLOSE_TIMEOUT_S):
@@ -303,13 +317,12 @@ class TcpService(ABC):
             if conn.logged:
                 logger.info("%s: client %s disconnected", self.name, conn.peer)
             conn.log.close()  # the totals of what this client's flood left unlogged
-            if released:
-                try:
-                    self.on_disconnect(conn)
-                except Exception:
-                    logger.exception(
-                        "%s: client %s: disconnect handling failed", self.name, conn.peer
-                    )
+
+    def _disconnected(self, conn: Connection) -> None:
+        try:
+            self.on_disconnect(conn)
+        except Exception:
+            logger.exception("%s: client %s: disconnect handling failed", self.name, conn.peer)
 
     # ----------------------------------------------------------- hooks
 
@@ -373,15 +386,13 @@ class FramedService(TcpService):
         async with contextlib.aclosing(self.frames(conn)) as frames:
             async for frame in frames:
                 verdict = check_request(frame, self._order, self.port_kind)
-                padded_ex = (
-                    frame.msg_type == MsgType.MOTO_JOINT_TRAJ_PT_FULL_EX and frame.size == RECV_SIZE
-                )  # a FULL_EX padded to 552 bytes is one MotoROS accepts whole (§1.5)
-                if isinstance(verdict, Accept) and verdict.surplus and not padded_ex:
-                    expected_total = frame.size - verdict.surplus
-                    self.length_mismatch_seen(conn, frame.msg_type, frame.size, expected_total)
-                elif isinstance(verdict, Reject) and verdict.subcode == InvalidSubcode.MSGSIZE:
+                if is_length_mismatch(frame, verdict):
                     kind, order = self.port_kind, self._order
-                    expected = expected_size(frame.msg_type, kind, frame.body, order)
+                    expected = (
+                        frame.size - verdict.surplus
+                        if isinstance(verdict, Accept)
+                        else expected_size(frame.msg_type, kind, frame.body, order)
+                    )
                     self.length_mismatch_seen(conn, frame.msg_type, frame.size, expected)
                 yield frame, verdict
 
@@ -470,6 +481,7 @@ class FramedService(TcpService):
                             exc,
                             len(dropped),
                         )
+                    self._bad_prefix_seen(conn, dropped)
                     await self.send(conn, self._bad_prefix_reply)
                     break
                 if frame is None:
@@ -479,6 +491,15 @@ class FramedService(TcpService):
                     self.fragment_seen(conn, frame.msg_type, len(data), frame.size)
                 self.traffic.request(frame.msg_type)
                 yield frame
+
+    def _bad_prefix_seen(self, conn: Connection, dropped: bytes) -> None:
+        """A prefix outside 12..548 (safe refuses it): a length mismatch, as exact finds
+        the same bytes (its reads never look at the prefix)."""
+        if len(dropped) < 8:
+            return  # not even a type: nothing to name
+        prefix, msg_type = struct.unpack(self._order.value + "ii", dropped[:8])
+        expected = expected_size(msg_type, self.port_kind, dropped[16:], self._order)
+        self.length_mismatch_seen(conn, msg_type, prefix + 4, expected)
 
     def lint(self, code: LintCode, conn: Connection, detail: str = "") -> None:
         """Hook: a client lint finding on ``conn`` (issue 31); the motion and IO servers
