@@ -220,6 +220,18 @@ def test_a_token_with_whitespace_inside_is_refused() -> None:
     assert "--token: the token contains whitespace inside" in result.output
 
 
+def test_a_token_beyond_ascii_is_refused() -> None:
+    """``tökén-…``: one client sends it in UTF-8, another in latin-1, the server reads
+    latin-1; refused at start with how to make one, not matched depending on the client."""
+    token = "t\u00f6k\u00e9n-of-the-browser-guard-tests"  # noqa: S105 - a test token
+    with pytest.raises(ConfigError, match="beyond ASCII"):
+        SimulatorConfig(token=token)
+    result = CliRunner().invoke(cli, ["sim", "--http-port", "0", "--token", token])
+    assert result.exit_code == 2, result.output
+    assert "--token: the token contains characters beyond ASCII" in result.output
+    assert "secrets.token_urlsafe" in result.output
+
+
 @pytest.mark.parametrize(
     ("token", "words"),
     [

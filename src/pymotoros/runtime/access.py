@@ -119,7 +119,9 @@ def clean_token(token: str | None, *, source: str = "--token") -> str | None:
     """The token without the whitespace around it (a Kubernetes Secret made from a file
     ends in a newline; clients' headers are trimmed too); None for none or an empty one.
     A token with whitespace *inside* cannot be sent in one header value as given:
-    :class:`ValueError` saying so."""
+    :class:`ValueError` saying so. So does one with a character beyond ASCII: HTTP
+    clients encode it differently (UTF-8, latin-1) and the server reads the header as
+    latin-1, so it would match for one client and not another."""
     if token is None:
         return None
     trimmed = token.strip()
@@ -127,6 +129,12 @@ def clean_token(token: str | None, *, source: str = "--token") -> str | None:
         raise ValueError(
             f"{source}: the token contains whitespace inside ({len(trimmed)} characters); "
             f"a bearer token is one word: {MAKE_ONE}"
+        )
+    if not trimmed.isascii():
+        raise ValueError(
+            f"{source}: the token contains characters beyond ASCII ({len(trimmed)} "
+            "characters); HTTP clients send them in different encodings, so it would "
+            f"match for some and not others: {MAKE_ONE}"
         )
     return trimmed or None
 
