@@ -90,7 +90,10 @@ PLACEHOLDER_TOKENS: Final = frozenset(
     }
 )
 """Tokens copied from an example rather than made (compared without case): refused
-beyond loopback whatever their length."""
+beyond loopback whatever their length. All but ``change-me-before-applying`` are shorter
+than MIN_TOKEN_LENGTH and would be refused by the length rule too; they stay because their
+refusal says the better thing (a copied placeholder, not a secret: anybody who read the
+example has it) than "too short", which invites padding the placeholder."""
 MAKE_ONE: Final = "make one with: python -c 'import secrets; print(secrets.token_urlsafe(24))'"
 """How to make a token, in the words of a refusal."""
 
@@ -161,7 +164,7 @@ class AccessGuard:
 
     def __init__(self, app: ASGIApp, token: str) -> None:
         self.app = app
-        self._token = (clean_token(token) or "").encode()
+        self._token = token.encode()  # cleaned once, by SimulatorConfig
         if not self._token:
             raise ValueError("AccessGuard needs a token that is not empty")
 
@@ -209,7 +212,8 @@ def loopback_or_token(host: str, token: str | None, insecure: bool) -> str | Non
 def install_access(
     api: FastAPI, token: str | None, *, ready: Callable[[], bool] | None = None
 ) -> None:
-    """Add ``/healthz`` and ``/readyz``; require ``token`` when given."""
+    """Add ``/healthz`` and ``/readyz``; require ``token`` when given (as
+    :func:`clean_token` returned it: SimulatorConfig cleans it once)."""
 
     @api.get("/healthz", include_in_schema=False)
     async def healthz() -> dict[str, str]:
@@ -225,7 +229,6 @@ def install_access(
             status_code=200 if listening else 503,
         )
 
-    token = clean_token(token)
     if token:
         api.add_middleware(AccessGuard, token=token)
         document_security(api)

@@ -174,10 +174,10 @@ class HostGuard:
             await self.app(scope, receive, send)
             return
         header = Headers(scope=scope).get("host")
-        if header is None or host_name(header) in self.names:
+        name = host_name(header) if header is not None else None
+        if name is None or name in self.names:
             await self.app(scope, receive, send)
             return
-        name = host_name(header)
         shown = f"[{name}]" if ":" in name else name
         message = (
             f"refused a request for Host {header!r}: this twin answers only to its own "
