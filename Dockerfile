@@ -18,6 +18,11 @@
 # refuses to start without PYMOTOROS_TOKEN (or --token), naming it; every /api route,
 # /metrics and /ws/state take `Authorization: Bearer TOKEN`. The MotoROS ports stay open,
 # as on a real controller: publish them only where you trust the network.
+# The control API answers to its own names (localhost, the container's host name, any IP
+# address) and refuses other Host headers with 403 (DNS rebinding). Reached under another
+# name (a compose service name such as `http://twin-a:8080` from a sibling container, a
+# Kubernetes Service), allow it: -e PYMOTOROS_SIM_ALLOWED_HOST="twin-a twin-b" (names
+# separated by spaces; `.example.com` allows every name under it).
 # Linted by hadolint and checked against the CLI by tests/test_dockerfile.py.
 FROM python:3.11-slim
 

@@ -28,12 +28,20 @@ class ContainerSim:
 
 
 @contextlib.contextmanager
-def container_sim(tmp_path: Path) -> Iterator[ContainerSim]:
+def container_sim(
+    tmp_path: Path, extra_env: dict[str, str] | None = None
+) -> Iterator[ContainerSim]:
     """A twin whose token and control API port come from the environment only (the
-    port 0 there: the OS picks, and the ports file says which)."""
+    port 0 there: the OS picks, and the ports file says which), plus ``extra_env`` (a
+    pod's other variables)."""
     token = secrets.token_urlsafe(32)
     ports_file = tmp_path / "ports.json"
-    env = {**os.environ, "PYMOTOROS_TOKEN": token, "PYMOTOROS_SIM_HTTP_PORT": "0"}
+    env = {
+        **os.environ,
+        "PYMOTOROS_TOKEN": token,
+        "PYMOTOROS_SIM_HTTP_PORT": "0",
+        **(extra_env or {}),
+    }
     process = subprocess.Popen(  # noqa: S603 - the package's own CLI
         [sys.executable, "-m", "pymotoros", "sim", "--motion-port", "0", "--state-port", "0",
          "--io-port", "0", "--ports-file", str(ports_file)],

@@ -4,6 +4,8 @@
   PATH holding only the few commands it needs to get that far (no apt-get, so nothing is
   installed, and none of tshark, chromium, chromedriver, git), it must fail before
   installing anything, naming each Debian package.
+- Installing the missing packages needs root: a user with passwordless sudo installs
+  through ``sudo -n``; one without is told so (and the packages are still named).
 - It creates a fresh virtual environment outside the checkout, installs the lock into
   it, runs the README's test command, ruff, mypy and the mutation run with that
   environment's python, in that order, stops at the first failure, and removes the
@@ -127,3 +129,55 @@ def test_a_failing_test_run_stops_it(tmp_path: Path, pytest_exit: int) -> None:
     returncode, calls, _temp = run_with_stand_ins(tmp_path, pytest_exit)
     assert returncode == pytest_exit
     assert calls[-1].endswith(" -m pytest"), calls  # neither ruff nor mypy nor mutants ran
+
+
+def run_as_user(tmp_path: Path, *, sudo: bool) -> tuple[subprocess.CompletedProcess[str], str]:
+    """.ci/run as uid 1000 with a stand-in apt-get (installs nothing, records its calls)
+    and, if ``sudo``, a passwordless stand-in sudo that runs what it is given."""
+    bin_dir = tmp_path / "bin"
+    bin_dir.mkdir()
+    for tool in ("dirname", "cat", "env"):
+        found = shutil.which(tool)
+        assert found is not None, tool
+        (bin_dir / tool).symlink_to(found)
+    log = tmp_path / "calls.log"
+    stand_ins = {
+        "id": "#!/bin/bash\necho 1000\n",
+        "apt-get": f'#!/bin/bash\necho "apt-get $*" >> {log}\n',
+        "debconf-set-selections": "#!/bin/bash\ncat >/dev/null\n",
+    }
+    if sudo:
+        stand_ins["sudo"] = f'#!/bin/bash\necho "sudo $*" >> {log}\n[ "$1" = -n ] && shift\n"$@"\n'
+    for name, text in stand_ins.items():
+        (bin_dir / name).write_text(text)
+        (bin_dir / name).chmod(0o755)
+    bash = shutil.which("bash")
+    assert bash is not None
+    done = subprocess.run(  # noqa: S603 - bash found on PATH, fixed arguments
+        [bash, str(ROOT / ".ci" / "run")],
+        env={"PATH": str(bin_dir), "HOME": str(tmp_path)},
+        capture_output=True,
+        text=True,
+        timeout=RUN_TIMEOUT_S,
+        check=False,
+    )
+    return done, log.read_text() if log.exists() else ""
+
+
+@pytest.mark.skipif(shutil.which("bash") is None, reason="bash is not installed")
+def test_a_user_with_sudo_installs_through_sudo(tmp_path: Path) -> None:
+    done, calls = run_as_user(tmp_path, sudo=True)
+    assert "sudo -n apt-get update" in calls, (calls, done.stderr)
+    assert "sudo -n env DEBIAN_FRONTEND=noninteractive apt-get install -y tshark" in calls
+    assert "apt-get install -y chromium-driver" in calls
+    assert done.returncode == 1  # the stand-in installed nothing: still named
+    assert "'tshark' is missing" in done.stderr
+
+
+@pytest.mark.skipif(shutil.which("bash") is None, reason="bash is not installed")
+def test_a_user_without_sudo_is_told_root_is_needed(tmp_path: Path) -> None:
+    done, calls = run_as_user(tmp_path, sudo=False)
+    assert calls == ""  # apt-get never tried
+    assert "needs root: run as root or with passwordless sudo" in done.stderr
+    assert "install the Debian package 'chromium-driver'" in done.stderr
+    assert done.returncode == 1

@@ -304,3 +304,30 @@ def test_the_args_and_the_cell_are_what_the_sim_accepts(tmp_path: Path) -> None:
         sim.make_context("sim", ["--host", "0.0.0.0", *args])
     except click.UsageError as exc:
         pytest.fail(f"args {args}: pymotoros sim refuses them: {exc}")
+
+
+def test_a_twin_configured_like_a_pod_answers_its_per_pod_names(tmp_path: Path) -> None:
+    """The headless Service gives every pod a name (``pymotoros-0.pymotoros``, in full
+    ``pymotoros-0.pymotoros.NAMESPACE.svc.cluster.local``; docs/fleet.md): the
+    StatefulSet's environment makes the twin answer to them (not only 403)."""
+    env = {e["name"]: e["value"] for e in container()["env"] if "value" in e}
+    service = manifests()["Service"]["metadata"]["name"]
+    pod = manifests()["StatefulSet"]["metadata"]["name"] + "-0"
+    with container_sim(tmp_path, env | {"PYMOTOROS_SIM_HTTP_PORT": "0"}) as twin:
+        url = f"http://127.0.0.1:{twin.http}/api/state"
+        for name in (f"{pod}.{service}", f"{pod}.{service}.robots.svc.cluster.local"):
+            status, body = scrape_as(url, twin.token, f"{name}:8080")
+            assert status == 200, f"{name}: {body[:500]}"
+        status, body = scrape_as(url, twin.token, "rebind.attacker.example:8080")
+        assert status == 403, body[:500]
+
+
+def scrape_as(url: str, token: str, host: str) -> tuple[int, str]:
+    request = urllib.request.Request(  # noqa: S310 - loopback http
+        url, headers={"Authorization": f"Bearer {token}", "Host": host}
+    )
+    try:
+        with urllib.request.urlopen(request, timeout=SCRAPE_TIMEOUT_S) as reply:  # noqa: S310
+            return reply.status, reply.read().decode()
+    except urllib.error.HTTPError as exc:
+        return exc.code, exc.read().decode()

@@ -76,3 +76,21 @@ def test_status_reads_the_alarm_texts_with_the_token(tmp_path: Path) -> None:
             if "OUT OF RANGE (ABSO DATA)" in table.output or time.monotonic() > deadline:
                 break
         assert "4107 OUT OF RANGE (ABSO DATA)" in table.output, table.output
+
+
+def test_status_says_why_the_alarm_text_is_missing(tmp_path: Path) -> None:
+    """The control API refuses the alarm texts (here 401: no token): the table shows the
+    alarm number, and stderr says why its text is missing and how to give the token."""
+    ports = tmp_path / "ports.json"
+    with running_sim("--token", TOKEN, "--ports-file", str(ports)) as sim:
+        post(sim, "/api/alarm", {"code": 4107, "subcode": 2, "text": "OUT OF RANGE (ABSO DATA)"})
+        deadline = time.monotonic() + STATUS_WAIT_S
+        while True:  # the state port shows the alarm at its next monitor read
+            args = ["status", "--ports-file", str(ports)]
+            table = CliRunner().invoke(cli, args, env={"PYMOTOROS_TOKEN": ""})
+            if "4107" in table.stdout or time.monotonic() > deadline:
+                break
+        assert "4107 (text on the pendant)" in table.stdout, table.output
+        assert "alarm texts not read" in table.stderr, table.output
+        assert "a token is needed and none was given (401)" in table.stderr
+        assert table.stderr.count("alarm texts not read") == 1

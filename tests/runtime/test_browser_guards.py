@@ -108,7 +108,38 @@ async def test_a_name_the_user_allows_is_served(controller: VirtualController) -
             assert (await client.get("/api/state", headers={"Host": host})).status_code == 200
         other = await client.get("/api/state", headers={"Host": "twin.lab.attacker.example"})
         assert other.status_code == 403
-        assert "twin.lab, *.svc.cluster.local" in other.json()["error"]
+        assert "twin.lab, .svc.cluster.local" in other.json()["error"]  # as it is written
+
+
+async def test_a_star_dot_suffix_is_a_domain_too(controller: VirtualController) -> None:
+    """``*.lab.example`` means what ``.lab.example`` means (the spelling many tools use),
+    and the refusal lists it as ``.lab.example``."""
+    config = replace(LOCAL, http_port=0, allowed_hosts=("*.Lab.Example",))
+    async with (
+        SimulatorApp(controller, config) as app,
+        httpx.AsyncClient(base_url=base(app), timeout=10) as client,
+    ):
+        for host in ("cell-3.lab.example:8080", "lab.example", "a.b.lab.example."):
+            answer = await client.get("/api/state", headers={"Host": host})
+            assert answer.status_code == 200, (host, answer.text)
+        other = await client.get("/api/state", headers={"Host": "lab.example.attacker.test"})
+        assert other.status_code == 403
+        error = other.json()["error"]
+        assert ".lab.example" in error
+        assert "*." not in error
+
+
+def test_a_star_inside_a_name_is_refused_at_start() -> None:
+    """``twin-*`` would match no Host: refused (exit 2) naming the forms that work,
+    never started with a name that silently allows nothing."""
+    result = CliRunner().invoke(cli, ["sim", "--allowed-host", "twin-*"])
+    assert result.exit_code == 2, result.output
+    assert "'twin-*'" in result.output
+    assert "*.example.com" in result.output
+    from pymotoros.runtime.hosts import allowed_name
+
+    assert allowed_name("*") == "*"
+    assert allowed_name("*.Lab.Example.") == ".lab.example"
 
 
 def test_the_own_names_of_a_twin_on_every_interface() -> None:
@@ -187,6 +218,18 @@ def test_a_token_with_whitespace_inside_is_refused() -> None:
     result = CliRunner().invoke(cli, ["sim", "--http-port", "0", "--token", SPACED])
     assert result.exit_code == 2
     assert "--token: the token contains whitespace inside" in result.output
+
+
+def test_a_token_beyond_ascii_is_refused() -> None:
+    """``tökén-…``: one client sends it in UTF-8, another in latin-1, the server reads
+    latin-1; refused at start with how to make one, not matched depending on the client."""
+    token = "t\u00f6k\u00e9n-of-the-browser-guard-tests"  # noqa: S105 - a test token
+    with pytest.raises(ConfigError, match="beyond ASCII"):
+        SimulatorConfig(token=token)
+    result = CliRunner().invoke(cli, ["sim", "--http-port", "0", "--token", token])
+    assert result.exit_code == 2, result.output
+    assert "--token: the token contains characters beyond ASCII" in result.output
+    assert "secrets.token_urlsafe" in result.output
 
 
 @pytest.mark.parametrize(

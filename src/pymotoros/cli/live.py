@@ -13,6 +13,7 @@
 from __future__ import annotations
 
 import json
+import sys
 import urllib.error
 import urllib.request
 from collections.abc import Callable
@@ -44,19 +45,27 @@ def not_ready_reason(st: Status) -> str:
     return told(NotReadySubcode.NOT_STARTED, "pymotoros enable (START_TRAJ_MODE)")
 
 
-def twin_alarm_texts(host: str, http_port: int | None, token: str | None = None) -> dict[int, str]:
+def twin_alarm_texts(
+    host: str,
+    http_port: int | None,
+    token: str | None = None,
+    warn: Callable[[str], None] | None = None,
+) -> dict[int, str]:
     """Alarm number -> pendant text from the twin's control API ({} when unknown), with
-    its ``token`` when given."""
+    its ``token`` when given. A refusal (401: the token; 403: the Host name) is told to
+    ``warn`` (stderr by default): the alarm line alone would not say why its text is
+    missing. An unreachable API is not (a real controller has none)."""
     if http_port is None:
         return {}
-    from pymotoros.cli.sim_view import api_request
+    from pymotoros.cli.sim_view import api_request, refusal_text
 
     url = f"http://{host}:{http_port}/api/state"
     try:
         with urllib.request.urlopen(api_request(url, token), timeout=API_TIMEOUT_S) as response:  # noqa: S310 - http
             data = json.loads(response.read())
-    except urllib.error.HTTPError as exc:  # e.g. 401: no token given; the code suffices
-        exc.close()
+    except urllib.error.HTTPError as exc:
+        text = f"alarm texts not read: {refusal_text(url, exc, token)}"
+        (warn or _to_stderr)(text)
         return {}
     except (OSError, urllib.error.URLError, ValueError):
         return {}
@@ -66,6 +75,23 @@ def twin_alarm_texts(host: str, http_port: int | None, token: str | None = None)
         for a in alarms
         if isinstance(a, dict) and isinstance(a.get("code"), int)
     }
+
+
+def _to_stderr(text: str) -> None:
+    print(text, file=sys.stderr)
+
+
+class OnceWriter:
+    """Writes each distinct text once to stderr (a ``--watch`` asks for the texts again
+    at every frame with an alarm; its refusal need not scroll the screen)."""
+
+    def __init__(self) -> None:
+        self.told: set[str] = set()
+
+    def tell_once(self, text: str) -> None:
+        if text not in self.told:
+            self.told.add(text)
+            _to_stderr(text)
 
 
 def alarm_line(st: Status, texts: dict[int, str]) -> str:
@@ -123,4 +149,4 @@ class FrameWriter:
             self._live = None
 
 
-__all__ = ["FrameWriter", "alarm_line", "not_ready_reason", "twin_alarm_texts"]
+__all__ = ["FrameWriter", "OnceWriter", "alarm_line", "not_ready_reason", "twin_alarm_texts"]

@@ -31,7 +31,13 @@ from pymotoros.cli.cartesian import (
     tool_option,
     use_tool,
 )
-from pymotoros.cli.live import FrameWriter, alarm_line, not_ready_reason, twin_alarm_texts
+from pymotoros.cli.live import (
+    FrameWriter,
+    OnceWriter,
+    alarm_line,
+    not_ready_reason,
+    twin_alarm_texts,
+)
 from pymotoros.cli.options import (
     EXIT_CONNECTION,
     EXIT_USAGE,
@@ -412,6 +418,7 @@ def status(
             last = -math.inf
             loop = asyncio.get_running_loop()
             texts: dict[int, str] = {}
+            warned = OnceWriter()  # a refused alarm-text request: told once, not per frame
             redraw = watch and not as_json and (sys.stdout.isatty() if live is None else live)
             frames = FrameWriter(sys.stdout, live=redraw)
             try:
@@ -422,7 +429,11 @@ def status(
                         if st is not None and st.in_error and st.error_code not in texts:
                             texts.update(
                                 await asyncio.to_thread(
-                                    twin_alarm_texts, target.host, target.http_port, token
+                                    twin_alarm_texts,
+                                    target.host,
+                                    target.http_port,
+                                    token,
+                                    warned.tell_once,
                                 )
                             )
                         sim_state = await fetch_state_async(api, token) if api is not None else None

@@ -295,10 +295,11 @@ def _cell(
     "--allowed-host",
     multiple=True,
     metavar="NAME",
+    callback=lambda _ctx, _param, names: _allowed_hosts(names),
     help="A name the control API answers to besides its own (localhost, 127.0.0.1, "
     "[::1], --host; on 0.0.0.0 also the machine's name and any IP address); other Host "
-    "headers are refused (DNS rebinding). Repeatable; .example.com allows every name "
-    "under it, * any name.",
+    "headers are refused (DNS rebinding). Repeatable; .example.com (or *.example.com) "
+    "allows every name under it, * any name.",
 )
 @click.option(
     "--fidelity",
@@ -413,6 +414,18 @@ def _request_realtime(realtime: bool) -> None:
         from pymotoros.runtime.realtime import request_realtime
 
         request_realtime()  # a warning line if refused; the twin runs on either way
+
+
+def _allowed_hosts(names: tuple[str, ...]) -> tuple[str, ...]:
+    """The names as given, a usage error for one no Host could match (``twin-*``)."""
+    from pymotoros.runtime.hosts import allowed_name
+
+    for name in names:
+        try:
+            allowed_name(name)
+        except ValueError as exc:
+            raise click.BadParameter(str(exc), param_hint="'--allowed-host'") from exc
+    return names
 
 
 def check_http_access(host: str, token: str | None, insecure: bool) -> str | None:

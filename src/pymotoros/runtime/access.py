@@ -90,7 +90,10 @@ PLACEHOLDER_TOKENS: Final = frozenset(
     }
 )
 """Tokens copied from an example rather than made (compared without case): refused
-beyond loopback whatever their length."""
+beyond loopback whatever their length. All but ``change-me-before-applying`` are shorter
+than MIN_TOKEN_LENGTH and would be refused by the length rule too; they stay because their
+refusal says the better thing (a copied placeholder, not a secret: anybody who read the
+example has it) than "too short", which invites padding the placeholder."""
 MAKE_ONE: Final = "make one with: python -c 'import secrets; print(secrets.token_urlsafe(24))'"
 """How to make a token, in the words of a refusal."""
 
@@ -119,7 +122,9 @@ def clean_token(token: str | None, *, source: str = "--token") -> str | None:
     """The token without the whitespace around it (a Kubernetes Secret made from a file
     ends in a newline; clients' headers are trimmed too); None for none or an empty one.
     A token with whitespace *inside* cannot be sent in one header value as given:
-    :class:`ValueError` saying so."""
+    :class:`ValueError` saying so. So does one with a character beyond ASCII: HTTP
+    clients encode it differently (UTF-8, latin-1) and the server reads the header as
+    latin-1, so it would match for one client and not another."""
     if token is None:
         return None
     trimmed = token.strip()
@@ -127,6 +132,12 @@ def clean_token(token: str | None, *, source: str = "--token") -> str | None:
         raise ValueError(
             f"{source}: the token contains whitespace inside ({len(trimmed)} characters); "
             f"a bearer token is one word: {MAKE_ONE}"
+        )
+    if not trimmed.isascii():
+        raise ValueError(
+            f"{source}: the token contains characters beyond ASCII ({len(trimmed)} "
+            "characters); HTTP clients send them in different encodings, so it would "
+            f"match for some and not others: {MAKE_ONE}"
         )
     return trimmed or None
 
@@ -153,7 +164,7 @@ class AccessGuard:
 
     def __init__(self, app: ASGIApp, token: str) -> None:
         self.app = app
-        self._token = (clean_token(token) or "").encode()
+        self._token = token.encode()  # cleaned once, by SimulatorConfig
         if not self._token:
             raise ValueError("AccessGuard needs a token that is not empty")
 
@@ -201,7 +212,8 @@ def loopback_or_token(host: str, token: str | None, insecure: bool) -> str | Non
 def install_access(
     api: FastAPI, token: str | None, *, ready: Callable[[], bool] | None = None
 ) -> None:
-    """Add ``/healthz`` and ``/readyz``; require ``token`` when given."""
+    """Add ``/healthz`` and ``/readyz``; require ``token`` when given (as
+    :func:`clean_token` returned it: SimulatorConfig cleans it once)."""
 
     @api.get("/healthz", include_in_schema=False)
     async def healthz() -> dict[str, str]:
@@ -217,7 +229,6 @@ def install_access(
             status_code=200 if listening else 503,
         )
 
-    token = clean_token(token)
     if token:
         api.add_middleware(AccessGuard, token=token)
         document_security(api)

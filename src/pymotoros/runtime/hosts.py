@@ -21,8 +21,9 @@ The twin's own names:
   mandatory anyway (runtime/access.py);
 * the names the user adds: ``pymotoros sim --allowed-host NAME`` (repeatable; also
   ``PYMOTOROS_SIM_ALLOWED_HOST`` and ``allowed_host`` in the settings file's ``[sim]``
-  table). ``.example.com`` allows the domain and every name under it (a Kubernetes
-  Service's ``.svc.cluster.local``), ``*`` allows any name (turns the guard off).
+  table). ``.example.com`` (or ``*.example.com``, the same) allows the domain and every
+  name under it (a Kubernetes Service's ``.svc.cluster.local``), ``*`` allows any name
+  (turns the guard off); a ``*`` anywhere else is refused (it would match nothing).
 
 The port in ``Host`` is not compared: a rebinding page reaches the twin on the port it
 serves anyway, and a published port (``-p 9000:8080``, ``kubectl port-forward``) changes
@@ -49,6 +50,7 @@ __all__ = [
     "LOOPBACK_NAMES",
     "HostGuard",
     "OwnNames",
+    "allowed_name",
     "host_name",
     "own_names",
 ]
@@ -76,6 +78,28 @@ def host_name(header: str) -> str:
     return value.rstrip(".")
 
 
+def allowed_name(raw: str) -> str:
+    """A name as the user wrote it (``--allowed-host``), in the form the guard compares:
+    ``Twin.Lab:8080`` -> ``twin.lab``, ``*.Lab.Example`` -> ``.lab.example`` (a suffix),
+    ``*`` stays. ValueError for a ``*`` elsewhere (``twin-*``): no Host would match it."""
+    value = raw.strip().lower()
+    if value == ANY_HOST:
+        return value
+    if value.startswith(("*.", ".")):
+        suffix = value.removeprefix("*").rstrip(".")
+        rest = suffix[1:]
+    else:
+        suffix = ""
+        rest = host_name(value)
+    if ANY_HOST in rest:
+        raise ValueError(
+            f"allowed host {raw!r}: '*' stands only alone (any name) or as '*.example.com' "
+            "(every name under example.com, also written .example.com); a pattern such as "
+            "'twin-*' is not supported: list the names"
+        )
+    return suffix if suffix else rest
+
+
 def _is_ip(name: str) -> bool:
     try:
         ipaddress.ip_address(name)
@@ -92,7 +116,7 @@ class OwnNames:
         suffixes: list[str] = []
         self.any_name = False
         for raw in names:
-            name = host_name(raw) if not raw.startswith(".") else raw.strip().lower().rstrip(".")
+            name = allowed_name(raw)
             if name == ANY_HOST:
                 self.any_name = True
             elif name.startswith("."):
@@ -115,7 +139,7 @@ class OwnNames:
     def describe(self) -> str:
         """The names in the words of an error: ``localhost, 127.0.0.1, [::1], twin-0``."""
         shown = [f"[{n}]" if ":" in n else n for n in sorted(self.exact, key=_order)]
-        shown += [f"*{s}" for s in self.suffixes]
+        shown += list(self.suffixes)  # as they are written: .example.com
         if self.any_ip:
             shown.append("any IP address")
         return ", ".join(shown)
@@ -150,10 +174,10 @@ class HostGuard:
             await self.app(scope, receive, send)
             return
         header = Headers(scope=scope).get("host")
-        if header is None or host_name(header) in self.names:
+        name = host_name(header) if header is not None else None
+        if name is None or name in self.names:
             await self.app(scope, receive, send)
             return
-        name = host_name(header)
         shown = f"[{name}]" if ":" in name else name
         message = (
             f"refused a request for Host {header!r}: this twin answers only to its own "

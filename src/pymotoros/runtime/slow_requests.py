@@ -25,8 +25,9 @@ from uvicorn.protocols.http.h11_impl import H11Protocol
 __all__ = ["REQUEST_READ_TIMEOUT_S", "BoundedH11Protocol"]
 
 REQUEST_READ_TIMEOUT_S: Final = 10.0
-"""Seconds a client has to send a whole request (the largest, a 1 MB scenario file, takes
-well under a second on any link the twin is used over)."""
+"""Seconds a client has to send a whole request (the largest the control API takes,
+MAX_BODY_BYTES = 256 KiB in runtime/body_limit.py, takes well under a second on any link
+the twin is used over)."""
 
 
 class BoundedH11Protocol(H11Protocol):
