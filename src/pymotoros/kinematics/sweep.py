@@ -37,7 +37,8 @@ from typing import Final, Protocol
 import numpy as np
 import numpy.typing as npt
 
-from pymotoros.models.workspace import ContactLike, tick_travel_reaches
+from pymotoros.models.travel import tick_travel_reaches
+from pymotoros.models.workspace import ContactLike
 
 F64Array = npt.NDArray[np.float64]
 

@@ -26,12 +26,9 @@ read the same table the same way; every mistake is a
 from __future__ import annotations
 
 import math
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Final, Protocol
-
-import numpy as np
-import numpy.typing as npt
 
 from pymotoros.errors import ConfigError
 from pymotoros.models.robots import Transform, Vec3
@@ -414,33 +411,3 @@ __all__ = [
     "parse_tool_shape",
     "workspace_from_dict",
 ]
-
-
-TRAVEL_WINDOW_TICKS: Final = 64
-"""Ticks of travel summed first when looking for the next contact check (doubled each
-round): near an obstacle the next check is a few ticks away, far from all of them
-hundreds or thousands."""
-
-
-def tick_travel_reaches(
-    travel: Callable[[int, int], npt.NDArray[np.float64]], start: int, ticks: int, distance: float
-) -> int:
-    """The first tick after ``start`` by which the robot may have moved ``distance`` (m):
-    ``travel(a, b)`` gives how far any point of it can move in each tick from ``a`` to
-    ``b`` (a bound from |Δq| and the lever arms). ``ticks`` when it never does.
-
-    Shared by the client's guard (``kinematics.sweep``) and the offline check
-    (``trajectory.collisions``), which check the workspace only as often as the robot
-    can have closed the clearance the last check found."""
-    done = 0.0
-    window = TRAVEL_WINDOW_TICKS
-    while start < ticks - 1:
-        end = min(ticks - 1, start + window)
-        window *= 2
-        total = done + np.cumsum(travel(start, end))
-        j = int(np.searchsorted(total, distance, side="left"))
-        if j < len(total):
-            return start + j + 1
-        done = float(total[-1])
-        start = end
-    return ticks

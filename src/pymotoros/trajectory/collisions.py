@@ -25,7 +25,8 @@ import numpy as np
 import numpy.typing as npt
 
 from pymotoros.models.cell import CellModels
-from pymotoros.models.workspace import ContactLike, tick_travel_reaches
+from pymotoros.models.travel import tick_travel_reaches
+from pymotoros.models.workspace import ContactLike
 from pymotoros.motion import GroupAxes, to_pulses
 from pymotoros.trajectory.files import Trajectory
 
