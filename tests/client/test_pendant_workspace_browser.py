@@ -26,7 +26,7 @@ from test_pendant_browser import (
     browser,
 )
 
-from pymotoros.models.link_shapes import LINK_RADII_M
+from pymotoros.models import ROBOTS
 
 webdriver = pytest.importorskip("selenium.webdriver", reason="selenium is not installed")
 
@@ -108,7 +108,7 @@ def test_the_pendant_draws_obstacles_capsules_and_a_contact_in_red(
         ("table", "box", False),
         ("post", "cylinder", False),
     ]
-    assert scene["capsules"] == len(LINK_RADII_M["hc10"])  # base link and six links
+    assert scene["capsules"] == len(ROBOTS["hc10"].groups[0].link_radii)  # base link and six links
     calm = _canvas_png(browser)
     assert _red_pixels(browser, calm) == 0
     assert browser.save_screenshot(str(screenshot_dir / "pendant-workspace.png"))

@@ -58,7 +58,7 @@ def _joints(controller: VirtualController) -> list[float]:
 
 def _depth_and_one_tick(cell: CellConfig, controller: VirtualController) -> tuple[float, float]:
     """How deep the robot is in the obstacle, and the farthest one tick can carry it."""
-    world = CollisionWorld(cell.groups, cell.robots, cell.workspace)
+    world = CollisionWorld(cell.groups, cell.workspace)
     _, contacts = world.probe([_joints(controller)])
     depth = max((-c.distance_m for c in contacts), default=0.0)
     axes = _axes(controller)
@@ -129,7 +129,7 @@ async def test_a_link_pinned_between_two_obstacles_is_a_clamping_and_backs_off()
             phases.add(controller.snapshot().pfl)
         assert {"stop", "escape", "idle"} <= phases
         assert _joints(controller)[1] < stopped  # backed off along its path
-        world = CollisionWorld(cell.groups, cell.robots, cell.workspace)
+        world = CollisionWorld(cell.groups, cell.workspace)
         assert world.contacts([_joints(controller)]) == []
 
 

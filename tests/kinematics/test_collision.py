@@ -10,9 +10,8 @@ import numpy as np
 import pytest
 
 from pymotoros.kinematics import chain_for
-from pymotoros.kinematics.collision import NEAR_M, CollisionWorld
+from pymotoros.kinematics.collision import NEAR_M, CollisionWorld, link_name
 from pymotoros.models import ROBOTS, robot_model
-from pymotoros.models.link_shapes import LINK_RADII_M, link_name
 from pymotoros.models.robots import GroupKind, Transform
 from pymotoros.models.workspace import EMPTY_WORKSPACE, Workspace, workspace_from_dict
 
@@ -21,7 +20,7 @@ def _world(robot: str, obstacles: list[dict[str, object]], **extra: object) -> C
     model = robot_model(robot)
     names = [g.name for g in model.groups]
     ws = workspace_from_dict({"obstacles": obstacles, **extra}, "test", names)
-    return CollisionWorld(model.groups, [robot] * len(names), ws)
+    return CollisionWorld(model.groups, ws)
 
 
 def _zeros(robot: str) -> list[list[float]]:
@@ -31,10 +30,13 @@ def _zeros(robot: str) -> list[list[float]]:
 @pytest.mark.parametrize("robot", sorted(ROBOTS))
 def test_every_robot_group_has_shapes_and_none_collide_at_zero_or_home(robot: str) -> None:
     model = robot_model(robot)
-    world = CollisionWorld(model.groups, [robot] * len(model.groups), EMPTY_WORKSPACE)
+    world = CollisionWorld(model.groups, EMPTY_WORKSPACE)
     for group, body in zip(model.groups, world.bodies, strict=True):
         assert (body is not None) == (group.kind is GroupKind.ROBOT)
-    assert robot in LINK_RADII_M
+        assert len(group.link_radii) == (group.num_axes + 1 if body is not None else 0)
+        if body is not None:  # a capsule per link, base link first
+            radii = {p.order: p.radius for p in body.parts if p.order <= group.num_axes}
+            assert [radii[i] for i in range(len(radii))] == list(group.link_radii)
     assert world.self_contacts(_zeros(robot)) == []
     assert world.self_contacts([list(g.home) for g in model.groups]) == []
     assert world.probe(_zeros(robot)) == (math.inf, [])
@@ -156,7 +158,7 @@ def test_an_obstacle_in_another_groups_frame() -> None:
     }
     hc10 = robot_model("hc10").groups[0]
     ws: Workspace = workspace_from_dict(data, "test", ["R1", "R2"])
-    world = CollisionWorld((hc10, dataclasses.replace(hc10, name="R2")), ["hc10", "hc10"], ws)
+    world = CollisionWorld((hc10, dataclasses.replace(hc10, name="R2")), ws)
     tilted = [0.0, 0.8, 0.0, 0.0, 0.0, 0.0]
     assert world.contacts([[0.0] * 6, [0.0] * 6]) == []
     assert {c.group for c in world.contacts([[0.0] * 6, tilted])} == {"R2"}

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import pytest
@@ -12,6 +13,8 @@ from pymotoros.models import (
     ROBOTS,
     ControllerType,
     GroupKind,
+    GroupModel,
+    RobotModel,
     controller_model,
     robot_model,
 )
@@ -180,3 +183,76 @@ def test_speed_limit_from_max_increment_is_the_datasheet_speed(name: str, contro
 def test_hc10_default_pairing() -> None:
     assert ROBOTS["hc10"].controllers == {"yrc1000", "yrc1000micro"}
     assert ROBOTS["sda10f"].controllers == {"fs100"}
+
+
+def _gp7_arm(**changes: object) -> GroupModel:
+    """The GP7's R1 declared again field by field (no ``link_radii`` unless given), as a
+    new model's author writes it."""
+    gp7 = ROBOTS["gp7"].groups[0]
+    group = GroupModel(
+        gp7.name, gp7.kind, gp7.axes, gp7.moto_slots, gp7.home, gp7.dh, tool0=gp7.tool0
+    )
+    return dataclasses.replace(group, **changes)
+
+
+def test_a_robot_group_declared_without_shapes_is_refused() -> None:
+    """Without capsule radii the arm would have no collision body and pass through every
+    obstacle: the declaration itself fails, naming the model, the group and the fix."""
+    with pytest.raises(ConfigError) as err:
+        RobotModel("toy", "a toy arm", (_gp7_arm(),), frozenset({"yrc1000"}))
+    assert str(err.value) == (
+        "robot model 'toy' group R1 has no collision shapes, so obstacles would never stop "
+        "it: declare link_radii on the group, 7 capsule radii in m (the base link's, then "
+        "one per joint's link in ROS order)"
+    )
+
+
+@pytest.mark.parametrize(
+    ("changes", "message"),
+    [
+        (
+            {"link_radii": (0.1,) * 6},
+            "robot model 'toy' group R1: 6 link_radii for 6 axes; give 7 (the base link's, "
+            "then one per joint's link in ROS order)",
+        ),
+        (
+            {"link_radii": (0.1, 0.1, 0.0, 0.1, 0.1, 0.1, 0.1)},
+            "robot model 'toy' group R1: link_radii[2] is 0.0, a capsule radius is > 0 m",
+        ),
+        (
+            {"link_radii": (0.1,) * 7, "kind": GroupKind.STATION, "name": "S1"},
+            "robot model 'toy' group S1 is a station axis group: it takes no link_radii "
+            "(only robot groups R1, R2 … have collision shapes)",
+        ),
+    ],
+)
+def test_wrong_shapes_are_refused(changes: dict[str, object], message: str) -> None:
+    with pytest.raises(ConfigError) as err:
+        RobotModel("toy", "a toy arm", (_gp7_arm(**changes),), frozenset({"yrc1000"}))
+    assert str(err.value) == message
+
+
+def test_a_robot_group_without_joint_geometry_has_no_shapes_and_is_refused() -> None:
+    axes = tuple(dataclasses.replace(a, geometry=None) for a in ROBOTS["gp7"].groups[0].axes)
+    group = _gp7_arm(axes=axes, link_radii=(0.1,) * 7)
+    with pytest.raises(ConfigError, match=r"'toy' group R1 has no collision shapes: joint_1_s"):
+        RobotModel("toy", "a toy arm", (group,), frozenset({"yrc1000"}))
+
+
+def test_the_same_arm_with_shapes_is_a_robot() -> None:
+    radii = (0.12, 0.1, 0.07, 0.07, 0.05, 0.045, 0.035)
+    toy = RobotModel("toy", "a toy arm", (_gp7_arm(link_radii=radii),), frozenset({"yrc1000"}))
+    assert toy.groups[0].link_radii == radii
+
+
+@pytest.mark.parametrize("name", sorted(ROBOTS))
+def test_every_shipped_robot_group_has_shapes(name: str) -> None:
+    """Each robot group a capsule radius per link (base link first), each base or station
+    axis none (the SDA10F torso: the arms' base links cover it)."""
+    for group in ROBOTS[name].groups:
+        if group.kind is GroupKind.ROBOT:
+            assert len(group.link_radii) == group.num_axes + 1
+            assert all(0.02 <= r <= 0.2 for r in group.link_radii)
+            assert all(a.geometry is not None for a in group.axes)
+        else:
+            assert group.link_radii == ()

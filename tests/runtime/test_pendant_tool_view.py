@@ -65,7 +65,7 @@ def test_the_default_tool_shape_is_the_contact_checks_capsule() -> None:
     tool = placed[1]
     assert tool is not None
     assert (tool["shape"], tool["size"]) == ("capsule", pytest.approx([0.04, 0.15]))
-    world = CollisionWorld(cell.groups, cell.robots, cell.workspace)
+    world = CollisionWorld(cell.groups, cell.workspace)
     world.set_tool(0, cell.tool(0, 2).cell_tool)
     body = world.bodies[0]
     assert body is not None

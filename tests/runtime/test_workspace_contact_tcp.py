@@ -52,7 +52,7 @@ def _depth_and_one_tick(controller: VirtualController) -> tuple[float, float]:
     """How deep the commanded robot is in the ball, and the farthest one tick at full
     speed can carry any point of it (each joint's largest increment × its reach)."""
     cell = controller.cell
-    world = CollisionWorld(cell.groups, cell.robots, cell.workspace)
+    world = CollisionWorld(cell.groups, cell.workspace)
     _, contacts = world.probe([_joints(controller)])
     depth = max((-c.distance_m for c in contacts), default=0.0)
     axes = GroupAxes.from_model(cell.groups[0], cell.controller)

@@ -5,12 +5,12 @@ offline check and planner (``trajectory/``) need the same answer to "does the ro
 touch something at these joints?", and both may import ``kinematics`` but not each
 other, so the checker lives here beside the chains it places.
 
-Each robot group's links are capsules (radii: :mod:`pymotoros.models.link_shapes`)
-placed by the group's own Pinocchio model (its own data: nothing shared with another
-user of the kinematics); the active tool is its tool file's ``shape`` on the flange, or
-a capsule from ``tool0`` to its TCP (:meth:`GroupBody.set_tool`). The
-obstacles come from :mod:`pymotoros.models.workspace`. Coal (FCL's successor, a
-dependency of Pinocchio) computes the exact signed distances.
+Each robot group's links are capsules (radii: the group's ``link_radii``, declared
+with its joints in :mod:`pymotoros.models.robots`) placed by the group's own Pinocchio
+model (its own data: nothing shared with another user of the kinematics); the active
+tool is its tool file's ``shape`` on the flange, or a capsule from ``tool0`` to its TCP
+(:meth:`GroupBody.set_tool`). The obstacles come from :mod:`pymotoros.models.workspace`.
+Coal (FCL's successor, a dependency of Pinocchio) computes the exact signed distances.
 
 Cost: the narrow phase runs only on pairs whose bounding spheres are within
 :data:`NEAR_M`: a probe far from every obstacle is one forward kinematics, one
@@ -39,8 +39,7 @@ import pinocchio as pin
 from pymotoros.kinematics.chain import Chain
 from pymotoros.models.cell import CellModels
 from pymotoros.models.cell_tools import CellTool
-from pymotoros.models.link_shapes import link_name, link_radii
-from pymotoros.models.robots import GroupModel, Transform
+from pymotoros.models.robots import GroupKind, GroupModel, Transform
 from pymotoros.models.workspace import (
     DEFAULT_TOOL_RADIUS_M,
     Box,
@@ -67,6 +66,12 @@ two radii), not because the arm is folded onto itself."""
 _MIN_SEGMENT_M: Final = 1e-9
 TOOL_LINK: Final = "tool"
 """The link name of the tool's shape in a contact (``R1 tool touches obstacle 'table'``)."""
+
+
+def link_name(joint_name: str) -> str:
+    """The ROS-Industrial link after a joint: ``joint_1_s`` → ``link_1_s``,
+    ``arm_left_joint_2_l`` → ``arm_left_link_2_l``."""
+    return joint_name.replace("joint", "link", 1) if "joint" in joint_name else f"{joint_name}_link"
 
 
 @dataclass(frozen=True, slots=True)
@@ -160,14 +165,13 @@ class GroupBody:
     def __init__(
         self,
         group: GroupModel,
-        robot: str,
         base: Transform | None = None,
         *,
         tool_radius: float = DEFAULT_TOOL_RADIUS_M,
     ) -> None:
-        radii = link_radii(robot, group)
-        if radii is None:
-            raise ValueError(f"no collision shapes for {robot} group {group.name}")
+        radii = group.link_radii
+        if not radii:  # a base or station axis: the robot model refuses a robot group without
+            raise ValueError(f"group {group.name} has no collision shapes (no link_radii)")
         chain = Chain(group)
         self.name = group.name
         self.model = chain.model
@@ -402,20 +406,18 @@ class CollisionWorld:
     def __init__(
         self,
         groups: Sequence[GroupModel],
-        robots: Sequence[str],
         workspace: Workspace,
     ) -> None:
         self.workspace = workspace
         self.groups = tuple(groups)
         self.bodies: list[GroupBody | None] = []
-        for group, robot in zip(groups, robots, strict=True):
-            if link_radii(robot, group) is None or any(a.geometry is None for a in group.axes):
+        for group in groups:
+            if group.kind is not GroupKind.ROBOT:  # base and station axes have no shapes
                 self.bodies.append(None)
                 continue
             self.bodies.append(
                 GroupBody(
                     group,
-                    robot,
                     workspace.base(group.name),
                     tool_radius=workspace.tool_radius_m,
                 )
@@ -651,7 +653,7 @@ def world_for_cell(cell: CellModels, tools: Sequence[int | None] = ()) -> Collis
     order, its ``[workspace]``), each group with a tool on its flange: ``tools[g]`` (a
     tool number; missing or None: the cell's default, ``[initial.tool]`` or tool 0, as
     the twin boots), its shape from the cell's tool data (:meth:`GroupBody.set_tool`)."""
-    world = CollisionWorld(cell.robot.groups, cell.robots, cell.workspace)
+    world = CollisionWorld(cell.robot.groups, cell.workspace)
     for g in range(len(cell.robot.groups)):
         given = tools[g] if g < len(tools) else None
         world.set_tool(g, cell_tool(cell, g, cell.default_tool(g) if given is None else given))

@@ -10,6 +10,11 @@ controller parameter is) equal to the datasheet joint speed. Each ratio is picke
 that speed × ratio is a whole number of pulses per 4 ms tick: then MotoROS's speed
 limit (derived from the maximum increment per tick, §5.5) is the datasheet speed to
 the pulse. Each choice is commented where it is made.
+
+A robot model is one declaration, collision shapes included: every robot group (R1,
+R2 …) carries its joint geometry and the capsule radii of its links
+(:attr:`GroupModel.link_radii`), and :class:`RobotModel` refuses a robot group without
+them, because a group without shapes would pass through every obstacle of the cell.
 """
 
 from __future__ import annotations
@@ -104,6 +109,14 @@ class GroupModel:
     base_height: float = 0.0
     """Height of the ROS-Industrial ``base`` frame (Yaskawa robot coordinates) above
     ``base_link``: the S-axis height of robot-models.md (0: the two frames coincide)."""
+    link_radii: tuple[float, ...] = ()
+    """The collision shapes: the capsule radius (m) of the base link, then of each joint's
+    link in ROS order (``num_axes + 1`` values). Each link is a capsule around the segment
+    from its joint to the next (the last: to ``tool0``; the base link: from ``base_link``
+    to the first joint), so the joint origins give the segments and only the radii are
+    declared. A robot group must have them (:class:`RobotModel` refuses one without: it
+    would pass through obstacles); a base or station axis (the SDA10F torso) has none,
+    the arms' base links cover it."""
 
     def __post_init__(self) -> None:
         n = len(self.axes)
@@ -141,6 +154,44 @@ class RobotModel:
     pfl: bool = False
     """A collaborative (HC) arm with Power and Force Limiting: on a YRC1000 /
     YRC1000micro it enables MotoROS's PFL option (reference §4.4)."""
+
+    def __post_init__(self) -> None:
+        for group in self.groups:
+            _check_shapes(self.name, group)
+
+
+def _check_shapes(robot: str, group: GroupModel) -> None:
+    """Refuse a robot group without collision shapes (joint geometry and one capsule
+    radius per link), and shapes on a base or station axis, which nothing would use."""
+    where = f"robot model {robot!r} group {group.name}"
+    n = group.num_axes
+    if group.kind is not GroupKind.ROBOT:
+        if group.link_radii:
+            raise ConfigError(
+                f"{where} is a {group.kind.name.lower()} axis group: it takes no link_radii "
+                "(only robot groups R1, R2 … have collision shapes)"
+            )
+        return
+    if not group.link_radii:
+        raise ConfigError(
+            f"{where} has no collision shapes, so obstacles would never stop it: declare "
+            f"link_radii on the group, {n + 1} capsule radii in m (the base link's, then "
+            "one per joint's link in ROS order)"
+        )
+    if len(group.link_radii) != n + 1:
+        raise ConfigError(
+            f"{where}: {len(group.link_radii)} link_radii for {n} axes; give {n + 1} "
+            "(the base link's, then one per joint's link in ROS order)"
+        )
+    for i, r in enumerate(group.link_radii):
+        if not (math.isfinite(r) and r > 0):
+            raise ConfigError(f"{where}: link_radii[{i}] is {r!r}, a capsule radius is > 0 m")
+    unplaced = [a.name for a in group.axes if a.geometry is None]
+    if unplaced:
+        raise ConfigError(
+            f"{where} has no collision shapes: {', '.join(unplaced)} has no geometry "
+            "(joint origin and axis), so its links cannot be placed; declare the geometry"
+        )
 
 
 def _deg(x: float) -> float:
@@ -248,20 +299,6 @@ def _hc10_dh(flange: float) -> tuple[DhLink, ...]:
     )
 
 
-def _single_arm(
-    name: str,
-    description: str,
-    axes: tuple[AxisModel, ...],
-    dh: tuple[DhLink, ...],
-    controllers: frozenset[str],
-    *,
-    pfl: bool = False,
-) -> RobotModel:
-    slots = SEVEN_AXIS_SLOTS if len(axes) == 7 else _six_axis_slots()
-    group = GroupModel("R1", GroupKind.ROBOT, axes, slots, (0.0,) * len(axes), dh)
-    return RobotModel(name, description, (group,), controllers, pfl=pfl)
-
-
 # --- Geometry: joint origins and axes, tool0 and the ``base`` frame (robot-models.md §1) ---
 
 _X: Final = (1.0, 0.0, 0.0)
@@ -285,31 +322,57 @@ class _GroupGeometry:
     mount: Transform = Transform()
 
 
-def _with_geometry(robot: RobotModel, *geometries: _GroupGeometry) -> RobotModel:
-    """The robot with each group's joint origins, axes, tool0 and base height attached."""
-    groups = []
-    for group, geo in zip(robot.groups, geometries, strict=True):
-        if len(geo.joints) != group.num_axes:
-            raise ConfigError(f"{robot.name} {group.name}: geometry for {len(geo.joints)} joints")
-        axes = tuple(
-            dataclasses.replace(
-                axis,
-                geometry=JointGeometry(
-                    Transform(joint[0], joint[2] if len(joint) == 3 else (0.0, 0.0, 0.0)), joint[1]
-                ),
-            )
-            for axis, joint in zip(group.axes, geo.joints, strict=True)
+def _group(
+    name: str,
+    kind: GroupKind,
+    axes: tuple[AxisModel, ...],
+    dh: tuple[DhLink, ...],
+    geometry: _GroupGeometry,
+    link_radii: tuple[float, ...] = (),
+) -> GroupModel:
+    """A control group, home at zero, with each joint's origin and axis, its tool0, base
+    height and mount, and its links' capsule radii attached."""
+    if len(geometry.joints) != len(axes):
+        joints = len(geometry.joints)
+        raise ConfigError(f"group {name}: geometry for {joints} of {len(axes)} joints")
+    placed = tuple(
+        dataclasses.replace(
+            axis,
+            geometry=JointGeometry(
+                Transform(joint[0], joint[2] if len(joint) == 3 else (0.0, 0.0, 0.0)), joint[1]
+            ),
         )
-        groups.append(
-            dataclasses.replace(
-                group,
-                axes=axes,
-                tool0=geo.tool0,
-                base_height=geo.base_height,
-                mount=geo.mount,
-            )
-        )
-    return dataclasses.replace(robot, groups=tuple(groups))
+        for axis, joint in zip(axes, geometry.joints, strict=True)
+    )
+    slots = SEVEN_AXIS_SLOTS if len(axes) == 7 else _six_axis_slots()
+    return GroupModel(
+        name,
+        kind,
+        placed,
+        slots if kind is GroupKind.ROBOT else tuple(range(len(axes))),
+        (0.0,) * len(axes),
+        dh,
+        mount=geometry.mount,
+        tool0=geometry.tool0,
+        base_height=geometry.base_height,
+        link_radii=link_radii,
+    )
+
+
+def _single_arm(
+    name: str,
+    description: str,
+    axes: tuple[AxisModel, ...],
+    dh: tuple[DhLink, ...],
+    geometry: _GroupGeometry,
+    controllers: frozenset[str],
+    *,
+    link_radii: tuple[float, ...],
+    pfl: bool = False,
+) -> RobotModel:
+    """A robot of one arm, R1: axes, DH, geometry and collision shapes in one call."""
+    group = _group("R1", GroupKind.ROBOT, axes, dh, geometry, link_radii)
+    return RobotModel(name, description, (group,), controllers, pfl=pfl)
 
 
 # HC10 (A0) / HC10DT (A1): robot-models.md §1.2; tool0 on the T axis, rolled by π.
@@ -338,6 +401,8 @@ def _gp_arm(
     axes: tuple[AxisModel, ...],
     opw: _Opw,
     controllers: frozenset[str],
+    *,
+    link_radii: tuple[float, ...],
 ) -> RobotModel:
     """A GP-family arm: its DH parameters and its URDF chain both from its OPW lengths,
     so that each length is written once (S height c1 and offset a1, upper arm c2,
@@ -356,7 +421,7 @@ def _gp_arm(
         c1,
     )
     dh = _dh_6axis(c1, a1, c2, a2, c3, c4)
-    return _with_geometry(_single_arm(name, description, axes, dh, controllers), geometry)
+    return _single_arm(name, description, axes, dh, geometry, controllers, link_radii=link_radii)
 
 
 # MH5: the ROS2 origins (robot-models.md §1.4: S z 0.330, L x 0.088, U z 0.310, R z 0.040,
@@ -422,45 +487,47 @@ def _sda10f_arm_geometry(reflect: float) -> _GroupGeometry:
 _SDA10F_TORSO_GEOMETRY: Final = _GroupGeometry((((0.0, 0.0, _SDA10F_TORSO_HEIGHT), _Z),), None, 0.0)
 
 
-HC10: Final = _with_geometry(
-    RobotModel(
-        name="hc10",
-        description="Yaskawa HC10 (A0) collaborative robot, 10 kg, 6 axes",
-        groups=(
-            GroupModel(
-                name="R1",
-                kind=GroupKind.ROBOT,
-                axes=_HC10_AXES,
-                moto_slots=_six_axis_slots(),
-                home=(0.0,) * 6,
-                dh=_hc10_dh(0.130),
-            ),
-        ),
-        # Sourced: HC10 on YRC1000 (motoros2#293) and YRC1000micro (motoman#284), §2.
-        controllers=frozenset({"yrc1000", "yrc1000micro"}),
-        pfl=True,  # collaborative: Power and Force Limiting
-    ),
+# HC10 / HC10DT link radii (manuals HW1483896, HW1485083): base Ø ~200 mm, S and L
+# housings Ø ~190 mm, upper arm Ø ~150 mm, forearm Ø ~130 mm, wrist Ø ~110 mm, flange
+# Ø ~90 mm. Link radii of every model: OUR numbers, read off the outline drawings of the
+# datasheets and manuals named per robot (the body around each axis, rounded up to the
+# next 5 mm so that a capsule encloses its link): good enough to stop the twin at an
+# obstacle a few millimetres before the real arm would touch it, not a CAD model.
+_HC10_LINK_RADII: Final = (0.100, 0.095, 0.075, 0.065, 0.060, 0.055, 0.045)
+
+HC10: Final = _single_arm(
+    "hc10",
+    "Yaskawa HC10 (A0) collaborative robot, 10 kg, 6 axes",
+    _HC10_AXES,
+    _hc10_dh(0.130),
     _hc10_geometry(0.130),
+    # Sourced: HC10 on YRC1000 (motoros2#293) and YRC1000micro (motoman#284), §2.
+    frozenset({"yrc1000", "yrc1000micro"}),
+    link_radii=_HC10_LINK_RADII,
+    pfl=True,  # collaborative: Power and Force Limiting
 )
 
-# HC10DT (A1): the same kinematics, limits and speeds as the HC10 (robot-models.md §1.2);
-# only the flange is longer (tool0 at 0.170 m instead of 0.130 m).
-HC10DT: Final = _with_geometry(
-    _single_arm(
-        "hc10dt",
-        "Yaskawa HC10DT (A1) collaborative robot, dust/drip-proof, 10 kg, 6 axes",
-        _HC10_AXES,
-        _hc10_dh(0.170),
-        # Sourced for the HC10 family: YRC1000 and YRC1000micro (§2).
-        frozenset({"yrc1000", "yrc1000micro"}),
-        pfl=True,  # collaborative: Power and Force Limiting
-    ),
+# HC10DT (A1): the same kinematics, limits, speeds and body as the HC10 (robot-models.md
+# §1.2); only the flange is longer (tool0 at 0.170 m instead of 0.130 m).
+HC10DT: Final = _single_arm(
+    "hc10dt",
+    "Yaskawa HC10DT (A1) collaborative robot, dust/drip-proof, 10 kg, 6 axes",
+    _HC10_AXES,
+    _hc10_dh(0.170),
     _hc10_geometry(0.170),
+    # Sourced for the HC10 family: YRC1000 and YRC1000micro (§2).
+    frozenset({"yrc1000", "yrc1000micro"}),
+    link_radii=_HC10_LINK_RADII,
+    pfl=True,  # collaborative: Power and Force Limiting
 )
 
 # GP7 / GP8 / GP12: limits and speeds from robot-models.md §1.3 (datasheets; manuals
 # HW1486547, HW1484060; GP8 L 385°/s from the manual, the ROS1 URDF's 6.7495 rad/s is
 # 386.7°/s). Pulses/degree chosen: whole pulses per tick at the datasheet speed.
+# GP7 / GP8 link radii (manual HW1486547): base ~240 mm wide, S head ~200 mm, L arm
+# ~140 mm, U housing ~140 mm, wrist ~100 mm, B ~90 mm, flange Ø 70 mm (ISO 9409-1-31.5).
+_GP7_LINK_RADII: Final = (0.120, 0.100, 0.070, 0.070, 0.050, 0.045, 0.035)
+
 GP7: Final = _gp_arm(
     "gp7",
     "Yaskawa GP7 industrial robot, 7 kg, 6 axes",
@@ -477,6 +544,7 @@ GP7: Final = _gp_arm(
     (0.330, 0.040, 0.445, 0.040, 0.440, 0.080),
     # Not in the stored sources: the GP7 is sold with the YRC1000micro (and YRC1000).
     frozenset({"yrc1000micro", "yrc1000"}),
+    link_radii=_GP7_LINK_RADII,
 )
 
 GP8: Final = _gp_arm(
@@ -493,6 +561,7 @@ GP8: Final = _gp_arm(
     (0.330, 0.040, 0.345, 0.040, 0.340, 0.080),
     # Not in the stored sources: the GP8 is sold with the YRC1000micro (and YRC1000).
     frozenset({"yrc1000micro", "yrc1000"}),
+    link_radii=_GP7_LINK_RADII,  # the GP7's body (same manual)
 )
 
 GP12: Final = _gp_arm(
@@ -509,52 +578,56 @@ GP12: Final = _gp_arm(
     (0.450, 0.155, 0.614, 0.200, 0.640, 0.100),
     # Not in the stored sources: the GP12 is a YRC1000 robot.
     frozenset({"yrc1000"}),
+    # Link radii (manual HW1484060): base ~320 mm, S head ~260 mm, L arm ~180 mm, U ~170 mm,
+    # wrist ~130 mm, B ~110 mm, flange Ø 90 mm.
+    link_radii=(0.160, 0.130, 0.090, 0.085, 0.065, 0.055, 0.045),
 )
 
 # MH5: joint names of the ROS1 package (older joint_s naming); limits and speeds of the
 # ROS2 package, which rebuilt them from the Yaskawa manuals (robot-models.md §1.4). The
 # ROS1 URDF's 2.96–6.97 rad/s come from an old datasheet and are half the manual's.
-MH5: Final = _with_geometry(
-    _single_arm(
-        "mh5",
-        "Yaskawa MH5 industrial robot, 5 kg, 6 axes",
-        (
-            _axis("joint_s", -170, 170, 376, 1250),
-            _axis("joint_l", -65, 150, 350, 1250),
-            _axis("joint_u", -70, 190, 400, 1100),
-            _axis("joint_r", -190, 190, 450, 700),
-            _axis("joint_b", -135, 135, 450, 700),
-            _axis("joint_t", -360, 360, 720, 475),
-        ),
-        # ROS2 origins: S z 0.330, L x 0.088, U z 0.310, R z 0.040, B x 0.305, T x 0.080.
-        _dh_6axis(0.330, 0.088, 0.310, 0.040, 0.305, 0.080),
-        # Partly sourced: the ROS1 package's U limits were measured on an MH5F, the FS100
-        # variant (§1.4); DX100 and DX200 are the MH5's controllers of its time (not sourced).
-        frozenset({"dx100", "dx200", "fs100"}),
+MH5: Final = _single_arm(
+    "mh5",
+    "Yaskawa MH5 industrial robot, 5 kg, 6 axes",
+    (
+        _axis("joint_s", -170, 170, 376, 1250),
+        _axis("joint_l", -65, 150, 350, 1250),
+        _axis("joint_u", -70, 190, 400, 1100),
+        _axis("joint_r", -190, 190, 450, 700),
+        _axis("joint_b", -135, 135, 450, 700),
+        _axis("joint_t", -360, 360, 720, 475),
     ),
+    # ROS2 origins: S z 0.330, L x 0.088, U z 0.310, R z 0.040, B x 0.305, T x 0.080.
+    _dh_6axis(0.330, 0.088, 0.310, 0.040, 0.305, 0.080),
     _MH5_GEOMETRY,
+    # Partly sourced: the ROS1 package's U limits were measured on an MH5F, the FS100
+    # variant (§1.4); DX100 and DX200 are the MH5's controllers of its time (not sourced).
+    frozenset({"dx100", "dx200", "fs100"}),
+    # Link radii (datasheet MH5/MH5L): about the GP7's body, slightly slimmer wrist.
+    link_radii=(0.115, 0.095, 0.065, 0.065, 0.050, 0.040, 0.030),
 )
 
 # SIA20D: 7 axes, ROS order S-L-E-U-R-B-T, limits and speeds from robot-models.md §1.5
 # (manual HW0485536). Pulses/degree chosen.
-SIA20D: Final = _with_geometry(
-    _single_arm(
-        "sia20d",
-        "Yaskawa SIA20D 7-axis robot, 20 kg",
-        (
-            _axis("joint_s", -180, 180, 130, 1525),
-            _axis("joint_l", -110, 110, 130, 1525),
-            _axis("joint_e", -170, 170, 170, 1225),
-            _axis("joint_u", -130, 130, 170, 1225),
-            _axis("joint_r", -180, 180, 200, 900),
-            _axis("joint_b", -110, 110, 200, 900),
-            _axis("joint_t", -180, 180, 400, 600),
-        ),
-        _dh_7axis(0.41, 0.49, 0.42, 0.18),
-        # Not in the stored sources: the "D" suffix is the DX100 generation (SIA20F: FS100).
-        frozenset({"dx100"}),
+SIA20D: Final = _single_arm(
+    "sia20d",
+    "Yaskawa SIA20D 7-axis robot, 20 kg",
+    (
+        _axis("joint_s", -180, 180, 130, 1525),
+        _axis("joint_l", -110, 110, 130, 1525),
+        _axis("joint_e", -170, 170, 170, 1225),
+        _axis("joint_u", -130, 130, 170, 1225),
+        _axis("joint_r", -180, 180, 200, 900),
+        _axis("joint_b", -110, 110, 200, 900),
+        _axis("joint_t", -180, 180, 400, 600),
     ),
+    _dh_7axis(0.41, 0.49, 0.42, 0.18),
     _SIA20D_GEOMETRY,
+    # Not in the stored sources: the "D" suffix is the DX100 generation (SIA20F: FS100).
+    frozenset({"dx100"}),
+    # Link radii (manual HW0485536): base ~300 mm, S/L ~240 mm, E/U ~200 mm, R/B ~150 mm,
+    # flange Ø 80 mm.
+    link_radii=(0.150, 0.120, 0.120, 0.100, 0.100, 0.075, 0.075, 0.040),
 )
 
 
@@ -572,48 +645,49 @@ def _sda10f_arm(side: str) -> tuple[AxisModel, ...]:
     )
 
 
+# SDA10F arm link radii (manual HW0485584): the torso column Ø ~300 mm is each arm's base
+# link; shoulder ~180 mm, upper arm ~150 mm, forearm ~130 mm, wrist ~110 mm, flange Ø 70 mm.
+_SDA10F_ARM_LINK_RADII: Final = (0.150, 0.090, 0.090, 0.075, 0.075, 0.065, 0.055, 0.035)
+
+
 def _torso(name: str) -> GroupModel:
     # torso_joint_b1 and _b2 are one physical axis (URDF mimic), ±170°, 130°/s (§1.6).
-    # DH (derived): the torso base sits 1.2 m above base_link.
+    # DH (derived): the torso base sits 1.2 m above base_link. No link radii: the arms'
+    # base links cover the torso column.
     axis = _axis(name, -170, 170, 130, 1525)
     group = "B1" if name.endswith("b1") else "B2"
-    return GroupModel(group, GroupKind.BASE, (axis,), (0,), (0.0,), (DhLink(0.0, 1.2, 0.0, 0.0),))
+    dh = (DhLink(0.0, 1.2, 0.0, 0.0),)
+    return _group(group, GroupKind.BASE, (axis,), dh, _SDA10F_TORSO_GEOMETRY)
 
 
 # SDA10F: dual arm + torso in four groups, R1 left arm, R2 right arm, B1/B2 the torso
 # (robot-models.md §1.6; Yaskawa says B1 and B2 must get the same data, motoman#343).
-SDA10F: Final = _with_geometry(
-    RobotModel(
-        name="sda10f",
-        description="Yaskawa SDA10F dual-arm robot: two 7-axis arms (R1, R2) and a torso (B1, B2)",
-        groups=(
-            GroupModel(
-                "R1",
-                GroupKind.ROBOT,
-                _sda10f_arm("left"),
-                SEVEN_AXIS_SLOTS,
-                (0.0,) * 7,
-                _dh_7axis(0.0, 0.36, 0.36, 0.155),
-            ),
-            GroupModel(
-                "R2",
-                GroupKind.ROBOT,
-                _sda10f_arm("right"),
-                SEVEN_AXIS_SLOTS,
-                (0.0,) * 7,
-                _dh_7axis(0.0, 0.36, 0.36, 0.155),
-            ),
-            _torso("torso_joint_b1"),
-            _torso("torso_joint_b2"),
+SDA10F: Final = RobotModel(
+    name="sda10f",
+    description="Yaskawa SDA10F dual-arm robot: two 7-axis arms (R1, R2) and a torso (B1, B2)",
+    groups=(
+        _group(
+            "R1",
+            GroupKind.ROBOT,
+            _sda10f_arm("left"),
+            _dh_7axis(0.0, 0.36, 0.36, 0.155),
+            _sda10f_arm_geometry(1.0),
+            _SDA10F_ARM_LINK_RADII,
         ),
-        # Sourced: model YR-SDA010F-A00 is an FS100 robot (§1.6). MotoROS's SDA job folder also
-        # covers DX200 and YRC1000 SDA cells, but not necessarily this model.
-        controllers=frozenset({"fs100"}),
+        _group(
+            "R2",
+            GroupKind.ROBOT,
+            _sda10f_arm("right"),
+            _dh_7axis(0.0, 0.36, 0.36, 0.155),
+            _sda10f_arm_geometry(-1.0),
+            _SDA10F_ARM_LINK_RADII,
+        ),
+        _torso("torso_joint_b1"),
+        _torso("torso_joint_b2"),
     ),
-    _sda10f_arm_geometry(1.0),
-    _sda10f_arm_geometry(-1.0),
-    _SDA10F_TORSO_GEOMETRY,
-    _SDA10F_TORSO_GEOMETRY,
+    # Sourced: model YR-SDA010F-A00 is an FS100 robot (§1.6). MotoROS's SDA job folder also
+    # covers DX200 and YRC1000 SDA cells, but not necessarily this model.
+    controllers=frozenset({"fs100"}),
 )
 
 ROBOTS: Final[dict[str, RobotModel]] = {

@@ -249,7 +249,7 @@ def workspace_contact(
     workspace = workspace if workspace is not None else cell.workspace
     if not workspace.obstacles:
         return None
-    world = CollisionWorld(cell.groups, cell.robots, workspace)
+    world = CollisionWorld(cell.groups, workspace)
     if not any(world.joint_reach(g) for g in range(ctx.num_groups)):
         return None
     interps = ctx.interpolators

@@ -1,8 +1,8 @@
 """What the pendant's 3D view needs to draw the workspace: the robot's collision shapes
 and the obstacles, both in the workspace frame (the first group's ``base_link``).
 
-The page has no kinematics, so the shapes come placed: each group's capsules (the link
-shapes of :mod:`pymotoros.models.link_shapes`, placed by the same
+The page has no kinematics, so the shapes come placed: each group's capsules (the
+``link_radii`` of its robot model, placed by the same
 :class:`~pymotoros.kinematics.collision.GroupBody` the twin's contact check uses) as end
 points and a radius, the tool in force (its shape from the cell file's tool data, mounted
 by the same ``GroupBody.set_tool`` and with the same ``workspace.tool_radius_m`` as the
@@ -26,8 +26,7 @@ import pinocchio as pin
 from pymotoros.controller.api import WorkspaceSnapshot
 from pymotoros.controller.cell import CellConfig
 from pymotoros.kinematics.collision import GroupBody
-from pymotoros.models.link_shapes import link_radii
-from pymotoros.models.robots import GroupModel, Transform
+from pymotoros.models.robots import GroupKind, GroupModel, Transform
 from pymotoros.models.workspace import Box, Cylinder, Obstacle, Workspace
 
 __all__ = ["WorkspaceView"]
@@ -83,14 +82,11 @@ class WorkspaceView:
         self._workspace: Workspace = cell.workspace if cell is not None else Workspace()
         self._bodies: list[GroupBody | None] = []
         self._groups: list[GroupModel] = list(cell.groups) if cell is not None else []
-        for group, robot in zip(cell.groups, cell.robots, strict=True) if cell else ():
-            shaped = link_radii(robot, group) is not None and all(
-                a.geometry is not None for a in group.axes
-            )
+        for group in cell.groups if cell else ():
+            shaped = group.kind is GroupKind.ROBOT  # base and station axes have no shapes
             self._bodies.append(
                 GroupBody(
                     group,
-                    robot,
                     self._workspace.base(group.name),
                     tool_radius=self._workspace.tool_radius_m,  # as the contact check's
                 )
