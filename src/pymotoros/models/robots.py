@@ -367,7 +367,7 @@ def _single_arm(
     geometry: _GroupGeometry,
     controllers: frozenset[str],
     *,
-    link_radii: tuple[float, ...],
+    link_radii: tuple[float, ...] = (),
     pfl: bool = False,
 ) -> RobotModel:
     """A robot of one arm, R1: axes, DH, geometry and collision shapes in one call."""
@@ -402,7 +402,7 @@ def _gp_arm(
     opw: _Opw,
     controllers: frozenset[str],
     *,
-    link_radii: tuple[float, ...],
+    link_radii: tuple[float, ...] = (),
 ) -> RobotModel:
     """A GP-family arm: its DH parameters and its URDF chain both from its OPW lengths,
     so that each length is written once (S height c1 and offset a1, upper arm c2,
