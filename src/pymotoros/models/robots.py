@@ -203,10 +203,6 @@ def _ppr(pulses_per_degree: float) -> float:
     return pulses_per_degree * 180.0 / math.pi
 
 
-def _six_axis_slots() -> tuple[int, ...]:
-    return (0, 1, 2, 3, 4, 5)
-
-
 SEVEN_AXIS_SLOTS: Final = (0, 1, 6, 2, 3, 4, 5)
 """ROS S,L,E,U,R,B,T → controller S,L,U,R,B,T,E: E lives in controller slot 6 (§5.7)."""
 
@@ -344,12 +340,14 @@ def _group(
         )
         for axis, joint in zip(axes, geometry.joints, strict=True)
     )
-    slots = SEVEN_AXIS_SLOTS if len(axes) == 7 else _six_axis_slots()
+    # a 7-axis arm's E sits in controller slot 6; every other group in ROS order
+    seven = kind is GroupKind.ROBOT and len(axes) == 7
+    slots = SEVEN_AXIS_SLOTS if seven else tuple(range(len(axes)))
     return GroupModel(
         name,
         kind,
         placed,
-        slots if kind is GroupKind.ROBOT else tuple(range(len(axes))),
+        slots,
         (0.0,) * len(axes),
         dh,
         mount=geometry.mount,
