@@ -17,10 +17,12 @@ __all__ = ["PROGRESS_REDRAW_S", "move_data", "progress_bar", "progress_line", "t
 
 
 def unit_of(deg: bool, linear: bool = False) -> str:
+    """The unit the user reads an axis in: m for a linear axis, else rad (deg with --deg)."""
     return "m" if linear else ("deg" if deg else "rad")
 
 
 def to_user(value: float, deg: bool, linear: bool = False) -> float:
+    """An axis value (rad or m) in :func:`unit_of`'s unit."""
     return value if linear or not deg else math.degrees(value)
 
 
@@ -97,6 +99,7 @@ def progress_bar(
 
 
 def move_data(result: MoveResult) -> dict[str, Any]:
+    """A finished move as ``--json`` prints it (``move`` adds the groups' names)."""
     return {
         "positions": list(result.final_positions),
         "elapsed_s": round(result.elapsed_s, 4),
