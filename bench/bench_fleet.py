@@ -210,8 +210,9 @@ def serve(kind: str, cells: int, capacity: int, samples: Path, realtime: bool) -
 def twin_server(cells: int, probes: Probes, holder: list[Any]) -> Callable[[], Any]:
     """``cells`` HC10/YRC1000 cells served as ``pymotoros sim`` serves them."""
     from pymotoros.cli.ports_file import CellLabel
-    from pymotoros.cli.sim import run_simulator, simulator_config
+    from pymotoros.cli.sim import run_simulator
     from pymotoros.cli.sim_cells import run_fleet
+    from pymotoros.cli.sim_serving import simulator_config
     from pymotoros.controller import VirtualController
     from pymotoros.controller.cell import load_cell
     from pymotoros.runtime.app import SimulatorApp

@@ -15,7 +15,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "client"))
 from client_sim import Sim, running_sim
 
 from pymotoros.cli.main import cli
-from pymotoros.cli.robot import EXIT_USAGE
+from pymotoros.cli.session import EXIT_USAGE
 from pymotoros.kinematics import chain_for
 
 START = ("0", "0.5", "1.9", "0", "0.9", "0")

@@ -13,7 +13,7 @@ import pytest
 from click.testing import CliRunner
 
 from pymotoros.cli.main import _COMMANDS, cli
-from pymotoros.cli.robot import progress_bar, progress_line
+from pymotoros.cli.move_report import progress_bar, progress_line
 from pymotoros.client.streaming import FollowingSample
 from pymotoros.models import controller_model, robot_model
 from pymotoros.trajectory import Trajectory, check_trajectory

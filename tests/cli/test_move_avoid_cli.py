@@ -16,7 +16,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "client"))
 from client_sim import Sim, running_sim
 
 from pymotoros.cli.main import cli
-from pymotoros.cli.robot import EXIT_REFUSED, EXIT_USAGE
+from pymotoros.cli.session import EXIT_REFUSED, EXIT_USAGE
 
 LEFT = ("-0.8", "0.6", "0", "0", "0", "0")
 RIGHT = ("0.8", "0.6", "0", "0", "0", "0")

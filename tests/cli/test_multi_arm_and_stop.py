@@ -17,7 +17,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "client"))
 from client_sim import Sim, running_sim
 
 from pymotoros.cli.main import cli
-from pymotoros.cli.robot import EXIT_CONNECTION, EXIT_TERMINATED, EXIT_USAGE
+from pymotoros.cli.session import EXIT_CONNECTION, EXIT_TERMINATED, EXIT_USAGE
 from pymotoros.client import SyncRobotClient
 
 ROOT = Path(__file__).resolve().parents[2]

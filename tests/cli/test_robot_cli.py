@@ -15,7 +15,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "client"))
 from client_sim import Sim, running_sim
 
 from pymotoros.cli.main import cli
-from pymotoros.cli.robot import EXIT_CONNECTION, EXIT_REFUSED, EXIT_USAGE
+from pymotoros.cli.session import EXIT_CONNECTION, EXIT_REFUSED, EXIT_USAGE
 
 SRDF = Path(__file__).resolve().parents[2] / "examples" / "hc10.srdf"
 

@@ -24,7 +24,7 @@ import pytest
 from click.testing import CliRunner
 
 from pymotoros.cli.main import cli
-from pymotoros.cli.robot import read_ports_file
+from pymotoros.cli.session import read_ports_file
 from pymotoros.cli.sim import cell_file_ports, sim
 from pymotoros.protocol.constants import ByteOrder, MotionCommand, Port, ResultCode
 from pymotoros.protocol.messages import MotoReadIoBit, MotoReadIoBitReply, Ping, PingReply

@@ -19,7 +19,7 @@ import pytest
 from click.testing import CliRunner
 
 from pymotoros.cli.main import cli
-from pymotoros.cli.robot import EXIT_CONNECTION
+from pymotoros.cli.session import EXIT_CONNECTION
 from pymotoros.pytest_plugin import RunningTwin
 
 from .fault_proxy import FaultProxy

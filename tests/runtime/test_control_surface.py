@@ -207,6 +207,51 @@ def test_a_parameter_in_the_path_is_checked_like_any_other() -> None:
         parse_scenario({"events": [event]}, actions=actions)
 
 
+SLOT = ActionSpec(
+    "slot",
+    "/api/slots/{n}/{x}",
+    "Two numbers in the path and one in the body.",
+    lambda target, p: target.raise_alarm(8300 + p["n"], 0, f"x={p['x']} y={p['y']}"),
+    (
+        Param("n", "int", "a slot", ge=0, le=9),
+        Param("x", "number", "where in it", unit="m", ge=-1, le=1),
+        Param("y", "number", "how high", unit="m", ge=0, le=2),
+    ),
+    method="PUT",
+)
+"""An action with several typed parameters in the path and a required body."""
+
+
+def test_parameters_in_the_path_keep_their_order_type_and_words() -> None:
+    """Each endpoint is a plain function (no signature made up for it): the path's
+    parameters are typed, documented and reported in the declaration's order."""
+    app = create_http_app(VirtualController(), lambda: STATS, actions=(*CONTROL_ACTIONS, SLOT))
+    assert not any(hasattr(route, "endpoint") and "__signature__" in vars(route.endpoint)
+                   for route in app.routes)  # fmt: skip
+    with BlockingClient(app) as client:
+        r = client.request("PUT", "/api/slots/3/0.5", json={"y": 1})
+        assert r.status_code == 200, r.text
+        assert r.json()["alarms"] == [{"code": 8303, "subcode": 0, "text": "x=0.5 y=1.0"}]
+        op = client.get("/openapi.json").json()["paths"]["/api/slots/{n}/{x}"]["put"]
+        assert [(p["name"], p["schema"]["type"]) for p in op["parameters"]] == [
+            ("n", "integer"),
+            ("x", "number"),
+        ]
+        assert op["requestBody"]["required"] is True
+        r = client.request("PUT", "/api/slots/x/abc", json={"y": 9})
+        assert (r.status_code, r.json()["error"]) == (
+            422,
+            "PUT /api/slots/x/abc: path.n: Input should be a valid integer, unable to parse "
+            "string as an integer; path.x: Input should be a valid number, unable to parse "
+            "string as a number; y: must lie in 0..2 m, not 9",
+        )
+        r = client.request("PUT", "/api/slots/30/5", json={"y": 1})
+        assert (r.status_code, r.json()["error"]) == (
+            422,
+            "PUT /api/slots/30/5: n: must lie in 0..9, not 30",
+        )
+
+
 def test_tcp_speed_zero_is_refused_by_every_surface(
     beacon_api: tuple[BlockingClient, VirtualController],
 ) -> None:

@@ -7,7 +7,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from pymotoros.cli.trajectory import client_trajectory
+from pymotoros.cli.trajectory_run import client_trajectory
 from pymotoros.client.errors import ReplyError
 from pymotoros.controller import CellConfig
 from pymotoros.models import robot_model

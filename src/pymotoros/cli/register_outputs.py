@@ -7,9 +7,9 @@ the cell's ``[groups.s1cxg]`` table fills and decodes them with the client's own
 (:meth:`pymotoros.client.RobotClient.read_register_outputs`), so the CLI and Python read
 the same numbers through one code path.
 
-The command is added to the ``mreg`` group of :mod:`pymotoros.cli.robot` here, in its own
-module, so that ``pymotoros mreg`` (read, write, outputs) is one group while the robot
-commands' module stays as it is; ``pymotoros.cli.main`` loads ``mreg`` from this module.
+The command is added to the ``mreg`` group of :mod:`pymotoros.cli.io_commands` here, in
+its own module, so that ``pymotoros mreg`` (read, write, outputs) is one group;
+``pymotoros.cli.main`` loads ``mreg`` from this module.
 """
 
 from __future__ import annotations
@@ -20,8 +20,9 @@ from typing import Any, Final
 
 import click
 
+from pymotoros.cli.io_commands import mreg
 from pymotoros.cli.options import json_option, robot_options
-from pymotoros.cli.robot import EXIT_CODES_HELP, _target, connected, mreg, run
+from pymotoros.cli.session import EXIT_CODES_HELP, connected, run, target_from_options
 from pymotoros.client import RobotClient
 from pymotoros.client.registers import RegisterValues
 from pymotoros.errors import ConfigError
@@ -154,7 +155,7 @@ def mreg_outputs(group_index: int, as_json: bool, **kwargs: Any) -> None:
             "M-registers hold which value (docs/cell.md)"
         )
     _check_table(cell_path, group_index)
-    target = _target(kwargs)
+    target = target_from_options(kwargs)
 
     async def work() -> tuple[RobotClient, RegisterValues]:
         async with connected(target, motion=False, state=False, io=True) as client:

@@ -26,7 +26,13 @@ from pathlib import Path
 import click
 
 from pymotoros.cli.ports_file import CellLabel
-from pymotoros.cli.sim import announce, open_recorder, serve, simulator_config, stop_on_signals
+from pymotoros.cli.sim_serving import (
+    announce,
+    open_recorder,
+    serve,
+    simulator_config,
+    stop_on_signals,
+)
 from pymotoros.controller import VirtualController
 from pymotoros.controller.cell import CellConfig, cell_from_file
 from pymotoros.errors import ConfigError

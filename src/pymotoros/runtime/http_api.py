@@ -20,7 +20,6 @@ the action, in the same shape as ``GET /api/state``.
 
 from __future__ import annotations
 
-import inspect
 import logging
 from collections.abc import Awaitable, Callable, Sequence
 from typing import Annotated, Any, ClassVar, Literal
@@ -45,6 +44,7 @@ from pymotoros.controller.actions import (
 )
 from pymotoros.controller.api import ControllerSnapshot
 from pymotoros.errors import PymotorosError
+from pymotoros.runtime.action_endpoints import action_endpoint, path_values
 from pymotoros.runtime.body_limit import BodyLimit
 from pymotoros.runtime.csrf import CsrfGuard, NoFraming
 from pymotoros.runtime.docs_page import install_offline_docs
@@ -402,11 +402,11 @@ def _install_action(
     answer: type[Answer] = StateModel,
 ) -> None:
     """``spec.method spec.path``: the body (and the path's parameters) checked by the
-    declaration, then the action."""
+    declaration, then the action (the endpoint: runtime/action_endpoints.py)."""
     model = action_body_model(spec)
     path_keys = spec.path_keys
 
-    async def endpoint(body: BaseModel | None = None, **in_path: object) -> dict[str, Any]:
+    def act(in_path: dict[str, object], body: BaseModel | None) -> dict[str, Any]:
         given = {} if body is None else body.model_dump(exclude_unset=True)
         for key in path_keys:
             try:
@@ -419,22 +419,14 @@ def _install_action(
         spec.perform(controller, given)
         return state()
 
-    keyword = inspect.Parameter.KEYWORD_ONLY
-    parameters = [
-        inspect.Parameter(key, keyword, annotation=_PATH_TYPES[_param(spec, key).kind])
-        for key in path_keys
-    ]
-    if model is not None:
-        # with its key in the path, an action whose body is all optional may omit it
-        optional = bool(path_keys) and not any(
-            p.required for p in spec.params if p.name not in path_keys
-        )
-        default = None if optional else inspect.Parameter.empty
-        parameters.append(inspect.Parameter("body", keyword, annotation=model, default=default))
-    endpoint.__signature__ = inspect.Signature(parameters)  # type: ignore[attr-defined]
+    # with its key in the path, an action whose body is all optional may omit it
+    optional = bool(path_keys) and not any(
+        p.required for p in spec.params if p.name not in path_keys
+    )
+    in_path = path_values([(key, _PATH_TYPES[_param(spec, key).kind]) for key in path_keys])
     app.add_api_route(
         spec.path,
-        endpoint,
+        action_endpoint(in_path, model, act, body_optional=optional),
         methods=[spec.method],
         response_model=answer,
         responses=_ERRORS | _NOT_FOUND if spec.method == "DELETE" else _ERRORS,

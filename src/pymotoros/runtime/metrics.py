@@ -32,7 +32,7 @@ The endpoint is open, like the MotoROS ports, unless the control API has a token
 from __future__ import annotations
 
 from collections.abc import Iterator
-from typing import TYPE_CHECKING, Final
+from typing import Final, Protocol
 
 import numpy as np
 from fastapi import FastAPI
@@ -47,10 +47,9 @@ from prometheus_client.core import (
 from prometheus_client.registry import Collector
 
 from pymotoros.protocol.constants import MotionCommand, MsgType
-from pymotoros.runtime.traffic import OTHER
-
-if TYPE_CHECKING:
-    from pymotoros.runtime.app import SimulatorApp
+from pymotoros.runtime.target import SimulatedController
+from pymotoros.runtime.ticker import Ticker
+from pymotoros.runtime.traffic import OTHER, Traffic
 
 __all__ = ["LATENESS_BUCKETS_S", "TwinCollector", "install_metrics"]
 
@@ -96,10 +95,41 @@ class _Monotonic:
         return self.total
 
 
-class TwinCollector(Collector):
-    """Reads one :class:`SimulatorApp`'s counters at scrape time."""
+class CountedPort(Protocol):
+    """A MotoROS port's server as the collector reads it: its traffic counters."""
 
-    def __init__(self, app: SimulatorApp, cell: str | None = None) -> None:
+    @property
+    def traffic(self) -> Traffic: ...
+
+
+class MetricsSource(Protocol):
+    """What the collector reads of one simulator at scrape time (runtime/app.py's
+    ``SimulatorApp`` is one): declared here, so the app imports this module and not the
+    other way round."""
+
+    @property
+    def controller(self) -> SimulatedController: ...
+
+    @property
+    def ticker(self) -> Ticker: ...
+
+    @property
+    def motion(self) -> CountedPort: ...
+
+    @property
+    def io(self) -> CountedPort: ...
+
+    @property
+    def metrics_cell(self) -> str | None:
+        """The ``cell`` label (None: a process of one cell, no label)."""
+
+    def client_counts(self) -> dict[str, int]: ...
+
+
+class TwinCollector(Collector):
+    """Reads one simulator's counters at scrape time."""
+
+    def __init__(self, app: MetricsSource, cell: str | None = None) -> None:
         self._app = app
         self._cell = cell
         self._mark = 0
@@ -242,7 +272,7 @@ class TwinCollector(Collector):
         yield fsu
 
 
-def install_metrics(api: FastAPI, app: SimulatorApp) -> CollectorRegistry:
+def install_metrics(api: FastAPI, app: MetricsSource) -> CollectorRegistry:
     """Serve ``GET /metrics`` for ``app`` on its control API; returns the registry."""
     registry = CollectorRegistry(auto_describe=False)
     registry.register(TwinCollector(app))
