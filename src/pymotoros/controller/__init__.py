@@ -20,7 +20,6 @@ from pymotoros.controller.api import (
     MotoRosController,
     OperatorPanel,
     Outcome,
-    PendantMode,
     Pending,
     PointData,
     StatusData,
@@ -36,6 +35,7 @@ from pymotoros.controller.cell import (
 )
 from pymotoros.controller.controller import VirtualController
 from pymotoros.controller.machine import EstopSource
+from pymotoros.protocol.constants import PendantMode
 
 __all__ = [
     "AlarmInfo",

@@ -41,9 +41,9 @@ from pymotoros.controller.actions import (
     ActionTargetMissingError,
     Param,
     actions_by_name,
-    with_scenario_of,
 )
 from pymotoros.controller.api import ControllerSnapshot
+from pymotoros.controller.scenario import with_scenario_of
 from pymotoros.errors import PymotorosError
 from pymotoros.runtime.body_limit import BodyLimit
 from pymotoros.runtime.csrf import CsrfGuard, NoFraming
