@@ -229,12 +229,19 @@ def _conversion(tp: Any) -> tuple[bool, Encode] | None:
     item = _item_type(tp)
     if item is not None:
         convert = _converter(item)
-        return (False, list) if convert is None else (True, convert)
+        if convert is None:  # ``list`` alone: listed in one pass, unless it may be null
+            return (False, list) if inner is None else (False, _array)
+        return True, convert
     if isinstance(tp, type) and dataclasses.is_dataclass(tp):
         if tp in _BUILDING:  # a part that holds its own type: found at call time
             return False, lambda v: _ENCODERS[tp](v)
         return False, document_encoder(tp)
     raise TypeError(f"the state document cannot encode {tp!r} (add a Form to FORMS)")
+
+
+def _array(value: Any) -> list[Any]:
+    """An array that may be null (the encoder's loop passes a null by)."""
+    return list(value)
 
 
 _Plan = list[tuple[str, str, tuple[bool, Encode] | None]]
@@ -267,29 +274,45 @@ def _compose(plan: _Plan) -> Callable[[Any], dict[str, Any]]:
     keys = tuple(key for key, _, _ in plan)
     if not keys:
         return lambda o: {}
-    paths = [path for _, path, _ in plan]
-    read: Callable[[Any], tuple[Any, ...]]
-    if len(paths) == 1:
-        one = attrgetter(paths[0])
-
-        def read(o: Any) -> tuple[Any, ...]:
-            return (one(o),)
-
-    else:
-        read = attrgetter(*paths)
-    conversions = tuple((key, *conversion) for key, _, conversion in plan if conversion is not None)
-    if not conversions:
+    read = _reader([path for _, path, _ in plan])
+    # arrays of plain values (joint positions, names) are listed in one C-level pass
+    listed = [(key, path) for key, path, conversion in plan if conversion == (False, list)]
+    conversions = tuple(
+        (key, *conversion)
+        for key, _, conversion in plan
+        if conversion is not None and conversion != (False, list)
+    )
+    list_keys = tuple(key for key, _ in listed)
+    read_lists = _reader([path for _, path in listed])
+    if not conversions and not listed:
         return lambda o: dict(zip(keys, read(o)))  # noqa: B905 - one value per key
 
     def encode(o: Any) -> dict[str, Any]:
         doc = dict(zip(keys, read(o)))  # noqa: B905 - one value per key
+        if listed:
+            doc.update(zip(list_keys, map(list, read_lists(o))))  # noqa: B905
         for key, each, convert in conversions:
             value = doc[key]
-            if value is not None:
-                doc[key] = list(map(convert, value)) if each else convert(value)
+            if value is None:
+                continue
+            if each:  # most arrays of parts are empty (alarms, events, contacts)
+                doc[key] = list(map(convert, value)) if value else []
+            else:
+                doc[key] = convert(value)
         return doc
 
     return encode
+
+
+def _reader(paths: list[str]) -> Callable[[Any], tuple[Any, ...]]:
+    """One call that reads every path's value, as a tuple (``attrgetter`` of one path
+    gives the value itself)."""
+    if len(paths) > 1:
+        return attrgetter(*paths)
+    if paths:
+        one = attrgetter(paths[0])
+        return lambda o: (one(o),)
+    return lambda o: ()
 
 
 def document_encoder(cls: type) -> Callable[[Any], dict[str, Any]]:
