@@ -22,6 +22,7 @@ from __future__ import annotations
 from collections.abc import Sequence
 from typing import Protocol, Unpack
 
+import pymotoros.protocol.constants as constants
 from pymotoros.controller.alarms import Alarm
 from pymotoros.controller.lint import ClientLint, ResumedMotion
 from pymotoros.controller.safety import SafetyUnit
@@ -50,7 +51,6 @@ from pymotoros.controller.values import (
     described,
 )
 from pymotoros.models.fidelity import Fidelity
-from pymotoros.protocol import constants
 from pymotoros.protocol.constants import IoResultCode
 
 __all__ = [
