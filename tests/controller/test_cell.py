@@ -8,10 +8,10 @@ from pathlib import Path
 import pytest
 
 from pymotoros.controller import VirtualController, cell_from_dict, default_cell, load_cell
-from pymotoros.controller.api import PendantMode
 from pymotoros.errors import ConfigError
 from pymotoros.models.robots import ROBOTS
 from pymotoros.protocol.constants import NotReadySubcode as Nr
+from pymotoros.protocol.constants import PendantMode
 
 from .helpers import CMD, command
 

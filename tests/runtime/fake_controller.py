@@ -17,14 +17,13 @@ from pymotoros.controller.api import (
     GroupSnapshot,
     IoRead,
     Outcome,
-    PendantMode,
     Pending,
     PointData,
     StatusData,
 )
 from pymotoros.controller.lint import ClientLint, ResumedMotion
 from pymotoros.models.fidelity import Fidelity
-from pymotoros.protocol.constants import IoResultCode, MotionCommand, ResultCode
+from pymotoros.protocol.constants import IoResultCode, MotionCommand, PendantMode, ResultCode
 
 
 class FakeController:

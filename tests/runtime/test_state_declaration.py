@@ -13,10 +13,10 @@ import httpx
 import pytest
 
 from pymotoros.controller import VirtualController
-from pymotoros.controller.api import INLINE, OMIT, ControllerSnapshot
+from pymotoros.controller.api import INLINE, OMIT, ControllerSnapshot, described
 from pymotoros.controller.safety import SafetySnapshot
 from pymotoros.runtime.http_api import StateModel, create_http_app
-from pymotoros.runtime.snapshot_document import document_encoder, field_docs
+from pymotoros.runtime.snapshot_document import document_encoder, document_model, field_docs
 
 from .support import STATS
 
@@ -25,24 +25,22 @@ from .support import STATS
 class DoorState:
     """A toy safety function's state, declared only here."""
 
-    open: bool = False
-    """The cell door is open."""
-    opened: int = 0
-    """How many times it was opened since boot."""
+    open: bool = field(default=False, metadata=described("The cell door is open."))
+    opened: int = field(default=0, metadata=described("How many times it was opened since boot."))
 
 
 @dataclass(frozen=True, slots=True)
 class Lights:
     """A toy part whose fields join the document's top level."""
 
-    beacon: Literal["green", "amber", "red"] = "green"
-    """The cell's beacon colour."""
+    beacon: Literal["green", "amber", "red"] = field(
+        default="green", metadata=described("The cell's beacon colour.")
+    )
 
 
 @dataclass(frozen=True, slots=True)
 class DoorSnapshot(ControllerSnapshot):
-    door: DoorState = DoorState()
-    """The cell door's interlock."""
+    door: DoorState = field(default=DoorState(), metadata=described("The cell door's interlock."))
     lights: Lights = field(default=Lights("amber"), metadata=INLINE)
     secret: int = field(default=7, metadata=OMIT)
 
@@ -134,3 +132,13 @@ def test_the_documents_keys_keep_their_place() -> None:
         "mode", "remote", "servo", "estop", "hold", "alarms", "motion_ready", "groups",
         "fsu", "pfl", "events", "motoros", "workspace",
     ]  # fmt: skip
+
+
+def test_a_description_is_data_so_a_type_without_source_keeps_it() -> None:
+    """A field's description is its metadata, not a docstring read back from a source
+    file: a part built at run time (no source to read) is described in the schema."""
+    level = field(default=3, metadata=described("The tank's level (%)."))
+    tank = dataclasses.make_dataclass("Tank", [("level", int, level)], frozen=True)
+    schema = document_model(tank).model_json_schema()
+    assert schema["properties"]["level"]["description"] == "The tank's level (%)."
+    assert document_encoder(tank)(tank()) == {"level": 3}

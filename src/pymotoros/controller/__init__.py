@@ -7,7 +7,8 @@ Front door::
     vc = VirtualController(load_cell("cell.toml"))   # or VirtualController() for HC10/YRC1000
     vc.tick()                                        # one interpolation period
 
-The contract with the servers is :mod:`pymotoros.controller.api`.
+The contract with the servers is :mod:`pymotoros.controller.api` (the protocols) over
+:mod:`pymotoros.controller.values` (every value the controller hands out, a leaf).
 """
 
 from pymotoros.controller.api import (
@@ -20,7 +21,6 @@ from pymotoros.controller.api import (
     MotoRosController,
     OperatorPanel,
     Outcome,
-    PendantMode,
     Pending,
     PointData,
     StatusData,
@@ -36,6 +36,7 @@ from pymotoros.controller.cell import (
 )
 from pymotoros.controller.controller import VirtualController
 from pymotoros.controller.machine import EstopSource
+from pymotoros.protocol.constants import PendantMode
 
 __all__ = [
     "AlarmInfo",

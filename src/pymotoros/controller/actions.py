@@ -8,8 +8,10 @@ with the same message:
 
 * the control API (``runtime/http_api.py``): one ``POST`` endpoint per action, its
   pydantic body and OpenAPI schema built from the parameters;
-* scenario files (``controller/scenario.py``): the ``action`` of an ``[[events]]``
-  table and its keys, validated by :meth:`ActionSpec.check_value` and the rules;
+* scenario files (``controller/scenario.py``, which takes these declarations as its
+  argument and declares the one action that loads a scenario over them): the ``action``
+  of an ``[[events]]`` table and its keys, validated by :meth:`ActionSpec.check_value`
+  and the rules;
 * the web pendant (``runtime/pendant``): ``GET /api/pendant/actions`` lists the actions
   its buttons call, with their paths and parameters.
 
@@ -34,13 +36,14 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable, Mapping, Sequence
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 from typing import Any, Final, Literal, Protocol
 
-from pymotoros.controller.api import FaultInjection, OperatorPanel, PendantMode, SafetyPanel
+from pymotoros.controller.api import FaultInjection, OperatorPanel, SafetyPanel
 from pymotoros.controller.safety.pfl import MAX_RETREAT_MS
 from pymotoros.errors import PymotorosError
 from pymotoros.models.workspace import MAX_SIZE_M, SHAPE_KEYS, Obstacle, UnknownObstacleError
+from pymotoros.protocol.constants import PendantMode
 
 __all__ = [
     "CONTROL_ACTIONS",
@@ -49,12 +52,12 @@ __all__ = [
     "ActionSpec",
     "ActionTarget",
     "ActionTargetMissingError",
+    "Call",
     "Param",
     "ParamKind",
+    "Params",
     "Rule",
     "actions_by_name",
-    "scenario_loader",
-    "with_scenario_of",
 ]
 
 ParamKind = Literal["bool", "int", "number", "str", "numbers", "tables"]
@@ -373,27 +376,6 @@ def _fsu(target: ActionTarget, p: Params) -> None:
     )
 
 
-def scenario_loader(actions: Sequence[ActionSpec] | None = None) -> Call:
-    """Loading a scenario, whose events may carry ``actions`` (None: the declared ones)."""
-
-    def load(target: ActionTarget, p: Params) -> None:
-        from pymotoros.controller.scenario import parse_scenario  # it imports this module
-
-        events = {"events": p["events"]}
-        target.load_scenario(parse_scenario(events, source="POST /api/scenario", actions=actions))
-
-    return load
-
-
-def with_scenario_of(actions: Sequence[ActionSpec]) -> tuple[ActionSpec, ...]:
-    """``actions`` with the scenario loader's events taking every one of them (a surface
-    serving more actions than :data:`CONTROL_ACTIONS` accepts them in scenarios too)."""
-    return tuple(
-        replace(spec, call=scenario_loader(actions)) if spec.name == "scenario" else spec
-        for spec in actions
-    )
-
-
 def _on(doc: str) -> tuple[Param, ...]:
     return (Param("on", "bool", doc),)
 
@@ -608,18 +590,7 @@ CONTROL_ACTIONS: Final[tuple[ActionSpec, ...]] = (
         lambda t, p: t.drop_motion(),
         tag="safety",
     ),
-    ActionSpec(
-        "scenario",
-        "/api/scenario",
-        "Run timed events (same keys as a scenario file); replaces events not fired yet.",
-        scenario_loader(),
-        (
-            Param(
-                "events", "tables", "timed events, the keys of a scenario file's [[events]] tables"
-            ),
-        ),
-        tag="safety",
-        in_scenarios=False,
-    ),
 )
-"""Every action of the control surface (the order of the OpenAPI document)."""
+"""Every operator, IO, safety and fault action (the order of the OpenAPI document).
+The action that loads a scenario, whose events carry these, is declared over them in
+``controller/scenario.py`` (:func:`~pymotoros.controller.scenario.with_scenario_of`)."""

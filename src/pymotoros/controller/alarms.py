@@ -14,7 +14,7 @@ from dataclasses import dataclass
 from typing import Final
 
 from pymotoros.controller import signals
-from pymotoros.controller.api import AlarmInfo
+from pymotoros.controller.values import AlarmInfo
 
 HISTORY_LENGTH: Final = 100
 """Alarms and errors kept in the history (the pendant's alarm history holds about as many)."""

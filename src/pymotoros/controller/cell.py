@@ -15,15 +15,24 @@ from __future__ import annotations
 import logging
 import math
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Final
+from typing import Final
 
-from pymotoros.controller.api import AlarmInfo, PendantMode
 from pymotoros.controller.inform import BUILTIN_VARIANTS, JobRunner, load_jobs
 from pymotoros.controller.io_image import IoImage
-from pymotoros.controller.peripherals import MAX_DELAY_MS, PeripheralConfig
-from pymotoros.controller.safety.startup import StartupConfig, check_parameters
+from pymotoros.controller.peripherals import MAX_DELAY_MS
+from pymotoros.controller.safety.startup import check_parameters
+from pymotoros.controller.values import (
+    FEEDBACK_LAG_TICKS,
+    SERVO_ON_DELAY_MS,
+    AlarmInfo,
+    CellConfig,
+    InitialState,
+    PeripheralConfig,
+    ServoConfig,
+    StartupConfig,
+    ToolConfig,
+)
 from pymotoros.errors import ConfigError, JobError
 from pymotoros.models import (
     DEFAULT_CONTROLLER,
@@ -39,146 +48,35 @@ from pymotoros.models.cell import (
     CellFile,
     GroupPart,
     cell_file_from_dict,
-    cell_table,
     read_cell_file,
 )
-from pymotoros.models.cell_tools import CellTool
 from pymotoros.models.fidelity import DEFAULT_FIDELITY, Fidelity
-from pymotoros.models.robots import Transform
 from pymotoros.models.s1cxg import S1cxgTable, parse_s1cxg
 from pymotoros.models.toml_file import TomlTable
-from pymotoros.models.workspace import EMPTY_WORKSPACE, ToolShape, Workspace, parse_tool_shape
-from pymotoros.protocol.constants import MAX_TOOL_NUMBER
+from pymotoros.models.workspace import ToolShape, parse_tool_shape
+from pymotoros.protocol.constants import MAX_TOOL_NUMBER, PendantMode
+
+__all__ = [
+    "FEEDBACK_LAG_TICKS",
+    "MAX_BRAKE_SAG_PULSES",
+    "MAX_NOISE_PULSES",
+    "SERVO_ON_DELAY_MS",
+    "CellConfig",
+    "InitialState",
+    "ServoConfig",
+    "ToolConfig",
+    "cell_from_dict",
+    "cell_from_file",
+    "default_cell",
+    "load_cell",
+]
 
 logger = logging.getLogger(__name__)
 
-SERVO_ON_DELAY_MS: Final = 500
-"""Time from a servo-on request to 50073 (brakes released, amplifiers ready). Yaskawa
-publishes no figure; about half a second is what an operator sees on the pendant
-(modelling choice, docs/fidelity.md)."""
-FEEDBACK_LAG_TICKS: Final = 3
-"""Mean delay of the encoder feedback behind the command, in ticks (12 ms at 4 ms)."""
 MAX_NOISE_PULSES: Final = 10
 """Noise is encoder jitter; above this it would hide the 30-pulse in_motion threshold."""
 MAX_BRAKE_SAG_PULSES: Final = 1000
 """Brake sag is small: users report a few thousandths of a radian (ros-industrial/motoman#501)."""
-
-
-@dataclass(frozen=True, slots=True)
-class ToolConfig:
-    """A tool file: number 0..63, with the data the PFL function relies on."""
-
-    number: int
-    name: str = ""
-    mass_kg: float = 0.0
-    tcp_m: tuple[float, float, float] = (0.0, 0.0, 0.0)
-    rpy_rad: tuple[float, float, float] = (0.0, 0.0, 0.0)
-    """The TCP's orientation on tool0: fixed-axis roll, pitch, yaw (R = Rz·Ry·Rx)."""
-    shape: ToolShape | None = None
-    """Its collision shape on the flange (None: a capsule from the flange to the TCP)."""
-
-    @property
-    def cell_tool(self) -> CellTool:
-        """The tool as the client and the collision model read it (TCP and shape)."""
-        return CellTool(self.number, self.name, Transform(self.tcp_m, self.rpy_rad), self.shape)
-
-
-@dataclass(frozen=True, slots=True)
-class InitialState:
-    """The controller at boot. Default: PLAY, REMOTE, servo off, nothing pressed or active."""
-
-    mode: PendantMode = PendantMode.PLAY
-    remote: bool = True
-    servo: bool = False
-    estop: bool = False
-    hold: bool = False
-    eco: bool = False
-    alarms: tuple[AlarmInfo, ...] = ()
-    joints: tuple[tuple[float, ...], ...] = ()
-    """Per group, ROS order (rad, m); empty → every joint at 0."""
-    tools: tuple[int, ...] = ()
-    """Per group, the selected tool; empty → tool 0 (as after a reboot, §5.8)."""
-
-
-@dataclass(frozen=True, slots=True)
-class ServoConfig:
-    servo_on_delay_ms: int = SERVO_ON_DELAY_MS
-    lag_ticks: int = FEEDBACK_LAG_TICKS
-    noise_pulses: int = 0
-    brake_sag_pulses: int = 0
-    """When servo power goes off (servo off, E-stop, eco mode) the brakes hold the axes
-    a little away from where they were: each axis moves by a seeded amount within
-    ±this many pulses, command and feedback alike (0: no sag)."""
-    eco_idle_s: int | None = None
-    """Eco mode starts after this many seconds with servo on and no motion (None: never)."""
-    fsu_speed_limit_pct: int | None = None
-    """A Functional Safety Unit joint-speed limit: the controller executes at most this
-    share of each axis's maximum increment per tick and drops the rest (None: no FSU)."""
-
-
-@dataclass(frozen=True, slots=True)
-class CellConfig:
-    """Everything :class:`~pymotoros.controller.VirtualController` needs to boot."""
-
-    controller: ControllerModel
-    groups: tuple[GroupModel, ...]
-    robots: tuple[str, ...]
-    """Robot model name of each group."""
-    name: str = "cell"
-    tools: tuple[ToolConfig, ...] = ()
-    initial: InitialState = field(default_factory=InitialState)
-    group_tools: tuple[tuple[ToolConfig, ...], ...] = ()
-    """Per group, the tool files of ``[[groups.tools]]`` (empty: none beyond ``[[tools]]``)."""
-    s1cxg: tuple[S1cxgTable | None, ...] = ()
-    """Per group, the S1CxG register output parameters of ``[groups.s1cxg]`` (empty or
-    None: no register outputs, the default)."""
-    servo: ServoConfig = field(default_factory=ServoConfig)
-    pfl: bool = False
-    """The PFL option is enabled (HC robots on YRC1000 / YRC1000micro)."""
-    jobs: str | tuple[Path, ...] = "auto"
-    """A built-in INIT_ROS variant name, "auto", or job files/directories."""
-    warnings: tuple[str, ...] = ()
-    source: str = "<default cell>"
-    startup: StartupConfig = field(default_factory=StartupConfig)
-    """What MotoROS's start-up checks read: software version, conveyor tracking, set-up
-    parameters (``[controller]``, ``[controller.parameters]``)."""
-    peripherals: tuple[PeripheralConfig, ...] = ()
-    """``[[peripherals]]``: inputs that follow other bits like devices (docs/cell.md)."""
-    model_groups: tuple[str, ...] = ()
-    """Each group's name in its robot model (empty: the group's own name), see
-    :attr:`pymotoros.models.cell.CellModels.model_groups`."""
-    workspace: Workspace = EMPTY_WORKSPACE
-    """``[workspace]``: obstacles the robot may touch (docs/workspace.md)."""
-    fidelity: Fidelity = DEFAULT_FIDELITY
-    """``[motoros] fidelity``: exact (MotoROS 1.9.12's surprises kept, the default) or
-    safe (the twin's kinder behaviour); docs/fidelity.md §1."""
-
-    def tool(self, group_index: int, number: int) -> ToolConfig:
-        """Tool file ``number`` of a group: its own ``[[groups.tools]]`` entry, else the
-        cell-wide ``[[tools]]`` one, else an empty tool (all zero, as an unset tool file)."""
-        own = self.group_tools[group_index] if group_index < len(self.group_tools) else ()
-        for t in (*own, *self.tools):
-            if t.number == number:
-                return t
-        return ToolConfig(number)
-
-    def as_table(self) -> dict[str, Any]:
-        """Its name, controller and groups in the cell file's shape (JSON-able): what
-        ``pymotoros sim --ports-file`` tells the robot commands about the cell."""
-        names = self.model_groups or tuple(g.name for g in self.groups)
-        return cell_table(self.name, self.controller.type.value, self.robots, names)
-
-    @property
-    def job_variant(self) -> str | None:
-        """The built-in job set to load (None when the cell names job files)."""
-        if isinstance(self.jobs, tuple):
-            return None
-        if self.jobs != "auto":
-            return self.jobs
-        multi = len(self.groups) > 1
-        if self.controller.skillsnd:
-            return "dx100_multi_group" if multi else "dx100_single_arm"
-        return "multi_group" if multi else "single_arm"
 
 
 def default_cell(

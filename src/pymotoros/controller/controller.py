@@ -40,7 +40,6 @@ from pymotoros.controller.api import (
     JobPosition,
     NotReadyInfo,
     Outcome,
-    PendantMode,
     Pending,
     PointData,
     StatusData,
@@ -77,7 +76,7 @@ from pymotoros.kinematics.collision import Contact
 from pymotoros.models import robot_model
 from pymotoros.models.fidelity import Fidelity
 from pymotoros.models.workspace import Obstacle
-from pymotoros.protocol.constants import IoResultCode, MotionCommand
+from pymotoros.protocol.constants import IoResultCode, MotionCommand, PendantMode
 
 __all__ = ["FEEDBACK_FIELDS", "MAX_ALARM_CODE", "SnapshotObserver", "VirtualController"]
 

@@ -13,11 +13,11 @@ from typing import Final
 
 from pymotoros.controller import signals
 from pymotoros.controller.alarms import AlarmClass
-from pymotoros.controller.api import PendantMode
 from pymotoros.controller.io_image import IoImage
 from pymotoros.controller.machine import EstopSource, Event
 from pymotoros.controller.operator_keys import OperatorKeys
 from pymotoros.models.controllers import M_REGISTER_BASE
+from pymotoros.protocol.constants import PendantMode
 
 FORCED_ALARM_CODE: Final = {
     AlarmClass.MAJOR: 0,

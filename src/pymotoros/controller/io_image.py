@@ -23,8 +23,8 @@ import logging
 from array import array
 from collections.abc import Callable
 
-from pymotoros.controller.api import IoRead
 from pymotoros.controller.signals import MONITORED
+from pymotoros.controller.values import IoRead
 from pymotoros.models import ControllerModel, IoRange
 from pymotoros.models import io as rules
 from pymotoros.models.controllers import M_REGISTER_BASE, M_REGISTER_COUNT

@@ -27,8 +27,8 @@ from typing import Final
 
 from pymotoros.controller import signals
 from pymotoros.controller.alarms import Alarm, AlarmClass
-from pymotoros.controller.api import PendantMode
 from pymotoros.controller.io_image import IoImage
+from pymotoros.protocol.constants import PendantMode
 
 logger = logging.getLogger(__name__)
 

@@ -11,9 +11,9 @@ import logging
 from typing import Final
 
 from pymotoros.controller.alarms import Alarm, AlarmHistory
-from pymotoros.controller.api import PendantMode
 from pymotoros.controller.machine import EstopSource, Event, OperatorMachine
 from pymotoros.controller.processes import ControllerClock
+from pymotoros.protocol.constants import PendantMode
 
 logger = logging.getLogger(__name__)
 

@@ -12,27 +12,16 @@ from __future__ import annotations
 import logging
 from collections import deque
 from collections.abc import Sequence
-from dataclasses import dataclass
 
 from pymotoros.controller.io_image import IoImage
+from pymotoros.controller.values import PeripheralConfig
+
+__all__ = ["MAX_DELAY_MS", "PeripheralConfig", "Peripherals"]
 
 logger = logging.getLogger(__name__)
 
 MAX_DELAY_MS = 60_000
 """A device answering after more than a minute is a broken device, not a slow one."""
-
-
-@dataclass(frozen=True, slots=True)
-class PeripheralConfig:
-    """One ``[[peripherals]]`` table of the cell file."""
-
-    name: str
-    input: int
-    """The bit the device drives (e.g. a universal input, 20010)."""
-    follows: int
-    """The bit it reacts to (e.g. a universal output, 10010)."""
-    delay_ms: int = 0
-    invert: bool = False
 
 
 class Peripherals:

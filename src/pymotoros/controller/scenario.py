@@ -25,7 +25,7 @@ import difflib
 import logging
 import math
 from collections.abc import Callable, Mapping, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Final, TypeGuard
 
@@ -34,10 +34,29 @@ from pymotoros.controller.actions import (
     ActionParamError,
     ActionSpec,
     ActionTarget,
+    Call,
+    Param,
+    Params,
     actions_by_name,
 )
+from pymotoros.controller.values import Scenario, ScenarioEvent
 from pymotoros.errors import ConfigError
 from pymotoros.models.toml_file import read_toml
+
+__all__ = [
+    "ACTIONS",
+    "TRIGGERS",
+    "FiredEvent",
+    "Scenario",
+    "ScenarioDriver",
+    "ScenarioEvent",
+    "load_scenario",
+    "parse_scenario",
+    "perform",
+    "scenario_action",
+    "scenario_loader",
+    "with_scenario_of",
+]
 
 logger = logging.getLogger(__name__)
 
@@ -47,36 +66,6 @@ ACTIONS: Final[Mapping[str, ActionSpec]] = {
     name: spec for name, spec in actions_by_name(CONTROL_ACTIONS).items() if spec.in_scenarios
 }
 """Every action a scenario may carry, by name (the declarations of ``actions.py``)."""
-
-ScenarioTarget = ActionTarget
-"""What a scenario's actions act on (kept for its old name)."""
-
-
-@dataclass(frozen=True, slots=True)
-class ScenarioEvent:
-    """One event: a trigger and an action with its parameters."""
-
-    index: int
-    trigger: str
-    """"at", "after_motion" or "when_io"."""
-    seconds: float = 0.0
-    """For "at" and "after_motion"."""
-    io: tuple[int, int] = (0, 0)
-    """(address, value) for "when_io"."""
-    action: str = ""
-    params: Mapping[str, object] = field(default_factory=dict)
-    """The parameters as given (the optional ones left out keep their default)."""
-    spec: ActionSpec | None = None
-    """The action's declaration (None: looked up by name among :data:`ACTIONS`)."""
-
-
-@dataclass(frozen=True, slots=True)
-class Scenario:
-    """A fault scenario: the events a twin plays on its own clock (``pymotoros sim
-    --scenario FILE``); ``source`` names the file in error messages."""
-
-    events: tuple[ScenarioEvent, ...]
-    source: str = "<scenario>"
 
 
 def load_scenario(path: str | Path) -> Scenario:
@@ -98,12 +87,12 @@ def parse_scenario(
     data: Mapping[str, object],
     *,
     source: str = "<scenario>",
-    actions: Sequence[ActionSpec] | None = None,
+    actions: Sequence[ActionSpec] = CONTROL_ACTIONS,
 ) -> Scenario:
     """Validate a parsed scenario ({"events": [...]}); refuse anything unknown or wrong.
 
-    ``actions``: the declared actions (default :data:`ACTIONS`; those with
-    ``in_scenarios`` false are left out)."""
+    ``actions``: the declared actions its events may carry (those with ``in_scenarios``
+    false are left out); a surface serving more actions passes its own."""
     if not isinstance(data, Mapping):
         raise ConfigError(f"{source}: a scenario must be a table with an 'events' array")
     unknown = sorted(set(data) - {"events"})
@@ -114,7 +103,7 @@ def parse_scenario(
         raise ConfigError(f"{source}: events: needs at least one [[events]] table")
     known = (
         ACTIONS
-        if actions is None
+        if actions is CONTROL_ACTIONS
         else {n: a for n, a in actions_by_name(actions).items() if a.in_scenarios}
     )
     return Scenario(tuple(_event(i, e, source, known) for i, e in enumerate(raw)), source)
@@ -212,6 +201,47 @@ class FiredEvent:
 
 
 Action = Callable[[ScenarioEvent], None]
+
+
+def scenario_loader(actions: Sequence[ActionSpec] = CONTROL_ACTIONS) -> Call:
+    """Loading a scenario whose events may carry ``actions``: the scenario action's call."""
+
+    def load(target: ActionTarget, p: Params) -> None:
+        events = {"events": p["events"]}
+        target.load_scenario(parse_scenario(events, source="POST /api/scenario", actions=actions))
+
+    return load
+
+
+def scenario_action(actions: Sequence[ActionSpec] = CONTROL_ACTIONS) -> ActionSpec:
+    """The action that loads a scenario (``POST /api/scenario``), its events taking any of
+    ``actions``. Declared here, over the declarations it is given, so that the actions'
+    module never needs this one."""
+    return ActionSpec(
+        "scenario",
+        "/api/scenario",
+        "Run timed events (same keys as a scenario file); replaces events not fired yet.",
+        scenario_loader(actions),
+        (
+            Param(
+                "events", "tables", "timed events, the keys of a scenario file's [[events]] tables"
+            ),
+        ),
+        tag="safety",
+        in_scenarios=False,
+    )
+
+
+def with_scenario_of(actions: Sequence[ActionSpec]) -> tuple[ActionSpec, ...]:
+    """A surface's whole action list: ``actions`` and the scenario loader, whose events
+    take every one of them (an action named "scenario" among them is bound to them in
+    its place; otherwise the loader comes last, as in the OpenAPI document)."""
+    if any(spec.name == "scenario" for spec in actions):
+        return tuple(
+            replace(spec, call=scenario_loader(actions)) if spec.name == "scenario" else spec
+            for spec in actions
+        )
+    return (*actions, scenario_action(actions))
 
 
 def perform(target: ActionTarget, event: ScenarioEvent) -> None:

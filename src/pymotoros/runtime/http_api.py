@@ -40,9 +40,9 @@ from pymotoros.controller.actions import (
     ActionTargetMissingError,
     Param,
     actions_by_name,
-    with_scenario_of,
 )
 from pymotoros.controller.api import ControllerSnapshot
+from pymotoros.controller.scenario import with_scenario_of
 from pymotoros.errors import PymotorosError
 from pymotoros.runtime.action_endpoints import action_endpoint, path_values
 from pymotoros.runtime.body_limit import BodyLimit

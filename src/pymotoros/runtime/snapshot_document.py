@@ -6,7 +6,8 @@ observer sees. From a snapshot type this module derives, once:
 * an encoder (:func:`document_encoder`): snapshot → plain dicts and lists, the body of
   ``GET /api/state``, the ``/ws/state`` feed and the pendant's document;
 * a pydantic model (:func:`document_model`): the OpenAPI schema of the same document,
-  each field described by its attribute's docstring in the declaration.
+  each field described by the description in its metadata
+  (:func:`~pymotoros.controller.values.described`), data next to the field.
 
 So a field added to the snapshot, or to one of its parts (a group, the safety unit's
 :class:`~pymotoros.controller.safety.SafetySnapshot`), appears in the document and its
@@ -15,42 +16,41 @@ schema with no other edit.
 The rules: a dataclass is an object of its fields in declaration order; an enum is its
 value; a tuple an array; None is null. A field's metadata may say ``omit`` (not in the
 document) or ``inline`` (its fields join the parent object), see
-:data:`~pymotoros.controller.api.OMIT` and :data:`~pymotoros.controller.api.INLINE`.
+:data:`~pymotoros.controller.values.OMIT` and :data:`~pymotoros.controller.values.INLINE`.
 Where the JSON shape differs from the dataclass (the TCP's two speeds under
 ``speed_mm_s``; a fired event's parameters as keys of its own), a :class:`Form` in
 :data:`FORMS` gives the encoder and the schema for that type.
 
 The feed encodes the document 25 times a second on the loop that runs the interpolation
 ticks, so the encoder is not a walk over ``dataclasses.fields`` at each call: the walk
-is done once per type and written as Python source (one function per dataclass, one
-dict display each, as a hand-written builder would be), compiled once. Its cost per
-call is that of the hand-written builder it replaced (``docs/benchmarks.md``).
+is done once per type into a plan (the document's keys, one ``operator.attrgetter``
+that reads every field's value at once, inline parts by their dotted path, and a
+converter for only those values that are not their own JSON), composed into one
+closure per dataclass. No source is generated or read: a call is two C-level calls and
+a short loop over the converted fields (``docs/benchmarks.md``).
 """
 
 from __future__ import annotations
 
-import ast
 import dataclasses
 import enum
 import inspect
-import itertools
-import textwrap
 import types
 import typing
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
+from operator import attrgetter
 from typing import Any, Final, Literal, Union
 
 from pydantic import BaseModel, ConfigDict, Field, create_model
 
-from pymotoros.controller.api import (
+from pymotoros.controller.values import (
     AlarmInfo,
     FiredEventInfo,
+    FsuLimits,
     GroupSnapshot,
     TcpSnapshot,
-    snapshot_names,
 )
-from pymotoros.controller.safety import FsuLimits
 from pymotoros.models.workspace import Obstacle
 
 __all__ = [
@@ -142,33 +142,17 @@ dataclass."""
 
 
 def field_docs(cls: type) -> dict[str, str]:
-    """Each field's docstring (the string literal after its annotation), the class's
-    bases first; {} when the source is not available (then the schema has no
-    descriptions, nothing else changes)."""
-    docs: dict[str, str] = {}
-    for klass in reversed(cls.__mro__):
-        if not dataclasses.is_dataclass(klass):
-            continue
-        try:
-            source = textwrap.dedent(inspect.getsource(klass))
-        except (OSError, TypeError):
-            continue
-        tree = ast.parse(source)
-        body = tree.body[0].body if tree.body and isinstance(tree.body[0], ast.ClassDef) else []
-        for node, after in itertools.pairwise(body):
-            if (
-                isinstance(node, ast.AnnAssign)
-                and isinstance(node.target, ast.Name)
-                and isinstance(after, ast.Expr)
-                and isinstance(after.value, ast.Constant)
-                and isinstance(after.value.value, str)
-            ):
-                docs[node.target.id] = " ".join(inspect.cleandoc(after.value.value).split())
-    return docs
+    """Each field's description, from its metadata
+    (:func:`~pymotoros.controller.values.described`); a field without one is left out."""
+    return {
+        f.name: str(f.metadata["description"])
+        for f in dataclasses.fields(cls)
+        if "description" in f.metadata
+    }
 
 
 def _hints(cls: type) -> dict[str, Any]:
-    return typing.get_type_hints(cls, localns=snapshot_names())
+    return typing.get_type_hints(cls)
 
 
 def _optional(tp: Any) -> Any | None:
@@ -203,68 +187,132 @@ def _how(f: dataclasses.Field[Any]) -> str:
     return str(f.metadata.get("document", ""))
 
 
-class _Encoder:
-    """Writes the source of one encoder function per dataclass, then compiles them."""
-
-    def __init__(self) -> None:
-        self.namespace: dict[str, Any] = {}
-        self.functions: dict[type, str] = {}
-        self.sources: list[str] = []
-        self._vars = itertools.count()
-
-    def value(self, tp: Any, src: str) -> str:
-        """A Python expression that encodes ``src``, of type ``tp``."""
-        if tp in FORMS:
-            name = f"_form_{FORMS[tp].encode.__name__.strip('_')}"
-            self.namespace[name] = FORMS[tp].encode
-            return f"{name}({src})"
-        inner = _optional(tp)
-        if inner is not None:
-            code = self.value(inner, src)
-            return src if code == src else f"(None if {src} is None else {code})"
-        if _is_scalar(tp):
-            return src
-        if isinstance(tp, type) and issubclass(tp, enum.Enum):
-            return f"{src}.value"
-        item = _item_type(tp)
-        if item is not None:
-            var = f"v{next(self._vars)}"
-            code = self.value(item, var)
-            return f"list({src})" if code == var else f"[{code} for {var} in {src}]"
-        if isinstance(tp, type) and dataclasses.is_dataclass(tp):
-            return f"{self.function(tp)}({src})"
-        raise TypeError(f"the state document cannot encode {tp!r} (add a Form to FORMS)")
-
-    def items(self, cls: type, src: str) -> list[tuple[str, str]]:
-        """(key, expression) of each field of ``cls`` in the document, ``inline`` parts
-        expanded in place."""
-        hints = _hints(cls)
-        out: list[tuple[str, str]] = []
-        for f in dataclasses.fields(cls):
-            how = _how(f)
-            if how == "omit":
-                continue
-            if how == "inline":
-                out += self.items(hints[f.name], f"{src}.{f.name}")
-            else:
-                out.append((f.name, self.value(hints[f.name], f"{src}.{f.name}")))
-        keys = [key for key, _ in out]
-        if len(set(keys)) != len(keys):
-            raise TypeError(f"{cls.__name__}: two fields give the document the same key: {keys}")
-        return out
-
-    def function(self, cls: type) -> str:
-        if cls in self.functions:
-            return self.functions[cls]
-        name = f"_encode_{len(self.functions)}_{cls.__name__}"
-        self.functions[cls] = name
-        body = ", ".join(f"{key!r}: {code}" for key, code in self.items(cls, "o"))
-        self.sources.append(f"def {name}(o):\n    return {{{body}}}\n")
-        return name
-
+Encode = Callable[[Any], Any]
+"""A value → its JSON form (dicts, lists, scalars)."""
 
 _ENCODERS: dict[type, Callable[[Any], dict[str, Any]]] = {}
 _MODELS: dict[tuple[type, str | None], type[Answer]] = {}
+_BUILDING: set[type] = set()
+
+
+def _converter(tp: Any) -> Encode | None:
+    """How a value of type ``tp`` becomes JSON; None when it already is (a scalar, a
+    Literal): the encoder then takes the value as it is, with no call."""
+    inner = _optional(tp)
+    if inner is not None:
+        present = _converter(inner)
+        if present is None:
+            return None
+        return lambda v: None if v is None else present(v)
+    conversion = _conversion(tp)
+    if conversion is None:
+        return None
+    each, convert = conversion
+    if each:
+        return lambda v: list(map(convert, v))
+    return convert
+
+
+def _conversion(tp: Any) -> tuple[bool, Encode] | None:
+    """A field's conversion as the encoder's loop applies it: (each, convert) converts
+    every item of an array (``each``) or the value itself; None: no conversion. A null
+    stays null, so ``X | None`` is converted as ``X``."""
+    inner = _optional(tp)
+    if inner is not None:
+        tp = inner
+    if tp in FORMS:
+        return False, FORMS[tp].encode
+    if _is_scalar(tp):
+        return None
+    if isinstance(tp, type) and issubclass(tp, enum.Enum):
+        return False, attrgetter("value")
+    item = _item_type(tp)
+    if item is not None:
+        convert = _converter(item)
+        if convert is None:  # ``list`` alone: listed in one pass, unless it may be null
+            return (False, list) if inner is None else (False, _array)
+        return True, convert
+    if isinstance(tp, type) and dataclasses.is_dataclass(tp):
+        if tp in _BUILDING:  # a part that holds its own type: found at call time
+            return False, lambda v: _ENCODERS[tp](v)
+        return False, document_encoder(tp)
+    raise TypeError(f"the state document cannot encode {tp!r} (add a Form to FORMS)")
+
+
+def _array(value: Any) -> list[Any]:
+    """An array that may be null (the encoder's loop passes a null by)."""
+    return list(value)
+
+
+_Plan = list[tuple[str, str, tuple[bool, Encode] | None]]
+"""Per key of a document: the dotted attribute path of its value and its conversion."""
+
+
+def _plan(cls: type, path: str = "") -> _Plan:
+    """(key, dotted attribute path, conversion) of each field of ``cls`` in the document,
+    ``inline`` parts expanded in place."""
+    hints = _hints(cls)
+    out: _Plan = []
+    for f in dataclasses.fields(cls):
+        how = _how(f)
+        if how == "omit":
+            continue
+        if how == "inline":
+            out += _plan(hints[f.name], f"{path}{f.name}.")
+        else:
+            out.append((f.name, path + f.name, _conversion(hints[f.name])))
+    keys = [key for key, _, _ in out]
+    if len(set(keys)) != len(keys):
+        raise TypeError(f"{cls.__name__}: two fields give the document the same key: {keys}")
+    return out
+
+
+def _compose(plan: _Plan) -> Callable[[Any], dict[str, Any]]:
+    """One closure for a plan: every value read by one ``attrgetter``, the dict built
+    by ``zip``, then only the values that need it converted in place (a key keeps its
+    place when its value is replaced; an array's items each by one ``map``)."""
+    keys = tuple(key for key, _, _ in plan)
+    if not keys:
+        return lambda o: {}
+    read = _reader([path for _, path, _ in plan])
+    # arrays of plain values (joint positions, names) are listed in one C-level pass
+    listed = [(key, path) for key, path, conversion in plan if conversion == (False, list)]
+    conversions = tuple(
+        (key, *conversion)
+        for key, _, conversion in plan
+        if conversion is not None and conversion != (False, list)
+    )
+    list_keys = tuple(key for key, _ in listed)
+    read_lists = _reader([path for _, path in listed])
+    if not conversions and not listed:
+        return lambda o: dict(zip(keys, read(o)))  # noqa: B905 - one value per key
+
+    def encode(o: Any) -> dict[str, Any]:
+        doc = dict(zip(keys, read(o)))  # noqa: B905 - one value per key
+        if listed:
+            doc.update(zip(list_keys, map(list, read_lists(o))))  # noqa: B905
+        for key, each, convert in conversions:
+            value = doc[key]
+            if value is None:
+                continue
+            if each:  # most arrays of parts are empty (alarms, events, contacts)
+                doc[key] = list(map(convert, value)) if value else []
+            else:
+                doc[key] = convert(value)
+        return doc
+
+    return encode
+
+
+def _reader(paths: list[str]) -> Callable[[Any], tuple[Any, ...]]:
+    """One call that reads every path's value, as a tuple (``attrgetter`` of one path
+    gives the value itself)."""
+    if len(paths) > 1:
+        return attrgetter(*paths)
+    if paths:
+        one = attrgetter(paths[0])
+        return lambda o: (one(o),)
+    return lambda o: ()
 
 
 def document_encoder(cls: type) -> Callable[[Any], dict[str, Any]]:
@@ -273,13 +321,13 @@ def document_encoder(cls: type) -> Callable[[Any], dict[str, Any]]:
     known = _ENCODERS.get(cls)
     if known is not None:
         return known
-    encoder = _Encoder()
-    name = encoder.function(cls)
-    code = compile("\n".join(encoder.sources), f"<state document of {cls.__name__}>", "exec")
-    exec(code, encoder.namespace)  # noqa: S102 - our own source, written from field names
-    function: Callable[[Any], dict[str, Any]] = encoder.namespace[name]
-    _ENCODERS[cls] = function
-    return function
+    _BUILDING.add(cls)
+    try:
+        encoder = _compose(_plan(cls))
+    finally:
+        _BUILDING.discard(cls)
+    _ENCODERS[cls] = encoder
+    return encoder
 
 
 def _schema(tp: Any, name: str) -> Any:
@@ -302,7 +350,6 @@ def _schema(tp: Any, name: str) -> Any:
 
 def _fields(cls: type) -> dict[str, tuple[Any, Any]]:
     hints = _hints(cls)
-    docs = field_docs(cls)
     out: dict[str, tuple[Any, Any]] = {}
     for f in dataclasses.fields(cls):
         how = _how(f)
@@ -315,7 +362,7 @@ def _fields(cls: type) -> dict[str, tuple[Any, Any]]:
         default: Any = ...
         if isinstance(f.default, _SCALARS) and not isinstance(f.default, enum.Enum):
             default = f.default
-        out[f.name] = (kind, Field(default, description=docs.get(f.name)))
+        out[f.name] = (kind, Field(default, description=f.metadata.get("description")))
     return out
 
 

@@ -9,22 +9,20 @@ Adding a fault means one module here (with its test), its declaration in
 ``controller/actions.py`` (which gives it its control-API endpoint, its scenario action
 and its place in the pendant's list; its call reaches the module through
 ``target.safety``) and the state it shows: a field of :class:`SafetySnapshot`, filled
-by :meth:`SafetyUnit.snapshot`, in this file. The controller's snapshot carries that
-part, and ``GET /api/state``, its schema, ``/ws/state`` and ``pymotoros status --api``
-show each of its fields with no other edit (docs/architecture.md counts the files).
+by :meth:`SafetyUnit.snapshot` (the part is declared with the controller's other values
+in ``controller/values.py``, a leaf). The controller's snapshot carries that part, and
+``GET /api/state``, its schema, ``/ws/state`` and ``pymotoros status --api`` show each
+of its fields with no other edit (docs/architecture.md counts the files).
 """
 
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import dataclass
-from typing import Final, Literal
 
 from pymotoros.controller.io_image import IoImage
 from pymotoros.controller.safety.fsu import (
     TCP_NEEDS_KINEMATICS,
     FsuFunction,
-    FsuLimits,
     IncrementLimiter,
 )
 from pymotoros.controller.safety.pfl import (
@@ -35,6 +33,7 @@ from pymotoros.controller.safety.pfl import (
     PflStatus,
 )
 from pymotoros.controller.servo import ServoGroup
+from pymotoros.controller.values import FsuLimits, PflPhase, SafetySnapshot
 from pymotoros.motion import GroupAxes
 
 __all__ = [
@@ -51,27 +50,6 @@ __all__ = [
     "SafetySnapshot",
     "SafetyUnit",
 ]
-
-PflPhase = Literal["off", "idle", "stop", "escape"]
-"""The PFL function as the operator sees it ("off": no PFL in this cell)."""
-
-
-_NO_FSU_LIMITS: Final = FsuLimits(None, None)
-
-
-@dataclass(frozen=True, slots=True)
-class SafetySnapshot:
-    """What the safety functions show the operator, one field each: the controller's
-    snapshot carries it and the state document lists its fields at its top level
-    (``"fsu"``, ``"pfl"``). A new function adds its field here, with a docstring (the
-    OpenAPI schema's description), and fills it in :meth:`SafetyUnit.snapshot`."""
-
-    fsu: FsuLimits = _NO_FSU_LIMITS
-    """The FSU speed limits in force (null: that limit is off)."""
-    pfl: PflPhase = "off"
-    """The PFL function: off (not in this cell), idle, stop (81702 on) or escape (81703
-    on, retreating after a clamping)."""
-
 
 _PFL_PHASES: dict[str, PflPhase] = {"idle": "idle", "stop": "stop", "escape": "escape"}
 

@@ -18,10 +18,10 @@ from __future__ import annotations
 
 import logging
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass
 from typing import TypedDict
 
 from pymotoros.controller.servo import ServoGroup
+from pymotoros.controller.values import FsuLimits
 from pymotoros.models.fsu import fsu_joint_clip
 from pymotoros.motion import GroupAxes
 
@@ -49,14 +49,6 @@ TCP_NEEDS_KINEMATICS = (
     "the FSU TCP-speed limit (tcp_speed_mm_s) needs the robot's kinematics model, which "
     "this build of the virtual controller does not have yet; use joint_speed_pct"
 )
-
-
-@dataclass(frozen=True, slots=True)
-class FsuLimits:
-    """The active limits (None: that limit is off)."""
-
-    joint_speed_pct: int | None
-    tcp_speed_mm_s: float | None
 
 
 class FsuFunction:

@@ -13,9 +13,10 @@ from __future__ import annotations
 import logging
 import re
 from collections.abc import Callable, Mapping
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import Final
 
+from pymotoros.controller.values import StartupConfig
 from pymotoros.models import ControllerModel, ControllerType
 
 logger = logging.getLogger(__name__)
@@ -56,20 +57,6 @@ raises it (HC on YRC1000/micro is supported; HC elsewhere is not a sold combinat
 reachable only through ``validation_code = 9``."""
 
 _SOFTWARE = re.compile(r"^([A-Z]+)(\d+)\.(\d+)")
-
-
-@dataclass(frozen=True, slots=True)
-class StartupConfig:
-    """The controller facts the start-up checks read (cell file ``[controller]``)."""
-
-    software: str | None = None
-    """System software version, e.g. "YAS2.80.00-00" (None: a version that passes)."""
-    conveyor_tracking: bool = False
-    parameters: Mapping[str, int] = field(default_factory=dict)
-    """Set-up parameters that differ from :data:`PASSING_PARAMETERS`."""
-    validation_code: int | None = None
-    """A validation code no modelled setting produces: 9 ("MotoROS not compatible with
-    HC"), 10 or > 11 ("Controller config invalid", e.g. 102..106 for licensing)."""
 
 
 @dataclass(frozen=True, slots=True)

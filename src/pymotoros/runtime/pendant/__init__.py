@@ -67,7 +67,7 @@ from pymotoros.controller.api import (
     JobPosition,
     NotReadyInfo,
 )
-from pymotoros.controller.scenario import parse_scenario
+from pymotoros.controller.scenario import parse_scenario, with_scenario_of
 from pymotoros.errors import ConfigError, KinematicsError
 from pymotoros.kinematics import chain_for
 from pymotoros.runtime.pendant.document import (
@@ -421,7 +421,7 @@ def install_pendant(
     async def state_ws(ws: WebSocket) -> None:
         await feed.serve(ws)
 
-    _install_actions_routes(app, controller, feed, actions)
+    _install_actions_routes(app, controller, feed, with_scenario_of(actions))
 
 
 def _install_actions_routes(
