@@ -4,8 +4,10 @@ from __future__ import annotations
 
 import pytest
 
-from pymotoros.controller import VirtualController, cell_from_dict, signals
+from pymotoros.controller import VirtualController, cell_from_dict, default_cell, signals
+from pymotoros.controller.assembly import assemble
 from pymotoros.controller.safety import PFL_STOP_MS
+from pymotoros.controller.safety.fsu import FsuFunction
 from pymotoros.protocol.constants import NotReadySubcode, ResultCode
 
 from .helpers import CMD, command, current_pos, point, send, start_at_current, tick_until
@@ -130,15 +132,16 @@ def test_fsu_switches_and_refusals() -> None:
         vc.set_fsu(joint_speed_pct=10, off=True)
     vc.set_fsu(off=True)
     assert vc.safety.fsu.limits() is None
-    # the controller plugs its kinematics in: the TCP limit is accepted and engages the clip
+    # the controller builds its FSU with its kinematics: the TCP limit engages the clip
     vc.set_fsu(tcp_speed_mm_s=250.0)
     assert vc.safety.fsu.active.tcp_speed_mm_s == 250.0
     assert vc.safety.fsu.limits() is not None
-    # without a limiter (an FSU on its own) a TCP limit is refused, saying why
-    vc.set_fsu(off=True)
-    vc.safety.fsu.tcp_limiter = None
+    # an FSU built without kinematics (no tcp_limiter) refuses a TCP limit, saying why
+    ctx = assemble(default_cell(), seed=0, on_skill=lambda slave, text: None).ctx
+    alone = FsuFunction(ctx.axes, ctx.servos, None)
     with pytest.raises(ValueError, match="kinematics"):
-        vc.set_fsu(tcp_speed_mm_s=250.0)
+        alone.set(tcp_speed_mm_s=250.0)
+    assert alone.limits() is None
 
 
 TCP_LIMIT_MM_S = 100.0
