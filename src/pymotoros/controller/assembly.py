@@ -25,6 +25,7 @@ from pymotoros.controller.processes import ControllerClock
 from pymotoros.controller.queues import MotionQueues
 from pymotoros.controller.safety import SafetyUnit
 from pymotoros.controller.safety.fsu import IncrementLimiter
+from pymotoros.controller.safety.pfl import retreat_record_ticks
 from pymotoros.controller.servo import ServoGroup
 from pymotoros.controller.tool_point import TcpTracker
 from pymotoros.controller.workspace_runtime import WorkspaceRuntime
@@ -65,6 +66,9 @@ def servo_groups(
             noise_pulses=cell.servo.noise_pulses,
             seed=seed,
             group_index=g,
+            record_ticks=retreat_record_ticks(cell.controller.interpolation_period_ms)
+            if cell.pfl
+            else 0,
         )
         for g, group_axes in enumerate(axes)
     )
