@@ -182,3 +182,23 @@ def test_fsu_tcp_speed_limit_holds_and_the_move_still_ends_at_its_target() -> No
     assert max(cmd) <= TCP_LIMIT_MM_S * 1.005
     assert max(fb[1:]) <= TCP_LIMIT_MM_S * 1.005
     assert max(cmd) > 0.9 * TCP_LIMIT_MM_S  # and it does use what the limit allows
+
+
+def test_a_safety_function_raises_an_alarm_through_the_units_operator_port() -> None:
+    """What a new fault gets without a hook: the safety unit was built with the operator
+    state as a port, so an alarm raised through it stops the robot as any alarm does
+    (job stopped, servo off, 5001, in the alarm history)."""
+    vc = VirtualController()
+    assert command(vc, CMD.START_TRAJ_MODE).ok
+    operator = vc.safety.operator
+    assert operator.state.servo_on
+    operator.raise_alarm(4900, 2, "DOOR OPEN")
+    operator.servo_off()
+    vc.run_ticks(5)
+    snap = vc.snapshot()
+    assert [(a.code, a.subcode, a.text) for a in snap.alarms] == [(4900, 2, "DOOR OPEN")]
+    assert not snap.servo
+    assert [a.code for a in operator.state.alarms] == [4900]
+    assert vc.alarm_history()[-1].code == 4900
+    check = command(vc, CMD.CHECK_MOTION_READY)
+    assert check.subcode == NotReadySubcode.ALARM

@@ -21,18 +21,50 @@ The FSU's TCP-speed clip, which needs kinematics, is the FSU's own port
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from typing import Protocol
 
-from pymotoros.controller.machine import OperatorState
+__all__ = ["AlarmReading", "MotionLink", "OperatorPort", "OperatorReading"]
 
-__all__ = ["MotionLink", "OperatorPort"]
+
+class AlarmReading(Protocol):
+    """An alarm as a safety function reads it (``controller.alarms.Alarm`` is one)."""
+
+    @property
+    def code(self) -> int: ...
+
+    @property
+    def subcode(self) -> int: ...
+
+    @property
+    def text(self) -> str: ...
+
+
+class OperatorReading(Protocol):
+    """What a safety function reads of the operator state (``machine.OperatorState`` is
+    one). Declared here, not imported, so that this module stays a leaf."""
+
+    @property
+    def alarms(self) -> Sequence[AlarmReading]: ...
+
+    @property
+    def hold(self) -> bool: ...
+
+    @property
+    def estopped(self) -> bool: ...
+
+    @property
+    def servo_on(self) -> bool: ...
+
+    @property
+    def drives_powered(self) -> bool: ...
 
 
 class OperatorPort(Protocol):
     """What a safety function may read of and do to the operator state."""
 
     @property
-    def state(self) -> OperatorState:
+    def state(self) -> OperatorReading:
         """The operator state now (alarms, servo power, hold …), frozen."""
         ...
 
