@@ -19,7 +19,13 @@ from pymotoros.controller.cell import CellConfig, InitialState
 from pymotoros.controller.context import MotoRosContext
 from pymotoros.controller.inform import Job, JobRunner, builtin_jobs, load_jobs
 from pymotoros.controller.io_image import IoImage
-from pymotoros.controller.machine import EstopSource, OperatorMachine, OperatorState, ServoPower
+from pymotoros.controller.machine import (
+    EstopSource,
+    Observer,
+    OperatorMachine,
+    OperatorState,
+    ServoPower,
+)
 from pymotoros.controller.operator_keys import OperatorKeys
 from pymotoros.controller.processes import ControllerClock
 from pymotoros.controller.queues import MotionQueues
@@ -110,14 +116,25 @@ class Assembly:
     workspace: WorkspaceRuntime
 
 
-def assemble(cell: CellConfig, *, seed: int, on_skill: Callable[[int, str], None]) -> Assembly:
+def assemble(
+    cell: CellConfig,
+    *,
+    seed: int,
+    on_skill: Callable[[int, str], None],
+    on_operator_change: Observer | None = None,
+) -> Assembly:
     """Build the clock, IO image, operator machine, job runner, groups, the pendant's
-    keys, the kinematics, the safety unit and the workspace, each given what it acts on."""
+    keys, the kinematics, the safety unit and the workspace, each given what it acts on
+    (``on_skill``: a DX100 SKILLSND; ``on_operator_change``: the controller's reaction to
+    an operator-state change)."""
     ctrl = cell.controller
     clock = ControllerClock(ctrl.interpolation_period_ms)
     io = IoImage(ctrl)
     machine = OperatorMachine(
-        initial_operator_state(cell.initial), io, servo_on_delay_ms=cell.servo.servo_on_delay_ms
+        initial_operator_state(cell.initial),
+        io,
+        servo_on_delay_ms=cell.servo.servo_on_delay_ms,
+        observer=on_operator_change,
     )
     runner = JobRunner(cell_jobs(cell), io, on_skill=on_skill)
     axes = tuple(GroupAxes.from_model(g, ctrl) for g in cell.groups)

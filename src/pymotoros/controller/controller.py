@@ -104,7 +104,12 @@ class VirtualController:
         None: no motion server, ``drop_motion`` is refused saying so."""
         self.cell = cell = cell if cell is not None else default_cell()
         self.seed = seed
-        parts = assemble(cell, seed=seed, on_skill=lambda slave, text: self._on_skill(slave, text))
+        parts = assemble(
+            cell,
+            seed=seed,
+            on_skill=lambda slave, text: self._on_skill(slave, text),
+            on_operator_change=lambda old, new, event: self._on_operator_change(old, new, event),
+        )
         ctx = parts.ctx
         self._ctx = ctx
         self._clock, self._machine, self._io = ctx.clock, ctx.machine, ctx.io
@@ -123,7 +128,6 @@ class VirtualController:
         self._power = DrivePower(ctx, last_motion_ms=lambda: self._inc_move.last_motion_ms)
         self._scenarios = ScenarioPlayer(ctx.io.read_any)
         self._observers: list[SnapshotObserver] = []
-        self._machine.add_observer(self._on_operator_change)
         self._readiness.monitor.init_read()
         hc_robot = any(robot_model(r).pfl for r in cell.robots)
         self._startup = MotoRosStartup(
