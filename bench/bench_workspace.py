@@ -78,7 +78,7 @@ def _point(seq: int, t: float) -> PointData:
 def stream(obstacles: list[dict[str, Any]], ticks: int) -> dict[str, float]:
     """Stream the sweep for ``ticks`` ticks; wall time per tick and the contact check's."""
     controller = VirtualController(cell_from_dict(_cell(obstacles)))
-    contact = controller._cycle.contact
+    contact = controller._workspace.contact
     spent = [0.0]
     if contact is not None:
         original = contact.tick

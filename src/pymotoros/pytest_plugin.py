@@ -141,10 +141,12 @@ class _TwinThread:
 
         from pymotoros.controller import VirtualController
         from pymotoros.runtime.app import SimulatorApp, SimulatorConfig
+        from pymotoros.runtime.tcp import ClientTasks
 
         self._loop = asyncio.get_running_loop()
         self._stop = asyncio.Event()
-        controller = VirtualController(self._cell)
+        motion_clients = ClientTasks()  # a scenario's drop_motion closes these
+        controller = VirtualController(self._cell, motion_link=motion_clients)
         config = SimulatorConfig(
             host="127.0.0.1",
             motion_port=0,
@@ -152,7 +154,7 @@ class _TwinThread:
             io_port=0,
             http_port=0 if self._http else None,
         )
-        async with SimulatorApp(controller, config) as app:
+        async with SimulatorApp(controller, config, motion_clients=motion_clients) as app:
             ports = app.ports
             self._started.set_result(
                 RunningTwin(

@@ -57,7 +57,7 @@ from pymotoros.runtime.clock import ManualClock
 from pymotoros.runtime.io_server import IoServer
 from pymotoros.runtime.motion_server import MotionServer
 from pymotoros.runtime.state_server import STATE_PERIOD_S, StateServer
-from pymotoros.runtime.tcp import TcpService
+from pymotoros.runtime.tcp import ClientTasks, TcpService
 
 __all__ = ["Twin", "VirtualClock", "memory_stream_pair", "ready_queue", "sync_twin", "twin"]
 
@@ -352,17 +352,17 @@ class Twin:
         if fidelity is not None:
             cell = dataclasses.replace(cell, fidelity=Fidelity.parse(fidelity))
         self.cell = cell
-        self.controller = VirtualController(self.cell)
+        motion_clients = ClientTasks()  # a scenario's drop_motion closes these
+        self.controller = VirtualController(self.cell, motion_link=motion_clients)
         self.clock = VirtualClock(
             start_time, period=self.controller.period_ms / 1000.0, step=self.controller.tick
         )
         order = self.cell.controller.byte_order
-        self.motion = MotionServer(self.controller, order)
+        self.motion = MotionServer(self.controller, order, clients=motion_clients)
         self.state = StateServer(
             self.controller, order, self.clock, period=state_period, message_gap=state_message_gap
         )
         self.io = IoServer(self.controller, order)
-        self.controller.drop_motion_hook = self.motion.drop_clients  # a scenario's drop_motion
         self._services: dict[int, TcpService] = {
             TCP_PORT_MOTION: self.motion,
             TCP_PORT_STATE: self.state,

@@ -16,6 +16,7 @@ from client_sim import Sim, running_sim
 
 from pymotoros.cli.live import FrameWriter
 from pymotoros.cli.main import cli
+from pymotoros.protocol.constants import NotReadySubcode as Nr
 
 
 @pytest.fixture(scope="module")
@@ -36,7 +37,7 @@ def test_servo_off_reason_is_the_not_ready_meaning(sim: tuple[Sim, Path]) -> Non
     CliRunner().invoke(cli, ["disable", "--ports-file", str(ports)])
     CliRunner().invoke(cli, ["servo", "off", "--ports-file", str(ports)])
     out = status(ports).stdout
-    assert "SERVO_OFF (5006): servo power is off (or eco mode is on); pymotoros enable" in out
+    assert f"SERVO_OFF (5006): servo power is off (or eco mode is on); {Nr.SERVO_OFF.remedy}" in out
     data = json.loads(status(ports, "--json").stdout)
     assert data["status"]["not_ready_reason"].startswith("SERVO_OFF (5006)")
 
@@ -46,15 +47,15 @@ def test_estop_and_alarm_are_named_with_the_pendant_text(sim: tuple[Sim, Path]) 
     the_sim.api("/api/estop", {"pressed": True})
     try:
         out = status(ports).stdout
-        assert "ESTOP (5003): emergency stop is pressed; release it" in out
-        assert "(pymotoros enable)" not in out
+        assert f"ESTOP (5003): emergency stop is pressed; {Nr.ESTOP.remedy}" in out
+        assert "emergency stop is pressed; an operator must release" in out  # not "enable"
     finally:
         the_sim.api("/api/estop", {"pressed": False})
     the_sim.api("/api/alarm", {"code": 4107, "text": "OUT OF RANGE (ABSO DATA)"})
     try:
         out = status(ports).stdout
         assert "alarm             4107 OUT OF RANGE (ABSO DATA)" in out
-        assert "ALARM (5001): an alarm is active; remove the cause of 4107" in out
+        assert f"ALARM (5001): an alarm is active (4107); {Nr.ALARM.remedy}" in out
     finally:
         CliRunner().invoke(cli, ["reset", "--ports-file", str(ports)])
 

@@ -99,8 +99,9 @@ def test_every_scenario_action_is_declared_and_performed_through_its_declaration
 
 
 NOT_YET: Final = {"runtime/app.py"}
-"""Still probes the controller for its start-up and drop_motion hook (the runtime's own
-wiring, not a reading of its state): to go with the controller's split."""
+"""Still probes the controller for its start-up (``motoros_started``, ``motoros_phase``:
+fakes without a start-up run at once), not a reading of its state; the drop_motion hook
+it probed is a constructor argument now (tests/test_wiring.py)."""
 
 
 def test_nothing_outside_controller_reads_a_controller_attribute_by_getattr() -> None:

@@ -249,7 +249,8 @@ def test_the_first_failing_test_of_the_4_2_order_wins() -> None:
     assert reasons.subcode() is Nr.HOLD
     flags.observe(READY._replace(servo=1, eco=1), job_ready=True, pfl_event=False)
     assert reasons.subcode() is Nr.SERVO_OFF
-    assert reasons.why(Nr.SERVO_OFF) == "eco mode"
+    assert reasons.specifics(Nr.SERVO_OFF) == "eco mode"
+    assert reasons.why(Nr.SERVO_OFF) == f"eco mode; {Nr.SERVO_OFF.remedy}"
     flags.observe(READY, job_ready=True, pfl_event=False)
     assert reasons.subcode() is Nr.UNSPECIFIED
     assert reasons.why(Nr.UNSPECIFIED) == ""
@@ -264,7 +265,8 @@ def test_the_refusal_names_the_subcode_and_what_clears_it() -> None:
     assert outcome.result is ResultCode.FALSE
     assert outcome.subcode == Nr.INC_MOVE_ERROR
     assert outcome.group_no == 0
-    assert "refused: -3; START_TRAJ_MODE clears it" in outcome.detail
+    remedy = Nr.INC_MOVE_ERROR.remedy
+    assert outcome.detail.endswith(f"(an incremental move was refused: -3; {remedy})")
 
 
 def test_the_skillsend_detail_lists_every_missing_condition() -> None:
@@ -274,7 +276,7 @@ def test_the_skillsend_detail_lists_every_missing_condition() -> None:
     flags.observe(READY, job_ready=False, pfl_event=False)
     flags.begin_stop()
     assert reasons.subcode() is Nr.SKILLSEND
-    assert reasons.why(Nr.SKILLSEND) == (
+    assert reasons.specifics(Nr.SKILLSEND) == (
         'SKILLSND "ROS-START" not received for slave 1; '
         "OT#889 is on but its rising edge was not seen; a stop is in progress"
     )

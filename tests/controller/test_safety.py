@@ -4,8 +4,10 @@ from __future__ import annotations
 
 import pytest
 
-from pymotoros.controller import VirtualController, cell_from_dict, signals
+from pymotoros.controller import VirtualController, cell_from_dict, default_cell, signals
+from pymotoros.controller.assembly import assemble
 from pymotoros.controller.safety import PFL_STOP_MS
+from pymotoros.controller.safety.fsu import FsuFunction
 from pymotoros.protocol.constants import NotReadySubcode, ResultCode
 
 from .helpers import CMD, command, current_pos, point, send, start_at_current, tick_until
@@ -130,15 +132,16 @@ def test_fsu_switches_and_refusals() -> None:
         vc.set_fsu(joint_speed_pct=10, off=True)
     vc.set_fsu(off=True)
     assert vc.safety.fsu.limits() is None
-    # the controller plugs its kinematics in: the TCP limit is accepted and engages the clip
+    # the controller builds its FSU with its kinematics: the TCP limit engages the clip
     vc.set_fsu(tcp_speed_mm_s=250.0)
     assert vc.safety.fsu.active.tcp_speed_mm_s == 250.0
     assert vc.safety.fsu.limits() is not None
-    # without a limiter (an FSU on its own) a TCP limit is refused, saying why
-    vc.set_fsu(off=True)
-    vc.safety.fsu.tcp_limiter = None
+    # an FSU built without kinematics (no tcp_limiter) refuses a TCP limit, saying why
+    ctx = assemble(default_cell(), seed=0, on_skill=lambda slave, text: None).ctx
+    alone = FsuFunction(ctx.axes, ctx.servos, None)
     with pytest.raises(ValueError, match="kinematics"):
-        vc.set_fsu(tcp_speed_mm_s=250.0)
+        alone.set(tcp_speed_mm_s=250.0)
+    assert alone.limits() is None
 
 
 TCP_LIMIT_MM_S = 100.0
@@ -179,3 +182,23 @@ def test_fsu_tcp_speed_limit_holds_and_the_move_still_ends_at_its_target() -> No
     assert max(cmd) <= TCP_LIMIT_MM_S * 1.005
     assert max(fb[1:]) <= TCP_LIMIT_MM_S * 1.005
     assert max(cmd) > 0.9 * TCP_LIMIT_MM_S  # and it does use what the limit allows
+
+
+def test_a_safety_function_raises_an_alarm_through_the_units_operator_port() -> None:
+    """What a new fault gets without a hook: the safety unit was built with the operator
+    state as a port, so an alarm raised through it stops the robot as any alarm does
+    (job stopped, servo off, 5001, in the alarm history)."""
+    vc = VirtualController()
+    assert command(vc, CMD.START_TRAJ_MODE).ok
+    operator = vc.safety.operator
+    assert operator.state.servo_on
+    operator.raise_alarm(4900, 2, "DOOR OPEN")
+    operator.servo_off()
+    vc.run_ticks(5)
+    snap = vc.snapshot()
+    assert [(a.code, a.subcode, a.text) for a in snap.alarms] == [(4900, 2, "DOOR OPEN")]
+    assert not snap.servo
+    assert [a.code for a in operator.state.alarms] == [4900]
+    assert vc.alarm_history()[-1].code == 4900
+    check = command(vc, CMD.CHECK_MOTION_READY)
+    assert check.subcode == NotReadySubcode.ALARM

@@ -142,7 +142,7 @@ def test_is_clamping_needs_one_link_on_two_obstacles() -> None:
 
 def test_a_cell_without_obstacles_has_no_contact_check() -> None:
     controller = VirtualController(cell_from_dict(_cell("hc10", [])))
-    assert controller._cycle.contact is None
+    assert controller._workspace.contact is None
     assert controller.workspace_contacts == ()
 
 
@@ -185,7 +185,7 @@ async def test_an_obstacle_put_at_run_time_stops_the_robot_and_shows_in_the_stat
     cell = cell_from_dict(_cell("hc10", []))
     async with twin(cell=cell) as (robot, the_twin):
         controller = the_twin.controller
-        assert controller._cycle.contact is None
+        assert controller._workspace.contact is None
         controller.put_obstacle({"name": "person", "sphere": 0.1, "xyz": HC10_BALL})
         await robot.enable()
         with pytest.raises(NotReadyError) as info:
@@ -200,7 +200,7 @@ async def test_an_obstacle_put_at_run_time_stops_the_robot_and_shows_in_the_stat
         assert [(c["obstacle"], c["link"]) for c in contacts] == [("person", "link_2_l")]
         # the person steps aside: the move goes through where they stood
         controller.remove_obstacle("person")
-        assert controller._cycle.contact is None
+        assert controller._workspace.contact is None
         await the_twin.sleep(1.0)
         await robot.enable()
         await robot.move_joints(GOAL, speed_scale=0.5)

@@ -7,7 +7,8 @@ from dataclasses import replace
 
 import pytest
 
-from pymotoros.controller import VirtualController
+from pymotoros.controller import VirtualController, default_cell
+from pymotoros.controller.scenario import parse_scenario
 from pymotoros.protocol.constants import Port
 from pymotoros.protocol.messages import Ping, PingReply
 from pymotoros.runtime.app import SimulatorApp
@@ -110,3 +111,33 @@ def test_slot_table_rules() -> None:
 )
 def test_is_loopback(host: str, loopback: bool) -> None:
     assert is_loopback(host) is loopback
+
+
+async def test_a_scenarios_drop_motion_closes_the_motion_connection_of_an_app_for_a_cell() -> None:
+    """``SimulatorApp.for_cell`` builds the controller with the motion server's client set
+    as its motion link: the scenario's drop_motion reaches the TCP connection."""
+    sim = SimulatorApp.for_cell(default_cell(), LOCAL)
+    async with sim:
+        motion = await Peer.connect(sim.ports.motion, Port.MOTION)
+        assert isinstance(await motion.request(Ping()), PingReply)
+        assert sim.controller.read_io_bit(11124).value == 1  # OT#893: motion connected
+        sim.controller.load_scenario(
+            parse_scenario({"events": [{"at": 0.0, "action": "drop_motion"}]})
+        )
+        assert await motion.is_closed_by_server()
+        assert [f.error for f in sim.controller.fired_events] == [""]
+        await motion.close()
+
+
+async def test_drop_motion_of_a_controller_built_without_a_motion_link_says_why(
+    controller: VirtualController,
+) -> None:
+    """A controller built elsewhere reaches no motion server: drop_motion is refused with
+    the reason and what builds one with a link (the control API answers it 400)."""
+    async with SimulatorApp(controller, LOCAL) as sim:
+        motion = await Peer.connect(sim.ports.motion, Port.MOTION)
+        assert isinstance(await motion.request(Ping()), PingReply)
+        with pytest.raises(ValueError, match=r"no motion server .*SimulatorApp\.for_cell"):
+            controller.drop_motion()
+        assert isinstance(await motion.request(Ping()), PingReply)  # still connected
+        await motion.close()

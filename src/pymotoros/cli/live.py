@@ -27,22 +27,20 @@ API_TIMEOUT_S: Final = 1.0
 
 
 def not_ready_reason(st: Status) -> str:
-    """``SUBCODE_NAME (code): meaning; what to do`` for a status without motion possible."""
-
-    def told(code: NotReadySubcode, remedy: str) -> str:
-        return f"{code.name} ({int(code)}): {code.meaning}; {remedy}"
-
+    """``SUBCODE_NAME (code): meaning; what to do`` for a status without motion possible:
+    the reason MotoROS would answer, with the remedy the reason declares."""
     if st.e_stopped:
-        return told(NotReadySubcode.ESTOP, "release it, then pymotoros reset")
-    if st.in_error:
-        return told(
-            NotReadySubcode.ALARM, f"remove the cause of {st.error_code}, then pymotoros reset"
-        )
-    if st.mode is Mode.TEACH:
-        return told(NotReadySubcode.NOT_PLAY, "turn the pendant key to PLAY (and REMOTE)")
-    if not st.drives_powered:
-        return told(NotReadySubcode.SERVO_OFF, "pymotoros enable (servo on, trajectory mode)")
-    return told(NotReadySubcode.NOT_STARTED, "pymotoros enable (START_TRAJ_MODE)")
+        code = NotReadySubcode.ESTOP
+    elif st.in_error:
+        code = NotReadySubcode.ALARM
+    elif st.mode is Mode.TEACH:
+        code = NotReadySubcode.NOT_PLAY
+    elif not st.drives_powered:
+        code = NotReadySubcode.SERVO_OFF
+    else:
+        code = NotReadySubcode.NOT_STARTED
+    alarm = f" ({st.error_code})" if code is NotReadySubcode.ALARM and st.error_code else ""
+    return f"{code.name} ({int(code)}): {code.meaning}{alarm}; {code.remedy}"
 
 
 def twin_alarm_texts(

@@ -36,6 +36,7 @@ from pymotoros.models.fidelity import Fidelity
 from pymotoros.protocol.constants import TCP_PORT_IO, TCP_PORT_MOTION, TCP_PORT_STATE
 from pymotoros.runtime.app import DEFAULT_HTTP_PORT, SimulatorApp
 from pymotoros.runtime.fleet import cell_names, short_name
+from pymotoros.runtime.tcp import ClientTasks
 
 logger = logging.getLogger(__name__)
 
@@ -256,7 +257,7 @@ def sim(
         return
     config_file = config_path[0] if config_path else None
     ports = (motion_port, state_port, io_port, http_port)
-    cell, controller, asked = _one_cell(
+    cell, controller, motion_clients, asked = _one_cell(
         ctx,
         (controller_name, robot_name),
         config_file,
@@ -265,12 +266,14 @@ def sim(
     )
     ports = cell_file_ports(ctx, asked, ports)  # a [ports] table fills the flags not given
     _request_realtime(realtime)
+    recorder = open_recorder(record_path)  # before the coroutine: it may refuse
     app = SimulatorApp(
         controller,
         simulator_config(host, ports, cell, token, allowed_host),
         idle_batching=False if no_idle_batching else None,
+        motion_clients=motion_clients,
+        recorder=recorder,
     )
-    recorder = open_recorder(record_path, [app])  # before the coroutine: it may refuse
     serve(
         run_simulator(app, ports_file, _label(cell, config_file)),
         host=host,
@@ -288,23 +291,26 @@ def _one_cell(
     config_file: Path | None,
     scenario_path: Path | None,
     fidelity: Fidelity | None = None,
-) -> tuple[CellConfig, VirtualController, CellPorts]:
+) -> tuple[CellConfig, VirtualController, ClientTasks, CellPorts]:
     """The one cell's controller (``models``: --controller and --robot, when no file),
-    with the scenario loaded, and the ports its file asks for (none without a file); a
-    mistake in a file is a usage error."""
+    with the scenario loaded, the motion connections it was built with as its motion
+    link (the motion server keeps them: a scenario's drop_motion), and the ports its file
+    asks for (none without a file); a mistake in a file is a usage error."""
     try:
         cell_file = read_cell_file(config_file) if config_file is not None else None
         cell = _cell(ctx, *models, cell_file)
         if fidelity is not None:  # --fidelity over the file's [motoros] fidelity
             cell = dataclasses.replace(cell, fidelity=fidelity)
-        controller = VirtualController(cell)
+        motion_clients = ClientTasks()
+        controller = VirtualController(cell, motion_link=motion_clients)
         if scenario_path is not None:
             from pymotoros.controller.scenario import load_scenario
 
             controller.load_scenario(load_scenario(scenario_path))
     except ConfigError as exc:
         raise click.UsageError(str(exc)) from exc
-    return cell, controller, cell_file.ports if cell_file is not None else CellPorts()
+    ports = cell_file.ports if cell_file is not None else CellPorts()
+    return cell, controller, motion_clients, ports
 
 
 def _request_realtime(realtime: bool) -> None:

@@ -39,6 +39,7 @@ from pymotoros.errors import ConfigError
 from pymotoros.models.cell import PORT_KINDS, CellPorts, read_cell_file
 from pymotoros.models.fidelity import Fidelity
 from pymotoros.runtime.fleet import Fleet, FleetCell, cell_names, check_port_clashes
+from pymotoros.runtime.tcp import ClientTasks
 
 __all__ = ["run_cells", "run_fleet"]
 
@@ -111,10 +112,10 @@ def run_cells(
                 cell = dataclasses.replace(cell, fidelity=fidelity)
             cells.append(_fleet_cell(name, cell, cell_file.ports, host, token, allowed_hosts))
             labels.append(CellLabel.of(name, cell, path))
-        fleet = Fleet(cells, idle_batching=idle_batching)
+        recorder = open_recorder(record_path)  # before the coroutine: it may refuse
+        fleet = Fleet(cells, idle_batching=idle_batching, recorder=recorder)
     except ConfigError as exc:
         raise click.UsageError(str(exc)) from exc
-    recorder = open_recorder(record_path, fleet.apps)  # before the coroutine: it may refuse
     serve(
         run_fleet(fleet, labels, ports_file),
         host=host,
@@ -139,7 +140,9 @@ def _fleet_cell(
     behind the one token (and the one list of names) every cell's control API shares."""
     listen = [ports.get(kind) or 0 for kind in PORT_KINDS]
     config = simulator_config(host, listen, cell, token, allowed_hosts)
-    return FleetCell(name, VirtualController(cell), config)
+    motion_clients = ClientTasks()  # the motion server keeps them: a scenario's drop_motion
+    controller = VirtualController(cell, motion_link=motion_clients)
+    return FleetCell(name, controller, config, motion_clients)
 
 
 async def run_fleet(

@@ -116,9 +116,10 @@ def stop_on_signals(request_stop: Callable[[], None]) -> Iterator[None]:
             loop.remove_signal_handler(sig)
 
 
-def open_recorder(record_path: Path | None, apps: Sequence[SimulatorApp]) -> SessionRecorder | None:
+def open_recorder(record_path: Path | None) -> SessionRecorder | None:
     """``--record``: one pcapng file for the twin's side of every connection of every cell
-    (each cell's own ports tell its connections apart)."""
+    (each cell's own ports tell its connections apart), given to each app's servers when
+    the app is built."""
     if record_path is None:
         return None
     from pymotoros.capture import SessionRecorder
@@ -129,9 +130,6 @@ def open_recorder(record_path: Path | None, apps: Sequence[SimulatorApp]) -> Ses
         raise click.ClickException(
             f"cannot write the recording {record_path}: {exc.strerror or exc}"
         ) from exc
-    for app in apps:
-        for server in (app.motion, app.state, app.io):
-            server.recorder = recorder
     return recorder
 
 

@@ -33,6 +33,7 @@ from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
+from types import MappingProxyType
 from typing import TYPE_CHECKING, Final
 
 from pymotoros.errors import PymotorosError
@@ -299,43 +300,11 @@ class IoAddressError(IoError, ValueError):
 
 # --------------------------------------------------------------------------- the table
 
-_ENABLE = "then enable trajectory mode again (`pymotoros enable`, RobotClient.enable())"
-
-NOT_READY_REMEDIES: Final[Mapping[NotReadySubcode, str]] = {
-    NotReadySubcode.UNSPECIFIED: f"look at the pendant for the reason, {_ENABLE}",
-    NotReadySubcode.ALARM: (
-        f"read the alarm on the pendant and remove its cause, reset it (reset_alarm()), {_ENABLE}"
-    ),
-    NotReadySubcode.ERROR: f"clear the operator error shown on the pendant, {_ENABLE}",
-    NotReadySubcode.ESTOP: (
-        "release every emergency stop (pendant, controller, external), reset, "
-        f"{_ENABLE}; enabling switches servo power on"
-    ),
-    NotReadySubcode.NOT_PLAY: f"turn the pendant's mode key from TEACH to PLAY/REMOTE, {_ENABLE}",
-    NotReadySubcode.NOT_REMOTE: f"turn the pendant's mode key to REMOTE, {_ENABLE}",
-    NotReadySubcode.SERVO_OFF: (
-        "switch servo power on: enable trajectory mode (`pymotoros enable`, "
-        "RobotClient.enable()), which also wakes eco mode, or start_servos()"
-    ),
-    NotReadySubcode.HOLD: f"release HOLD (pendant button or external hold input), {_ENABLE}",
-    NotReadySubcode.NOT_STARTED: f"trajectory mode is off: {_ENABLE.removeprefix('then ')}",
-    NotReadySubcode.WAITING_ROS: (
-        "INIT_ROS runs but has not raised OT#889 yet: retry in a moment; if it persists, "
-        "check the INIT_ROS job on the controller"
-    ),
-    NotReadySubcode.SKILLSEND: (
-        "the job runs but motion is still not possible (DX100 SKILLSND, or a stop is in "
-        f"progress): {_ENABLE.removeprefix('then ')}"
-    ),
-    NotReadySubcode.PFL_ACTIVE: (
-        "a PFL (contact) event stopped the robot: move it to a safe place, press resume on "
-        f"the arm or pendant, {_ENABLE}"
-    ),
-    NotReadySubcode.INC_MOVE_ERROR: (
-        "the controller rejected a motion increment: disable, then enable trajectory mode "
-        "again; check the pendant for an alarm"
-    ),
-}
+NOT_READY_REMEDIES: Final[Mapping[NotReadySubcode, str]] = MappingProxyType(
+    {sub: sub.remedy for sub in NotReadySubcode}
+)
+"""Each NOT_READY reason's remedy, as the reason declares it (``NotReadySubcode.remedy``,
+the one text every surface shows)."""
 
 INVALID_REMEDIES: Final[Mapping[InvalidSubcode, str]] = {
     InvalidSubcode.UNSPECIFIED: "report this: MotoROS 1.9.12 never sends it",

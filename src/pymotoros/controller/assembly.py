@@ -2,13 +2,16 @@
 
 :class:`~pymotoros.controller.controller.VirtualController` is the composition root;
 the functions here build what it composes from a :class:`~pymotoros.controller.cell.CellConfig`
-(operator state, jobs, servos, safety unit, the shared :class:`MotoRosContext`), so
-each step reads on its own and tests can build one part without the whole controller.
+(operator state, jobs, servos, the pendant's keys, the kinematics, the safety unit, the
+workspace, the shared :class:`MotoRosContext`), so each step reads on its own and tests
+can build one part without the whole controller. Parts are wired here and only here:
+each receives what it acts on as a constructor argument (the ports of
+:mod:`pymotoros.controller.ports`), and no part is plugged into another afterwards.
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
 from pymotoros.controller.alarms import Alarm
@@ -16,11 +19,22 @@ from pymotoros.controller.cell import CellConfig, InitialState
 from pymotoros.controller.context import MotoRosContext
 from pymotoros.controller.inform import Job, JobRunner, builtin_jobs, load_jobs
 from pymotoros.controller.io_image import IoImage
-from pymotoros.controller.machine import EstopSource, OperatorMachine, OperatorState, ServoPower
+from pymotoros.controller.machine import (
+    EstopSource,
+    Observer,
+    OperatorMachine,
+    OperatorState,
+    ServoPower,
+)
+from pymotoros.controller.operator_keys import OperatorKeys
 from pymotoros.controller.processes import ControllerClock
 from pymotoros.controller.queues import MotionQueues
 from pymotoros.controller.safety import SafetyUnit
+from pymotoros.controller.safety.fsu import IncrementLimiter
+from pymotoros.controller.safety.pfl import retreat_record_ticks
 from pymotoros.controller.servo import ServoGroup
+from pymotoros.controller.tool_point import TcpTracker
+from pymotoros.controller.workspace_runtime import WorkspaceRuntime
 from pymotoros.models import robot_model
 from pymotoros.motion import GroupAxes, GroupInterpolator, to_pulses
 
@@ -58,6 +72,9 @@ def servo_groups(
             noise_pulses=cell.servo.noise_pulses,
             seed=seed,
             group_index=g,
+            record_ticks=retreat_record_ticks(cell.controller.interpolation_period_ms)
+            if cell.pfl
+            else 0,
         )
         for g, group_axes in enumerate(axes)
     )
@@ -74,21 +91,50 @@ def why_no_pfl(cell: CellConfig) -> str:
     return "the cell's PFL option is off (controller.pfl = false)"
 
 
+def tcp_limiter(tcp: TcpTracker, interps: Sequence[GroupInterpolator]) -> IncrementLimiter:
+    """The FSU's TCP-speed port: the kinematics clip a tick's increment with the group's
+    selected tool."""
+
+    def limit(
+        limit_mm_s: float, group: int, command: Sequence[int], increment: Sequence[int]
+    ) -> Sequence[int]:
+        return tcp.clip_increment(limit_mm_s, group, interps[group].tool, command, increment)
+
+    return limit
+
+
 @dataclass(frozen=True, slots=True)
 class Assembly:
-    """The shared parts of one controller and its safety unit."""
+    """The shared parts of one controller, wired: its safety unit, the pendant's keys
+    (also the safety unit's :class:`~pymotoros.controller.ports.OperatorPort`), the
+    kinematics of the tool point, and the workspace with its contact check."""
 
     ctx: MotoRosContext
     safety: SafetyUnit
+    keys: OperatorKeys
+    tcp: TcpTracker
+    workspace: WorkspaceRuntime
 
 
-def assemble(cell: CellConfig, *, seed: int, on_skill: Callable[[int, str], None]) -> Assembly:
-    """Build the clock, IO image, operator machine, job runner, groups and safety unit."""
+def assemble(
+    cell: CellConfig,
+    *,
+    seed: int,
+    on_skill: Callable[[int, str], None],
+    on_operator_change: Observer | None = None,
+) -> Assembly:
+    """Build the clock, IO image, operator machine, job runner, groups, the pendant's
+    keys, the kinematics, the safety unit and the workspace, each given what it acts on
+    (``on_skill``: a DX100 SKILLSND; ``on_operator_change``: the controller's reaction to
+    an operator-state change)."""
     ctrl = cell.controller
     clock = ControllerClock(ctrl.interpolation_period_ms)
     io = IoImage(ctrl)
     machine = OperatorMachine(
-        initial_operator_state(cell.initial), io, servo_on_delay_ms=cell.servo.servo_on_delay_ms
+        initial_operator_state(cell.initial),
+        io,
+        servo_on_delay_ms=cell.servo.servo_on_delay_ms,
+        observer=on_operator_change,
     )
     runner = JobRunner(cell_jobs(cell), io, on_skill=on_skill)
     axes = tuple(GroupAxes.from_model(g, ctrl) for g in cell.groups)
@@ -96,10 +142,14 @@ def assemble(cell: CellConfig, *, seed: int, on_skill: Callable[[int, str], None
     for interp, tool in zip(interps, cell.initial.tools, strict=False):
         interp.tool = tool
     servos = servo_groups(cell, axes, seed)
+    keys = OperatorKeys(machine, clock)
+    tcp = TcpTracker(cell)
     safety = SafetyUnit(
         io,
         axes,
         servos,
+        operator=keys,
+        tcp_limiter=tcp_limiter(tcp, interps),
         period_ms=ctrl.interpolation_period_ms,
         pfl_enabled=cell.pfl,
         pfl_why_disabled=why_no_pfl(cell),
@@ -118,4 +168,5 @@ def assemble(cell: CellConfig, *, seed: int, on_skill: Callable[[int, str], None
         increment_clip=safety.fsu.limits,
         increment_tcp_clip=safety.fsu.tcp_clip,
     )
-    return Assembly(ctx, safety)
+    workspace = WorkspaceRuntime(ctx, safety.pfl, safety.operator)
+    return Assembly(ctx, safety, keys, tcp, workspace)

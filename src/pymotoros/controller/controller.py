@@ -57,8 +57,9 @@ from pymotoros.controller.io_image import IoImage
 from pymotoros.controller.lint import ClientLint, ResumedMotion
 from pymotoros.controller.machine import EstopSource, Event, OperatorState
 from pymotoros.controller.motoros import MotoRos
-from pymotoros.controller.operator_keys import MAX_ALARM_CODE, OperatorKeys
+from pymotoros.controller.operator_keys import MAX_ALARM_CODE
 from pymotoros.controller.peripherals import Peripherals
+from pymotoros.controller.ports import MotionLink
 from pymotoros.controller.processes import Scheduler
 from pymotoros.controller.readiness import Readiness
 from pymotoros.controller.registers import RegisterOutputs
@@ -69,9 +70,7 @@ from pymotoros.controller.scenario import FiredEvent, Scenario, perform
 from pymotoros.controller.scenario_player import ScenarioPlayer
 from pymotoros.controller.skillsnd import SkillListeners
 from pymotoros.controller.state_view import FEEDBACK_FIELDS, StateView
-from pymotoros.controller.tool_point import TcpTracker
 from pymotoros.controller.trajectory import DhTable, TrajectoryPoints
-from pymotoros.controller.workspace_runtime import WorkspaceRuntime
 from pymotoros.kinematics.collision import Contact
 from pymotoros.models import robot_model
 from pymotoros.models.fidelity import Fidelity
@@ -87,35 +86,47 @@ class VirtualController:
     """A controller running MotoROS: MotoRosController for servers, OperatorPanel for operators."""
 
     def __init__(
-        self, cell: CellConfig | None = None, *, seed: int = 0, lazy_registers: bool = True
+        self,
+        cell: CellConfig | None = None,
+        *,
+        seed: int = 0,
+        lazy_registers: bool = True,
+        motion_link: MotionLink | None = None,
     ) -> None:
         """``lazy_registers=False``: the S1CxG register outputs are computed in every tick
         instead of when an M-register is read or written (same words either way; see
-        :class:`~pymotoros.controller.registers.RegisterOutputs`)."""
+        :class:`~pymotoros.controller.registers.RegisterOutputs`).
+
+        ``motion_link``: the motion connections a scenario's ``drop_motion`` closes, given
+        by the runtime that serves this controller (``pymotoros.testing``'s twin,
+        :meth:`SimulatorApp.for_cell <pymotoros.runtime.app.SimulatorApp.for_cell>`);
+        None: no motion server, ``drop_motion`` is refused saying so."""
         self.cell = cell = cell if cell is not None else default_cell()
         self.seed = seed
-        parts = assemble(cell, seed=seed, on_skill=lambda slave, text: self._on_skill(slave, text))
+        parts = assemble(
+            cell,
+            seed=seed,
+            on_skill=lambda slave, text: self._on_skill(slave, text),
+            on_operator_change=lambda old, new, event: self._on_operator_change(old, new, event),
+        )
         ctx = parts.ctx
         self._ctx = ctx
         self._clock, self._machine, self._io = ctx.clock, ctx.machine, ctx.io
         self._servos = ctx.servos  # the servo models, read by the S1CxG register tests
         self._safety = parts.safety
-        self._tcp = TcpTracker(cell)
-        interps = ctx.interpolators
-        self._safety.fsu.tcp_limiter = lambda limit, g, cmd, inc: self._tcp.clip_increment(
-            limit, g, interps[g].tool, cmd, inc
-        )
+        self._tcp = parts.tcp
+        self._keys = parts.keys
+        self._workspace = parts.workspace
+        self._motion_link = motion_link
         self.lint = ClientLint()
         """What clients did that a real controller answers differently (issue 31): the
         servers and the tick record it, ``GET /api/lint`` shows it."""
         self._build_motoros(ctx)
-        self._keys = OperatorKeys(ctx.machine, ctx.clock)
         self._forced = ForcedSignals(ctx.io, self._keys)
         self._state = StateView(ctx, self._readiness, self._tcp)
         self._power = DrivePower(ctx, last_motion_ms=lambda: self._inc_move.last_motion_ms)
         self._scenarios = ScenarioPlayer(ctx.io.read_any)
         self._observers: list[SnapshotObserver] = []
-        self._machine.add_observer(self._on_operator_change)
         self._readiness.monitor.init_read()
         hc_robot = any(robot_model(r).pfl for r in cell.robots)
         self._startup = MotoRosStartup(
@@ -137,14 +148,12 @@ class VirtualController:
             scenarios=self._scenarios,
             peripherals=Peripherals(ctx.io, cell.peripherals),
             scheduler=self._scheduler,
+            workspace=self._workspace,
             lint=self.lint,
         )
-        self._workspace = WorkspaceRuntime(ctx, self._safety.pfl, self._keys, self._cycle)
         # The tick runs every 4 ms for every twin: callers reach the cycle's tick
         # directly, without the facade's call in between (tick() below documents it).
         self.tick = self._cycle.tick  # type: ignore[method-assign]
-        self.drop_motion_hook: Callable[[], None] | None = None
-        """Closes the motion connection (set by the runtime; a scenario's drop_motion)."""
 
     def _build_motoros(self, ctx: MotoRosContext) -> None:
         """MotoROS's parts (see motoros.py for their map), all on one context."""
@@ -468,9 +477,13 @@ class VirtualController:
 
     def drop_motion(self) -> None:
         """Close the motion connection as a pulled cable (a scenario's ``drop_motion``)."""
-        if self.drop_motion_hook is None:
-            raise ValueError("drop_motion: no motion server is attached to this controller")
-        self.drop_motion_hook()
+        if self._motion_link is None:
+            raise ValueError(
+                "drop_motion: no motion server is attached to this controller (a controller "
+                "built with motion_link=None; SimulatorApp.for_cell and pymotoros.testing "
+                "build it with one)"
+            )
+        self._motion_link.drop_clients()
 
     # ================================================================== safety functions
 
@@ -493,7 +506,7 @@ class VirtualController:
     def workspace_contacts(self) -> tuple[Contact, ...]:
         """What the robot touched at the latest workspace check (empty: nothing, or a cell
         without obstacles)."""
-        contact = self._cycle.contact
+        contact = self._workspace.contact
         return contact.contacts if contact is not None else ()
 
     @property

@@ -31,9 +31,9 @@ from pymotoros.controller.processes import Scheduler
 from pymotoros.controller.readiness import Readiness
 from pymotoros.controller.registers import RegisterOutputs
 from pymotoros.controller.safety import SafetyUnit
-from pymotoros.controller.safety.contact import ContactFunction
 from pymotoros.controller.safety.startup import MotoRosStartup
 from pymotoros.controller.scenario_player import ScenarioPlayer
+from pymotoros.controller.workspace_runtime import WorkspaceRuntime
 
 
 class TickCycle:
@@ -52,7 +52,7 @@ class TickCycle:
         scenarios: ScenarioPlayer,
         peripherals: Peripherals,
         scheduler: Scheduler,
-        contact: ContactFunction | None = None,
+        workspace: WorkspaceRuntime | None = None,
         lint: ClientLint | None = None,
     ) -> None:
         self._ctx = ctx
@@ -68,8 +68,9 @@ class TickCycle:
         self._peripherals = peripherals
         self._has_peripherals = peripherals.active
         self._scheduler = scheduler
-        self.contact = contact
-        """The workspace contact check (None: a cell without obstacles, nothing to do)."""
+        self._workspace = workspace
+        """The cell's obstacles and their contact check (None, or its ``contact`` None:
+        nothing to touch, nothing to do)."""
         self._lint = lint if lint is not None else ClientLint()
         """Where the queue-starved check reports (the controller's client lint)."""
 
@@ -104,8 +105,8 @@ class TickCycle:
         if not moved and not safety_moved:
             for servo in ctx.servos:
                 servo.idle()
-        elif self.contact is not None:
-            self.contact.tick(now)
+        elif (workspace := self._workspace) is not None and workspace.contact is not None:
+            workspace.contact.tick(now)
         inc_move.fill_tick()
         if moved and self._lint.watching_queues:  # queue-starved: only after a moving point
             self._starved(now)

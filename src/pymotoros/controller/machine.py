@@ -314,10 +314,19 @@ class OperatorMachine:
 
     __slots__ = ("_io", "_observers", "_state", "next_timer_ms", "servo_on_delay_ms")
 
-    def __init__(self, initial: OperatorState, io: IoImage, *, servo_on_delay_ms: int) -> None:
+    def __init__(
+        self,
+        initial: OperatorState,
+        io: IoImage,
+        *,
+        servo_on_delay_ms: int,
+        observer: Observer | None = None,
+    ) -> None:
+        """``observer(old, new, event)`` runs after every change (not after a refusal):
+        the controller's reaction (brakes, the job runner, its snapshot observers)."""
         self._state = initial
         self._io = io
-        self._observers: list[Observer] = []
+        self._observers: tuple[Observer, ...] = (observer,) if observer is not None else ()
         self.servo_on_delay_ms = servo_on_delay_ms
         self.next_timer_ms: int | None = None
         """When :meth:`advance` next has something to do (None: nothing timed)."""
@@ -326,10 +335,6 @@ class OperatorMachine:
     @property
     def state(self) -> OperatorState:
         return self._state
-
-    def add_observer(self, observer: Observer) -> None:
-        """``observer(old, new, event)`` runs after every change (not after a refusal)."""
-        self._observers.append(observer)
 
     def fire(
         self,

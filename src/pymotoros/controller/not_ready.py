@@ -1,8 +1,10 @@
 """Why motion is not ready: the NOT_READY subcode order and its specifics (reference §4.2).
 
 :class:`NotReadyReasons` answers CHECK_MOTION_READY's refusal: the first matching test
-of §4.2 wins, and the detail says what holds the robot and what clears it (the web
-pendant shows the same words).
+of §4.2 wins, and the detail says what holds the robot (the specifics found here: which
+alarm, which E-stop chain, where INIT_ROS is) and what clears it: the remedy the reason
+declares (``NotReadySubcode.remedy``, the text the client and ``pymotoros status`` show
+too). The web pendant shows the same words.
 """
 
 from __future__ import annotations
@@ -25,21 +27,13 @@ class NotReadyReasons:
         self._machine = ctx.machine
         self._runner = ctx.runner
         self._flags = flags
-        self._why: dict[NotReadySubcode, Callable[[], str]] = {
+        self._specifics: dict[NotReadySubcode, Callable[[], str]] = {
             NotReadySubcode.ALARM: self._alarm,
             NotReadySubcode.ERROR: self._error,
             NotReadySubcode.ESTOP: self._estop,
-            NotReadySubcode.NOT_PLAY: lambda: "select PLAY on the pendant, then START_TRAJ_MODE",
-            NotReadySubcode.NOT_REMOTE: lambda: "switch the controller to REMOTE",
             NotReadySubcode.SERVO_OFF: self._servo_off,
-            NotReadySubcode.HOLD: lambda: "release HOLD, then START_TRAJ_MODE restarts INIT_ROS",
             NotReadySubcode.PFL_ACTIVE: self._pfl,
-            NotReadySubcode.INC_MOVE_ERROR: lambda: (
-                f"{flags.latches.inc_move_error_reason}; START_TRAJ_MODE clears it"
-            ),
-            NotReadySubcode.NOT_STARTED: lambda: (
-                "INIT_ROS is not running; START_TRAJ_MODE starts it"
-            ),
+            NotReadySubcode.INC_MOVE_ERROR: lambda: flags.latches.inc_move_error_reason,
             NotReadySubcode.WAITING_ROS: self._waiting_ros,
             NotReadySubcode.SKILLSEND: self._skill_detail,
         }
@@ -76,32 +70,40 @@ class NotReadyReasons:
         return reply(result, int(sub), detail, group_no=group_no)
 
     def why(self, sub: NotReadySubcode) -> str:
-        """The specifics behind ``sub`` and what clears it ("" for UNSPECIFIED)."""
-        explain = self._why.get(sub)
+        """The specifics behind ``sub`` and its declared remedy ("" for UNSPECIFIED,
+        which the controller answers when motion is ready)."""
+        if sub is NotReadySubcode.UNSPECIFIED:
+            return ""
+        specifics = self.specifics(sub)
+        return f"{specifics}; {sub.remedy}" if specifics else sub.remedy
+
+    def specifics(self, sub: NotReadySubcode) -> str:
+        """What holds the robot, as this controller sees it ("" when the meaning says it
+        all): the alarms, the E-stop chains, the PFL signals, where INIT_ROS is …"""
+        explain = self._specifics.get(sub)
         return explain() if explain is not None else ""
 
     def _alarm(self) -> str:
         state = self._machine.state
         alarms = ", ".join(f"{a.code}/{a.subcode} {a.text}".strip() for a in state.alarms)
-        return f"{alarms or 'alarm output on'}; RESET_ALARM or START_TRAJ_MODE resets it"
+        return alarms or "alarm output on"
 
     def _error(self) -> str:
         errors = ", ".join(f"{e.code} {e.text}".strip() for e in self._machine.state.errors)
-        return f"{errors or 'error output on'}; RESET_ALARM cancels it"
+        return errors or "error output on"
 
     def _estop(self) -> str:
         estop = sorted(self._machine.state.estop, key=lambda e: e.value)
         chains = ", ".join(e.name.lower() for e in estop)
-        return f"{chains or 'an'} E-stop pressed; release it, then START_TRAJ_MODE"
+        return f"{chains or 'an'} E-stop pressed"
 
     def _servo_off(self) -> str:
-        return "eco mode" if self._flags.reading.eco else "START_TRAJ_MODE switches servo power on"
+        return "eco mode" if self._flags.reading.eco else ""
 
     def _pfl(self) -> str:
         pfl = self._flags.reading.pfl
         active = [name for name, on in zip(_PFL_NAMES, pfl, strict=True) if on]
-        now = ", ".join(active) if active else "PFL signals clear, the event is latched"
-        return f"{now}; START_TRAJ_MODE clears the latch"
+        return ", ".join(active) if active else "PFL signals clear, the event is latched"
 
     def _waiting_ros(self) -> str:
         where = ", ".join(f"{job} line {line}" for job, line in self._runner.position())

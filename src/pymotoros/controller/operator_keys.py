@@ -2,7 +2,9 @@
 
 :class:`OperatorKeys` turns each key into the operator-machine event it stands for, at
 the controller's time, and keeps the alarm history. It is the operator-panel part of
-:class:`~pymotoros.controller.controller.VirtualController`, which delegates to it.
+:class:`~pymotoros.controller.controller.VirtualController`, which delegates to it, and
+the :class:`~pymotoros.controller.ports.OperatorPort` the safety functions act through
+(read the state, raise an alarm, cut servo power).
 """
 
 from __future__ import annotations
@@ -11,7 +13,7 @@ import logging
 from typing import Final
 
 from pymotoros.controller.alarms import Alarm, AlarmHistory
-from pymotoros.controller.machine import EstopSource, Event, OperatorMachine
+from pymotoros.controller.machine import EstopSource, Event, OperatorMachine, OperatorState
 from pymotoros.controller.processes import ControllerClock
 from pymotoros.protocol.constants import PendantMode
 
@@ -35,6 +37,15 @@ class OperatorKeys:
     ) -> str | None:
         """``event`` now; the refusal's reason, or None when it was accepted."""
         return self._machine.fire(event, self._clock.time_ms, alarm=alarm, source=source)
+
+    @property
+    def state(self) -> OperatorState:
+        """The operator state now, frozen."""
+        return self._machine.state
+
+    def servo_off(self) -> None:
+        """Cut servo power (a safety function's stop; the pendant's servo-off key)."""
+        self.fire(Event.SERVO_OFF)
 
     def alarm_history(self) -> tuple[Alarm, ...]:
         return self._history.entries()

@@ -86,7 +86,10 @@ class ServoGroup:
         noise_pulses: int = 0,
         seed: int = 0,
         group_index: int = 0,
+        record_ticks: int = 0,
     ) -> None:
+        """``record_ticks``: keep that many ticks of increments in :attr:`recorder` (a
+        PFL cell's servos, for a clamping's retreat); 0: none."""
         if lag_ticks < 0:
             raise ValueError(f"lag_ticks must be ≥ 0, not {lag_ticks}")
         if noise_pulses < 0:
@@ -104,8 +107,11 @@ class ServoGroup:
         self._weights = tuple((w - 1 - m) / w for m in range(w))
         self._noise_pulses = noise_pulses
         self._seed = _mix(seed * SEED_STRIDE + group_index)
-        self.recorder: deque[Sequence[int]] | None = None
-        """When set (the PFL function), every tick's increment is appended, zeros included."""
+        self.recorder: deque[Sequence[int]] | None = (
+            deque(maxlen=record_ticks) if record_ticks > 0 else None
+        )
+        """With ``record_ticks``: every tick's increment is appended, zeros included (the
+        PFL function reads it for a clamping's retreat)."""
 
     @property
     def lag_ticks(self) -> int:

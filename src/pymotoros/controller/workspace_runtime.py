@@ -7,7 +7,11 @@ the cell file's keys as a mapping (``{"name": "person", "cylinder": [0.3, 1.8],
 obstacle is a :class:`~pymotoros.errors.ConfigError` naming its key. The contact
 function of the tick (:mod:`pymotoros.controller.safety.contact`) follows: built when
 the first obstacle appears, dropped with the last one (so a cell without obstacles
-still costs nothing per tick), told to check again after every change.
+still costs nothing per tick), told to check again after every change. This part owns
+that function (:attr:`WorkspaceRuntime.contact`); the tick cycle, built with this part,
+runs it. A contact acts through the ports the part is built with: the PFL function, and
+the operator state (:class:`~pymotoros.controller.ports.OperatorPort`: alarm 4315, servo
+off).
 """
 
 from __future__ import annotations
@@ -16,9 +20,8 @@ from collections.abc import Mapping
 
 from pymotoros.controller.api import ContactInfo, WorkspaceSnapshot
 from pymotoros.controller.context import MotoRosContext
-from pymotoros.controller.cycle import TickCycle
-from pymotoros.controller.operator_keys import OperatorKeys
-from pymotoros.controller.safety.contact import workspace_contact
+from pymotoros.controller.ports import OperatorPort
+from pymotoros.controller.safety.contact import ContactFunction, workspace_contact
 from pymotoros.controller.safety.pfl import PflFunction
 from pymotoros.models.workspace import Obstacle, Workspace, parse_obstacle
 
@@ -26,15 +29,14 @@ from pymotoros.models.workspace import Obstacle, Workspace, parse_obstacle
 class WorkspaceRuntime:
     """The obstacles of one controller now, and the contact check that follows them."""
 
-    def __init__(
-        self, ctx: MotoRosContext, pfl: PflFunction, keys: OperatorKeys, cycle: TickCycle
-    ) -> None:
+    def __init__(self, ctx: MotoRosContext, pfl: PflFunction, operator: OperatorPort) -> None:
         self._ctx = ctx
         self._pfl = pfl
-        self._keys = keys
-        self._cycle = cycle
+        self._operator = operator
         self.workspace: Workspace = ctx.cell.workspace
-        cycle.contact = workspace_contact(ctx, pfl, keys, self.workspace)
+        self.contact: ContactFunction | None = workspace_contact(ctx, pfl, operator, self.workspace)
+        """The contact check the tick runs after the increments (None: nothing to touch,
+        nothing to do)."""
 
     @property
     def obstacles(self) -> tuple[Obstacle, ...]:
@@ -53,7 +55,7 @@ class WorkspaceRuntime:
 
     def state(self) -> dict[str, object]:
         """``{"obstacles": [...], "contacts": [...]}`` for the state document."""
-        contact = self._cycle.contact
+        contact = self.contact
         contacts = contact.contacts if contact is not None else ()
         return {
             "obstacles": [o.as_dict() for o in self.workspace.obstacles],
@@ -62,7 +64,7 @@ class WorkspaceRuntime:
 
     def snapshot(self) -> WorkspaceSnapshot:
         """The snapshot's part: the obstacles now and the latest check's contacts."""
-        contact = self._cycle.contact
+        contact = self.contact
         contacts = contact.contacts if contact is not None else ()
         return WorkspaceSnapshot(
             self.workspace.obstacles,
@@ -80,9 +82,9 @@ class WorkspaceRuntime:
 
     def _set(self, workspace: Workspace) -> None:
         self.workspace = workspace
-        contact = self._cycle.contact
+        contact = self.contact
         if contact is None or not workspace.obstacles:
-            self._cycle.contact = workspace_contact(self._ctx, self._pfl, self._keys, workspace)
+            self.contact = workspace_contact(self._ctx, self._pfl, self._operator, workspace)
             return
         contact.world.set_obstacles(workspace)
         contact.workspace_changed()

@@ -235,21 +235,130 @@ class InvalidSubcode(_Described):
 
 @enum.unique
 class NotReadySubcode(_Described):
-    """Subcodes that go with ``ResultCode.NOT_READY`` (§1.7, §4.2)."""
+    """Subcodes that go with ``ResultCode.NOT_READY`` (§1.7, §4.2).
 
-    UNSPECIFIED = 5000, "not ready for an unspecified reason"
-    ALARM = 5001, "an alarm is active"
-    ERROR = 5002, "an operator error is active"
-    ESTOP = 5003, "emergency stop is pressed"
-    NOT_PLAY = 5004, "the pendant is not in PLAY mode"
-    NOT_REMOTE = 5005, "the controller is not in REMOTE mode"
-    SERVO_OFF = 5006, "servo power is off (or eco mode is on)"
-    HOLD = 5007, "HOLD is on"
-    NOT_STARTED = 5008, "the INIT_ROS job is not running"
-    WAITING_ROS = 5009, "the INIT_ROS job has not raised OT#889 yet"
-    SKILLSEND = 5010, "motion-ready still false (DX100 SKILLSND, job-ready edge or stop pending)"
-    PFL_ACTIVE = 5011, "a PFL (power and force limiting) event stopped the robot"
-    INC_MOVE_ERROR = 5012, "the controller rejected an increment; restart trajectory mode"
+    Declared as ``NAME = value, "meaning", "remedy"``: each reason carries, once, what
+    the user does about it. The client's errors, ``pymotoros status``, the controller's
+    refusal text and the web pendant all show this ``remedy``. START_TRAJ_MODE clears
+    only what its §3.2 steps clear (errors, alarms, servo power, eco mode, MotoROS's
+    latches, a job not started); it is refused while an E-stop, HOLD or not-REMOTE holds
+    the robot, and cannot start INIT_ROS outside PLAY: those remedies begin with the
+    operator's hand (``OPERATOR_FIRST``).
+    """
+
+    remedy: str
+
+    def __new__(cls, value: int, meaning: str = "", remedy: str = "") -> Self:
+        member = int.__new__(cls, value)
+        member._value_ = value
+        member.meaning = meaning
+        member.remedy = remedy
+        return member
+
+    UNSPECIFIED = (
+        5000,
+        "not ready for an unspecified reason",
+        "look at the pendant for what holds the robot, then enable trajectory mode again "
+        "(START_TRAJ_MODE: `pymotoros enable`, RobotClient.enable())",
+    )
+    ALARM = (
+        5001,
+        "an alarm is active",
+        "read the alarm on the pendant and remove its cause (a collision: move the robot "
+        "clear); then reset it: START_TRAJ_MODE (`pymotoros enable`, RobotClient.enable()) "
+        "resets alarms before it switches servo power on, RESET_ALARM (`pymotoros reset`, "
+        "reset_alarm()) only resets",
+    )
+    ERROR = (
+        5002,
+        "an operator error is active",
+        "remove the operator error's cause (shown on the pendant); START_TRAJ_MODE "
+        "(`pymotoros enable`, RobotClient.enable()) or RESET_ALARM (`pymotoros reset`) "
+        "cancels it",
+    )
+    ESTOP = (
+        5003,
+        "emergency stop is pressed",
+        "an operator must release every emergency stop (pendant, controller, external): "
+        "START_TRAJ_MODE is refused while one is pressed; once released, enable trajectory "
+        "mode (START_TRAJ_MODE: `pymotoros enable`, RobotClient.enable()) to switch servo "
+        "power on",
+    )
+    NOT_PLAY = (
+        5004,
+        "the pendant is not in PLAY mode",
+        "an operator must turn the pendant's mode key to PLAY (START_TRAJ_MODE cannot "
+        "start INIT_ROS in TEACH); then enable trajectory mode (START_TRAJ_MODE: "
+        "`pymotoros enable`, RobotClient.enable())",
+    )
+    NOT_REMOTE = (
+        5005,
+        "the controller is not in REMOTE mode",
+        "an operator must switch the controller to REMOTE (START_TRAJ_MODE is refused "
+        "without it); then enable trajectory mode (START_TRAJ_MODE: `pymotoros enable`, "
+        "RobotClient.enable())",
+    )
+    SERVO_OFF = (
+        5006,
+        "servo power is off (or eco mode is on)",
+        "enable trajectory mode (START_TRAJ_MODE: `pymotoros enable`, RobotClient.enable()):"
+        " it switches servo power on and leaves eco mode",
+    )
+    HOLD = (
+        5007,
+        "HOLD is on",
+        "an operator must release HOLD (the pendant's key or the external hold input): "
+        "START_TRAJ_MODE is refused while HOLD is on; then enable trajectory mode "
+        "(START_TRAJ_MODE: `pymotoros enable`, RobotClient.enable()) to restart INIT_ROS",
+    )
+    NOT_STARTED = (
+        5008,
+        "the INIT_ROS job is not running",
+        "enable trajectory mode (START_TRAJ_MODE: `pymotoros enable`, RobotClient.enable()):"
+        " it starts INIT_ROS",
+    )
+    WAITING_ROS = (
+        5009,
+        "the INIT_ROS job has not raised OT#889 yet",
+        "INIT_ROS runs but has not raised OT#889 yet: retry in a moment; if it persists, "
+        "check the INIT_ROS job on the controller",
+    )
+    SKILLSEND = (
+        5010,
+        "motion-ready still false (DX100 SKILLSND, job-ready edge or stop pending)",
+        "the job runs but motion is still not possible (DX100 SKILLSND, or a stop in "
+        "progress): wait for the stop to end; if it persists, disable and enable trajectory"
+        " mode again (STOP_TRAJ_MODE, START_TRAJ_MODE: `pymotoros disable`, `pymotoros "
+        "enable`)",
+    )
+    PFL_ACTIVE = (
+        5011,
+        "a PFL (power and force limiting) event stopped the robot",
+        "an operator must make the cell safe (move the robot clear of the contact) and "
+        "release the PFL stop on the arm or pendant; only once the PFL signals are clear "
+        "does enabling trajectory mode (START_TRAJ_MODE: `pymotoros enable`, "
+        "RobotClient.enable()) clear MotoROS's latch",
+    )
+    INC_MOVE_ERROR = (
+        5012,
+        "the controller rejected an increment; restart trajectory mode",
+        "look on the pendant for the alarm that refused the increment; then enable "
+        "trajectory mode again (START_TRAJ_MODE: `pymotoros enable`, RobotClient.enable()),"
+        " which clears the latch",
+    )
+
+
+OPERATOR_FIRST: Final = frozenset(
+    {
+        NotReadySubcode.ESTOP,
+        NotReadySubcode.NOT_PLAY,
+        NotReadySubcode.NOT_REMOTE,
+        NotReadySubcode.HOLD,
+        NotReadySubcode.PFL_ACTIVE,
+    }
+)
+"""The reasons START_TRAJ_MODE cannot clear: a person must act first (§3.2 steps 4 and
+9.1; a PFL stop is released on the arm). Their remedies begin with "an operator must"."""
 
 
 NOT_READY_SUBCODES: Final = range(5000, 6000)

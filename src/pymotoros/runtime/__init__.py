@@ -3,10 +3,10 @@
 The MotoROS servers (motion 50240, state 50241, IO 50242), the interpolation loop on
 an injected clock, and the HTTP control API, all owned by :class:`SimulatorApp`::
 
-    from pymotoros.controller import VirtualController
+    from pymotoros.controller import default_cell
     from pymotoros.runtime import SimulatorApp, SimulatorConfig
 
-    async with SimulatorApp(VirtualController(), SimulatorConfig(motion_port=0)) as app:
+    async with SimulatorApp.for_cell(default_cell(), SimulatorConfig(motion_port=0)) as app:
         print(app.ports)
 
 Names are imported on first use, so ``pymotoros.runtime.clock`` does not pull in the

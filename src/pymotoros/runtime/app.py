@@ -12,9 +12,14 @@ the clients, stop the HTTP server, cancel the loops, release the sockets.
 
 ::
 
-    async with SimulatorApp(controller, SimulatorConfig(motion_port=0, ...)) as app:
+    async with SimulatorApp.for_cell(cell, SimulatorConfig(motion_port=0, ...)) as app:
         print(app.ports.motion)   # the port the OS chose
         ...
+
+``SimulatorApp.for_cell`` builds the controller itself, with the motion port's client
+set as its motion link (a scenario's ``drop_motion`` closes those connections);
+``SimulatorApp(controller, ...)`` serves a controller built elsewhere, which reaches the
+motion server only if it was built with that link (``motion_clients``).
 """
 
 from __future__ import annotations
@@ -29,6 +34,9 @@ from typing import Final, Self
 
 import uvicorn
 
+from pymotoros.capture import SessionRecorder
+from pymotoros.controller.cell import CellConfig
+from pymotoros.controller.controller import VirtualController
 from pymotoros.errors import ConfigError
 from pymotoros.models.cell import PORT_KINDS
 from pymotoros.protocol.constants import (
@@ -53,7 +61,13 @@ from pymotoros.runtime.state_server import (
     StateServer,
 )
 from pymotoros.runtime.target import SimulatedController
-from pymotoros.runtime.tcp import bind_socket, bind_unlistened, is_loopback
+from pymotoros.runtime.tcp import (
+    ClientTasks,
+    ServiceWiring,
+    bind_socket,
+    bind_unlistened,
+    is_loopback,
+)
 from pymotoros.runtime.ticker import Ticker, TickStats
 
 __all__ = ["DEFAULT_HTTP_PORT", "BoundPorts", "SimulatorApp", "SimulatorConfig"]
@@ -136,13 +150,19 @@ class SimulatorApp(Served):
         clock: Clock | None = None,
         idle_batching: bool | None = None,
         ticker: Ticker | None = None,
+        motion_clients: ClientTasks | None = None,
+        recorder: SessionRecorder | None = None,
+        metrics_cell: str | None = None,
     ) -> None:
+        """``motion_clients``: the motion connections the controller was built with as its
+        motion link (:meth:`for_cell` does both); ``recorder``: records every connection
+        (``pymotoros sim --record``); ``metrics_cell``: the cell's name as a ``cell``
+        label of ``GET /metrics`` (a process running several cells, runtime/fleet.py)."""
         super().__init__()
         self.controller = controller
         self.config = config or SimulatorConfig()
-        self.metrics_cell: str | None = None
-        """The cell's name as a ``cell`` label of ``GET /metrics`` (set when a process
-        runs several cells, runtime/fleet.py)."""
+        self.metrics_cell = metrics_cell
+        """The cell's name as a ``cell`` label of ``GET /metrics`` (None: one cell)."""
         self.clock: Clock = clock or LoopClock()
         # Real time: the interpolation loop sleeps on a precise timer (a timerfd in the
         # selector, or a timer thread; issue 13) instead of spinning the last
@@ -163,20 +183,22 @@ class SimulatorApp(Served):
             may_batch=self.observers.may_batch if self.idle_batching else None,
         )
         order = self.config.byte_order
-        self.motion = MotionServer(controller, order)
+        # every server catches the ticker up on accept and limits its log flood in the
+        # app's time
+        wiring = ServiceWiring(catch_up=self._catch_up, log_clock=self.clock.now, recorder=recorder)
+        motion_wiring = wiring.copy()
+        if motion_clients is not None:  # the controller's motion link (for_cell)
+            motion_wiring["clients"] = motion_clients
+        self.motion = MotionServer(controller, order, **motion_wiring)
         self.state = StateServer(
             controller,
             order,
             self.clock,
             period=self.config.state_period,
             message_gap=self.config.state_message_gap,
+            **wiring,
         )
-        self.io = IoServer(controller, order)
-        for server in (self.motion, self.state, self.io):
-            server.catch_up = self._catch_up
-            server.log_clock = self.clock.now  # log flood limits in the app's time
-        if hasattr(controller, "drop_motion_hook"):  # a scenario's drop_motion
-            controller.drop_motion_hook = self.motion.drop_clients
+        self.io = IoServer(controller, order, **wiring)
         self._ports: BoundPorts | None = None
         self._ready = asyncio.Event()
         self._http: _EmbeddedUvicorn | None = None
@@ -185,6 +207,34 @@ class SimulatorApp(Served):
         self._started = False
         self._shutdown_done = False
         self._motoros_listening = False
+
+    @classmethod
+    def for_cell(
+        cls,
+        cell: CellConfig,
+        config: SimulatorConfig | None = None,
+        *,
+        seed: int = 0,
+        clock: Clock | None = None,
+        idle_batching: bool | None = None,
+        ticker: Ticker | None = None,
+        recorder: SessionRecorder | None = None,
+        metrics_cell: str | None = None,
+    ) -> SimulatorApp:
+        """A :class:`~pymotoros.controller.VirtualController` of ``cell`` served by a new
+        app: the controller is built with the motion server's client set as its motion
+        link, so a scenario's ``drop_motion`` closes the motion connections."""
+        clients = ClientTasks()
+        return cls(
+            VirtualController(cell, seed=seed, motion_link=clients),
+            config,
+            clock=clock,
+            idle_batching=idle_batching,
+            ticker=ticker,
+            motion_clients=clients,
+            recorder=recorder,
+            metrics_cell=metrics_cell,
+        )
 
     # ----------------------------------------------------------- public
 

@@ -39,12 +39,14 @@ from typing import Final, Self
 
 import numpy as np
 
+from pymotoros.capture import SessionRecorder
 from pymotoros.errors import ConfigError
 from pymotoros.models.cell import PORT_KINDS, CellPorts, read_cell_file
 from pymotoros.runtime.app import SimulatorApp, SimulatorConfig
 from pymotoros.runtime.clock import Clock, precise_clock
 from pymotoros.runtime.served import Served
 from pymotoros.runtime.target import SimulatedController
+from pymotoros.runtime.tcp import ClientTasks
 from pymotoros.runtime.ticker import LATENESS_WINDOW, LatenessStats, Ticker, TickStats
 
 __all__ = [
@@ -116,6 +118,9 @@ class FleetCell:
     name: str
     controller: SimulatedController
     config: SimulatorConfig
+    motion_clients: ClientTasks | None = None
+    """The motion connections the controller was built with as its motion link (a
+    scenario's drop_motion closes them; None: the controller has none)."""
 
 
 class _TickAll:
@@ -180,7 +185,9 @@ class Fleet(Served):
         *,
         clock: Clock | None = None,
         idle_batching: bool | None = None,
+        recorder: SessionRecorder | None = None,
     ) -> None:
+        """``recorder``: records every connection of every cell (``pymotoros sim --record``)."""
         super().__init__()
         if not cells:
             raise ValueError("a fleet needs at least one cell")
@@ -209,12 +216,17 @@ class Fleet(Served):
         )
         self.apps = tuple(
             SimulatorApp(
-                c.controller, c.config, clock=clock, ticker=self.ticker, idle_batching=batching
+                c.controller,
+                c.config,
+                clock=clock,
+                ticker=self.ticker,
+                idle_batching=batching,
+                motion_clients=c.motion_clients,
+                recorder=recorder,
+                metrics_cell=c.name,  # GET /metrics labels each family with its cell
             )
             for c in cells
         )
-        for cell, app in zip(cells, self.apps, strict=True):
-            app.metrics_cell = cell.name  # GET /metrics labels each family with its cell
         self._started = False
 
     def _nobody_observes(self) -> bool:

@@ -12,7 +12,7 @@ from __future__ import annotations
 import contextlib
 import logging
 from collections.abc import Callable
-from typing import Final
+from typing import Final, Unpack
 
 from pymotoros.controller.api import IoRead, MotoRosController
 from pymotoros.controller.lint import LintCode
@@ -44,7 +44,7 @@ from pymotoros.protocol.messages import (
 )
 from pymotoros.protocol.sizes import Accept, Reject, Verdict, expected_size
 from pymotoros.runtime.connections import IO_CLIENTS
-from pymotoros.runtime.tcp import Connection, FramedService
+from pymotoros.runtime.tcp import Connection, FramedService, ServiceWiring
 
 __all__ = ["IoServer", "handle_io_request", "log_rejection"]
 
@@ -176,8 +176,10 @@ class IoServer(FramedService):
         order: ByteOrder,
         *,
         fidelity: Fidelity | None = None,
+        **wiring: Unpack[ServiceWiring],
     ) -> None:
-        """``fidelity``: exact or safe (docs/fidelity.md); None takes the controller's."""
+        """``fidelity``: exact or safe (docs/fidelity.md); None takes the controller's.
+        ``wiring``: what the application gives (``runtime.tcp.ServiceWiring``)."""
         # The IO port's replacement rule tests the *motion* queues, as MotoROS does (§2.2).
         super().__init__(
             IO_CLIENTS,
@@ -185,6 +187,7 @@ class IoServer(FramedService):
             order,
             IoErrorReply(ResultCode.INVALID, InvalidSubcode.MSGSIZE),
             controller.fidelity if fidelity is None else fidelity,
+            **wiring,
         )
         self._controller = controller
         self.requests = 0

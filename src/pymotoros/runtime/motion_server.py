@@ -35,7 +35,7 @@ import asyncio
 import contextlib
 import enum
 import logging
-from typing import Final
+from typing import Final, Unpack
 
 from pymotoros.controller.api import MotoRosController, Outcome, Pending, PointData
 from pymotoros.controller.lint import LintCode, ResumedMotion
@@ -68,7 +68,7 @@ from pymotoros.protocol.messages import (
 from pymotoros.protocol.sizes import Accept, Close, Reject, Verdict
 from pymotoros.runtime.connections import MOTION_CLIENTS
 from pymotoros.runtime.io_server import handle_io_request, log_rejection
-from pymotoros.runtime.tcp import Connection, FramedService
+from pymotoros.runtime.tcp import Connection, FramedService, ServiceWiring
 
 __all__ = ["MotionServer"]
 
@@ -155,15 +155,20 @@ class MotionServer(FramedService):
         order: ByteOrder,
         *,
         fidelity: Fidelity | None = None,
+        **wiring: Unpack[ServiceWiring],
     ) -> None:
         """``fidelity``: exact or safe (docs/fidelity.md); None takes the controller's
-        (its cell's ``[motoros] fidelity``)."""
+        (its cell's ``[motoros] fidelity``). ``wiring``: what the application gives
+        (:class:`~pymotoros.runtime.tcp.ServiceWiring`; ``clients``: the same
+        :class:`~pymotoros.runtime.tcp.ClientTasks` the controller was built with as its
+        motion link)."""
         super().__init__(
             MOTION_CLIENTS,
             lambda: controller.has_queued_motion(),
             order,
             MotoMotionReply(-1, -1, 0, ResultCode.INVALID, InvalidSubcode.MSGSIZE),
             controller.fidelity if fidelity is None else fidelity,
+            **wiring,
         )
         self._controller = controller
         self._encoded: dict[MotoMotionReply, bytes] = {}

@@ -22,7 +22,7 @@ import asyncio
 import logging
 import socket
 from collections.abc import Callable
-from typing import Final, Protocol
+from typing import Final, Protocol, Unpack
 
 from pymotoros.controller.api import FeedbackData, MotoRosController
 from pymotoros.protocol.constants import ByteOrder
@@ -31,7 +31,7 @@ from pymotoros.protocol.messages import JointFeedback, MotoJointFeedbackEx, Robo
 from pymotoros.protocol.state_frames import joint_feedback_frame, robot_status_frame
 from pymotoros.runtime.clock import Clock
 from pymotoros.runtime.connections import STATE_CLIENTS
-from pymotoros.runtime.tcp import READ_CHUNK, Connection, TcpService
+from pymotoros.runtime.tcp import READ_CHUNK, Connection, ServiceWiring, TcpService
 
 __all__ = ["STATE_MESSAGE_GAP_S", "STATE_PERIOD_S", "StateServer"]
 
@@ -112,8 +112,10 @@ class StateServer(TcpService):
         *,
         period: float = STATE_PERIOD_S,
         message_gap: float = STATE_MESSAGE_GAP_S,
+        **wiring: Unpack[ServiceWiring],
     ) -> None:
-        super().__init__(STATE_CLIENTS, lambda: controller.has_queued_motion())
+        """``wiring``: what the application gives (``runtime.tcp.ServiceWiring``)."""
+        super().__init__(STATE_CLIENTS, lambda: controller.has_queued_motion(), **wiring)
         self._controller = controller
         self._order = order
         self._clock = clock

@@ -18,7 +18,7 @@ import socket
 import struct
 from abc import ABC, abstractmethod
 from collections.abc import AsyncGenerator, Callable
-from typing import Final
+from typing import Final, TypedDict, Unpack
 
 from pymotoros.capture import Flow, SessionRecorder
 from pymotoros.controller.lint import LintCode
@@ -44,7 +44,15 @@ from pymotoros.runtime.connections import (
 from pymotoros.runtime.log_limit import LogLimiter, loop_later, loop_time
 from pymotoros.runtime.traffic import Traffic
 
-__all__ = ["Connection", "FramedService", "TcpService", "bind_socket", "is_loopback"]
+__all__ = [
+    "ClientTasks",
+    "Connection",
+    "FramedService",
+    "ServiceWiring",
+    "TcpService",
+    "bind_socket",
+    "is_loopback",
+]
 
 logger = logging.getLogger(__name__)
 
@@ -149,27 +157,66 @@ class Connection:
             self.writer.close()
 
 
+class ClientTasks(dict[Connection, "asyncio.Task[None]"]):
+    """One port's open connections and their tasks: the server keeps them here, and
+    whoever was given the same object may cut them all at once.
+
+    Made before the controller, so that the motion port's can be given both to the
+    controller (its :class:`~pymotoros.controller.ports.MotionLink`, for a scenario's
+    ``drop_motion``) and to the :class:`~pymotoros.runtime.motion_server.MotionServer`
+    at their construction: neither is plugged into the other afterwards.
+    """
+
+    __slots__ = ()
+
+    def drop_clients(self) -> None:
+        """Close every client's connection now, as a cable pulled (fault injection)."""
+        for conn in list(self):
+            conn.close()
+
+
+class ServiceWiring(TypedDict, total=False):
+    """What a server is given by the application that runs it, at construction."""
+
+    clients: ClientTasks
+    """Where the server keeps its connections (default: its own)."""
+    catch_up: Callable[[], object] | None
+    """Called first on every accept: brings a batching ticker up to date (issue 13)."""
+    log_clock: Callable[[], float]
+    """The clock of the log limiters (the application's clock when it has one)."""
+    recorder: SessionRecorder | None
+    """Records every accepted connection (``pymotoros sim --record``)."""
+
+
 class TcpService(ABC):
     """One MotoROS server port."""
 
     name: str = "tcp"
 
-    def __init__(self, capacity: int, motion_queued: Callable[[], bool]) -> None:
+    def __init__(
+        self,
+        capacity: int,
+        motion_queued: Callable[[], bool],
+        *,
+        clients: ClientTasks | None = None,
+        catch_up: Callable[[], object] | None = None,
+        log_clock: Callable[[], float] = loop_time,
+        recorder: SessionRecorder | None = None,
+    ) -> None:
+        """The keyword arguments are :class:`ServiceWiring`'s."""
         self._slots: SlotTable[Connection] = SlotTable(capacity)
         self._motion_queued = motion_queued
         self._server: asyncio.Server | None = None
         self._tg: asyncio.TaskGroup | None = None
-        self._tasks: dict[Connection, asyncio.Task[None]] = {}
+        self._tasks: ClientTasks = clients if clients is not None else ClientTasks()
         self.port: int = 0
         self.accepted = 0
         self.refused = 0
         self.replaced = 0
-        self.recorder: SessionRecorder | None = None
-        """Records every accepted connection (``pymotoros sim --record``) when set."""
-        self.catch_up: Callable[[], object] | None = None
-        """Called first on every accept: brings a batching ticker up to date (issue 13)."""
-        self.log_clock: Callable[[], float] = loop_time
-        """The clock of the log limiters (the application's clock when it has one)."""
+        self._recorder = recorder
+        self._catch_up = catch_up
+        self.log_clock = log_clock
+        """The clock of the log limiters (a test may swap it for a fake one)."""
         self.log = LogLimiter(self.name, lambda: self.log_clock(), schedule=loop_later)
         """Bounds the connection lines a flood of connects makes this port log."""
 
@@ -202,8 +249,7 @@ class TcpService(ABC):
 
     def drop_clients(self) -> None:
         """Close every client's connection now, as a cable pulled (fault injection)."""
-        for conn in list(self._tasks):
-            conn.close()
+        self._tasks.drop_clients()
 
     async def close_clients(self) -> None:
         """Close every client and wait for its task to finish."""
@@ -229,8 +275,8 @@ class TcpService(ABC):
     # ----------------------------------------------------------- accepting
 
     def _accept(self, reader: asyncio.StreamReader, writer: asyncio.StreamWriter) -> None:
-        if self.catch_up is not None:
-            self.catch_up()
+        if self._catch_up is not None:
+            self._catch_up()
         conn = Connection(reader, writer, self.name, self.log_clock)
         tg = self._tg
         if tg is None:  # pragma: no cover - start() sets it before accepting
@@ -267,8 +313,8 @@ class TcpService(ABC):
             self._disconnected(admission.evicted)
         self.accepted += 1
         configure_socket(writer)
-        if self.recorder is not None:
-            conn.flow = self.recorder.flow(self.port, _peer_port(writer))
+        if self._recorder is not None:
+            conn.flow = self._recorder.flow(self.port, _peer_port(writer))
         coro = self._run(conn)
         try:
             task = tg.create_task(coro, name=f"{self.name}:{conn.peer}")
@@ -364,8 +410,9 @@ class FramedService(TcpService):
         order: ByteOrder,
         bad_prefix_reply: Message,
         fidelity: Fidelity = DEFAULT_FIDELITY,
+        **wiring: Unpack[ServiceWiring],
     ) -> None:
-        super().__init__(capacity, motion_queued)
+        super().__init__(capacity, motion_queued, **wiring)
         self._order = order
         self._bad_prefix_reply = bad_prefix_reply
         self.fidelity = fidelity

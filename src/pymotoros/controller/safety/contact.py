@@ -32,8 +32,7 @@ import numpy as np
 import numpy.typing as npt
 
 from pymotoros.controller.context import MotoRosContext
-from pymotoros.controller.machine import Event
-from pymotoros.controller.operator_keys import OperatorKeys
+from pymotoros.controller.ports import OperatorPort
 from pymotoros.controller.safety.pfl import DEFAULT_RETREAT_MS, PflFunction
 from pymotoros.controller.servo import SLOTS, ServoGroup
 from pymotoros.kinematics.collision import CollisionWorld, Contact
@@ -202,19 +201,11 @@ class ContactResponse:
     """What the controller does about a contact: PFL on an HC robot, else alarm 4315."""
 
     def __init__(
-        self,
-        pfl: PflFunction,
-        *,
-        group_names: Sequence[str],
-        raise_alarm: Callable[[int, int, str], None],
-        servo_off: Callable[[], None],
-        alarm_active: Callable[[int], bool],
+        self, pfl: PflFunction, *, group_names: Sequence[str], operator: OperatorPort
     ) -> None:
         self._pfl = pfl
         self._groups = tuple(group_names)
-        self._raise_alarm = raise_alarm
-        self._servo_off = servo_off
-        self._alarm_active = alarm_active
+        self._operator = operator
 
     def __call__(self, contacts: Sequence[Contact], now_ms: int) -> None:
         pfl = self._pfl
@@ -229,18 +220,22 @@ class ContactResponse:
                 retreat_ms=DEFAULT_RETREAT_MS if clamping else 0,
             )
             return
-        if self._alarm_active(COLLISION_ALARM):
+        operator = self._operator
+        if any(a.code == COLLISION_ALARM for a in operator.state.alarms):
             return
         first = contacts[0]
         subcode = self._groups.index(first.group) + 1 if first.group in self._groups else 0
         # the alarm stops the job (IncMove is refused from the next tick on), then the
         # collision detection function cuts servo power
-        self._raise_alarm(COLLISION_ALARM, subcode, COLLISION_ALARM_TEXT)
-        self._servo_off()
+        operator.raise_alarm(COLLISION_ALARM, subcode, COLLISION_ALARM_TEXT)
+        operator.servo_off()
 
 
 def workspace_contact(
-    ctx: MotoRosContext, pfl: PflFunction, keys: OperatorKeys, workspace: Workspace | None = None
+    ctx: MotoRosContext,
+    pfl: PflFunction,
+    operator: OperatorPort,
+    workspace: Workspace | None = None,
 ) -> ContactFunction | None:
     """The contact function of a cell with ``workspace`` (default: the cell file's), or
     None when there is nothing to touch (no obstacles, or no group with collision
@@ -263,16 +258,7 @@ def workspace_contact(
             frames[key] = cell.tool(g, key[1]).cell_tool
         return frames[key]
 
-    def servo_off() -> None:
-        keys.fire(Event.SERVO_OFF)
-
-    response = ContactResponse(
-        pfl,
-        group_names=[g.name for g in cell.groups],
-        raise_alarm=keys.raise_alarm,
-        servo_off=servo_off,
-        alarm_active=lambda code: any(a.code == code for a in ctx.machine.state.alarms),
-    )
+    response = ContactResponse(pfl, group_names=[g.name for g in cell.groups], operator=operator)
     return ContactFunction(world, ctx.servos, ctx.axes, tool=tool, react=response)
 
 

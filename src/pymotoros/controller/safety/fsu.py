@@ -7,11 +7,11 @@ position moved less than it sent) and resends the missing pulses (reference §5.
 
 :meth:`FsuFunction.limits` is the one place the per-tick, per-axis clip is computed; it
 combines the joint-speed limit (a share of each axis's maximum increment) with any
-number of :data:`IncrementLimiter` hooks. The TCP-speed limit needs forward kinematics:
-the controller plugs its kinematics in as :attr:`FsuFunction.tcp_limiter`, which sees
-each tick's intended increment and scales it so that the TCP moves no faster than the
-limit (:meth:`FsuFunction.tcp_clip`); without a limiter a TCP-speed request is refused
-with a message saying so.
+TCP-speed clip. The TCP-speed limit needs forward kinematics: the controller gives its
+kinematics as the ``tcp_limiter`` port when it builds the unit (an
+:data:`IncrementLimiter`, which sees each tick's intended increment and scales it so
+that the TCP moves no faster than the limit, :meth:`FsuFunction.tcp_clip`); an FSU
+built without one refuses a TCP-speed request with a message saying so.
 """
 
 from __future__ import annotations
@@ -28,9 +28,9 @@ from pymotoros.motion import GroupAxes
 logger = logging.getLogger(__name__)
 
 IncrementLimiter = Callable[[float, int, Sequence[int], Sequence[int]], Sequence[int]]
-"""TCP-speed hook: ``(tcp_speed_mm_s, group index, commanded pulses, intended increment)
--> per-slot maximum |increment| (pulses) for this tick``. The controller fills it from its
-kinematics (``controller.tool_point.TcpTracker``)."""
+"""The TCP-speed port: ``(tcp_speed_mm_s, group index, commanded pulses, intended
+increment) -> per-slot maximum |increment| (pulses) for this tick``. The controller
+gives it from its kinematics (``controller.tool_point.TcpTracker``) at construction."""
 
 
 class FsuRequest(TypedDict, total=False):
@@ -59,11 +59,14 @@ class FsuFunction:
         axes: Sequence[GroupAxes],
         servos: Sequence[ServoGroup],
         boot_joint_speed_pct: int | None,
+        *,
+        tcp_limiter: IncrementLimiter | None = None,
     ) -> None:
+        """``tcp_limiter``: the kinematics that clip a tick's increment to a TCP speed
+        (None: no kinematics, a TCP-speed limit is refused)."""
         self._axes = tuple(axes)
         self._servos = tuple(servos)
-        self.tcp_limiter: IncrementLimiter | None = None
-        """The TCP-speed hook; None until a kinematics model provides it."""
+        self._tcp_limiter = tcp_limiter
         self._joint_pct: int | None = None
         self._tcp: float | None = None
         self._joint_clip: tuple[tuple[int, ...], ...] | None = None
@@ -85,7 +88,7 @@ class FsuFunction:
         """Switch limits at run time: each given limit replaces that limit; ``off`` clears all.
 
         Raises ValueError for a value out of range, ``off`` with a limit, nothing given,
-        or a TCP-speed limit without the kinematics hook.
+        or a TCP-speed limit without kinematics (no ``tcp_limiter``).
         """
         if off:
             if joint_speed_pct is not None or tcp_speed_mm_s is not None:
@@ -102,7 +105,7 @@ class FsuFunction:
         if tcp_speed_mm_s is not None:
             if not tcp_speed_mm_s > 0:
                 raise ValueError(f"FSU: tcp_speed_mm_s must be > 0, not {tcp_speed_mm_s}")
-            if self.tcp_limiter is None:
+            if self._tcp_limiter is None:
                 raise ValueError(TCP_NEEDS_KINEMATICS)
         if joint_speed_pct is not None:
             logger.info("FSU joint-speed limit %d %%", joint_speed_pct)
@@ -125,7 +128,7 @@ class FsuFunction:
         (:meth:`tcp_clip`)."""
         if self._joint_clip is not None:
             return self._joint_clip
-        if self._tcp is not None and self.tcp_limiter is not None:
+        if self._tcp is not None and self._tcp_limiter is not None:
             return tuple(a.max_increment for a in self._axes)
         return None
 
@@ -135,7 +138,7 @@ class FsuFunction:
         """Per slot, the most pulses the TCP-speed limit lets ``increment`` execute from
         ``command`` this tick; None when that limit is off."""
         tcp = self._tcp
-        limiter = self.tcp_limiter
+        limiter = self._tcp_limiter
         if tcp is None or limiter is None:
             return None
         return limiter(tcp, group, command, increment)

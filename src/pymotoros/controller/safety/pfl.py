@@ -34,6 +34,14 @@ the signal clears (modelling choice, docs/fidelity.md). Configurable per call.""
 MAX_RETREAT_MS: Final = 2000
 """The longest retreat after a clamping the twin records history for (2 s of motion:
 far beyond the few hundred ms a clamping retreat is on the HC10)."""
+
+
+def retreat_record_ticks(period_ms: int) -> int:
+    """How many ticks of increments each servo keeps for a clamping's retreat (its
+    ``record_ticks``, given when a PFL cell's servos are built)."""
+    return MAX_RETREAT_MS // period_ms + 1
+
+
 DEFAULT_RETREAT_MS: Final = 100
 """Retreat after a clamping when the request names none (the seed's example value)."""
 
@@ -72,15 +80,15 @@ class PflFunction:
         self.enabled = enabled
         self._why_disabled = why_disabled
         self._period_ms = period_ms
-        depth = MAX_RETREAT_MS // period_ms + 1
         # every tick's increment per group, recorded by the servos themselves (cheap: one
-        # append per tick) for a clamping's retreat
-        self._recorders: tuple[collections.deque[Sequence[int]], ...] = tuple(
-            collections.deque(maxlen=depth) for _ in self._servos
-        )
-        if enabled:
-            for servo, recorder in zip(self._servos, self._recorders, strict=True):
-                servo.recorder = recorder
+        # append per tick) for a clamping's retreat: built to record when the cell has PFL
+        recorders = tuple(s.recorder for s in self._servos if s.recorder is not None)
+        if enabled and len(recorders) != len(self._servos):
+            raise ValueError(
+                "PFL needs servos that record their increments: build them with "
+                f"record_ticks=retreat_record_ticks({period_ms})"
+            )
+        self._recorders: tuple[collections.deque[Sequence[int]], ...] = recorders
         self.phase = "idle"
         """"idle", "stop" (81702 on) or "escape" (81703 on, retreating)."""
         self._stop_until_ms = 0
