@@ -17,7 +17,7 @@ from pymotoros.cli.live import not_ready_reason
 from pymotoros.client.errors import NotReadyError, reply_error
 from pymotoros.client.state import Mode, Status
 from pymotoros.controller import VirtualController
-from pymotoros.controller.api import PendantMode
+from pymotoros.protocol.constants import PendantMode
 from pymotoros.controller.assembly import assemble
 from pymotoros.controller.cell import default_cell
 from pymotoros.controller.readiness import Readiness
