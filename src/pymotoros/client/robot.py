@@ -279,7 +279,7 @@ class RobotClient:
         ``{"330": 1, ...}`` mapping or a cell file with ``[groups.s1cxg]``."""
         if not isinstance(table, S1cxgTable):
             table = s1cxg_table(table, self.robot.groups[group], index=group)
-        return await read_register_outputs(self, table, group)
+        return await read_register_outputs(self.read_mregister, table, self.robot.groups[group])
 
     # ------------------------------------------------------------------ motion
 

@@ -47,6 +47,7 @@ from pymotoros.client.errors import (
     AxisDeviation,
     ClientError,
     ConnectionLostError,
+    EarlyStop,
     MotionConnectionLostError,
     MotionIncompleteError,
     MotionTimeoutError,
@@ -254,38 +255,6 @@ class FollowingReport:
     def max_lag_rad(self) -> float:
         """The largest lag in rad (or m): :attr:`max_error`."""
         return self.max_error
-
-
-@dataclass(frozen=True, slots=True)
-class EarlyStop:
-    """How a move that ended early was stopped (:meth:`TrajectoryStreamer.stop_early`)."""
-
-    stopped: bool
-    """STOP_MOTION was acknowledged (SUCCESS)."""
-    at_rest: bool
-    """The feedback then showed the robot at rest."""
-    positions: tuple[float, ...]
-    """Where the robot stands (or was last reported), joints of the moved groups."""
-    took_s: float
-    """From the stop's start to rest (or to giving up)."""
-    why: str
-    """What ended the move."""
-    detail: str
-    """Where the robot stopped, with units, or why it may not have."""
-
-    @property
-    def text(self) -> str:
-        return f"{self.why}: {self.detail}"
-
-    def tell(self, exc: BaseException) -> None:
-        """Put the stop into ``exc``: the client's own errors get it in their message
-        (what the CLI prints), anything else (``CancelledError``, ``KeyboardInterrupt``,
-        the caller's exception) a note, so its type and message stay as they were."""
-        if isinstance(exc, ClientError) and exc.args and isinstance(exc.args[0], str):
-            exc.args = (f"{exc.args[0]}; {self.detail}", *exc.args[1:])
-            exc.early_stop = self
-        else:
-            exc.add_note(self.text)
 
 
 @dataclass(frozen=True, slots=True)
