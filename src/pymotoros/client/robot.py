@@ -43,10 +43,11 @@ from pymotoros.client.io_port import IoPort
 from pymotoros.client.link import Link
 from pymotoros.client.motion import Motion
 from pymotoros.client.motion_commands import SLOW_COMMAND_TIMEOUT_S, MotionCommands
+from pymotoros.client.move_result import MoveResult
 from pymotoros.client.registers import RegisterValues, read_register_outputs, s1cxg_table
 from pymotoros.client.state import RobotState, StateTracker, Status
 from pymotoros.client.state_view import DH_TOLERANCE, StateView
-from pymotoros.client.streaming import MoveResult, TrajectoryStreamer
+from pymotoros.client.streaming import TrajectoryStreamer
 from pymotoros.client.timing import REAL_TIME, ClientClock
 from pymotoros.client.tools import ToolTable
 from pymotoros.models import (

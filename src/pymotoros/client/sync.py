@@ -36,7 +36,7 @@ from typing import Any, Concatenate, Final, ParamSpec, Self, TypeVar
 from pymotoros.client.connection import Ports
 from pymotoros.client.robot import RobotClient
 from pymotoros.client.state import DEFAULT_STATE_TIMEOUT_S, JointState, RobotState, Status
-from pymotoros.client.streaming import EARLY_STOP_BOUND_S, STOP_ON_THE_PENDANT
+from pymotoros.client.stopping import EARLY_STOP_BOUND_S, STOP_ON_THE_PENDANT
 from pymotoros.client.tools import ToolTable
 from pymotoros.models import ControllerModel, RobotModel
 from pymotoros.protocol.constants import ByteOrder
