@@ -1,4 +1,4 @@
-"""``RobotClient`` is a facade over parts; each part works on its own (issue 19)."""
+"""``RobotClient`` is built of parts; each part works on its own (issue 19)."""
 
 from __future__ import annotations
 
@@ -7,6 +7,7 @@ import inspect
 import pytest
 
 from pymotoros.client import ClientError, RobotClient
+from pymotoros.client.calls import RobotCalls
 from pymotoros.client.connection import Ports
 from pymotoros.client.geometry import Geometry
 from pymotoros.client.io_port import IoPort
@@ -68,17 +69,26 @@ async def test_the_motion_commands_and_the_io_port_on_their_own() -> None:
             await link.close()
 
 
-def test_the_facade_forwards_each_part_with_its_signature() -> None:
+def _without_self(function: object) -> inspect.Signature:
+    signature = inspect.signature(function)  # type: ignore[arg-type]
+    return signature.replace(parameters=list(signature.parameters.values())[1:])
+
+
+def test_each_call_has_the_signature_of_the_part_it_calls() -> None:
+    """The client's calls are real definitions (``RobotCalls``, issue 30), each with the
+    parameters, kind (coroutine or not) and return annotation of the part's method of
+    the same name it calls."""
     parts = (StateView, MotionCommands, IoPort, Motion, Geometry)
-    forwarded = 0
-    for name in dir(RobotClient):
-        member = inspect.getattr_static(RobotClient, name)
-        wrapped = getattr(member, "__wrapped__", None)
-        if name.startswith("_") or wrapped is None:
+    client = RobotClient(robot="hc10")
+    checked = 0
+    for name in dir(RobotCalls):
+        homes = [getattr(part, name) for part in parts if hasattr(part, name)]
+        if name.startswith("_") or not homes:
             continue
-        forwarded += 1
-        assert any(getattr(part, wrapped.__name__, None) is wrapped for part in parts), name
-        assert inspect.iscoroutinefunction(member) == inspect.iscoroutinefunction(wrapped), name
-        assert inspect.signature(member) == inspect.signature(wrapped), name
-        assert member.__doc__ == wrapped.__doc__, name
-    assert forwarded >= 40
+        checked += 1
+        (method,) = homes
+        call = getattr(client, name)
+        assert inspect.iscoroutinefunction(call) == inspect.iscoroutinefunction(method), name
+        assert inspect.signature(call) == _without_self(method), name
+        assert call.__doc__, name
+    assert checked >= 40
