@@ -21,15 +21,15 @@ from typing import Any, cast
 import pytest
 
 from pymotoros.client.connection import FrameConnection
-from pymotoros.client.planning import JointLimits, JointTrajectory, TrajectoryPoint, plan_joint_move
-from pymotoros.client.preflight import _f32_at_most, speed_deviations, speed_screen, within_screen
-from pymotoros.client.state import JointState, RobotState, StateTracker, Status
 from pymotoros.client.following import (
     ARRIVED_PROGRESS,
     FollowingMonitor,
     FollowingSample,
     PathProgress,
 )
+from pymotoros.client.planning import JointLimits, JointTrajectory, TrajectoryPoint, plan_joint_move
+from pymotoros.client.preflight import _f32_at_most, speed_deviations, speed_screen, within_screen
+from pymotoros.client.state import JointState, RobotState, StateTracker, Status
 from pymotoros.models import controller_model, robot_model
 from pymotoros.models.rules import f32
 from pymotoros.protocol.constants import ByteOrder, CommType, Port, ReplyType

@@ -16,9 +16,9 @@ from typing import Final
 
 import pytest
 
+from pymotoros.client.following import FollowingMonitor
 from pymotoros.client.planning import JointLimits, plan_joint_move
 from pymotoros.client.state import JointState, RobotState
-from pymotoros.client.following import FollowingMonitor
 from pymotoros.controller.scenario import load_scenario
 from pymotoros.log_tags import NOTE
 from pymotoros.models import robot_model

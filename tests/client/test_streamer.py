@@ -10,9 +10,9 @@ import pytest
 
 from pymotoros.client import BusyTimeoutError, ConnectionLostError, TrajectoryStreamer
 from pymotoros.client.motion_port import MotionReadiness
+from pymotoros.client.pacing import BUSY_BACKOFF_FIRST_S, BUSY_BACKOFF_MAX_S, BusyPolicy
 from pymotoros.client.planning import JointTrajectory, TrajectoryPoint
 from pymotoros.client.state import RobotState
-from pymotoros.client.pacing import BUSY_BACKOFF_FIRST_S, BUSY_BACKOFF_MAX_S, BusyPolicy
 from pymotoros.models import controller_model, robot_model
 from pymotoros.protocol.constants import MsgType, ResultCode
 from pymotoros.protocol.messages import MotoMotionReply, WireMessage
