@@ -19,7 +19,6 @@ wire request is one method in ``calls.py``, for both clients.
 from __future__ import annotations
 
 import functools
-import inspect
 import types
 from abc import ABC, abstractmethod
 from collections.abc import Callable, Coroutine
@@ -47,17 +46,13 @@ class BlockingFacade(ABC):
         """Block until the first state message is in (a no-op once it is)."""
 
 
-def _without_self(method: Callable[..., Any]) -> inspect.Signature:
-    signature = inspect.signature(method)
-    return signature.replace(parameters=list(signature.parameters.values())[1:])
-
-
 class blocking_twin(Generic[_S, _P, _R]):  # noqa: N801 - used as a decorator, named as one
     """A coroutine method of the client, and its blocking twin on a :class:`BlockingFacade`.
 
-    On the async client it is the method as written (on the class: the function); on a facade it is
-    a plain function with the same parameters that runs the coroutine on the facade's
-    loop (:meth:`BlockingFacade.run`: an interrupt stops a moving robot first)."""
+    On the async client it is the method as written (on the class: the function); on a
+    facade it is a plain function with the same parameters that runs the coroutine on the
+    facade's loop (:meth:`BlockingFacade.run`: an interrupt stops a moving robot first),
+    and on the facade's class the same, taking the facade first."""
 
     def __init__(self, method: Callable[Concatenate[_S, _P], Coroutine[Any, Any, _R]]) -> None:
         self.method = method
@@ -66,9 +61,20 @@ class blocking_twin(Generic[_S, _P, _R]):  # noqa: N801 - used as a decorator, n
         self.__wrapped__ = method  # inspect.signature() and help() show the method's
 
     @functools.cached_property
-    def _signature(self) -> inspect.Signature:
-        return _without_self(self.method)
+    def _on_facade(self) -> Callable[..., Any]:
+        """The blocking function, taking the facade first (bound to it on an instance)."""
+        method = self.method
 
+        @functools.wraps(method)  # the signature and the documentation are the method's
+        def blocking(facade: BlockingFacade, /, *args: Any, **kwargs: Any) -> Any:
+            return facade.run(method(facade.client, *args, **kwargs))
+
+        return blocking
+
+    @overload
+    def __get__(
+        self, obj: None, owner: type[BlockingFacade]
+    ) -> Callable[Concatenate[BlockingFacade, _P], _R]: ...
     @overload
     def __get__(
         self, obj: None, owner: type[Any]
@@ -78,20 +84,9 @@ class blocking_twin(Generic[_S, _P, _R]):  # noqa: N801 - used as a decorator, n
     @overload
     def __get__(self, obj: _S, owner: type[Any]) -> Callable[_P, Coroutine[Any, Any, _R]]: ...
     def __get__(self, obj: object, owner: type[Any]) -> Any:
-        if obj is None:  # on the class: the function (``RobotClient.stop(client)``)
-            return self.method
-        if not isinstance(obj, BlockingFacade):
-            return types.MethodType(self.method, obj)
-        method, facade = self.method, obj
-
-        @functools.wraps(method)
-        def blocking(*args: Any, **kwargs: Any) -> Any:
-            return facade.run(method(facade.client, *args, **kwargs))
-
-        del blocking.__wrapped__  # its signature is the bound one below, not the coroutine's
-        blocking.__signature__ = self._signature  # type: ignore[attr-defined]
-        blocking.__qualname__ = f"{type(obj).__name__}.{method.__name__}"
-        return blocking
+        on_facade = issubclass(owner, BlockingFacade)
+        function = self._on_facade if on_facade else self.method
+        return function if obj is None else types.MethodType(function, obj)
 
 
 class facade_plain(Generic[_S, _P, _R]):  # noqa: N801 - used as a decorator, named as one
@@ -109,31 +104,30 @@ class facade_plain(Generic[_S, _P, _R]):  # noqa: N801 - used as a decorator, na
         self.__wrapped__ = method  # inspect.signature() and help() show the method's
 
     @functools.cached_property
-    def _signature(self) -> inspect.Signature:
-        return _without_self(self.method)
+    def _on_facade(self) -> Callable[..., Any]:
+        """The method called on the facade's client, taking the facade first."""
+        method, wait = self.method, self.after_first_state
 
+        @functools.wraps(method)  # the signature and the documentation are the method's
+        def plain(facade: BlockingFacade, /, *args: Any, **kwargs: Any) -> Any:
+            if wait:
+                facade.wait_for_first_state()
+            return method(facade.client, *args, **kwargs)
+
+        return plain
+
+    @overload
+    def __get__(
+        self, obj: None, owner: type[BlockingFacade]
+    ) -> Callable[Concatenate[BlockingFacade, _P], _R]: ...
     @overload
     def __get__(self, obj: None, owner: type[Any]) -> Callable[Concatenate[_S, _P], _R]: ...
     @overload
     def __get__(self, obj: _S | BlockingFacade, owner: type[Any]) -> Callable[_P, _R]: ...
     def __get__(self, obj: object, owner: type[Any]) -> Any:
-        if obj is None:
-            return self.method
-        if not isinstance(obj, BlockingFacade):
-            return types.MethodType(self.method, obj)
-        if not self.after_first_state:
-            return types.MethodType(self.method, obj.client)
-        method, facade = self.method, obj
-
-        @functools.wraps(method)
-        def after(*args: Any, **kwargs: Any) -> Any:
-            facade.wait_for_first_state()
-            return method(facade.client, *args, **kwargs)
-
-        del after.__wrapped__
-        after.__signature__ = self._signature  # type: ignore[attr-defined]
-        after.__qualname__ = f"{type(obj).__name__}.{method.__name__}"
-        return after
+        on_facade = issubclass(owner, BlockingFacade)
+        function = self._on_facade if on_facade else self.method
+        return function if obj is None else types.MethodType(function, obj)
 
 
 def after_first_state(method: Callable[Concatenate[_S, _P], _R]) -> facade_plain[_S, _P, _R]:
