@@ -2,11 +2,15 @@
 
 from __future__ import annotations
 
+import asyncio
 import inspect
+from collections.abc import Coroutine
+from typing import Any, TypeVar
 
 import pytest
 
 from pymotoros.client import ClientError, RobotClient
+from pymotoros.client.blocking import BlockingFacade, after_first_state, blocking_twin
 from pymotoros.client.calls import RobotCalls
 from pymotoros.client.connection import Ports
 from pymotoros.client.geometry import Geometry
@@ -22,6 +26,7 @@ from pymotoros.protocol.constants import Port
 from pymotoros.testing import TWIN_HOST, Twin
 
 HC10 = robot_model("hc10")
+_T = TypeVar("_T")
 YRC = controller_model("yrc1000")
 
 
@@ -92,3 +97,47 @@ def test_each_call_has_the_signature_of_the_part_it_calls() -> None:
         assert inspect.signature(call) == _without_self(method), name
         assert call.__doc__, name
     assert checked >= 40
+
+
+class _ToyCalls:
+    @blocking_twin
+    async def double(self, x: int) -> int:
+        """Twice ``x``, after one event-loop turn."""
+        await asyncio.sleep(0)
+        return 2 * x
+
+    @after_first_state
+    def latest(self) -> str:
+        """What the facade waited for first."""
+        return "state"
+
+
+class _ToyClient(_ToyCalls):
+    pass
+
+
+class _ToyFacade(BlockingFacade, _ToyCalls):
+    def __init__(self) -> None:
+        self.client = _ToyClient()
+        self.waited = 0
+
+    def run(self, coro: Coroutine[Any, Any, _T]) -> _T:
+        return asyncio.run(coro)
+
+    def wait_for_first_state(self) -> None:
+        self.waited += 1
+
+
+def test_one_definition_is_awaited_on_the_client_and_blocks_on_the_facade() -> None:
+    """``client.blocking``: the same method, a coroutine on the client, a blocking call
+    with the same signature on the facade (on its class too, taking the facade first)."""
+    facade = _ToyFacade()
+    assert asyncio.run(_ToyClient().double(3)) == 6
+    assert facade.double(4) == 8
+    assert _ToyFacade.double(facade, 5) == 10
+    assert inspect.iscoroutinefunction(_ToyClient().double)
+    assert not inspect.iscoroutinefunction(facade.double)
+    assert inspect.signature(facade.double) == inspect.signature(_ToyClient().double)
+    assert facade.double.__doc__ == "Twice ``x``, after one event-loop turn."
+    assert (facade.latest(), facade.waited) == ("state", 1)
+    assert (_ToyClient().latest(), facade.waited) == ("state", 1)

@@ -68,6 +68,10 @@ class RobotClient(RobotCalls):
     ``clock`` is where the motion logic gets "now" and "sleep" (default: real time);
     ``connector`` opens a port's byte stream (default: TCP). The in-memory twin of
     :mod:`pymotoros.testing` passes both.
+
+    Its calls (``move_joints``, ``read_io_bit`` ...) are those of
+    :class:`~pymotoros.client.calls.RobotCalls`, which :class:`SyncRobotClient` inherits
+    too; this class adds the connection, the latest state and :meth:`states`.
     """
 
     def __init__(
