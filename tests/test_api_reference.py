@@ -51,9 +51,9 @@ BUILD_BUDGET_S = 120.0
 time on the shared 2-core development machine)."""
 
 
-EXTENSION = ROOT / "docs" / "griffe_forwarded.py"
+EXTENSION = ROOT / "docs" / "griffe_reference.py"
 """The griffe extension mkdocs.yml loads: the check reads the API as the pages show it
-(``RobotClient.move_joints`` a documented method, not an attribute holding a call)."""
+(``SyncRobotClient.move_joints`` a documented blocking method)."""
 
 
 @functools.cache
@@ -281,7 +281,7 @@ def test_the_reference_pages_hold_no_block_the_docs_runner_would_miss() -> None:
 def test_sphinx_roles_are_written_as_markdown() -> None:
     """The docstrings' reST markup would show raw on a Markdown page: a role becomes the
     name in code, an optional link where the target resolves; ``::`` a colon."""
-    spec = importlib.util.spec_from_file_location("griffe_forwarded", EXTENSION)
+    spec = importlib.util.spec_from_file_location("griffe_reference", EXTENSION)
     assert spec is not None
     assert spec.loader is not None
     module = importlib.util.module_from_spec(spec)

@@ -33,10 +33,10 @@ from hypothesis import strategies as st
 
 import pymotoros.client.errors as client_errors
 import pymotoros.client.io_map as client_io_map
+import pymotoros.client.joint_text as client_joint_text
 import pymotoros.client.planning as client_planning
 import pymotoros.client.preflight as client_preflight
 import pymotoros.client.state as client_state
-import pymotoros.client.streaming as client_streaming
 import pymotoros.controller.io_image as controller_io_image
 import pymotoros.controller.state_view as controller_state_view
 import pymotoros.controller.trajectory as controller_trajectory
@@ -63,7 +63,7 @@ SRC = Path(__file__).resolve().parents[1] / "src" / "pymotoros"
 @pytest.mark.parametrize(
     ("name", "homes"),
     [
-        ("START_TOLERANCE_PULSES", (client_errors, client_streaming, motion)),
+        ("START_TOLERANCE_PULSES", (client_errors, client_joint_text, motion)),
         ("MAX_POINT_TIME_S", (motion_offline,)),
         ("SLOTS", (motion, motion_constants, motion_points)),
         ("check_start", (motion, controller_trajectory, client_preflight, motion_offline)),

@@ -18,7 +18,7 @@ from pymotoros.cli.main import cli
 from pymotoros.cli.replay import EXIT_CONNECTION, EXIT_DIFFERS, EXIT_MATCH, EXIT_USAGE
 from pymotoros.client.recorder import SessionRecorder
 from pymotoros.client.recording import read_recording
-from pymotoros.client.replay import _plan
+from pymotoros.client.replay_plan import replay_plan
 from pymotoros.protocol.constants import ByteOrder, ResultCode
 from pymotoros.protocol.framing import encode
 from pymotoros.protocol.messages import JointTrajPtFull, MotoMotionReply
@@ -202,7 +202,7 @@ def test_busy_resends_are_one_request(tmp_path: Path) -> None:
             flow.received(encode(reply, order))
     rec.close()
     recording = read_recording(pcap)
-    (steps,) = _plan(recording).values()
+    (steps,) = replay_plan(recording).values()
     assert [len(s.attempts) for s in steps] == [3, 1]
     assert [s.final_reply.message.result for s in steps if s.final_reply] == [0, 0]
     assert not steps[0].polled

@@ -21,15 +21,15 @@ from typing import Any, cast
 import pytest
 
 from pymotoros.client.connection import FrameConnection
-from pymotoros.client.planning import JointLimits, JointTrajectory, TrajectoryPoint, plan_joint_move
-from pymotoros.client.preflight import _f32_at_most, speed_deviations, speed_screen, within_screen
-from pymotoros.client.state import JointState, RobotState, StateTracker, Status
-from pymotoros.client.streaming import (
+from pymotoros.client.following import (
     ARRIVED_PROGRESS,
     FollowingMonitor,
     FollowingSample,
-    _Progress,
+    PathProgress,
 )
+from pymotoros.client.planning import JointLimits, JointTrajectory, TrajectoryPoint, plan_joint_move
+from pymotoros.client.preflight import _f32_at_most, speed_deviations, speed_screen, within_screen
+from pymotoros.client.state import JointState, RobotState, StateTracker, Status
 from pymotoros.models import controller_model, robot_model
 from pymotoros.models.rules import f32
 from pymotoros.protocol.constants import ByteOrder, CommType, Port, ReplyType
@@ -101,7 +101,7 @@ def test_planned_at_of_odd_plans_is_position_at() -> None:
 
 
 def test_progress_is_the_plans_bit_for_bit(plan: JointTrajectory) -> None:
-    progress = _Progress(plan)
+    progress = PathProgress(plan)
     rng = random.Random("progress")
     for _ in range(2000):
         positions = tuple(rng.uniform(-2, 2) for _ in range(6))

@@ -1,12 +1,17 @@
-"""``RobotClient`` is a facade over parts; each part works on its own (issue 19)."""
+"""``RobotClient`` is built of parts; each part works on its own (issue 19)."""
 
 from __future__ import annotations
 
+import asyncio
 import inspect
+from collections.abc import Coroutine
+from typing import Any, TypeVar
 
 import pytest
 
 from pymotoros.client import ClientError, RobotClient
+from pymotoros.client.blocking import BlockingFacade, after_first_state, blocking_twin
+from pymotoros.client.calls import RobotCalls
 from pymotoros.client.connection import Ports
 from pymotoros.client.geometry import Geometry
 from pymotoros.client.io_port import IoPort
@@ -21,6 +26,7 @@ from pymotoros.protocol.constants import Port
 from pymotoros.testing import TWIN_HOST, Twin
 
 HC10 = robot_model("hc10")
+_T = TypeVar("_T")
 YRC = controller_model("yrc1000")
 
 
@@ -68,17 +74,70 @@ async def test_the_motion_commands_and_the_io_port_on_their_own() -> None:
             await link.close()
 
 
-def test_the_facade_forwards_each_part_with_its_signature() -> None:
+def _without_self(function: object) -> inspect.Signature:
+    signature = inspect.signature(function)  # type: ignore[arg-type]
+    return signature.replace(parameters=list(signature.parameters.values())[1:])
+
+
+def test_each_call_has_the_signature_of_the_part_it_calls() -> None:
+    """The client's calls are real definitions (``RobotCalls``, issue 30), each with the
+    parameters, kind (coroutine or not) and return annotation of the part's method of
+    the same name it calls."""
     parts = (StateView, MotionCommands, IoPort, Motion, Geometry)
-    forwarded = 0
-    for name in dir(RobotClient):
-        member = inspect.getattr_static(RobotClient, name)
-        wrapped = getattr(member, "__wrapped__", None)
-        if name.startswith("_") or wrapped is None:
+    client = RobotClient(robot="hc10")
+    checked = 0
+    for name in dir(RobotCalls):
+        homes = [getattr(part, name) for part in parts if hasattr(part, name)]
+        if name.startswith("_") or not homes:
             continue
-        forwarded += 1
-        assert any(getattr(part, wrapped.__name__, None) is wrapped for part in parts), name
-        assert inspect.iscoroutinefunction(member) == inspect.iscoroutinefunction(wrapped), name
-        assert inspect.signature(member) == inspect.signature(wrapped), name
-        assert member.__doc__ == wrapped.__doc__, name
-    assert forwarded >= 40
+        checked += 1
+        (method,) = homes
+        call = getattr(client, name)
+        assert inspect.iscoroutinefunction(call) == inspect.iscoroutinefunction(method), name
+        assert inspect.signature(call) == _without_self(method), name
+        assert call.__doc__, name
+    assert checked >= 40
+
+
+class _ToyCalls:
+    @blocking_twin
+    async def double(self, x: int) -> int:
+        """Twice ``x``, after one event-loop turn."""
+        await asyncio.sleep(0)
+        return 2 * x
+
+    @after_first_state
+    def latest(self) -> str:
+        """What the facade waited for first."""
+        return "state"
+
+
+class _ToyClient(_ToyCalls):
+    pass
+
+
+class _ToyFacade(BlockingFacade, _ToyCalls):
+    def __init__(self) -> None:
+        self.client = _ToyClient()
+        self.waited = 0
+
+    def run(self, coro: Coroutine[Any, Any, _T]) -> _T:
+        return asyncio.run(coro)
+
+    def wait_for_first_state(self) -> None:
+        self.waited += 1
+
+
+def test_one_definition_is_awaited_on_the_client_and_blocks_on_the_facade() -> None:
+    """``client.blocking``: the same method, a coroutine on the client, a blocking call
+    with the same signature on the facade (on its class too, taking the facade first)."""
+    facade = _ToyFacade()
+    assert asyncio.run(_ToyClient().double(3)) == 6
+    assert facade.double(4) == 8
+    assert _ToyFacade.double(facade, 5) == 10
+    assert inspect.iscoroutinefunction(_ToyClient().double)
+    assert not inspect.iscoroutinefunction(facade.double)
+    assert inspect.signature(facade.double) == inspect.signature(_ToyClient().double)
+    assert facade.double.__doc__ == "Twice ``x``, after one event-loop turn."
+    assert (facade.latest(), facade.waited) == ("state", 1)
+    assert (_ToyClient().latest(), facade.waited) == ("state", 1)

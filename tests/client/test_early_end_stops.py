@@ -29,7 +29,7 @@ from hypothesis import strategies as st
 
 from pymotoros.client import FollowingSample
 from pymotoros.client.errors import ConnectionLostError, MoveInProgressError
-from pymotoros.client.streaming import EARLY_STOP_BOUND_S
+from pymotoros.client.stopping import EARLY_STOP_BOUND_S
 from pymotoros.controller.cell import load_cell
 from pymotoros.models.cell import load_cell_models
 from pymotoros.protocol.constants import TCP_PORT_MOTION, TCP_PORT_STATE, MotionCommand

@@ -16,9 +16,9 @@ from typing import Final
 
 import pytest
 
+from pymotoros.client.following import FollowingMonitor
 from pymotoros.client.planning import JointLimits, plan_joint_move
 from pymotoros.client.state import JointState, RobotState
-from pymotoros.client.streaming import FollowingMonitor
 from pymotoros.controller.scenario import load_scenario
 from pymotoros.log_tags import NOTE
 from pymotoros.models import robot_model
@@ -36,7 +36,7 @@ def _contradiction(text: str) -> bool:
 async def test_the_fsu_scenario_is_blamed_on_the_robot_being_slowed(
     caplog: pytest.LogCaptureFixture,
 ) -> None:
-    caplog.set_level(logging.WARNING, logger="pymotoros.client.streaming")
+    caplog.set_level(logging.WARNING, logger="pymotoros.client.following")
     async with twin(robot="hc10", timeout_s=2.0) as (client, cell):
         cell.controller.load_scenario(load_scenario(SCENARIOS / "fsu_long_move.toml"))
         await client.enable()
@@ -70,7 +70,7 @@ def _stall(step: Callable[[], None], now: Callable[[], float], start: float, end
 async def test_a_stalled_controller_loop_is_blamed_on_the_controller(
     caplog: pytest.LogCaptureFixture, monkeypatch: pytest.MonkeyPatch
 ) -> None:
-    caplog.set_level(logging.WARNING, logger="pymotoros.client.streaming")
+    caplog.set_level(logging.WARNING, logger="pymotoros.client.following")
     async with twin(robot="hc10", timeout_s=2.0) as (client, cell):
         await client.enable()
         t0 = cell.clock.now()

@@ -336,7 +336,7 @@ async def test_mregister_needs_io_port(cell: Twin) -> None:
 
 
 async def test_two_groups_use_full_ex() -> None:
-    from pymotoros.client.streaming import build_message
+    from pymotoros.client.point_messages import build_message
 
     point = TrajectoryPoint(0.5, (0.1, 0.2, 0.3), (0.0, 0.0, 0.0), (0.0, 0.0, 0.0))
     msg = build_message(point, 3, (0, 1), (2, 1))

@@ -10,9 +10,9 @@ import pytest
 
 from pymotoros.client import BusyTimeoutError, ConnectionLostError, TrajectoryStreamer
 from pymotoros.client.motion_port import MotionReadiness
+from pymotoros.client.pacing import BUSY_BACKOFF_FIRST_S, BUSY_BACKOFF_MAX_S, BusyPolicy
 from pymotoros.client.planning import JointTrajectory, TrajectoryPoint
 from pymotoros.client.state import RobotState
-from pymotoros.client.streaming import BUSY_BACKOFF_FIRST_S, BUSY_BACKOFF_MAX_S, BusyPolicy
 from pymotoros.models import controller_model, robot_model
 from pymotoros.protocol.constants import MsgType, ResultCode
 from pymotoros.protocol.messages import MotoMotionReply, WireMessage
@@ -137,8 +137,21 @@ async def test_a_lost_state_stream_stops_streaming() -> None:
         await _streamer(FakePort(busy=0), FakeClock(), states).send_points(_trajectory(2), (0,))
 
 
-def test_streaming_does_not_import_the_client() -> None:
-    tree = ast.parse((CLIENT / "streaming.py").read_text(encoding="utf-8"))
+STREAMING_MODULES = (
+    "streaming.py",
+    "pacing.py",
+    "following.py",
+    "rest_detection.py",
+    "stopping.py",
+    "point_messages.py",
+    "joint_text.py",
+    "move_result.py",
+)
+
+
+@pytest.mark.parametrize("module", STREAMING_MODULES)
+def test_streaming_does_not_import_the_client(module: str) -> None:
+    tree = ast.parse((CLIENT / module).read_text(encoding="utf-8"))
     modules = {
         node.module for node in ast.walk(tree) if isinstance(node, ast.ImportFrom) and node.module
     }

@@ -31,7 +31,9 @@ from pymotoros.client.errors import (
     StartPositionError,
     StateStreamLostError,
 )
+from pymotoros.client.following import FollowingReport, FollowingSample
 from pymotoros.client.motion_port import MotionPort, MotionReadiness, StateSource
+from pymotoros.client.move_result import MoveResult, StreamStats
 from pymotoros.client.planning import (
     JointLimits,
     JointTrajectory,
@@ -42,13 +44,7 @@ from pymotoros.client.planning import (
 from pymotoros.client.robot import RobotClient, connect
 from pymotoros.client.srdf import NamedPose, NamedPoseError, parse_srdf
 from pymotoros.client.state import JointState, Mode, RobotState, Status
-from pymotoros.client.streaming import (
-    FollowingReport,
-    FollowingSample,
-    MoveResult,
-    StreamStats,
-    TrajectoryStreamer,
-)
+from pymotoros.client.streaming import TrajectoryStreamer
 from pymotoros.client.sync import SyncRobotClient
 from pymotoros.client.timing import REAL_TIME, ClientClock
 

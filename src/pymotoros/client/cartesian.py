@@ -31,8 +31,8 @@ from pymotoros.client.planning import (
     JointTrajectory,
     PlanningError,
     TrajectoryPoint,
-    _check_scaling,
-    _ruckig_plan,
+    check_scaling,
+    ruckig_plan,
     sample_count,
 )
 from pymotoros.client.tools import DEFAULT_TCP_SPEED_MM_S
@@ -190,8 +190,8 @@ def plan_linear_move(
     velocity (× ``velocity_scaling``), acceleration and jerk (× ``acceleration_scaling``)
     limits. Raises :class:`PlanningError` naming the problem and where on the line.
     """
-    _check_scaling("velocity_scaling", velocity_scaling)
-    _check_scaling("acceleration_scaling", acceleration_scaling)
+    check_scaling("velocity_scaling", velocity_scaling)
+    check_scaling("acceleration_scaling", acceleration_scaling)
     if not tcp_speed_mm_s > 0 or not math.isfinite(tcp_speed_mm_s):
         raise PlanningError(f"tcp_speed_mm_s must be a positive number, got {tcp_speed_mm_s}")
     if sample_period < MIN_SAMPLE_PERIOD_S:
@@ -263,9 +263,9 @@ def plan_linear_move(
         v_s /= 2
     a_s = float(np.min((amax - dd_max * v_s**2) / d_max))
     j_s = float(np.min(jmax / d_max))
-    duration, _ = _ruckig_plan([0.0], [1.0], [v_s], [a_s], [j_s], 1)
+    duration, _ = ruckig_plan([0.0], [1.0], [v_s], [a_s], [j_s], 1)
     segments = sample_count(duration, sample_period)
-    duration, samples = _ruckig_plan([0.0], [1.0], [v_s], [a_s], [j_s], segments)
+    duration, samples = ruckig_plan([0.0], [1.0], [v_s], [a_s], [j_s], segments)
     # 4. Points: exact IK on the line, velocities dq/ds · ds/dt.
     points = [TrajectoryPoint(0.0, tuple(q0.tolist()), zeros, zeros)]
     for k in range(1, segments):

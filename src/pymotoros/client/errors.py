@@ -34,7 +34,7 @@ from __future__ import annotations
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from types import MappingProxyType
-from typing import TYPE_CHECKING, Final
+from typing import Final
 
 from pymotoros.errors import PymotorosError
 from pymotoros.models.rules import START_TOLERANCE_PULSES
@@ -50,9 +50,6 @@ from pymotoros.protocol.constants import (
     subcode_meaning,
 )
 
-if TYPE_CHECKING:
-    from pymotoros.client.streaming import EarlyStop
-
 
 class ClientError(PymotorosError):
     """Root of the errors the client raises."""
@@ -62,6 +59,39 @@ class ClientError(PymotorosError):
     (STOP_MOTION): whether the stop worked, where the robot came to rest (``positions``,
     rad/m of the moved groups) and the sentence already appended to the message. A caller
     that words its own message (the CLI) adds only what is new, not the position again."""
+
+
+@dataclass(frozen=True, slots=True)
+class EarlyStop:
+    """How a move that ended early was stopped
+    (:meth:`~pymotoros.client.streaming.TrajectoryStreamer.stop_early`)."""
+
+    stopped: bool
+    """STOP_MOTION was acknowledged (SUCCESS)."""
+    at_rest: bool
+    """The feedback then showed the robot at rest."""
+    positions: tuple[float, ...]
+    """Where the robot stands (or was last reported), joints of the moved groups."""
+    took_s: float
+    """From the stop's start to rest (or to giving up)."""
+    why: str
+    """What ended the move."""
+    detail: str
+    """Where the robot stopped, with units, or why it may not have."""
+
+    @property
+    def text(self) -> str:
+        return f"{self.why}: {self.detail}"
+
+    def tell(self, exc: BaseException) -> None:
+        """Put the stop into ``exc``: the client's own errors get it in their message
+        (what the CLI prints), anything else (``CancelledError``, ``KeyboardInterrupt``,
+        the caller's exception) a note, so its type and message stay as they were."""
+        if isinstance(exc, ClientError) and exc.args and isinstance(exc.args[0], str):
+            exc.args = (f"{exc.args[0]}; {self.detail}", *exc.args[1:])
+            exc.early_stop = self
+        else:
+            exc.add_note(self.text)
 
 
 class ConnectError(ClientError, ConnectionError):

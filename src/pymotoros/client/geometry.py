@@ -13,10 +13,11 @@ from collections.abc import Callable, Sequence
 from typing import Any, Literal
 
 from pymotoros.client.errors import ClientError
+from pymotoros.client.following import FollowingSample
 from pymotoros.client.motion import Motion
+from pymotoros.client.move_result import MoveResult
 from pymotoros.client.planning import PlanningError
 from pymotoros.client.state_view import StateView
-from pymotoros.client.streaming import FollowingSample, MoveResult
 from pymotoros.client.tools import DEFAULT_TCP_SPEED_MM_S, ToolTable
 from pymotoros.errors import KinematicsError
 

@@ -27,8 +27,11 @@ from pymotoros.client.errors import (
     MoveStoppedError,
     NotReadyError,
 )
+from pymotoros.client.following import FollowingSample
 from pymotoros.client.link import Link
 from pymotoros.client.motion_commands import MotionCommands
+from pymotoros.client.move_result import MoveResult
+from pymotoros.client.pacing import DEFAULT_BUSY_TIMEOUT_S
 from pymotoros.client.planning import (
     DEFAULT_SAMPLE_PERIOD_S,
     JointLimits,
@@ -38,15 +41,8 @@ from pymotoros.client.planning import (
 )
 from pymotoros.client.srdf import NamedPose, find_pose, parse_srdf
 from pymotoros.client.state_view import StateView
-from pymotoros.client.streaming import (
-    DEFAULT_BUSY_TIMEOUT_S,
-    DEFAULT_GOAL_TOLERANCE,
-    EARLY_STOP_BOUND_S,
-    ExecuteOptions,
-    FollowingSample,
-    MoveResult,
-    TrajectoryStreamer,
-)
+from pymotoros.client.stopping import EARLY_STOP_BOUND_S
+from pymotoros.client.streaming import DEFAULT_GOAL_TOLERANCE, ExecuteOptions, TrajectoryStreamer
 from pymotoros.client.tools import ToolTable
 from pymotoros.errors import PymotorosError
 from pymotoros.models import ControllerModel, RobotModel

@@ -201,12 +201,13 @@ class JointTrajectory:
         return pts[-1].time
 
 
-def _check_scaling(name: str, value: float) -> None:
+def check_scaling(name: str, value: float) -> None:
+    """Refuse a speed or acceleration scale outside (0, 1] (``name`` says which)."""
     if not 0.0 < value <= 1.0 or math.isnan(value):
         raise PlanningError(f"{name} must be in (0, 1], got {value}")
 
 
-def _ruckig_plan(
+def ruckig_plan(
     start: Sequence[float],
     goal: Sequence[float],
     vmax: Sequence[float],
@@ -276,8 +277,8 @@ def plan_joint_move(
             f"expected {n} joint values ({', '.join(limits.names)}), "
             f"got start {len(start)} and goal {len(goal)}"
         )
-    _check_scaling("velocity_scaling", velocity_scaling)
-    _check_scaling("acceleration_scaling", acceleration_scaling)
+    check_scaling("velocity_scaling", velocity_scaling)
+    check_scaling("acceleration_scaling", acceleration_scaling)
     if sample_period < MIN_SAMPLE_PERIOD_S:
         raise PlanningError(f"sample_period must be at least {MIN_SAMPLE_PERIOD_S} s")
     for i, g in enumerate(goal):
@@ -304,9 +305,9 @@ def plan_joint_move(
     amax = [a * acceleration_scaling for a in limits.max_acceleration]
     jmax = [j * acceleration_scaling for j in limits.max_jerk]
     # First pass for the duration, second to sample it (ruckig plans in microseconds).
-    duration, _ = _ruckig_plan(start_t, goal_t, vmax, amax, jmax, 1)
+    duration, _ = ruckig_plan(start_t, goal_t, vmax, amax, jmax, 1)
     segments = sample_count(duration, sample_period)
-    duration, samples = _ruckig_plan(start_t, goal_t, vmax, amax, jmax, segments)
+    duration, samples = ruckig_plan(start_t, goal_t, vmax, amax, jmax, segments)
 
     points = [TrajectoryPoint(0.0, start_t, zeros, zeros)]
     for k in range(1, segments):

@@ -8,18 +8,14 @@ the rules of :mod:`pymotoros.models.s1cxg`.
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Awaitable, Callable, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import TYPE_CHECKING
 
 from pymotoros.errors import ConfigError
 from pymotoros.models.cell import read_cell_file
 from pymotoros.models.robots import GroupKind, GroupModel
 from pymotoros.models.s1cxg import Quantity, Reading, S1cxgTable, Source, decode, parse_s1cxg
-
-if TYPE_CHECKING:
-    from pymotoros.client.robot import RobotClient
 
 
 def s1cxg_table(
@@ -86,13 +82,13 @@ class RegisterValues:
 
 
 async def read_register_outputs(
-    client: RobotClient, table: S1cxgTable, group: int = 0
+    read_mregister: Callable[[int], Awaitable[int]], table: S1cxgTable, model: GroupModel
 ) -> RegisterValues:
-    """Read every register ``table`` fills (one M-register read each) and decode them."""
+    """Read every register ``table`` fills (one ``read_mregister`` each: the client's
+    M-register read) and decode them for the group ``model``."""
     words: dict[int, int] = {}
     for number in sorted(set(table.registers)):
-        words[number] = await client.read_mregister(number)
-    model = client.robot.groups[group]
+        words[number] = await read_mregister(number)
     slot_axis = {slot: ros for ros, slot in enumerate(model.moto_slots)}
     linear = [model.axes[slot_axis[k]].linear for k in range(model.num_axes)]
     return RegisterValues(tuple(decode(table, words, linear)), words)

@@ -32,33 +32,40 @@ from __future__ import annotations
 
 import asyncio
 import contextlib
-import dataclasses
-import statistics
 from collections.abc import Awaitable, Callable, Mapping, Sequence
 from dataclasses import dataclass, field
-from typing import Any, Final, TypeAlias
+from typing import Final, TypeAlias
 
 from pymotoros.client.recording import (
-    Direction,
     RecordedConnection,
-    RecordedMessage,
     Recording,
+)
+from pymotoros.client.replay_plan import (
+    ReplayStep,
+    replay_plan,
+    retried,
+)
+from pymotoros.client.replay_report import (
+    DEFAULT_TIMING_TOLERANCE_S,
+    PositionDiff,
+    ReplayResult,
+    ReplyDiff,
+    RequestTiming,
+    compared,
+    reply_summary,
+    type_name,
 )
 from pymotoros.protocol.constants import (
     ByteOrder,
     CommType,
     MotionCommand,
-    MsgType,
     Port,
     ResultCode,
-    reply_result,
 )
 from pymotoros.protocol.framing import Frame, FrameDecoder, decode_reply, encode_frame
 from pymotoros.protocol.messages import (
     JointFeedback,
     MotoJointFeedbackEx,
-    MotoMotionCtrl,
-    MotoMotionReply,
     RobotStatus,
     WireMessage,
 )
@@ -73,339 +80,27 @@ __all__ = [
     "reply_summary",
 ]
 
-DEFAULT_TIMING_TOLERANCE_S: Final = 0.05
-"""Reply delays further apart than this are listed: MotoROS answers a motion request
-within a few 4 ms ticks, START_TRAJ_MODE within its servo-on time; 50 ms is well above
-the jitter of a real-time twin on a loaded machine, well below a servo-on."""
 
 REPLY_TIMEOUT_S: Final = 5.0
 """A request the controller does not answer within this is reported as unanswered
 (the client's own request timeout, pymotoros.client.connection)."""
 
+
 CONNECT_TIMEOUT_S: Final = 5.0
 """Connecting to a port of the target: as the client does."""
 
-RETRY_WINDOW_MIN_S: Final = 10.0
-"""How long the replay resends a point answered BUSY (or a poll answered NOT_READY) at
-least: the client's own BUSY timeout (pymotoros.client.streaming)."""
-
-RETRY_WINDOW_FACTOR: Final = 2.0
-"""… or this many times as long as the recorded client kept resending, if longer."""
-
-DEFAULT_RETRY_GAP_S: Final = 0.002
-"""Resend gap when the recording shows none for a request: the client's longest BUSY
-back-off (pymotoros.client.streaming)."""
 
 SETTLE_TIMEOUT_S: Final = 30.0
 """How long after the recorded end the replay waits for the robot to stand still
 (ROBOT_STATUS in_motion 0) before it takes the final positions anyway."""
 
+
 READ_CHUNK: Final = 4096
 
-_RETRIED: Final = frozenset({int(ResultCode.BUSY), int(ResultCode.NOT_READY)})
-"""Results after which a client resends the same request (a point, a readiness poll)."""
 
 Connector: TypeAlias = Callable[
     [str, int], Awaitable[tuple[asyncio.StreamReader, asyncio.StreamWriter]]
 ]
-
-
-# --------------------------------------------------------------------------- summaries
-
-
-def _type_name(msg_type: int) -> str:
-    try:
-        return MsgType(msg_type).name
-    except ValueError:
-        return str(msg_type)
-
-
-def reply_summary(message: WireMessage | None, frame: Frame | None = None) -> dict[str, Any]:
-    """What is compared of a reply: ``{"type", "result", "subcode", "value"}`` (None where
-    the message has no such field); ``{"type": None, …}`` for no reply at all."""
-    if message is None and frame is None:
-        return {"type": None, "result": None, "subcode": None, "value": None}
-    msg_type = frame.msg_type if frame is not None else getattr(message, "MSG_TYPE", 0)
-    result = getattr(message, "result", getattr(message, "result_code", None))
-    return {
-        "type": _type_name(msg_type),
-        "result": result,
-        "subcode": getattr(message, "subcode", None),
-        "value": getattr(message, "value", None),
-    }
-
-
-def _is_queue_count(request: WireMessage | None) -> bool:
-    return isinstance(request, MotoMotionCtrl) and request.command == MotionCommand.CHECK_QUEUE_CNT
-
-
-def _compared(summary: Mapping[str, Any], request: WireMessage | None) -> dict[str, Any]:
-    """The fields compared: the queue count of CHECK_QUEUE_CNT is timing, not a verdict."""
-    out = dict(summary)
-    if _is_queue_count(request):
-        out["subcode"] = None
-    return out
-
-
-def _retried(message: WireMessage | None) -> int | None:
-    """The result, if it is one after which a client resends the same request."""
-    if isinstance(message, MotoMotionReply):
-        result = reply_result(message.result, message.subcode)
-        return result if result in _RETRIED else None
-    return None
-
-
-# --------------------------------------------------------------------------- results
-
-
-@dataclass(frozen=True, slots=True)
-class ReplyDiff:
-    """A request whose replayed reply differs from the recorded one."""
-
-    request: int
-    """Its number: requests are numbered 1, 2, … in the order the client sent them."""
-    connection: int
-    port: str
-    offset: float
-    """Recorded time of the request, s from the recording's start."""
-    request_type: str
-    sequence: int | None
-    command: str | None
-    recorded: Mapping[str, Any]
-    replayed: Mapping[str, Any]
-
-    def as_json(self) -> dict[str, Any]:
-        return {
-            "request": self.request,
-            "connection": self.connection,
-            "port": self.port,
-            "offset_s": self.offset,
-            "request_type": self.request_type,
-            "sequence": self.sequence,
-            "command": self.command,
-            "recorded": dict(self.recorded),
-            "replayed": dict(self.replayed),
-        }
-
-
-@dataclass(frozen=True, slots=True)
-class RequestTiming:
-    """Reply delay of one request, recorded and replayed (s; None: no reply)."""
-
-    request: int
-    port: str
-    request_type: str
-    recorded_delay: float | None
-    replayed_delay: float | None
-    recorded_attempts: int
-    replayed_attempts: int
-
-    @property
-    def difference(self) -> float | None:
-        if self.recorded_delay is None or self.replayed_delay is None:
-            return None
-        return self.replayed_delay - self.recorded_delay
-
-    def as_json(self) -> dict[str, Any]:
-        return {
-            "request": self.request,
-            "port": self.port,
-            "request_type": self.request_type,
-            "recorded_delay_s": self.recorded_delay,
-            "replayed_delay_s": self.replayed_delay,
-            "recorded_attempts": self.recorded_attempts,
-            "replayed_attempts": self.replayed_attempts,
-        }
-
-
-@dataclass(frozen=True, slots=True)
-class PositionDiff:
-    """One group's final feedback positions, recorded and replayed."""
-
-    group: int
-    recorded: tuple[float, ...] | None
-    replayed: tuple[float, ...] | None
-    tolerance: tuple[float, ...]
-
-    @property
-    def matches(self) -> bool:
-        if self.recorded is None or self.replayed is None:
-            return self.recorded is None and self.replayed is None
-        return all(
-            abs(a - b) <= tol
-            for a, b, tol in zip(self.recorded, self.replayed, self.tolerance, strict=False)
-        )
-
-    def as_json(self) -> dict[str, Any]:
-        return {
-            "group": self.group,
-            "recorded": None if self.recorded is None else list(self.recorded),
-            "replayed": None if self.replayed is None else list(self.replayed),
-            "tolerance": list(self.tolerance),
-            "match": self.matches,
-        }
-
-
-@dataclass(frozen=True, slots=True)
-class ReplayResult:
-    """The diff between a recording and its replay."""
-
-    requests: int
-    connections: int
-    recorded_duration: float
-    replayed_duration: float
-    differences: tuple[ReplyDiff, ...]
-    timings: tuple[RequestTiming, ...]
-    timing_tolerance: float
-    positions: tuple[PositionDiff, ...]
-    settled: bool | None
-    """The replayed robot stood still when the final positions were taken (None: not
-    waited for, the recording ended in motion or without a state connection)."""
-
-    @property
-    def slow_or_fast(self) -> tuple[RequestTiming, ...]:
-        """Requests whose reply delay differs by more than the tolerance."""
-        return tuple(
-            t
-            for t in self.timings
-            if t.difference is not None and abs(t.difference) > self.timing_tolerance
-        )
-
-    @property
-    def matches(self) -> bool:
-        """Every reply as recorded and every final position within its tolerance."""
-        return not self.differences and all(p.matches for p in self.positions)
-
-    def as_json(self) -> dict[str, Any]:
-        return {
-            "match": self.matches,
-            "requests": self.requests,
-            "connections": self.connections,
-            "recorded_duration_s": self.recorded_duration,
-            "replayed_duration_s": self.replayed_duration,
-            "differences": [d.as_json() for d in self.differences],
-            "timing": {
-                "tolerance_s": self.timing_tolerance,
-                "outside_tolerance": [t.request for t in self.slow_or_fast],
-                "requests": [t.as_json() for t in self.timings],
-            },
-            "final_positions": [p.as_json() for p in self.positions],
-            "settled": self.settled,
-        }
-
-
-# --------------------------------------------------------------------------- the plan
-
-
-@dataclass(frozen=True, slots=True)
-class _Step:
-    """One logical request of the recording: its attempts (resends) and final reply."""
-
-    number: int
-    conn: RecordedConnection
-    attempts: tuple[RecordedMessage, ...]
-    final_reply: RecordedMessage | None
-    expects_reply: bool
-    think: float
-    """Recorded gap between the previous step's reply (or the connection's opening) and
-    this step's first send."""
-    retry_gap: float
-    polled: bool
-    """The recorded client resent it after a NOT_READY (a readiness poll)."""
-
-    @property
-    def first(self) -> RecordedMessage:
-        return self.attempts[0]
-
-    @property
-    def recorded_delay(self) -> float | None:
-        if self.final_reply is None:
-            return None
-        return self.final_reply.time - self.attempts[-1].time
-
-    @property
-    def retry_window(self) -> float:
-        span = self.attempts[-1].time - self.attempts[0].time
-        return max(RETRY_WINDOW_MIN_S, RETRY_WINDOW_FACTOR * span)
-
-
-def _pairs(
-    conn: RecordedConnection,
-) -> list[tuple[RecordedMessage, RecordedMessage | None, bool]]:
-    """(request, its reply or None, reply awaited) in order: replies answer the oldest
-    unanswered request (MotoROS answers in order)."""
-    pending: list[int] = []
-    out: list[tuple[RecordedMessage, RecordedMessage | None, bool]] = []
-    for message in conn.messages:
-        if message.direction is Direction.TO_SERVER:
-            # A motion-port message sent as a SERVICE_REPLY gets no answer (§1.5).
-            expects = not (
-                conn.kind is Port.MOTION and message.frame.comm_type == CommType.SERVICE_REPLY
-            )
-            out.append((message, None, expects))
-            if expects:
-                pending.append(len(out) - 1)
-        elif not message.is_topic and pending:
-            index = pending.pop(0)
-            request, _, expects = out[index]
-            out[index] = (request, message, expects)
-    return out
-
-
-def _plan(recording: Recording) -> dict[int, list[_Step]]:
-    """The steps of each motion and IO connection (index → steps)."""
-    plans: dict[int, list[_Step]] = {}
-    for conn in recording.connections:
-        if conn.kind is Port.STATE or not conn.sent():
-            continue
-        pairs = _pairs(conn)
-        steps: list[_Step] = []
-        previous_done = recording.start + conn.opened
-        i = 0
-        while i < len(pairs):
-            group = [pairs[i]]
-            # a resend: the same bytes again after a BUSY or NOT_READY reply
-            while (
-                i + len(group) < len(pairs)
-                and group[-1][1] is not None
-                and _retried(group[-1][1].message) is not None
-                and pairs[i + len(group)][0].frame == group[-1][0].frame
-            ):
-                group.append(pairs[i + len(group)])
-            i += len(group)
-            attempts = tuple(request for request, _, _ in group)
-            final = group[-1][1]
-            gaps = [
-                later.time - reply.time
-                for (_, reply, _), later in zip(group, attempts[1:], strict=False)
-                if reply is not None
-            ]
-            polled = any(
-                _retried(reply.message) == ResultCode.NOT_READY
-                for _, reply, _ in group[:-1]
-                if reply is not None
-            )
-            steps.append(
-                _Step(
-                    number=0,  # set below
-                    conn=conn,
-                    attempts=attempts,
-                    final_reply=final,
-                    expects_reply=group[-1][2],
-                    think=max(0.0, attempts[0].time - previous_done),
-                    retry_gap=statistics.fmean(gaps) if gaps else DEFAULT_RETRY_GAP_S,
-                    polled=polled,
-                )
-            )
-            previous_done = final.time if final is not None else attempts[-1].time
-        plans[conn.index] = steps
-    # numbered in the order the client sent them, across connections
-    ordered = sorted((s for steps in plans.values() for s in steps), key=lambda s: s.first.time)
-    numbers = {id(s): n for n, s in enumerate(ordered, start=1)}
-    return {
-        index: [dataclasses.replace(s, number=numbers[id(s)]) for s in steps]
-        for index, steps in plans.items()
-    }
 
 
 # --------------------------------------------------------------------------- replaying
@@ -434,7 +129,7 @@ class _Observed:
 
 @dataclass(frozen=True, slots=True)
 class _Outcome:
-    step: _Step
+    step: ReplayStep
     reply: WireMessage | None
     reply_frame: Frame | None
     delay: float | None
@@ -509,7 +204,7 @@ async def _next_reply(link: _Link) -> tuple[float, Frame] | None:
 
 
 async def _replay_requests(
-    steps: Sequence[_Step],
+    steps: Sequence[ReplayStep],
     conn: RecordedConnection,
     t0: float,
     connect: Connector,
@@ -528,7 +223,7 @@ async def _replay_requests(
         for step in steps:
             await _sleep_until(max(t0 + step.first.offset, previous_done + step.think))
             data = encode_frame(step.first.frame, order)
-            recorded_final = _retried(
+            recorded_final = retried(
                 step.final_reply.message if step.final_reply is not None else None
             )
             deadline = loop.time() + step.retry_window
@@ -549,7 +244,7 @@ async def _replay_requests(
                     message = None
                     break
                 message = decode_reply(reply[1], order, kind)
-                again = _retried(message)
+                again = retried(message)
                 if again is None or loop.time() >= deadline:
                     break
                 if again == ResultCode.NOT_READY and not step.polled:
@@ -639,7 +334,7 @@ async def replay(
             "known (non-standard ports and no telling traffic)"
         )
     open_stream: Connector = connect or asyncio.open_connection
-    plans = _plan(recording)
+    plans = replay_plan(recording)
     loop = asyncio.get_running_loop()
     observed = _Observed()
     end = asyncio.Event()
@@ -721,7 +416,7 @@ async def replay(
 
 def _result(
     recording: Recording,
-    plans: Mapping[int, Sequence[_Step]],
+    plans: Mapping[int, Sequence[ReplayStep]],
     outcomes: Sequence[_Outcome],
     observed: _Observed,
     pulse_tolerance: Mapping[int, Sequence[float]],
@@ -735,17 +430,17 @@ def _result(
         step = outcome.step
         request = step.first.message
         kind = (step.conn.kind or Port.MOTION).value
-        request_type = _type_name(step.first.frame.msg_type)
+        request_type = type_name(step.first.frame.msg_type)
         if step.expects_reply:
             final = step.final_reply
-            recorded = _compared(
+            recorded = compared(
                 reply_summary(
                     final.message if final is not None else None,
                     final.frame if final is not None else None,
                 ),
                 request,
             )
-            replayed = _compared(reply_summary(outcome.reply, outcome.reply_frame), request)
+            replayed = compared(reply_summary(outcome.reply, outcome.reply_frame), request)
             if recorded != replayed:
                 command = getattr(request, "command", None)
                 differences.append(

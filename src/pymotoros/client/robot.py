@@ -13,25 +13,20 @@ one request at a time per port and checks each reply's echo. Refusals become typ
 exceptions (:mod:`pymotoros.client.errors`) carrying the code, its meaning and a
 remedy. It imports no part of the virtual controller: it only speaks the wire.
 
-``RobotClient`` is a facade over parts each testable on its own: the connections
-(:class:`~pymotoros.client.link.Link`), the motion port's requests
-(:class:`~pymotoros.client.motion_commands.MotionCommands`), the state stream and the
-model checks (:class:`~pymotoros.client.state_view.StateView`), the IO image
-(:class:`~pymotoros.client.io_port.IoPort`), joint motion
-(:class:`~pymotoros.client.motion.Motion`) and the TCP
-(:class:`~pymotoros.client.geometry.Geometry`). Its methods are those parts' methods,
-forwarded with their names, parameters and documentation (:func:`_part`).
+``RobotClient`` builds the connections (:class:`~pymotoros.client.link.Link`) and the
+parts its calls work through (:class:`~pymotoros.client.calls.ClientParts`); the calls
+themselves are defined once, in :class:`~pymotoros.client.calls.RobotCalls`, for this
+client and its blocking facade (:class:`~pymotoros.client.SyncRobotClient`).
 """
 
 from __future__ import annotations
 
-import functools
-import inspect
-from collections.abc import Callable, Coroutine, Mapping
+from collections.abc import AsyncIterator
 from pathlib import Path
-from typing import Any, Concatenate, ParamSpec, Self, TypeVar
+from typing import Self
 
 from pymotoros.client.avoid import Avoidance
+from pymotoros.client.calls import ClientParts, RobotCalls
 from pymotoros.client.connection import (
     DEFAULT_CONNECT_TIMEOUT_S,
     DEFAULT_REQUEST_TIMEOUT_S,
@@ -43,10 +38,9 @@ from pymotoros.client.io_port import IoPort
 from pymotoros.client.link import Link
 from pymotoros.client.motion import Motion
 from pymotoros.client.motion_commands import SLOW_COMMAND_TIMEOUT_S, MotionCommands
-from pymotoros.client.registers import RegisterValues, read_register_outputs, s1cxg_table
-from pymotoros.client.state import RobotState, StateTracker, Status
+from pymotoros.client.state import DEFAULT_STATE_TIMEOUT_S, RobotState, StateTracker, Status
 from pymotoros.client.state_view import DH_TOLERANCE, StateView
-from pymotoros.client.streaming import MoveResult, TrajectoryStreamer
+from pymotoros.client.streaming import TrajectoryStreamer
 from pymotoros.client.timing import REAL_TIME, ClientClock
 from pymotoros.client.tools import ToolTable
 from pymotoros.models import (
@@ -59,55 +53,9 @@ from pymotoros.models import (
     robot_model,
 )
 from pymotoros.models.cell import CellModels, load_cell_models
-from pymotoros.models.s1cxg import S1cxgTable
-
-_P = ParamSpec("_P")
-_R = TypeVar("_R")
 
 
-def _part(
-    part: str, method: Callable[Concatenate[Any, _P], _R]
-) -> Callable[Concatenate[RobotClient, _P], _R]:
-    """``RobotClient.<name>``: ``method`` called on the client's part ``part`` (an
-    attribute name), with the method's name, parameters and documentation; a
-    coroutine function stays one (``inspect.iscoroutinefunction``)."""
-    name = method.__name__
-
-    if inspect.iscoroutinefunction(method):
-
-        async def forward_async(self: RobotClient, /, *args: Any, **kwargs: Any) -> Any:
-            return await getattr(getattr(self, part), name)(*args, **kwargs)
-
-        forward: Callable[..., Any] = forward_async
-    else:
-
-        def forward_plain(self: RobotClient, /, *args: Any, **kwargs: Any) -> Any:
-            return getattr(getattr(self, part), name)(*args, **kwargs)
-
-        forward = forward_plain
-    functools.update_wrapper(forward, method)
-    forward.__qualname__ = f"RobotClient.{name}"
-    return forward
-
-
-def _move_part(
-    method: Callable[Concatenate[Geometry, _P], Coroutine[Any, Any, MoveResult]],
-) -> Callable[Concatenate[RobotClient, _P], Coroutine[Any, Any, MoveResult]]:
-    """:func:`_part` for a Cartesian move of ``_geometry``, holding the client's one move
-    (:meth:`Motion.one_move`) from its first wait to its end: a second move is refused
-    at once, and a stop() ends it even while it plans."""
-    name = method.__name__
-
-    async def forward(self: RobotClient, /, *args: _P.args, **kwargs: _P.kwargs) -> MoveResult:
-        with self._motion.one_move(name):
-            return await method(self._geometry, *args, **kwargs)
-
-    functools.update_wrapper(forward, method)
-    forward.__qualname__ = f"RobotClient.{name}"
-    return forward
-
-
-class RobotClient:
+class RobotClient(RobotCalls):
     """Async client for one MotoROS controller.
 
     ``controller`` picks the byte order (FS100 is big-endian) and the IO map used to
@@ -120,6 +68,10 @@ class RobotClient:
     ``clock`` is where the motion logic gets "now" and "sleep" (default: real time);
     ``connector`` opens a port's byte stream (default: TCP). The in-memory twin of
     :mod:`pymotoros.testing` passes both.
+
+    Its calls (``move_joints``, ``read_io_bit`` ...) are those of
+    :class:`~pymotoros.client.calls.RobotCalls`, which :class:`SyncRobotClient` inherits
+    too; this class adds the connection, the latest state and :meth:`states`.
     """
 
     def __init__(
@@ -175,25 +127,29 @@ class RobotClient:
             connect_timeout_s=connect_timeout_s,
             connector=connector,
         )
-        self._commands = MotionCommands(self._link, self.tools, len(self.robot.groups))
+        commands = MotionCommands(self._link, self.tools, len(self.robot.groups))
         self.streamer = TrajectoryStreamer(
-            self._commands, self.tracker, self.robot, self.controller, clock=clock
+            commands, self.tracker, self.robot, self.controller, clock=clock
         )
         """Streams trajectories through this client's motion port (see :meth:`execute`)."""
-        self._view = StateView(
-            self._link, self.tracker, self.robot, self._commands.get_dh_parameters
-        )
-        self._io_port = IoPort(self._link, self.controller)
-        self._motion = Motion(
+        view = StateView(self._link, self.tracker, self.robot, commands.get_dh_parameters)
+        motion = Motion(
             self._link,
-            self._view,
-            self._commands,
+            view,
+            commands,
             self.streamer,
             self.robot,
             self.controller,
             Avoidance(tools, self.tools),
         )
-        self._geometry = Geometry(self._view, self._motion, self.tools)
+        self._parts = ClientParts(
+            view=view,
+            commands=commands,
+            io=IoPort(self._link, self.controller),
+            motion=motion,
+            geometry=Geometry(view, motion, self.tools),
+            robot=self.robot,
+        )
 
     # ------------------------------------------------------------------ connection
 
@@ -215,7 +171,7 @@ class RobotClient:
         STOP_MOTION, the robot at rest (at most ``EARLY_STOP_BOUND_S``, 3 s), then the
         connections close. (MotoROS does not clear its queues when the motion
         connection closes, §2.2: closing alone would leave the robot moving.)"""
-        await self._motion.end_move("the client is closing")
+        await self._parts.motion.end_move("the client is closing")
         await self._link.close()
 
     async def __aenter__(self) -> Self:
@@ -236,71 +192,11 @@ class RobotClient:
         """The latest ROBOT_STATUS (None before the first)."""
         return self.tracker.state.status
 
-    feedback = _part("_view", StateView.feedback)
-    add_listener = _part("_view", StateView.add_listener)
-    states = _part("_view", StateView.states)
-    wait_for_state = _part("_view", StateView.wait_for_state)
-    wait_until = _part("_view", StateView.wait_until)
-    check_groups = _part("_view", StateView.check_groups)
-    check_dh_parameters = _part("_view", StateView.check_dh_parameters)
-    group_index = _part("_view", StateView.group_index)
-
-    # ------------------------------------------------------------------ motion port
-
-    request_motion = _part("_commands", MotionCommands.request_motion)
-    check_motion_ready = _part("_commands", MotionCommands.check_motion_ready)
-    start_trajectory_mode = _part("_commands", MotionCommands.start_trajectory_mode)
-    stop_trajectory_mode = _part("_commands", MotionCommands.stop_trajectory_mode)
-    enable = start_trajectory_mode
-    disable = stop_trajectory_mode
-    start_servos = _part("_commands", MotionCommands.start_servos)
-    stop_servos = _part("_commands", MotionCommands.stop_servos)
-    reset_alarm = _part("_commands", MotionCommands.reset_alarm)
-    stop_motion = _part("_commands", MotionCommands.stop_motion)
-    queue_count = _part("_commands", MotionCommands.queue_count)
-    select_tool = _part("_commands", MotionCommands.select_tool)
-    get_dh_parameters = _part("_commands", MotionCommands.get_dh_parameters)
-    ping = _part("_commands", MotionCommands.ping)
-
-    # ------------------------------------------------------------------ IO
-
-    read_io_bit = _part("_io_port", IoPort.read_io_bit)
-    write_io_bit = _part("_io_port", IoPort.write_io_bit)
-    read_io_group = _part("_io_port", IoPort.read_io_group)
-    write_io_group = _part("_io_port", IoPort.write_io_group)
-    read_mregister = _part("_io_port", IoPort.read_mregister)
-    write_mregister = _part("_io_port", IoPort.write_mregister)
-
-    async def read_register_outputs(
-        self, table: S1cxgTable | Mapping[str, object] | str | Path, group: int = 0
-    ) -> RegisterValues:
-        """The S1CxG register outputs (TCP speed, Cartesian position, axis speeds and
-        positions, pulses) decoded with ``table``: an :class:`S1cxgTable`, a
-        ``{"330": 1, ...}`` mapping or a cell file with ``[groups.s1cxg]``."""
-        if not isinstance(table, S1cxgTable):
-            table = s1cxg_table(table, self.robot.groups[group], index=group)
-        return await read_register_outputs(self, table, group)
-
-    # ------------------------------------------------------------------ motion
-
-    limits = _part("_motion", Motion.limits)
-    current_positions = _part("_motion", Motion.current_positions)
-    plan = _part("_motion", Motion.plan)
-    execute = _part("_motion", Motion.execute)
-    guard = _part("_motion", Motion.guard)
-    stop = _part("_motion", Motion.stop)
-    stop_threadsafe = _part("_motion", Motion.stop_threadsafe)
-    move_joints = _part("_motion", Motion.move_joints)
-    named_pose = _part("_motion", Motion.named_pose)
-    move_named = _part("_motion", Motion.move_named)
-
-    # ------------------------------------------------------------------ geometry
-
-    tcp_pose = _part("_geometry", Geometry.tcp_pose)
-    move_linear = _move_part(Geometry.move_linear)
-    move_pose = _move_part(Geometry.move_pose)
-    move_relative = _move_part(Geometry.move_relative)
-    move_cartesian = _move_part(Geometry.move_cartesian)
+    def states(
+        self, message_timeout_s: float = DEFAULT_STATE_TIMEOUT_S
+    ) -> AsyncIterator[RobotState]:
+        """``async for state in robot.states():`` every state message, latest wins."""
+        return self._parts.view.states(message_timeout_s)
 
 
 async def connect(host: str = "127.0.0.1", **options: object) -> RobotClient:

@@ -6,12 +6,13 @@
         robot.enable()
         robot.move_joints([0, 0, 0, 0, -1.57, 0])
 
-Every public method and property of :class:`RobotClient` has its twin here, with
-the same name and parameters: coroutines become blocking calls, plain methods and
-properties forward as they are (there is one implementation). A test compares the
-two classes (``tests/test_front_door.py``), so a new client method cannot be silently
-absent. There is deliberately no ``__getattr__`` fallback: it would make every attribute
-of this class type-check as ``Any``. Listeners run in the loop's thread.
+Every call of :class:`RobotClient` is here too, with the same name and parameters: both
+classes inherit the one definition of each (:class:`~pymotoros.client.calls.RobotCalls`),
+which blocks here (:mod:`pymotoros.client.blocking`), so a new client method cannot be
+absent and mypy checks a blocking call against the async signature. The properties and
+``states`` are this class's own. There is deliberately no ``__getattr__`` fallback: it
+would make every attribute of this class type-check as ``Any``. Listeners run in the
+loop's thread.
 
 Interrupting a call (Ctrl-C: ``KeyboardInterrupt`` in the calling thread) cancels the
 coroutine behind it and waits until that cancellation has run its course: a move sends
@@ -25,18 +26,19 @@ from __future__ import annotations
 import asyncio
 import concurrent.futures
 import contextlib
-import functools
 import signal
 import threading
 import time
 from collections.abc import AsyncIterator, Callable, Coroutine, Iterator
 from types import TracebackType
-from typing import Any, Concatenate, Final, ParamSpec, Self, TypeVar
+from typing import Any, Final, ParamSpec, Self, TypeVar
 
+from pymotoros.client.blocking import BlockingFacade
+from pymotoros.client.calls import RobotCalls
 from pymotoros.client.connection import Ports
 from pymotoros.client.robot import RobotClient
 from pymotoros.client.state import DEFAULT_STATE_TIMEOUT_S, JointState, RobotState, Status
-from pymotoros.client.streaming import EARLY_STOP_BOUND_S, STOP_ON_THE_PENDANT
+from pymotoros.client.stopping import EARLY_STOP_BOUND_S, STOP_ON_THE_PENDANT
 from pymotoros.client.tools import ToolTable
 from pymotoros.models import ControllerModel, RobotModel
 from pymotoros.protocol.constants import ByteOrder
@@ -51,50 +53,16 @@ INTERRUPT_WAIT_S: Final = EARLY_STOP_BOUND_S + 2.0
 stop (:data:`EARLY_STOP_BOUND_S`) and a margin for the loop thread to get to it."""
 
 
-def _forward(
-    method: Callable[Concatenate[RobotClient, _P], Coroutine[Any, Any, _R]],
-) -> Callable[Concatenate[SyncRobotClient, _P], _R]:
-    """The blocking twin of an async ``RobotClient`` method (same name, parameters, doc)."""
+class SyncRobotClient(BlockingFacade, RobotCalls):
+    """Blocking :class:`RobotClient`: same constructor arguments, same methods.
 
-    @functools.wraps(method)
-    def blocking(self: SyncRobotClient, /, *args: _P.args, **kwargs: _P.kwargs) -> _R:
-        return self.run(method(self.client, *args, **kwargs))
+    The calls are :class:`~pymotoros.client.calls.RobotCalls`' (the async client's): each
+    coroutine method of it runs here on the facade's event loop and blocks until done
+    (:mod:`pymotoros.client.blocking`). :meth:`stop` is safe from another thread while a
+    blocking move runs there (the move raises ``MoveStoppedError``).
+    """
 
-    blocking.__qualname__ = f"SyncRobotClient.{method.__name__}"
-    return blocking
-
-
-def _forward_plain(
-    method: Callable[Concatenate[RobotClient, _P], _R],
-) -> Callable[Concatenate[SyncRobotClient, _P], _R]:
-    """A plain (non-async) ``RobotClient`` method called on the client behind the facade."""
-
-    @functools.wraps(method)
-    def plain(self: SyncRobotClient, /, *args: _P.args, **kwargs: _P.kwargs) -> _R:
-        return method(self.client, *args, **kwargs)
-
-    plain.__qualname__ = f"SyncRobotClient.{method.__name__}"
-    return plain
-
-
-def _after_first_state(
-    method: Callable[Concatenate[RobotClient, _P], _R],
-) -> Callable[Concatenate[SyncRobotClient, _P], _R]:
-    """A plain method that reads the latest state, called once the first state is in:
-    a script calls it right after connecting, before any state message has arrived."""
-
-    @functools.wraps(method)
-    def after(self: SyncRobotClient, /, *args: _P.args, **kwargs: _P.kwargs) -> _R:
-        if not self.client.state.joints:
-            self.run(self.client.wait_for_state())
-        return method(self.client, *args, **kwargs)
-
-    after.__qualname__ = f"SyncRobotClient.{method.__name__}"
-    return after
-
-
-class SyncRobotClient:
-    """Blocking :class:`RobotClient`: same constructor arguments, same methods."""
+    client: RobotClient
 
     def __init__(self, host: str = "127.0.0.1", **options: Any) -> None:
         self._loop = asyncio.new_event_loop()
@@ -272,49 +240,12 @@ class SyncRobotClient:
         """The tool table ``tcp_pose`` uses (a plain object: safe from this thread)."""
         return self.client.tools
 
-    plan = _forward_plain(RobotClient.plan)
-    limits = _forward_plain(RobotClient.limits)
-    named_pose = _forward_plain(RobotClient.named_pose)
-    group_index = _forward_plain(RobotClient.group_index)
-    check_groups = _forward_plain(RobotClient.check_groups)
-    guard = _forward_plain(RobotClient.guard)
-    stop_threadsafe = _forward_plain(RobotClient.stop_threadsafe)
-
-    wait_for_state = _forward(RobotClient.wait_for_state)
-    wait_until = _forward(RobotClient.wait_until)
-    request_motion = _forward(RobotClient.request_motion)
-    check_motion_ready = _forward(RobotClient.check_motion_ready)
-    start_trajectory_mode = _forward(RobotClient.start_trajectory_mode)
-    stop_trajectory_mode = _forward(RobotClient.stop_trajectory_mode)
-    enable = _forward(RobotClient.start_trajectory_mode)
-    disable = _forward(RobotClient.stop_trajectory_mode)
-    start_servos = _forward(RobotClient.start_servos)
-    stop_servos = _forward(RobotClient.stop_servos)
-    reset_alarm = _forward(RobotClient.reset_alarm)
-    stop_motion = _forward(RobotClient.stop_motion)
-    stop = _forward(RobotClient.stop)
-    """Safe from another thread while a blocking move runs there (it raises MoveStoppedError)."""
-    queue_count = _forward(RobotClient.queue_count)
-    select_tool = _forward(RobotClient.select_tool)
-    get_dh_parameters = _forward(RobotClient.get_dh_parameters)
-    check_dh_parameters = _forward(RobotClient.check_dh_parameters)
-    ping = _forward(RobotClient.ping)
-    read_io_bit = _forward(RobotClient.read_io_bit)
-    write_io_bit = _forward(RobotClient.write_io_bit)
-    read_io_group = _forward(RobotClient.read_io_group)
-    write_io_group = _forward(RobotClient.write_io_group)
-    read_mregister = _forward(RobotClient.read_mregister)
-    write_mregister = _forward(RobotClient.write_mregister)
-    current_positions = _forward(RobotClient.current_positions)
-    execute = _forward(RobotClient.execute)
-    move_joints = _forward(RobotClient.move_joints)
-    move_named = _forward(RobotClient.move_named)
-    move_linear = _forward(RobotClient.move_linear)
-    move_relative = _forward(RobotClient.move_relative)
-    move_pose = _forward(RobotClient.move_pose)
-    read_register_outputs = _forward(RobotClient.read_register_outputs)
-    move_cartesian = _forward(RobotClient.move_cartesian)
-    tcp_pose = _after_first_state(RobotClient.tcp_pose)
+    def wait_for_first_state(self) -> None:
+        """Block until the first state message is in (a no-op once it is): the calls that
+        read the latest state (``tcp_pose``) wait for it when called right after
+        connecting."""
+        if not self.client.state.joints:
+            self.run(self.client.wait_for_state())
 
 
 class _Terminated(BaseException):
