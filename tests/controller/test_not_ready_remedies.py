@@ -17,7 +17,6 @@ from pymotoros.cli.live import not_ready_reason
 from pymotoros.client.errors import NotReadyError, reply_error
 from pymotoros.client.state import Mode, Status
 from pymotoros.controller import VirtualController
-from pymotoros.protocol.constants import PendantMode
 from pymotoros.controller.assembly import assemble
 from pymotoros.controller.cell import default_cell
 from pymotoros.controller.readiness import Readiness
@@ -25,6 +24,7 @@ from pymotoros.protocol.constants import (
     OPERATOR_FIRST,
     MotionCommand,
     NotReadySubcode,
+    PendantMode,
     ResultCode,
 )
 
