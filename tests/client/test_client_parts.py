@@ -96,7 +96,7 @@ def test_each_call_has_the_signature_of_the_part_it_calls() -> None:
         assert inspect.iscoroutinefunction(call) == inspect.iscoroutinefunction(method), name
         assert inspect.signature(call) == _without_self(method), name
         assert call.__doc__, name
-    assert checked >= 40
+    assert checked >= 35  # most calls have a part method of the same name (not ping: exchange)
 
 
 class _ToyCalls:

@@ -16,6 +16,7 @@ A new wire request: its method in the part, and one method here (both clients ge
 
 from __future__ import annotations
 
+import time
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -39,7 +40,7 @@ from pymotoros.client.streaming import DEFAULT_GOAL_TOLERANCE
 from pymotoros.client.tools import DEFAULT_TCP_SPEED_MM_S
 from pymotoros.models import RobotModel
 from pymotoros.models.s1cxg import S1cxgTable
-from pymotoros.protocol.messages import DhLink, MotoMotionReply, WireMessage
+from pymotoros.protocol.messages import DhLink, MotoMotionReply, Ping, PingReply, WireMessage
 
 
 @dataclass(frozen=True, slots=True)
@@ -192,7 +193,9 @@ class RobotCalls:
     @blocking_twin
     async def ping(self) -> float:
         """PING on the motion port; returns the round trip in seconds."""
-        return await self._parts.commands.ping()
+        start = time.perf_counter()
+        await self._parts.commands.exchange(Ping(), PingReply)
+        return time.perf_counter() - start
 
     # ------------------------------------------------------------------ IO
 
