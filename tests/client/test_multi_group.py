@@ -3,11 +3,11 @@
 from __future__ import annotations
 
 import asyncio
-import threading
 from collections.abc import AsyncIterator
 from pathlib import Path
 
 import pytest
+from slow_move import start_slow_move
 
 from pymotoros.client import (
     ClientError,
@@ -115,26 +115,11 @@ def test_sync_stop_from_another_thread() -> None:
     with sync_twin(robot="hc10") as (client, _):
         client.enable()
         goal = (2.5, 0.0, 0.0, 0.0, 0.0, 0.0)
-        moving = threading.Event()
-        errors: list[BaseException] = []
-
-        def move() -> None:
-            try:
-                # Slow (about 100 s of virtual motion): the twin's time runs as fast as
-                # its thread, so a brisk move could end before stop() arrives.
-                client.move_joints(goal, speed_scale=0.01, on_progress=lambda s: moving.set())
-            except BaseException as exc:
-                errors.append(exc)
-
-        thread = threading.Thread(target=move)
-        thread.start()
-        assert moving.wait(10)
+        move = start_slow_move(client, goal)
         client.stop()
-        thread.join(10)
-        assert not thread.is_alive()
-        assert len(errors) == 1
-        assert isinstance(errors[0], MoveStoppedError)
-        assert errors[0].positions[0] < goal[0]
+        error = move.error()
+        assert isinstance(error, MoveStoppedError)
+        assert error.positions[0] < goal[0]
 
 
 async def test_stop_threadsafe_from_a_thread_ends_an_async_move(
