@@ -8,9 +8,12 @@ the internet fails visibly instead of working by luck; loopback bypasses the pro
 from __future__ import annotations
 
 import shutil
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from contextlib import contextmanager
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
+
+import pytest
+from client_sim import Sim, running_sim
 
 if TYPE_CHECKING:
     from selenium.webdriver.remote.webdriver import WebDriver
@@ -19,6 +22,52 @@ CHROMIUM = shutil.which("chromium") or shutil.which("chromium-browser")
 CHROMEDRIVER = shutil.which("chromedriver")
 DEAD_PROXY = "127.0.0.1:9"
 """Every non-loopback request goes to this closed port (the discard port): blocked."""
+WAIT_S = 20.0
+"""Bound on every wait for the page (a cold Chromium start on a busy 2-core machine)."""
+NEEDS_CHROMIUM = pytest.mark.skipif(
+    CHROMIUM is None or CHROMEDRIVER is None,
+    reason="chromium and chromium-driver are not installed (.ci/run installs them)",
+)
+BROWSER_TEST = [pytest.mark.timeout(180), NEEDS_CHROMIUM]
+"""The ``pytestmark`` of a browser test module: a Chromium start and a simulator take
+a while on a busy machine; without Chromium the module is skipped, saying why."""
+
+
+def sim_fixture(*args: str) -> Any:
+    """A module-scoped ``sim`` fixture: ``pymotoros sim`` with ``args``, shared by the
+    module's tests (one simulator start per module)."""
+
+    @pytest.fixture(scope="module")
+    def sim() -> Iterator[Sim]:
+        with running_sim(*args) as sim:
+            yield sim
+
+    return sim
+
+
+def browser_fixture(*, window: str | None = None, logs: dict[str, str] | None = None) -> Any:
+    """A module-scoped ``browser`` fixture: one :func:`headless_chromium` per module."""
+
+    @pytest.fixture(scope="module")
+    def browser() -> Iterator[WebDriver]:
+        with headless_chromium(window=window, logs=logs) as driver:
+            yield driver
+
+    return browser
+
+
+def wait_for(
+    driver: WebDriver,
+    condition: Callable[[WebDriver], Any],
+    what: str,
+    *,
+    timeout_s: float = WAIT_S,
+    poll_s: float = 0.05,
+) -> Any:
+    """``condition``'s first truthy value, polled in the page; fails naming ``what``."""
+    from selenium.webdriver.support.ui import WebDriverWait
+
+    return WebDriverWait(driver, timeout_s, poll_frequency=poll_s).until(condition, what)
 
 
 @contextmanager
