@@ -8,6 +8,7 @@ the internet fails visibly instead of working by luck; loopback bypasses the pro
 from __future__ import annotations
 
 import shutil
+from base64 import b64encode
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from typing import TYPE_CHECKING, Any
@@ -102,3 +103,24 @@ def headless_chromium(
         yield driver
     finally:
         driver.quit()
+
+
+PNG_PIXELS_JS = """
+const done = arguments[arguments.length - 1];
+const img = new Image();
+img.onload = () => {
+  const c = document.createElement("canvas");
+  c.width = img.width; c.height = img.height;
+  const ctx = c.getContext("2d"); ctx.drawImage(img, 0, 0);
+  const d = ctx.getImageData(0, 0, c.width, c.height).data;
+  done((() => { COUNT })());
+};
+img.src = "data:image/png;base64," + arguments[0];
+"""
+
+
+def count_in_png(driver: WebDriver, png: bytes, count_js: str) -> int:
+    """A number counted by ``count_js`` (a function body over ``d``, the RGBA bytes) in a
+    PNG decoded by the browser itself: no imaging library."""
+    script = PNG_PIXELS_JS.replace("COUNT", count_js)
+    return int(driver.execute_async_script(script, b64encode(png).decode()))

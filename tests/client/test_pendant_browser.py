@@ -16,13 +16,12 @@ import concurrent.futures
 import json
 import math
 import re
-from base64 import b64encode
 from pathlib import Path
 from urllib.parse import urlsplit
 
 import pytest
 from client_sim import Sim, running_sim
-from headless import BROWSER_TEST, WAIT_S, browser_fixture, sim_fixture, wait_for
+from headless import BROWSER_TEST, WAIT_S, browser_fixture, count_in_png, sim_fixture, wait_for
 
 from pymotoros.client import NotReadyError, SyncRobotClient
 
@@ -45,6 +44,11 @@ const p = window.pendant, stale = JSON.parse(JSON.stringify(p.last));
 stale.estop = false;
 stale.tick.count = p.answeredAt;
 return p.fromFeed(stale);
+"""
+DISTINCT_COLOURS_JS = """
+const seen = new Set();
+for (let i = 0; i < d.length; i += 4) seen.add((d[i] << 16) | (d[i+1] << 8) | d[i+2]);
+return seen.size;
 """
 MIN_COLOURS = 20
 """A blank canvas has one colour; grid, links, joints and ghost give far more."""
@@ -116,25 +120,8 @@ def _canvas_png(driver: WebDriver) -> bytes:
 
 
 def _colours(driver: WebDriver, png: bytes) -> int:
-    """Distinct colours in a PNG (decoded by the browser itself: no imaging library)."""
-    return int(
-        driver.execute_async_script(
-            """
-            const done = arguments[arguments.length - 1];
-            const img = new Image();
-            img.onload = () => {
-              const c = document.createElement("canvas");
-              c.width = img.width; c.height = img.height;
-              const ctx = c.getContext("2d"); ctx.drawImage(img, 0, 0);
-              const d = ctx.getImageData(0, 0, c.width, c.height).data, seen = new Set();
-              for (let i = 0; i < d.length; i += 4) seen.add((d[i] << 16) | (d[i+1] << 8) | d[i+2]);
-              done(seen.size);
-            };
-            img.src = "data:image/png;base64," + arguments[0];
-            """,
-            b64encode(png).decode(),
-        )
-    )
+    """Distinct colours in a PNG."""
+    return count_in_png(driver, png, DISTINCT_COLOURS_JS)
 
 
 def test_pendant_in_a_real_browser_offline(

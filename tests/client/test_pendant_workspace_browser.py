@@ -9,14 +9,13 @@ directory, or to ``$PYMOTOROS_SCREENSHOT_DIR`` when it is set.
 from __future__ import annotations
 
 import urllib.request
-from base64 import b64encode
 from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
 import pytest
 from client_sim import Sim, running_sim
-from headless import BROWSER_TEST, sim_fixture, wait_for
+from headless import BROWSER_TEST, count_in_png, sim_fixture, wait_for
 from test_pendant_browser import _canvas_png, browser
 
 from pymotoros.models.link_shapes import LINK_RADII_M
@@ -34,18 +33,9 @@ CRATE = {"name": "crate", "sphere": 0.12, "xyz": [0.0, 0.0, 0.975]}
 """Around the HC10's elbow at its zero pose (where the simulator boots): a contact."""
 SCENE_JS = "return window.pendant.scene || null"
 RED_PIXELS_JS = """
-const done = arguments[arguments.length - 1];
-const img = new Image();
-img.onload = () => {
-  const c = document.createElement("canvas");
-  c.width = img.width; c.height = img.height;
-  const ctx = c.getContext("2d"); ctx.drawImage(img, 0, 0);
-  const d = ctx.getImageData(0, 0, c.width, c.height).data;
-  let red = 0;
-  for (let i = 0; i < d.length; i += 4) if (d[i] > 150 && d[i + 1] < 90 && d[i + 2] < 90) red++;
-  done(red);
-};
-img.src = "data:image/png;base64," + arguments[0];
+let red = 0;
+for (let i = 0; i < d.length; i += 4) if (d[i] > 150 && d[i + 1] < 90 && d[i + 2] < 90) red++;
+return red;
 """
 MIN_RED_PIXELS = 200
 """A touched obstacle filled red covers far more than this; the robot and the grid have
@@ -56,7 +46,7 @@ sim = sim_fixture("--robot", "hc10")
 
 
 def _red_pixels(driver: WebDriver, png: bytes) -> int:
-    return int(driver.execute_async_script(RED_PIXELS_JS, b64encode(png).decode()))
+    return count_in_png(driver, png, RED_PIXELS_JS)
 
 
 def _scene(driver: WebDriver) -> dict[str, Any] | None:
