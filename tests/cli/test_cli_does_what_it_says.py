@@ -17,7 +17,7 @@ import pytest
 from click.testing import CliRunner, Result
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "client"))
-from client_sim import Sim, running_sim
+from client_sim import Sim, running_sim, sim_fixture
 
 from pymotoros.cli.main import cli
 from pymotoros.cli.robot import EXIT_REFUSED
@@ -35,10 +35,7 @@ PROCESS_TIMEOUT_S = 60.0
 """Bound on a subprocess's life: a command that never ends fails the test, not the run."""
 
 
-@pytest.fixture(scope="module")
-def sim() -> Iterator[Sim]:
-    with running_sim() as s:
-        yield s
+sim = sim_fixture()
 
 
 def invoke(sim: Sim, *args: str) -> Result:

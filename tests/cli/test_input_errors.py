@@ -8,14 +8,12 @@ import signal
 import socket
 import subprocess
 import sys
-from collections.abc import Iterator
 from pathlib import Path
 
-import pytest
 from click.testing import CliRunner, Result
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "client"))
-from client_sim import Sim, running_sim
+from client_sim import Sim, port_options, sim_fixture
 
 from pymotoros.cli.main import cli
 from pymotoros.cli.robot import EXIT_REFUSED, EXIT_USAGE
@@ -36,10 +34,7 @@ def _one_line_error(result: Result, code: int) -> str:
     return lines[0]
 
 
-@pytest.fixture(scope="module")
-def sim() -> Iterator[Sim]:
-    with running_sim() as s:
-        yield s
+sim = sim_fixture()
 
 
 def invoke(sim: Sim, *args: str) -> Result:
@@ -191,17 +186,7 @@ def test_busy_default_port_hints_port_0() -> None:
         port = busy.getsockname()[1]
         result = CliRunner().invoke(
             cli,
-            [
-                "sim",
-                "--motion-port",
-                str(port),
-                "--state-port",
-                "0",
-                "--io-port",
-                "0",
-                "--http-port",
-                "0",
-            ],
+            ["sim", *port_options(motion=port, state=0, io=0, http=0)],
         )
     assert result.exit_code == 1
     assert "Traceback" not in result.output

@@ -17,6 +17,8 @@ from collections.abc import Iterator
 from dataclasses import dataclass
 from typing import Any
 
+import pytest
+
 READY_TIMEOUT_S = 30.0
 STOP_TIMEOUT_S = 10.0
 _READY = re.compile(r"pymotoros sim ready motion=(\d+) state=(\d+) io=(\d+) http=(\d+)")
@@ -35,16 +37,11 @@ class Sim:
         return {"motion_port": self.motion, "state_port": self.state, "io_port": self.io}
 
     def cli_args(self) -> list[str]:
-        return [
-            "--host",
-            self.host,
-            "--motion-port",
-            str(self.motion),
-            "--state-port",
-            str(self.state),
-            "--io-port",
-            str(self.io),
-        ]
+        return ["--host", self.host, *self.port_args()]
+
+    def port_args(self) -> list[str]:
+        """``--motion-port M --state-port S --io-port I``: where a client finds it."""
+        return port_options(motion=self.motion, state=self.state, io=self.io)
 
     def api(self, path: str, body: dict[str, Any] | None = None) -> dict[str, Any]:
         """Call the control API (POST with a body, GET without)."""
@@ -65,6 +62,11 @@ class Sim:
         self.process.wait(STOP_TIMEOUT_S)
 
 
+def port_options(**ports: int) -> list[str]:
+    """``--NAME-port PORT`` for each of ``ports`` (motion, state, io, http), in order."""
+    return [arg for name, port in ports.items() for arg in (f"--{name}-port", str(port))]
+
+
 def _readline(process: subprocess.Popen[str]) -> str:
     assert process.stdout is not None
     return process.stdout.readline()
@@ -80,14 +82,7 @@ def running_sim(*extra: str) -> Iterator[Sim]:
             "sim",
             "--host",
             "127.0.0.1",
-            "--motion-port",
-            "0",
-            "--state-port",
-            "0",
-            "--io-port",
-            "0",
-            "--http-port",
-            "0",
+            *port_options(motion=0, state=0, io=0, http=0),
             *extra,
         ],
         stdout=subprocess.PIPE,
@@ -111,3 +106,15 @@ def running_sim(*extra: str) -> Iterator[Sim]:
                 process.wait(STOP_TIMEOUT_S)
         if process.stdout is not None:
             process.stdout.close()
+
+
+def sim_fixture(*args: str) -> Any:
+    """A module-scoped ``sim`` fixture: ``pymotoros sim`` with ``args``, shared by the
+    module's tests (one simulator start per module)."""
+
+    @pytest.fixture(scope="module")
+    def sim() -> Iterator[Sim]:
+        with running_sim(*args) as sim:
+            yield sim
+
+    return sim

@@ -14,7 +14,6 @@ from contextlib import contextmanager
 from typing import TYPE_CHECKING, Any
 
 import pytest
-from client_sim import Sim, running_sim
 
 if TYPE_CHECKING:
     from selenium.webdriver.remote.webdriver import WebDriver
@@ -32,18 +31,6 @@ NEEDS_CHROMIUM = pytest.mark.skipif(
 BROWSER_TEST = [pytest.mark.timeout(180), NEEDS_CHROMIUM]
 """The ``pytestmark`` of a browser test module: a Chromium start and a simulator take
 a while on a busy machine; without Chromium the module is skipped, saying why."""
-
-
-def sim_fixture(*args: str) -> Any:
-    """A module-scoped ``sim`` fixture: ``pymotoros sim`` with ``args``, shared by the
-    module's tests (one simulator start per module)."""
-
-    @pytest.fixture(scope="module")
-    def sim() -> Iterator[Sim]:
-        with running_sim(*args) as sim:
-            yield sim
-
-    return sim
 
 
 def browser_fixture(*, window: str | None = None, logs: dict[str, str] | None = None) -> Any:

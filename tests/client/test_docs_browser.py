@@ -14,8 +14,8 @@ import json
 from urllib.parse import urlsplit
 
 import pytest
-from client_sim import Sim
-from headless import BROWSER_TEST, browser_fixture, sim_fixture, wait_for
+from client_sim import Sim, sim_fixture
+from headless import BROWSER_TEST, browser_fixture, wait_for
 
 webdriver = pytest.importorskip("selenium.webdriver", reason="selenium is not installed")
 

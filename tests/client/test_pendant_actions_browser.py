@@ -6,8 +6,8 @@ API's words (Debian's Chromium + chromedriver, driven by Selenium)."""
 from __future__ import annotations
 
 import pytest
-from client_sim import Sim
-from headless import BROWSER_TEST, browser_fixture, sim_fixture, wait_for
+from client_sim import Sim, sim_fixture
+from headless import BROWSER_TEST, browser_fixture, wait_for
 
 webdriver = pytest.importorskip("selenium.webdriver", reason="selenium is not installed")
 

@@ -20,8 +20,8 @@ from pathlib import Path
 from urllib.parse import urlsplit
 
 import pytest
-from client_sim import Sim, running_sim
-from headless import BROWSER_TEST, WAIT_S, browser_fixture, count_in_png, sim_fixture, wait_for
+from client_sim import Sim, running_sim, sim_fixture
+from headless import BROWSER_TEST, WAIT_S, browser_fixture, count_in_png, wait_for
 
 from pymotoros.client import NotReadyError, SyncRobotClient
 

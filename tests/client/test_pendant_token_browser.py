@@ -9,8 +9,8 @@ import urllib.request
 from typing import Any
 
 import pytest
-from client_sim import Sim
-from headless import BROWSER_TEST, browser_fixture, sim_fixture, wait_for
+from client_sim import Sim, sim_fixture
+from headless import BROWSER_TEST, browser_fixture, wait_for
 
 webdriver = pytest.importorskip("selenium.webdriver", reason="selenium is not installed")
 from selenium.common.exceptions import NoAlertPresentException  # noqa: E402

@@ -14,8 +14,8 @@ from pathlib import Path
 from typing import Any
 
 import pytest
-from client_sim import Sim, running_sim
-from headless import BROWSER_TEST, count_in_png, sim_fixture, wait_for
+from client_sim import Sim, running_sim, sim_fixture
+from headless import BROWSER_TEST, count_in_png, wait_for
 from test_pendant_browser import _canvas_png, browser
 
 from pymotoros.models.link_shapes import LINK_RADII_M
