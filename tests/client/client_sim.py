@@ -9,7 +9,9 @@ from __future__ import annotations
 import concurrent.futures
 import contextlib
 import json
+import os
 import re
+import signal
 import subprocess
 import sys
 import urllib.request
@@ -18,6 +20,10 @@ from dataclasses import dataclass
 from typing import Any
 
 import pytest
+from click.testing import CliRunner
+
+from pymotoros.cli.main import cli
+from pymotoros.client import SyncRobotClient
 
 READY_TIMEOUT_S = 30.0
 STOP_TIMEOUT_S = 10.0
@@ -118,3 +124,45 @@ def sim_fixture(*args: str) -> Any:
             yield sim
 
     return sim
+
+
+GOAL_2_5_RAD = ("2.5", "0", "0", "0", "0", "0")
+"""Joint 1 to 2.5 rad: a move long enough to be stopped on its way."""
+
+
+@dataclass
+class EstoppedMove:
+    """What ``pymotoros move`` did when the E-stop was pressed during its move."""
+
+    returncode: int
+    stderr: str
+    rest: tuple[float, ...]
+    """The first group's joints as a client saw them once the command had ended."""
+
+
+def estop_a_cli_move(sim: Sim, *, moving_beyond: float, timeout_s: float) -> EstoppedMove:
+    """``pymotoros move 2.5 0 0 0 0 0`` as a subprocess against ``sim``, the E-stop
+    pressed once joint 1 passed ``moving_beyond`` rad; afterwards the E-stop is released
+    and ``pymotoros reset`` run, so the simulator is ready for the next test."""
+    process = subprocess.Popen(  # noqa: S603 - our own CLI
+        [sys.executable, "-m", "pymotoros", "move", *GOAL_2_5_RAD, *sim.cli_args()],
+        stderr=subprocess.PIPE,
+        stdout=subprocess.PIPE,
+        text=True,
+        env={**os.environ},
+    )
+    try:
+        with SyncRobotClient(**sim.client_options()) as watcher:
+            watcher.wait_until(
+                lambda s: (s.positions(0) or (0,))[0] > moving_beyond, 30.0, "motion"
+            )
+            sim.api("/api/estop", {"pressed": True})
+            _, stderr = process.communicate(timeout=timeout_s)
+            rest = watcher.current_positions(0)
+    finally:
+        if process.poll() is None:
+            process.send_signal(signal.SIGKILL)
+            process.communicate()
+        sim.api("/api/estop", {"pressed": False})
+        CliRunner().invoke(cli, ["reset", *sim.cli_args()])
+    return EstoppedMove(process.returncode, stderr, tuple(rest))
