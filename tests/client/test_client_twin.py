@@ -13,6 +13,7 @@ from pathlib import Path
 import pytest
 from client_sim import running_sim
 
+from first_script import move_b_and_set_an_output
 from load_proof import Stopwatch
 from pymotoros.client import JointTrajectory, NotReadyError, RobotClient, SyncRobotClient
 from pymotoros.client.planning import TrajectoryPoint
@@ -189,12 +190,7 @@ def test_blocking_facade_over_tcp() -> None:
         running_sim() as sim,
         SyncRobotClient(**sim.client_options()) as robot,
     ):
-        robot.wait_for_state()
-        robot.enable()
-        result = robot.move_joints([0.0, 0.0, 0.0, 0.0, -1.57, 0.0])
-        assert abs(result.final_positions[4] + 1.57) < TOLERANCE
-        robot.write_io_bit(10020, 1)
-        assert robot.read_io_bit(10020) == 1
+        move_b_and_set_an_output(robot, -1.57)
         states = robot.states()
         assert next(states).count > 0
         states.close()
