@@ -19,6 +19,7 @@ from pymotoros.client import (
 from pymotoros.controller.cell import load_cell
 from pymotoros.models.cell import load_cell_models
 from pymotoros.testing import Twin, sync_twin, twin
+from says import assert_says
 
 CELL = Path(__file__).resolve().parents[2] / "examples" / "cells" / "two_hc10_dx100.toml"
 TOLERANCE = 1e-3
@@ -38,12 +39,14 @@ async def test_a_model_with_more_groups_is_named_a_mismatch() -> None:
         async with client:
             with pytest.raises(ModelMismatchError) as info:
                 await client.wait_for_state(2.0)
-    text = str(info.value)
-    assert "model mismatch" in text
-    assert "sda10f expects 4 group(s)" in text
-    assert "streams 1 (group 0)" in text
-    assert "R2" in text
-    assert "--robot" in text
+    assert_says(
+        str(info.value),
+        "model mismatch",
+        "sda10f expects 4 group(s)",
+        "streams 1 (group 0)",
+        "R2",
+        "--robot",
+    )
 
 
 async def test_a_model_with_fewer_axes_is_named_a_mismatch() -> None:
