@@ -28,7 +28,7 @@ from pymotoros.runtime.fleet import (
 )
 from pymotoros.runtime.ticker import IDLE_BATCH_TICKS
 
-from .fake_controller import FakeController
+from .fake_controller import BrokenAtTick3, FakeController
 from .peer import Peer, ctrl
 from .support import LOCAL, virtual_time
 
@@ -134,15 +134,8 @@ async def test_stop_closes_every_cell_and_is_idempotent() -> None:
     await fleet.wait_stopped()  # returns at once, no error
 
 
-class _Broken(FakeController):
-    def tick(self) -> None:
-        super().tick()
-        if self.ticks == 3:
-            raise RuntimeError("controller bug")
-
-
 async def test_a_crashing_tick_stops_every_cell_and_propagates() -> None:
-    fleet = _fleet(FakeController(), _Broken())
+    fleet = _fleet(FakeController(), BrokenAtTick3())
 
     async def run() -> list[int]:
         async with asyncio.timeout(5.0), fleet:
