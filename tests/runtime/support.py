@@ -11,7 +11,7 @@ import pytest
 
 from pymotoros.controller.cell import CellConfig, default_cell
 from pymotoros.models.fidelity import Fidelity
-from pymotoros.runtime.app import SimulatorConfig
+from pymotoros.runtime.app import SimulatorApp, SimulatorConfig
 from pymotoros.runtime.clock import ManualClock
 from pymotoros.runtime.ticker import LatenessStats, Ticker, TickStats
 
@@ -63,3 +63,16 @@ async def running(ticker: Ticker) -> AsyncIterator[asyncio.Task[None]]:
         task.cancel()
         with contextlib.suppress(asyncio.CancelledError):
             await task
+
+
+async def until(
+    app: SimulatorApp, what: str, condition: object, ticks: int = 2000, timeout_s: float = 10.0
+) -> None:
+    """Tick by tick until ``condition()`` holds (bounded in ticks and time)."""
+    assert callable(condition)
+    async with asyncio.timeout(timeout_s):
+        for _ in range(ticks):
+            if condition():
+                return
+            await app.ticker.wait_ticks(1)
+    pytest.fail(f"{what} did not happen within {ticks} ticks")

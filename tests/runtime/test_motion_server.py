@@ -45,6 +45,7 @@ from pymotoros.protocol.messages import (
 from pymotoros.runtime.app import SimulatorApp
 
 from .peer import Peer, ctrl
+from .support import until
 
 LE = ByteOrder.LITTLE
 OK = (ResultCode.SUCCESS, 0)
@@ -54,17 +55,6 @@ MOTION_SERVER_OUTPUT = 11124
 
 async def motion_peer(app: SimulatorApp) -> Peer:
     return await Peer.connect(app.ports.motion, Port.MOTION)
-
-
-async def until(app: SimulatorApp, what: str, condition: object, ticks: int = 2000) -> None:
-    """Tick by tick until ``condition()`` holds (bounded in ticks and time)."""
-    assert callable(condition)
-    async with asyncio.timeout(10.0):
-        for _ in range(ticks):
-            if condition():
-                return
-            await app.ticker.wait_ticks(1)
-    pytest.fail(f"{what} did not happen within {ticks} ticks")
 
 
 async def start_trajectory(peer: Peer, app: SimulatorApp) -> None:
