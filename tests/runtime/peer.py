@@ -68,6 +68,11 @@ class Peer:
             await self.writer.wait_closed()
 
 
+def header(frame: Frame) -> tuple[int, int, int]:
+    """The (message type, communication type, reply type) of ``frame``'s header."""
+    return frame.msg_type, frame.comm_type, frame.reply_type
+
+
 async def ctrl(peer: Peer, command: int, group: int = 0, sequence: int = 0) -> tuple[int, int]:
     """Send a MOTO_MOTION_CTRL; (result, subcode) of the reply, whose echo is checked."""
     reply = await peer.request(MotoMotionCtrl(group, sequence, command))

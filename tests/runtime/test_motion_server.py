@@ -44,7 +44,7 @@ from pymotoros.protocol.messages import (
 )
 from pymotoros.runtime.app import SimulatorApp
 
-from .peer import Peer, ctrl
+from .peer import Peer, ctrl, header
 from .support import until
 
 LE = ByteOrder.LITTLE
@@ -72,11 +72,7 @@ async def test_ping_and_single_write_replies(app: SimulatorApp) -> None:
     peer = await motion_peer(app)
     await peer.send(Ping())
     frame = await peer.frame()
-    assert (frame.msg_type, frame.comm_type, frame.reply_type) == (
-        MsgType.PING,
-        CommType.SERVICE_REPLY,
-        ReplyType.SUCCESS,
-    )
+    assert header(frame) == (MsgType.PING, CommType.SERVICE_REPLY, ReplyType.SUCCESS)
     assert frame.body == b""
     await peer.close()
 
