@@ -25,24 +25,35 @@ ROOT = Path(__file__).resolve().parents[1]
 RUN_TIMEOUT_S = 60.0
 
 
-@pytest.mark.skipif(shutil.which("bash") is None, reason="bash is not installed")
-def test_a_missing_component_fails_the_run_naming_its_package(tmp_path: Path) -> None:
+def bin_with(tmp_path: Path, tools: tuple[str, ...]) -> Path:
+    """A fresh ``bin`` directory under ``tmp_path`` holding links to just ``tools``."""
     bin_dir = tmp_path / "bin"
     bin_dir.mkdir()
-    for tool in ("dirname", "cat"):
+    for tool in tools:
         found = shutil.which(tool)
         assert found is not None, tool
         (bin_dir / tool).symlink_to(found)
+    return bin_dir
+
+
+def run_ci(env: dict[str, str]) -> subprocess.CompletedProcess[str]:
+    """``.ci/run`` under bash with only ``env`` as its environment."""
     bash = shutil.which("bash")
     assert bash is not None
-    done = subprocess.run(  # noqa: S603 - bash found on PATH, fixed arguments
+    return subprocess.run(  # noqa: S603 - bash found on PATH, fixed arguments
         [bash, str(ROOT / ".ci" / "run")],
-        env={"PATH": str(bin_dir), "HOME": str(tmp_path)},
+        env=env,
         capture_output=True,
         text=True,
         timeout=RUN_TIMEOUT_S,
         check=False,
     )
+
+
+@pytest.mark.skipif(shutil.which("bash") is None, reason="bash is not installed")
+def test_a_missing_component_fails_the_run_naming_its_package(tmp_path: Path) -> None:
+    bin_dir = bin_with(tmp_path, ("dirname", "cat"))
+    done = run_ci({"PATH": str(bin_dir), "HOME": str(tmp_path)})
     assert done.returncode == 1, done.stderr
     for command, package in (
         ("tshark", "tshark"),
@@ -68,12 +79,7 @@ exit 0
 
 
 def run_with_stand_ins(tmp_path: Path, pytest_exit: int = 0) -> tuple[int, list[str], Path]:
-    bin_dir = tmp_path / "bin"
-    bin_dir.mkdir()
-    for tool in ("dirname", "cat", "mktemp", "rm", "mkdir", "cp"):
-        found = shutil.which(tool)
-        assert found is not None, tool
-        (bin_dir / tool).symlink_to(found)
+    bin_dir = bin_with(tmp_path, ("dirname", "cat", "mktemp", "rm", "mkdir", "cp"))
     for present in ("tshark", "chromium", "chromedriver", "git"):  # nothing to apt-get
         (bin_dir / present).write_text("#!/bin/sh\nexit 0\n")
         (bin_dir / present).chmod(0o755)
@@ -82,21 +88,14 @@ def run_with_stand_ins(tmp_path: Path, pytest_exit: int = 0) -> tuple[int, list[
     temp = tmp_path / "temp"
     temp.mkdir()
     log = tmp_path / "calls.log"
-    bash = shutil.which("bash")
-    assert bash is not None
-    done = subprocess.run(  # noqa: S603 - bash found on PATH, fixed arguments
-        [bash, str(ROOT / ".ci" / "run")],
-        env={
+    done = run_ci(
+        {
             "PATH": str(bin_dir),
             "HOME": str(tmp_path),
             "TMPDIR": str(temp),
             "CI_LOG": str(log),
             "PYTEST_EXIT": str(pytest_exit),
-        },
-        capture_output=True,
-        text=True,
-        timeout=RUN_TIMEOUT_S,
-        check=False,
+        }
     )
     calls = log.read_text().splitlines() if log.exists() else []
     return done.returncode, calls, temp
@@ -134,12 +133,7 @@ def test_a_failing_test_run_stops_it(tmp_path: Path, pytest_exit: int) -> None:
 def run_as_user(tmp_path: Path, *, sudo: bool) -> tuple[subprocess.CompletedProcess[str], str]:
     """.ci/run as uid 1000 with a stand-in apt-get (installs nothing, records its calls)
     and, if ``sudo``, a passwordless stand-in sudo that runs what it is given."""
-    bin_dir = tmp_path / "bin"
-    bin_dir.mkdir()
-    for tool in ("dirname", "cat", "env"):
-        found = shutil.which(tool)
-        assert found is not None, tool
-        (bin_dir / tool).symlink_to(found)
+    bin_dir = bin_with(tmp_path, ("dirname", "cat", "env"))
     log = tmp_path / "calls.log"
     stand_ins = {
         "id": "#!/bin/bash\necho 1000\n",
@@ -151,16 +145,7 @@ def run_as_user(tmp_path: Path, *, sudo: bool) -> tuple[subprocess.CompletedProc
     for name, text in stand_ins.items():
         (bin_dir / name).write_text(text)
         (bin_dir / name).chmod(0o755)
-    bash = shutil.which("bash")
-    assert bash is not None
-    done = subprocess.run(  # noqa: S603 - bash found on PATH, fixed arguments
-        [bash, str(ROOT / ".ci" / "run")],
-        env={"PATH": str(bin_dir), "HOME": str(tmp_path)},
-        capture_output=True,
-        text=True,
-        timeout=RUN_TIMEOUT_S,
-        check=False,
-    )
+    done = run_ci({"PATH": str(bin_dir), "HOME": str(tmp_path)})
     return done, log.read_text() if log.exists() else ""
 
 

@@ -14,6 +14,7 @@ from pathlib import Path
 import httpx
 import pytest
 
+from first_script import move_b_and_set_an_output
 from pymotoros.client import RobotClient, SyncRobotClient
 from pymotoros.pytest_plugin import RunningTwin
 
@@ -33,12 +34,7 @@ def options(twin: RunningTwin) -> dict[str, int]:
 
 def test_the_blocking_client_moves_the_twin(pymotoros_twin: RunningTwin) -> None:
     with SyncRobotClient(pymotoros_twin.host, **options(pymotoros_twin)) as robot:
-        robot.wait_for_state()
-        robot.enable()
-        result = robot.move_joints([0.0, 0.0, 0.0, 0.0, -0.3, 0.0])
-        assert abs(result.final_positions[4] + 0.3) < TOLERANCE
-        robot.write_io_bit(10020, 1)
-        assert robot.read_io_bit(10020) == 1
+        move_b_and_set_an_output(robot, -0.3)
     feedback = pymotoros_twin.call(lambda c: c.snapshot().groups[0].feedback_rad)
     assert feedback[4] == pytest.approx(-0.3, abs=TOLERANCE)
 

@@ -278,6 +278,36 @@ def _pad(values: tuple[float, ...]) -> tuple[float, ...]:
     return values + (0.0,) * (10 - len(values))
 
 
+def _send(
+    vc: VirtualController,
+    sequence: int,
+    time_s: float,
+    pos: tuple[float, ...],
+    vel: tuple[float, ...] = (),
+) -> Outcome:
+    """The controller's answer to point ``sequence`` of group 0 (all three fields valid)."""
+    return _complete(
+        vc, vc.trajectory_point(sequence, PointData(0, 7, time_s, _pad(pos), _pad(vel), _pad(())))
+    )
+
+
+def _agree(
+    predicted: client_preflight.PreflightRefusal | None,
+    outcome: Outcome,
+    subcode: int | None,
+    axis: int | None,
+) -> None:
+    """The client's prediction and the controller's answer both say ``subcode`` on
+    ``axis``, or both accept the point (``subcode`` None)."""
+    if subcode is None:
+        assert predicted is None
+        assert outcome.ok, outcome.detail
+        return
+    assert predicted is not None
+    assert (predicted.refusal.subcode, predicted.refusal.axis) == (subcode, axis)
+    assert (outcome.result, outcome.subcode) == (ResultCode.INVALID, subcode)
+
+
 @st.composite
 def _velocity(draw: st.DrawFn, limit: float) -> float:
     """Around the limit, including the truncation band [limit, floor(limit) + 1)."""
@@ -295,8 +325,12 @@ def _velocity(draw: st.DrawFn, limit: float) -> float:
     return sign * draw(st.floats(band_top, band_top + 2.0))
 
 
+Case = tuple[str, str, tuple[float, ...], tuple[float, ...]]
+"""(controller, robot, joint positions, joint speeds) of a drawn point."""
+
+
 @st.composite
-def _case(draw: st.DrawFn, use: str) -> tuple[str, str, tuple[float, ...], tuple[float, ...]]:
+def _case(draw: st.DrawFn, use: str) -> Case:
     controller, robot = draw(st.sampled_from(CELLS))
     vc = _controller(controller, robot, use)
     axes = rules.group_rules(vc.cell.groups[0], vc.cell.controller)
@@ -324,19 +358,14 @@ def _case(draw: st.DrawFn, use: str) -> tuple[str, str, tuple[float, ...], tuple
     suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large],
 )
 @given(case=_case("start"))
-def test_preflight_is_wired_to_the_controllers_start_rules(
-    case: tuple[str, str, tuple[float, ...], tuple[float, ...]],
-) -> None:
+def test_preflight_is_wired_to_the_controllers_start_rules(case: Case) -> None:
     controller, robot, pos, vel = case
     vc = _controller(controller, robot, "start")
-    group = vc.cell.groups[0]
     feedback = vc.snapshot().groups[0].feedback_rad  # what JOINT_FEEDBACK tells a client
     predicted = client_preflight.first_refusal(
-        TrajectoryPoint(0.0, pos, vel), 0, [group], vc.cell.controller, feedback
+        TrajectoryPoint(0.0, pos, vel), 0, [vc.cell.groups[0]], vc.cell.controller, feedback
     )
-    outcome = _complete(
-        vc, vc.trajectory_point(0, PointData(0, 7, 0.0, _pad(pos), _pad(vel), _pad(())))
-    )
+    outcome = _send(vc, 0, 0.0, pos, vel)
     event(f"{controller}/{robot}: {outcome.subcode or 'accepted'}")
     if predicted is None:
         assert outcome.ok, outcome.detail
@@ -352,20 +381,15 @@ def test_preflight_is_wired_to_the_controllers_start_rules(
 
 @settings(max_examples=150, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(case=_case("after"))
-def test_preflight_is_wired_to_the_controllers_speed_rule_after_the_start(
-    case: tuple[str, str, tuple[float, ...], tuple[float, ...]],
-) -> None:
+def test_preflight_is_wired_to_the_controllers_speed_rule_after_the_start(case: Case) -> None:
     controller, robot, _, vel = case
     vc = _controller(controller, robot, "after")
     group = vc.cell.groups[0]
     here = vc.snapshot().groups[0].command_rad
-    start = PointData(0, 7, 0.0, _pad(here), _pad(()), _pad(()))
-    assert _complete(vc, vc.trajectory_point(0, start)).ok
+    assert _send(vc, 0, 0.0, here).ok
     point = TrajectoryPoint(0.5, here, vel)
     predicted = client_preflight.first_refusal(point, 1, [group], vc.cell.controller)
-    outcome = _complete(
-        vc, vc.trajectory_point(1, PointData(0, 7, 0.5, _pad(here), _pad(vel), _pad(())))
-    )
+    outcome = _send(vc, 1, 0.5, here, vel)
     event(f"{controller}/{robot}: {outcome.subcode or 'accepted'}")
     try:
         if predicted is None:
@@ -498,16 +522,8 @@ def test_start_rules_by_hand(
     predicted = client_preflight.first_refusal(
         TrajectoryPoint(0.0, pos_f, vel_f), 0, [group], vc.cell.controller, (0.0,) * 6
     )
-    outcome = _complete(
-        vc, vc.trajectory_point(0, PointData(0, 7, 0.0, _pad(pos_f), _pad(vel_f), _pad(())))
-    )
-    if subcode is None:
-        assert predicted is None
-        assert outcome.ok, outcome.detail
-        return
-    assert predicted is not None
-    assert (predicted.refusal.subcode, predicted.refusal.axis) == (subcode, axis)
-    assert (outcome.result, outcome.subcode) == (ResultCode.INVALID, subcode)
+    outcome = _send(vc, 0, 0.0, pos_f, vel_f)
+    _agree(predicted, outcome, subcode, axis)
 
 
 # After the start (sequence > 0) only the speed check runs, for i < numAxes.
@@ -527,22 +543,12 @@ def test_speed_rule_after_the_start_by_hand(
     vc = VirtualController()
     assert _complete(vc, vc.motion_ctrl(0, MotionCommand.START_TRAJ_MODE)).ok
     zero = (0.0,) * 6
-    assert _complete(
-        vc, vc.trajectory_point(0, PointData(0, 7, 0.0, _pad(zero), _pad(()), _pad(())))
-    ).ok
+    assert _send(vc, 0, 0.0, zero).ok
     vel_f = tuple(float(x) for x in vel)
     point = TrajectoryPoint(0.5, zero, vel_f)
     predicted = client_preflight.first_refusal(point, 1, [vc.cell.groups[0]], vc.cell.controller)
-    outcome = _complete(
-        vc, vc.trajectory_point(1, PointData(0, 7, 0.5, _pad(zero), _pad(vel_f), _pad(())))
-    )
-    if subcode is None:
-        assert predicted is None
-        assert outcome.ok, outcome.detail
-        return
-    assert predicted is not None
-    assert (predicted.refusal.subcode, predicted.refusal.axis) == (subcode, axis)
-    assert (outcome.result, outcome.subcode) == (ResultCode.INVALID, subcode)
+    outcome = _send(vc, 1, 0.5, zero, vel_f)
+    _agree(predicted, outcome, subcode, axis)
 
 
 def test_multi_group_start_by_hand() -> None:

@@ -12,7 +12,7 @@ import pytest
 from click.testing import CliRunner, Result
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "client"))
-from client_sim import Sim, running_sim
+from client_sim import Sim, running_sim, sim_fixture
 
 from pymotoros.cli.main import cli
 from pymotoros.cli.session import EXIT_USAGE
@@ -22,10 +22,7 @@ START = ("0", "0.5", "1.9", "0", "0.9", "0")
 MM = 1e-3
 
 
-@pytest.fixture(scope="module")
-def sim() -> Iterator[Sim]:
-    with running_sim() as s:
-        yield s
+sim = sim_fixture()
 
 
 def invoke(sim: Sim, *args: str) -> Result:

@@ -4,9 +4,7 @@ position, and ``move --named`` on a robot of several groups says which groups mo
 
 from __future__ import annotations
 
-import os
 import re
-import signal
 import subprocess
 import sys
 from collections.abc import Iterator
@@ -17,7 +15,7 @@ import pytest
 from click.testing import CliRunner, Result
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "client"))
-from client_sim import Sim, running_sim
+from client_sim import Sim, estop_a_cli_move, running_sim, sim_fixture
 
 from pymotoros.cli.main import cli
 from pymotoros.cli.session import EXIT_REFUSED
@@ -35,10 +33,7 @@ PROCESS_TIMEOUT_S = 60.0
 """Bound on a subprocess's life: a command that never ends fails the test, not the run."""
 
 
-@pytest.fixture(scope="module")
-def sim() -> Iterator[Sim]:
-    with running_sim() as s:
-        yield s
+sim = sim_fixture()
 
 
 def invoke(sim: Sim, *args: str) -> Result:
@@ -119,26 +114,9 @@ def test_watch_count_ends_while_the_robot_stands_still(sim: Sim, mode: list[str]
 
 def test_estop_stands_at_is_where_the_robot_came_to_rest(sim: Sim) -> None:
     _at_zero(sim)
-    process = subprocess.Popen(  # noqa: S603 - our own CLI
-        _command(sim, "move", "2.5", "0", "0", "0", "0", "0"),
-        stderr=subprocess.PIPE,
-        stdout=subprocess.PIPE,
-        text=True,
-        env={**os.environ},
-    )
-    try:
-        with SyncRobotClient(**sim.client_options()) as watcher:
-            watcher.wait_until(lambda s: (s.positions(0) or (0,))[0] > 0.5, 30.0, "fast motion")
-            sim.api("/api/estop", {"pressed": True})
-            _, stderr = process.communicate(timeout=PROCESS_TIMEOUT_S)
-            rest = watcher.current_positions(0)
-    finally:
-        if process.poll() is None:
-            process.send_signal(signal.SIGKILL)
-            process.communicate()
-        sim.api("/api/estop", {"pressed": False})
-        invoke(sim, "reset")
-    assert process.returncode == EXIT_REFUSED, stderr
+    moved = estop_a_cli_move(sim, moving_beyond=0.5, timeout_s=PROCESS_TIMEOUT_S)
+    stderr, rest = moved.stderr, moved.rest
+    assert moved.returncode == EXIT_REFUSED, stderr
     assert stderr.count("stands at [") == 1, stderr  # said once (the library's stop)
     match = re.search(r"stands at \[([^\]]+)\] rad", stderr)
     assert match is not None, stderr

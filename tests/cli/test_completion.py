@@ -32,6 +32,15 @@ def _console_script(folder: Path) -> Path:
     return script
 
 
+def _succeeds(args: list[str], timeout_s: float, **env: str) -> subprocess.CompletedProcess[str]:
+    """``args`` run with :func:`_env` plus ``env``; it must exit 0."""
+    done = subprocess.run(  # noqa: S603 - our CLI, or bash running the documented line
+        args, env=_env(**env), capture_output=True, text=True, check=False, timeout=timeout_s
+    )
+    assert done.returncode == 0, done.stderr
+    return done
+
+
 @pytest.mark.parametrize(
     ("shell", "marker"),
     [
@@ -41,15 +50,7 @@ def _console_script(folder: Path) -> Path:
     ],
 )
 def test_the_completion_script_is_printed(shell: str, marker: str, tmp_path: Path) -> None:
-    done = subprocess.run(  # noqa: S603 - our CLI
-        [str(_console_script(tmp_path))],
-        env=_env(_PYMOTOROS_COMPLETE=f"{shell}_source"),
-        capture_output=True,
-        text=True,
-        check=False,
-        timeout=60,
-    )
-    assert done.returncode == 0, done.stderr
+    done = _succeeds([str(_console_script(tmp_path))], 60, _PYMOTOROS_COMPLETE=f"{shell}_source")
     assert marker in done.stdout
 
 
@@ -69,15 +70,8 @@ def test_bash_completes_commands_and_options(tmp_path: Path) -> None:
     echo "== options"; complete_words pymotoros move --speed
     echo "== choices"; complete_words pymotoros status --controller fs
     """
-    done = subprocess.run(  # noqa: S603 - bash running the documented line
-        [str(BASH), "-c", script],
-        env=_env(PATH=f"{tmp_path}{os.pathsep}{os.environ['PATH']}"),
-        capture_output=True,
-        text=True,
-        check=False,
-        timeout=120,
-    )
-    assert done.returncode == 0, done.stderr
+    path = f"{tmp_path}{os.pathsep}{os.environ['PATH']}"
+    done = _succeeds([str(BASH), "-c", script], 120, PATH=path)
     sections = dict(part.split("\n", 1) for part in done.stdout.split("== ")[1:] if "\n" in part)
     assert "status" in sections["commands"].split()
     assert "--speed-scale" in sections["options"].split()

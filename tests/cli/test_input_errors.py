@@ -2,24 +2,18 @@
 
 from __future__ import annotations
 
-import os
 import re
-import signal
 import socket
-import subprocess
 import sys
-from collections.abc import Iterator
 from pathlib import Path
 
-import pytest
 from click.testing import CliRunner, Result
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "client"))
-from client_sim import Sim, running_sim
+from client_sim import Sim, estop_a_cli_move, port_options, sim_fixture
 
 from pymotoros.cli.main import cli
 from pymotoros.cli.session import EXIT_REFUSED, EXIT_USAGE
-from pymotoros.client import SyncRobotClient
 
 ROOT = Path(__file__).resolve().parents[2]
 SWING = ROOT / "examples" / "trajectories" / "hc10_swing.csv"
@@ -36,10 +30,7 @@ def _one_line_error(result: Result, code: int) -> str:
     return lines[0]
 
 
-@pytest.fixture(scope="module")
-def sim() -> Iterator[Sim]:
-    with running_sim() as s:
-        yield s
+sim = sim_fixture()
 
 
 def invoke(sim: Sim, *args: str) -> Result:
@@ -139,38 +130,9 @@ def test_same_axes_other_model_is_found_by_its_dh_parameters(sim: Sim) -> None:
 def test_estop_mid_move_says_where_and_how_far(sim: Sim) -> None:
     assert invoke(sim, "enable").exit_code == 0
     assert invoke(sim, "move", "0", "0", "0", "0", "0", "0").exit_code == 0
-    env = {**os.environ}
-    process = subprocess.Popen(  # noqa: S603 - our own CLI
-        [
-            sys.executable,
-            "-m",
-            "pymotoros",
-            "move",
-            "2.5",
-            "0",
-            "0",
-            "0",
-            "0",
-            "0",
-            *sim.cli_args(),
-        ],
-        stderr=subprocess.PIPE,
-        stdout=subprocess.PIPE,
-        text=True,
-        env=env,
-    )
-    try:
-        with SyncRobotClient(**sim.client_options()) as watcher:
-            watcher.wait_until(lambda s: (s.positions(0) or (0,))[0] > 0.2, 30.0, "motion")
-        sim.api("/api/estop", {"pressed": True})
-        _, stderr = process.communicate(timeout=EXIT_TIMEOUT_S)
-    finally:
-        if process.poll() is None:
-            process.send_signal(signal.SIGKILL)
-            process.communicate()
-        sim.api("/api/estop", {"pressed": False})
-        invoke(sim, "reset")
-    assert process.returncode == EXIT_REFUSED, stderr
+    moved = estop_a_cli_move(sim, moving_beyond=0.2, timeout_s=EXIT_TIMEOUT_S)
+    stderr = moved.stderr
+    assert moved.returncode == EXIT_REFUSED, stderr
     assert "Traceback" not in stderr
     lines = stderr.strip().splitlines()
     assert len(lines) == 1, stderr
@@ -191,17 +153,7 @@ def test_busy_default_port_hints_port_0() -> None:
         port = busy.getsockname()[1]
         result = CliRunner().invoke(
             cli,
-            [
-                "sim",
-                "--motion-port",
-                str(port),
-                "--state-port",
-                "0",
-                "--io-port",
-                "0",
-                "--http-port",
-                "0",
-            ],
+            ["sim", *port_options(motion=port, state=0, io=0, http=0)],
         )
     assert result.exit_code == 1
     assert "Traceback" not in result.output

@@ -110,20 +110,22 @@ def test_the_speed_quirk_accepts_and_warns(tmp_path: Path) -> None:
     assert len(out.splitlines()) > 1
 
 
-@pytest.mark.parametrize(
-    ("text", "words"),
-    [
-        ("", ["empty"]),
-        (HEADER6, ["no points"]),
-        ("time,p1\n0,0\n", ["row 1", "13"]),
-        (HEADER6 + "0,0,0\n", ["row 2", "3 columns", "13"]),
-        (
-            HEADER6 + "0" + ",0" * 12 + "\n0.1,0,0,abc" + ",0" * 9 + "\n",
-            ["row 3", "column 4", "p3", "abc"],
-        ),
-        (HEADER6 + "0" + ",0" * 11 + ",nan\n", ["row 2", "column 13", "v6"]),
-    ],
-)
+BAD_CSV = [
+    ("", ["empty"]),
+    (HEADER6, ["no points"]),
+    ("time,p1\n0,0\n", ["row 1", "13"]),
+    (HEADER6 + "0,0,0\n", ["row 2", "3 columns", "13"]),
+    (
+        HEADER6 + "0" + ",0" * 12 + "\n0.1,0,0,abc" + ",0" * 9 + "\n",
+        ["row 3", "column 4", "p3", "abc"],
+    ),
+    (HEADER6 + "0" + ",0" * 11 + ",nan\n", ["row 2", "column 13", "v6"]),
+    (HEADER6 + "0" + ",0" * 11 + ",inf\n", ["row 2", "column 13", "v6"]),
+]
+"""Bad trajectory files and words their error must contain (both CSV paths)."""
+
+
+@pytest.mark.parametrize(("text", "words"), BAD_CSV)
 def test_bad_csv_is_a_clear_error(tmp_path: Path, text: str, words: list[str]) -> None:
     traj = write(tmp_path, text)
     code, _, err = run(str(traj))

@@ -16,7 +16,7 @@ from click.testing import CliRunner
 import pymotoros.cli.interpolate as interpolate_cli
 from pymotoros.cli.main import cli
 
-from .test_interpolate import HEADER6, test_bad_csv_is_a_clear_error
+from .test_interpolate import BAD_CSV, HEADER6, test_bad_csv_is_a_clear_error
 
 pytest.importorskip("pyarrow")
 
@@ -60,18 +60,7 @@ def test_fast_and_python_paths_write_the_same_bytes(
     assert out_fast.read_bytes() == out_slow.read_bytes()
 
 
-@pytest.mark.parametrize(
-    ("text", "words"),
-    [
-        ("", ["empty"]),
-        (HEADER6, ["no points"]),
-        ("time,p1\n0,0\n", ["row 1", "13"]),
-        (HEADER6 + "0,0,0\n", ["row 2", "3 columns", "13"]),
-        (HEADER6 + "0" + ",0" * 12 + "\n0.1,0,0,abc" + ",0" * 9 + "\n", ["row 3", "abc"]),
-        (HEADER6 + "0" + ",0" * 11 + ",nan\n", ["row 2", "column 13", "v6"]),
-        (HEADER6 + "0" + ",0" * 11 + ",inf\n", ["row 2", "column 13", "v6"]),
-    ],
-)
+@pytest.mark.parametrize(("text", "words"), BAD_CSV)
 def test_the_fast_path_falls_back_for_the_precise_error(
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch, text: str, words: list[str]
 ) -> None:

@@ -7,35 +7,25 @@ from __future__ import annotations
 
 import json
 import sys
-from collections.abc import Iterator
 from pathlib import Path
 
 import pytest
 from click.testing import CliRunner, Result
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "client"))
-from client_sim import Sim, running_sim
+from client_sim import Sim, sim_fixture
 
 from pymotoros.cli.main import cli
 from pymotoros.cli.session import EXIT_REFUSED
 
-CELL = """
-[robot]
-model = "hc10"
-[[workspace.obstacles]]
-name = "ball"
-sphere = 0.1
-xyz = [0.45, 0.0, 0.75]
-"""
+from .test_workspace_cli import CELL
+
 INTO_THE_BALL = ("0", "1.0", "0", "0", "0", "0")
 """Tilting L forward from the zero pose: the upper arm meets the ball (test_workspace_cli)."""
 CLEAR = ("1.0", "0", "0", "0", "0", "0")
 
 
-@pytest.fixture(scope="module")
-def sim() -> Iterator[Sim]:
-    with running_sim("--robot", "hc10") as s:
-        yield s
+sim = sim_fixture("--robot", "hc10")
 
 
 @pytest.fixture

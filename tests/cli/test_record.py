@@ -6,24 +6,20 @@ import shutil
 import subprocess
 import sys
 from collections import Counter
-from collections.abc import Iterator
 from pathlib import Path
 
 import pytest
 from click.testing import CliRunner
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "client"))
-from client_sim import Sim, running_sim
+from client_sim import Sim, running_sim, sim_fixture
 
 from pymotoros.cli.main import cli
 
 TSHARK_TIMEOUT_S = 60
 
 
-@pytest.fixture(scope="module")
-def sim() -> Iterator[Sim]:
-    with running_sim() as s:
-        yield s
+sim = sim_fixture()
 
 
 def _tshark() -> str:

@@ -12,7 +12,7 @@ import pytest
 from click.testing import CliRunner, Result
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "client"))
-from client_sim import Sim, running_sim
+from client_sim import running_sim
 
 from pymotoros.cli.main import cli
 from pymotoros.cli.replay import EXIT_CONNECTION, EXIT_DIFFERS, EXIT_MATCH, EXIT_USAGE
@@ -147,20 +147,9 @@ def test_a_different_start_position_is_the_expected_diff(
 
 def test_replay_against_a_running_controller(recorded: dict[str, Path]) -> None:
     with running_sim() as sim:
-        result = _replay(str(recorded["io"]), "--against", sim.host, *_ports(sim))
+        result = _replay(str(recorded["io"]), "--against", sim.host, *sim.port_args())
     assert result.exit_code == EXIT_MATCH, result.output
     assert "replies: all 1 match" in result.stdout
-
-
-def _ports(sim: Sim) -> list[str]:
-    return [
-        "--motion-port",
-        str(sim.motion),
-        "--state-port",
-        str(sim.state),
-        "--io-port",
-        str(sim.io),
-    ]
 
 
 def test_usage_and_connection_errors(recorded: dict[str, Path], tmp_path: Path) -> None:

@@ -5,14 +5,12 @@ from __future__ import annotations
 import json
 import socket
 import sys
-from collections.abc import Iterator
 from pathlib import Path
 
-import pytest
 from click.testing import CliRunner, Result
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "client"))
-from client_sim import Sim, running_sim
+from client_sim import Sim, sim_fixture
 
 from pymotoros.cli.main import cli
 from pymotoros.cli.session import EXIT_CONNECTION, EXIT_REFUSED, EXIT_USAGE
@@ -20,10 +18,7 @@ from pymotoros.cli.session import EXIT_CONNECTION, EXIT_REFUSED, EXIT_USAGE
 SRDF = Path(__file__).resolve().parents[2] / "examples" / "hc10.srdf"
 
 
-@pytest.fixture(scope="module")
-def sim() -> Iterator[Sim]:
-    with running_sim() as s:
-        yield s
+sim = sim_fixture()
 
 
 def invoke(sim: Sim, *args: str) -> Result:

@@ -6,7 +6,6 @@ from __future__ import annotations
 import json
 import re
 import sys
-from collections.abc import Iterator
 from pathlib import Path
 
 import matplotlib
@@ -15,7 +14,7 @@ import pytest
 from click.testing import CliRunner, Result
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "client"))
-from client_sim import Sim, running_sim
+from client_sim import Sim, sim_fixture
 
 from pymotoros.cli.main import cli
 from pymotoros.models import controller_model, robot_model
@@ -37,10 +36,7 @@ def invoke(*args: str) -> Result:
     return CliRunner().invoke(cli, list(args), catch_exceptions=False)
 
 
-@pytest.fixture(scope="module")
-def sim() -> Iterator[Sim]:
-    with running_sim() as s:
-        yield s
+sim = sim_fixture()
 
 
 @pytest.fixture

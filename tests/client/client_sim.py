@@ -9,13 +9,21 @@ from __future__ import annotations
 import concurrent.futures
 import contextlib
 import json
+import os
 import re
+import signal
 import subprocess
 import sys
 import urllib.request
 from collections.abc import Iterator
 from dataclasses import dataclass
 from typing import Any
+
+import pytest
+from click.testing import CliRunner
+
+from pymotoros.cli.main import cli
+from pymotoros.client import SyncRobotClient
 
 READY_TIMEOUT_S = 30.0
 STOP_TIMEOUT_S = 10.0
@@ -35,16 +43,11 @@ class Sim:
         return {"motion_port": self.motion, "state_port": self.state, "io_port": self.io}
 
     def cli_args(self) -> list[str]:
-        return [
-            "--host",
-            self.host,
-            "--motion-port",
-            str(self.motion),
-            "--state-port",
-            str(self.state),
-            "--io-port",
-            str(self.io),
-        ]
+        return ["--host", self.host, *self.port_args()]
+
+    def port_args(self) -> list[str]:
+        """``--motion-port M --state-port S --io-port I``: where a client finds it."""
+        return port_options(motion=self.motion, state=self.state, io=self.io)
 
     def api(self, path: str, body: dict[str, Any] | None = None) -> dict[str, Any]:
         """Call the control API (POST with a body, GET without)."""
@@ -65,6 +68,11 @@ class Sim:
         self.process.wait(STOP_TIMEOUT_S)
 
 
+def port_options(**ports: int) -> list[str]:
+    """``--NAME-port PORT`` for each of ``ports`` (motion, state, io, http), in order."""
+    return [arg for name, port in ports.items() for arg in (f"--{name}-port", str(port))]
+
+
 def _readline(process: subprocess.Popen[str]) -> str:
     assert process.stdout is not None
     return process.stdout.readline()
@@ -80,14 +88,7 @@ def running_sim(*extra: str) -> Iterator[Sim]:
             "sim",
             "--host",
             "127.0.0.1",
-            "--motion-port",
-            "0",
-            "--state-port",
-            "0",
-            "--io-port",
-            "0",
-            "--http-port",
-            "0",
+            *port_options(motion=0, state=0, io=0, http=0),
             *extra,
         ],
         stdout=subprocess.PIPE,
@@ -111,3 +112,57 @@ def running_sim(*extra: str) -> Iterator[Sim]:
                 process.wait(STOP_TIMEOUT_S)
         if process.stdout is not None:
             process.stdout.close()
+
+
+def sim_fixture(*args: str) -> Any:
+    """A module-scoped ``sim`` fixture: ``pymotoros sim`` with ``args``, shared by the
+    module's tests (one simulator start per module)."""
+
+    @pytest.fixture(scope="module")
+    def sim() -> Iterator[Sim]:
+        with running_sim(*args) as sim:
+            yield sim
+
+    return sim
+
+
+GOAL_2_5_RAD = ("2.5", "0", "0", "0", "0", "0")
+"""Joint 1 to 2.5 rad: a move long enough to be stopped on its way."""
+
+
+@dataclass
+class EstoppedMove:
+    """What ``pymotoros move`` did when the E-stop was pressed during its move."""
+
+    returncode: int
+    stderr: str
+    rest: tuple[float, ...]
+    """The first group's joints as a client saw them once the command had ended."""
+
+
+def estop_a_cli_move(sim: Sim, *, moving_beyond: float, timeout_s: float) -> EstoppedMove:
+    """``pymotoros move 2.5 0 0 0 0 0`` as a subprocess against ``sim``, the E-stop
+    pressed once joint 1 passed ``moving_beyond`` rad; afterwards the E-stop is released
+    and ``pymotoros reset`` run, so the simulator is ready for the next test."""
+    process = subprocess.Popen(  # noqa: S603 - our own CLI
+        [sys.executable, "-m", "pymotoros", "move", *GOAL_2_5_RAD, *sim.cli_args()],
+        stderr=subprocess.PIPE,
+        stdout=subprocess.PIPE,
+        text=True,
+        env={**os.environ},
+    )
+    try:
+        with SyncRobotClient(**sim.client_options()) as watcher:
+            watcher.wait_until(
+                lambda s: (s.positions(0) or (0,))[0] > moving_beyond, 30.0, "motion"
+            )
+            sim.api("/api/estop", {"pressed": True})
+            _, stderr = process.communicate(timeout=timeout_s)
+            rest = watcher.current_positions(0)
+    finally:
+        if process.poll() is None:
+            process.send_signal(signal.SIGKILL)
+            process.communicate()
+        sim.api("/api/estop", {"pressed": False})
+        CliRunner().invoke(cli, ["reset", *sim.cli_args()])
+    return EstoppedMove(process.returncode, stderr, tuple(rest))

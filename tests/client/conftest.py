@@ -6,7 +6,9 @@ MotoROS server handlers, in virtual time, so that seconds of motion take millise
 
 from __future__ import annotations
 
+import os
 from collections.abc import AsyncIterator
+from pathlib import Path
 
 import pytest
 
@@ -29,3 +31,15 @@ def client(pair: tuple[RobotClient, Twin]) -> RobotClient:
 def cell(pair: tuple[RobotClient, Twin]) -> Twin:
     """The twin's side: the controller, its servers and the clock."""
     return pair[1]
+
+
+SCREENSHOT_DIR_ENV = "PYMOTOROS_SCREENSHOT_DIR"
+"""Where the browser tests' screenshots go when set (tools/pendant_screenshots.py)."""
+
+
+@pytest.fixture
+def screenshot_dir(tmp_path: Path) -> Path:
+    """``$PYMOTOROS_SCREENSHOT_DIR`` when set, else a temporary directory: a test run
+    never writes into the checkout."""
+    chosen = os.environ.get(SCREENSHOT_DIR_ENV)
+    return Path(chosen) if chosen else tmp_path

@@ -11,6 +11,7 @@ from __future__ import annotations
 from typing import Any
 
 import pytest
+from cell_twin import twin_of_cell
 
 from pymotoros import PathBlockedError
 from pymotoros.client import NotReadyError, PlanningError
@@ -63,12 +64,7 @@ async def test_the_client_moves_around_the_ball_and_the_twin_feels_no_contact() 
 
 
 async def test_a_blocked_goal_raises_path_blocked_naming_the_obstacle() -> None:
-    async with (
-        Twin(cell_from_dict(DATA)) as the_twin,
-        the_twin.client(cell=cell_models_from_dict(DATA)) as client,
-    ):
-        await client.wait_for_state()
-        await client.enable()
+    async with twin_of_cell(DATA) as (client, the_twin):
         with pytest.raises(PathBlockedError) as info:
             await client.move_joints(INSIDE, avoid=True)
         assert str(info.value) == (
@@ -81,11 +77,7 @@ async def test_a_blocked_goal_raises_path_blocked_naming_the_obstacle() -> None:
 
 
 async def test_plan_with_avoid_returns_the_detour_without_moving() -> None:
-    async with (
-        Twin(cell_from_dict(DATA)) as the_twin,
-        the_twin.client(cell=cell_models_from_dict(DATA)) as client,
-    ):
-        await client.wait_for_state()
+    async with twin_of_cell(DATA, enable=False) as (client, _the_twin):
         start = await client.current_positions()
         planned = client.plan(start, RIGHT, avoid=True)
         direct = client.plan(start, RIGHT)
@@ -106,12 +98,7 @@ async def test_avoid_without_a_cell_says_what_it_needs() -> None:
 async def test_the_following_monitor_measures_a_detour_along_its_path() -> None:
     """Progress along a detour is not its start-to-goal line (which a robot going round
     first leaves sideways or backwards): no false "slowed" there, either way round."""
-    async with (
-        Twin(cell_from_dict(DATA)) as the_twin,
-        the_twin.client(cell=cell_models_from_dict(DATA)) as client,
-    ):
-        await client.wait_for_state()
-        await client.enable()
+    async with twin_of_cell(DATA) as (client, _the_twin):
         for goal in (RIGHT, LEFT):
             result = await client.move_joints(goal, avoid=True)
             assert list(result.final_positions) == pytest.approx(goal, abs=1e-3)

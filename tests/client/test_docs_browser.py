@@ -11,47 +11,22 @@ being served proves nothing.
 from __future__ import annotations
 
 import json
-import shutil
-from collections.abc import Iterator
 from urllib.parse import urlsplit
 
 import pytest
-from client_sim import Sim, running_sim
-from headless import headless_chromium
+from client_sim import Sim, sim_fixture
+from headless import BROWSER_TEST, browser_fixture, wait_for
 
 webdriver = pytest.importorskip("selenium.webdriver", reason="selenium is not installed")
 
 from selenium.webdriver.remote.webdriver import WebDriver  # noqa: E402
-from selenium.webdriver.support.ui import WebDriverWait  # noqa: E402
 
-CHROMIUM = shutil.which("chromium") or shutil.which("chromium-browser")
-CHROMEDRIVER = shutil.which("chromedriver")
 WAIT_S = 30.0
 """Bound on the wait for a page to render (a cold Chromium on a busy 2-core machine)."""
-DEAD_PROXY = "127.0.0.1:9"
-"""Every non-loopback request goes to this closed port (the discard port): blocked."""
 
-pytestmark = [
-    pytest.mark.timeout(180),
-    pytest.mark.skipif(
-        CHROMIUM is None or CHROMEDRIVER is None,
-        reason="chromium and chromium-driver are not installed (.ci/run installs them)",
-    ),
-]
-
-
-@pytest.fixture(scope="module")
-def sim() -> Iterator[Sim]:
-    with running_sim() as sim:
-        yield sim
-
-
-@pytest.fixture(scope="module")
-def browser() -> Iterator[WebDriver]:
-    with headless_chromium(
-        window="1300,1000", logs={"performance": "ALL", "browser": "ALL"}
-    ) as driver:
-        yield driver
+pytestmark = BROWSER_TEST
+sim = sim_fixture()
+browser = browser_fixture(window="1300,1000", logs={"performance": "ALL", "browser": "ALL"})
 
 
 def _requests_that_left(driver: WebDriver) -> list[str]:
@@ -92,9 +67,12 @@ def _operations(driver: WebDriver, selector: str, method: str, path: str) -> lis
 
 def _render(driver: WebDriver, url: str, selector: str) -> None:
     driver.get(url)
-    WebDriverWait(driver, WAIT_S, poll_frequency=0.1).until(
+    wait_for(
+        driver,
         lambda d: _operations(d, selector, "POST", "/api/estop"),
         f"{url}: the operation POST /api/estop to be listed",
+        timeout_s=WAIT_S,
+        poll_s=0.1,
     )
 
 

@@ -17,16 +17,17 @@ import asyncio
 import contextlib
 import logging
 import math
-import threading
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Final
 
 import pytest
-from hypothesis import HealthCheck, given, settings
+from hypothesis import given
 from hypothesis import strategies as st
+from slow_move import start_slow_move
 
+from bounded_examples import bounded_examples
 from pymotoros.client import FollowingSample
 from pymotoros.client.errors import ConnectionLostError, MoveInProgressError
 from pymotoros.client.stopping import EARLY_STOP_BOUND_S
@@ -197,12 +198,7 @@ def _all_notes(error: BaseException) -> str:
 
 
 @pytest.mark.parametrize("way", WAYS)
-@settings(
-    max_examples=12,
-    deadline=None,
-    derandomize=True,
-    suppress_health_check=[HealthCheck.function_scoped_fixture],
-)
+@bounded_examples(12)
 @given(at_s=st.floats(min_value=0.02, max_value=1.4))
 def test_a_move_ended_early_stops_the_robot(way: str, at_s: float) -> None:
     outcome = asyncio.run(_end_early(way, at_s))
@@ -390,24 +386,11 @@ def test_leaving_a_sync_with_block_while_another_thread_moves_stops_the_robot() 
     """``with SyncRobotClient(...)`` (here the sync twin) ends while a thread is blocked
     in a move: the close stops the robot first; the moving thread gets the cancellation
     with the note."""
-    errors: list[BaseException] = []
     with sync_twin(robot="hc10", timeout_s=2.0) as (client, the_twin):
         client.enable()
-        moving = threading.Event()
-
-        def move() -> None:
-            try:  # slow: the twin's virtual time runs as fast as its thread
-                client.move_joints(GOAL, speed_scale=0.01, on_progress=lambda _s: moving.set())
-            except BaseException as exc:
-                errors.append(exc)
-
-        thread = threading.Thread(target=move)
-        thread.start()
-        assert moving.wait(10)
-    thread.join(10)
-    assert not thread.is_alive()
-    assert len(errors) == 1
-    assert "stands at [" in _all_notes(errors[0]), repr(errors[0])
+        move = start_slow_move(client, GOAL)
+    error = move.error()
+    assert "stands at [" in _all_notes(error), repr(error)
     assert not the_twin.controller.has_queued_motion()
 
 

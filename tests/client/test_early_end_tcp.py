@@ -21,9 +21,10 @@ from pathlib import Path
 from typing import Final
 
 import pytest
-from hypothesis import HealthCheck, given, settings
+from hypothesis import given
 from hypothesis import strategies as st
 
+from bounded_examples import bounded_examples
 from pymotoros.client import RobotClient
 from pymotoros.pytest_plugin import RunningTwin, _cell_for, _TwinThread
 
@@ -52,12 +53,7 @@ def _assert_still(twin: RunningTwin) -> tuple[int, ...]:
 TRAVEL: list[float] = []
 
 
-@settings(
-    max_examples=5,
-    deadline=None,
-    derandomize=True,
-    suppress_health_check=[HealthCheck.function_scoped_fixture],
-)
+@bounded_examples(5)
 @given(at_s=st.floats(min_value=0.15, max_value=1.2))
 def test_wait_for_over_tcp_stops_the_robot(pymotoros_twin: RunningTwin, at_s: float) -> None:
     async def scenario() -> tuple[BaseException, float, float]:
@@ -109,18 +105,61 @@ def _script(twin: RunningTwin, body: str) -> str:
 
 
 def _run_until_moving(twin: RunningTwin, body: str) -> subprocess.Popen[str]:
+    return _start_moving(_script(twin, body))
+
+
+def _start_moving(script: str, robots: int = 1) -> subprocess.Popen[str]:
+    """Run ``script`` in a Python subprocess; return once each robot's move printed "moving"."""
     env = {"PYTHONPATH": str(SRC), **os.environ}
     process = subprocess.Popen(  # noqa: S603 - our own script
-        [sys.executable, "-c", _script(twin, body)],
+        [sys.executable, "-c", script],
         stdout=subprocess.PIPE,
         stderr=subprocess.PIPE,
         text=True,
         env=env,
     )
     assert process.stdout is not None
-    line = process.stdout.readline()
-    assert line.strip() == "moving", line + (process.stderr.read() if process.stderr else "")
+    for _ in range(robots):
+        line = process.stdout.readline()
+        assert line.strip() == "moving", line + (process.stderr.read() if process.stderr else "")
     return process
+
+
+def _asyncio_script(twin: RunningTwin, moving_when: str, after_move: str, run: str) -> str:
+    """A script moving the twin's robot in ``asyncio.run``; it prints "moving" once
+    ``moving_when`` (of the progress sample) holds, ``after_move`` runs after the move."""
+    return textwrap.dedent(
+        f"""
+        import asyncio
+        from pymotoros.client import RobotClient
+
+        async def main():
+            async with RobotClient({twin.host!r}, motion_port={twin.motion},
+                                   state_port={twin.state}, io_port={twin.io}) as robot:
+                await robot.wait_for_state()
+                await robot.enable()
+                def progress(sample):
+                    if {moving_when}:
+                        print("moving", flush=True)
+                await robot.move_joints([3.0, 0, 0, 0, 0, 0], on_progress=progress)
+                {after_move}
+        """
+    ) + textwrap.dedent(run)
+
+
+def _ended_by_sigterm(process: subprocess.Popen[str]) -> tuple[str, str]:
+    """SIGTERM to ``process``: it ends by the signal before its move finished."""
+    process.send_signal(signal.SIGTERM)
+    out, err = process.communicate(timeout=30)
+    assert "finished" not in out
+    assert process.returncode == -signal.SIGTERM, (process.returncode, err)
+    return out, err
+
+
+def _s_axis(twin: RunningTwin, pulses: tuple[int, ...]) -> float:
+    """The S axis's position in rad from the commanded ``pulses``."""
+    ratio = twin.call(lambda c: c.cell.groups[0].axes[0].pulses_per_unit)
+    return pulses[0] / ratio
 
 
 @pytest.mark.parametrize("twice", [False, True], ids=["once", "twice"])
@@ -146,9 +185,7 @@ def test_ctrl_c_in_a_sync_script_stops_the_robot(pymotoros_twin: RunningTwin, tw
     assert "interrupted:" in out, err
     assert "the robot was stopped (STOP_MOTION) and stands at [" in out, out + err
     assert "] rad" in out
-    pulses = _assert_still(pymotoros_twin)
-    ratio = pymotoros_twin.call(lambda c: c.cell.groups[0].axes[0].pulses_per_unit)
-    s_axis = pulses[0] / ratio
+    s_axis = _s_axis(pymotoros_twin, _assert_still(pymotoros_twin))
     assert 0.1 < s_axis < 2.9  # stopped on the way, well short of the 3 rad goal
     stands = out.split("stands at [", 1)[1].split(",", 1)[0]
     assert math.isclose(float(stands), s_axis, abs_tol=0.01)  # where it says it stopped
@@ -164,52 +201,28 @@ def test_sigterm_to_a_sync_script_stops_the_robot(pymotoros_twin: RunningTwin) -
         print("finished", flush=True)
         """,
     )
-    process.send_signal(signal.SIGTERM)
-    out, err = process.communicate(timeout=30)
-    assert "finished" not in out
-    assert process.returncode == -signal.SIGTERM, (process.returncode, err)
+    _out, err = _ended_by_sigterm(process)
     assert "the robot was stopped (STOP_MOTION) and stands at [" in err
     _assert_still(pymotoros_twin)
     pulses = pymotoros_twin.call(lambda c: c.commanded_pulses(0))
-    ratio = pymotoros_twin.call(lambda c: c.cell.groups[0].axes[0].pulses_per_unit)
-    assert pulses[0] / ratio < 2.9
+    assert _s_axis(pymotoros_twin, pulses) < 2.9
 
 
 def test_sigint_to_an_asyncio_script_stops_the_robot(pymotoros_twin: RunningTwin) -> None:
     """``asyncio.run`` turns Ctrl-C into a cancel of the main task: the move stops the
     robot before the KeyboardInterrupt leaves ``asyncio.run``."""
-    env = {"PYTHONPATH": str(SRC), **os.environ}
-    twin = pymotoros_twin
-    script = textwrap.dedent(
-        f"""
-        import asyncio
-        from pymotoros.client import RobotClient
-
-        async def main():
-            async with RobotClient({twin.host!r}, motion_port={twin.motion},
-                                   state_port={twin.state}, io_port={twin.io}) as robot:
-                await robot.wait_for_state()
-                await robot.enable()
-                def progress(sample):
-                    if sample.elapsed_s > 0.3:
-                        print("moving", flush=True)
-                await robot.move_joints([3.0, 0, 0, 0, 0, 0], on_progress=progress)
-
+    script = _asyncio_script(
+        pymotoros_twin,
+        "sample.elapsed_s > 0.3",
+        "",
+        """
         try:
             asyncio.run(main())
         except KeyboardInterrupt:
             print("interrupted", flush=True)
-        """
+        """,
     )
-    process = subprocess.Popen(  # noqa: S603 - our own script
-        [sys.executable, "-c", script],
-        stdout=subprocess.PIPE,
-        stderr=subprocess.PIPE,
-        text=True,
-        env=env,
-    )
-    assert process.stdout is not None
-    assert process.stdout.readline().strip() == "moving"
+    process = _start_moving(script)
     process.send_signal(signal.SIGINT)
     out, err = process.communicate(timeout=30)
     assert "interrupted" in out, err
@@ -220,44 +233,15 @@ def test_sigint_to_an_asyncio_script_stops_the_robot(pymotoros_twin: RunningTwin
 def test_sigterm_to_an_asyncio_script_stops_the_robot(pymotoros_twin: RunningTwin) -> None:
     """SIGTERM (default action) while a move runs on the main thread's loop: the move is
     cancelled and stops the robot, then the process ends by SIGTERM."""
-    env = {"PYTHONPATH": str(SRC), **os.environ}
-    twin = pymotoros_twin
-    script = textwrap.dedent(
-        f"""
-        import asyncio
-        from pymotoros.client import RobotClient
-
-        async def main():
-            async with RobotClient({twin.host!r}, motion_port={twin.motion},
-                                   state_port={twin.state}, io_port={twin.io}) as robot:
-                await robot.wait_for_state()
-                await robot.enable()
-                def progress(sample):
-                    if sample.progress > 0.05:
-                        print("moving", flush=True)
-                await robot.move_joints([3.0, 0, 0, 0, 0, 0], on_progress=progress)
-                print("finished", flush=True)
-
-        asyncio.run(main())
-        """
+    script = _asyncio_script(
+        pymotoros_twin,
+        "sample.progress > 0.05",
+        'print("finished", flush=True)',
+        "asyncio.run(main())",
     )
-    process = subprocess.Popen(  # noqa: S603 - our own script
-        [sys.executable, "-c", script],
-        stdout=subprocess.PIPE,
-        stderr=subprocess.PIPE,
-        text=True,
-        env=env,
-    )
-    assert process.stdout is not None
-    assert process.stdout.readline().strip() == "moving"
-    process.send_signal(signal.SIGTERM)
-    out, err = process.communicate(timeout=30)
-    assert "finished" not in out
-    assert process.returncode == -signal.SIGTERM, (process.returncode, err)
+    _out, err = _ended_by_sigterm(_start_moving(script))
     assert "the move was cancelled (SIGTERM): the robot was stopped (STOP_MOTION)" in err
-    pulses = _assert_still(pymotoros_twin)
-    ratio = pymotoros_twin.call(lambda c: c.cell.groups[0].axes[0].pulses_per_unit)
-    assert pulses[0] / ratio < 2.9
+    assert _s_axis(pymotoros_twin, _assert_still(pymotoros_twin)) < 2.9
 
 
 def test_sigterm_to_an_asyncio_script_moving_two_robots_stops_both(
@@ -296,24 +280,9 @@ def test_sigterm_to_an_asyncio_script_moving_two_robots_stops_both(
             asyncio.run(main())
             """
         )
-        env = {"PYTHONPATH": str(SRC), **os.environ}
-        process = subprocess.Popen(  # noqa: S603 - our own script
-            [sys.executable, "-c", script],
-            stdout=subprocess.PIPE,
-            stderr=subprocess.PIPE,
-            text=True,
-            env=env,
-        )
-        assert process.stdout is not None
-        for _ in range(2):
-            assert process.stdout.readline().strip() == "moving"
-        process.send_signal(signal.SIGTERM)
-        out, err = process.communicate(timeout=30)
-        assert "finished" not in out
-        assert process.returncode == -signal.SIGTERM, (process.returncode, err)
+        out, err = _ended_by_sigterm(_start_moving(script, robots=2))
         assert err.count("the move was cancelled (SIGTERM): the robot was stopped") == 2, (out, err)
-        ratio = pymotoros_twin.call(lambda c: c.cell.groups[0].axes[0].pulses_per_unit)
         for twin in (pymotoros_twin, other):
-            assert _assert_still(twin)[0] / ratio < 2.9
+            assert _s_axis(pymotoros_twin, _assert_still(twin)) < 2.9
     finally:
         runner.stop()

@@ -3,11 +3,11 @@
 from __future__ import annotations
 
 import asyncio
-import threading
 from collections.abc import AsyncIterator
 from pathlib import Path
 
 import pytest
+from slow_move import start_slow_move
 
 from pymotoros.client import (
     ClientError,
@@ -19,6 +19,7 @@ from pymotoros.client import (
 from pymotoros.controller.cell import load_cell
 from pymotoros.models.cell import load_cell_models
 from pymotoros.testing import Twin, sync_twin, twin
+from says import assert_says
 
 CELL = Path(__file__).resolve().parents[2] / "examples" / "cells" / "two_hc10_dx100.toml"
 TOLERANCE = 1e-3
@@ -38,12 +39,14 @@ async def test_a_model_with_more_groups_is_named_a_mismatch() -> None:
         async with client:
             with pytest.raises(ModelMismatchError) as info:
                 await client.wait_for_state(2.0)
-    text = str(info.value)
-    assert "model mismatch" in text
-    assert "sda10f expects 4 group(s)" in text
-    assert "streams 1 (group 0)" in text
-    assert "R2" in text
-    assert "--robot" in text
+    assert_says(
+        str(info.value),
+        "model mismatch",
+        "sda10f expects 4 group(s)",
+        "streams 1 (group 0)",
+        "R2",
+        "--robot",
+    )
 
 
 async def test_a_model_with_fewer_axes_is_named_a_mismatch() -> None:
@@ -115,26 +118,11 @@ def test_sync_stop_from_another_thread() -> None:
     with sync_twin(robot="hc10") as (client, _):
         client.enable()
         goal = (2.5, 0.0, 0.0, 0.0, 0.0, 0.0)
-        moving = threading.Event()
-        errors: list[BaseException] = []
-
-        def move() -> None:
-            try:
-                # Slow (about 100 s of virtual motion): the twin's time runs as fast as
-                # its thread, so a brisk move could end before stop() arrives.
-                client.move_joints(goal, speed_scale=0.01, on_progress=lambda s: moving.set())
-            except BaseException as exc:
-                errors.append(exc)
-
-        thread = threading.Thread(target=move)
-        thread.start()
-        assert moving.wait(10)
+        move = start_slow_move(client, goal)
         client.stop()
-        thread.join(10)
-        assert not thread.is_alive()
-        assert len(errors) == 1
-        assert isinstance(errors[0], MoveStoppedError)
-        assert errors[0].positions[0] < goal[0]
+        error = move.error()
+        assert isinstance(error, MoveStoppedError)
+        assert error.positions[0] < goal[0]
 
 
 async def test_stop_threadsafe_from_a_thread_ends_an_async_move(

@@ -5,44 +5,19 @@ API's words (Debian's Chromium + chromedriver, driven by Selenium)."""
 
 from __future__ import annotations
 
-import shutil
-from collections.abc import Callable, Iterator
-from typing import Any
-
 import pytest
-from client_sim import Sim, running_sim
-from headless import headless_chromium
+from client_sim import Sim, sim_fixture
+from headless import BROWSER_TEST, browser_fixture, wait_for
 
 webdriver = pytest.importorskip("selenium.webdriver", reason="selenium is not installed")
 
 from selenium.webdriver.common.by import By  # noqa: E402
 from selenium.webdriver.remote.webdriver import WebDriver  # noqa: E402
-from selenium.webdriver.support.ui import Select, WebDriverWait  # noqa: E402
+from selenium.webdriver.support.ui import Select  # noqa: E402
 
-CHROMIUM = shutil.which("chromium") or shutil.which("chromium-browser")
-CHROMEDRIVER = shutil.which("chromedriver")
-WAIT_S = 20.0
-"""Bound on every wait for the page (a cold Chromium start on a busy 2-core machine)."""
-
-pytestmark = pytest.mark.skipif(
-    CHROMIUM is None or CHROMEDRIVER is None, reason="chromium and chromedriver are needed"
-)
-
-
-@pytest.fixture(scope="module")
-def sim() -> Iterator[Sim]:
-    with running_sim() as sim:
-        yield sim
-
-
-@pytest.fixture(scope="module")
-def browser() -> Iterator[WebDriver]:
-    with headless_chromium() as driver:
-        yield driver
-
-
-def _wait(driver: WebDriver, condition: Callable[[WebDriver], Any], what: str) -> Any:
-    return WebDriverWait(driver, WAIT_S, poll_frequency=0.05).until(condition, what)
+pytestmark = BROWSER_TEST
+sim = sim_fixture()
+browser = browser_fixture()
 
 
 def _run(browser: WebDriver, action: str, params: str) -> None:
@@ -55,7 +30,7 @@ def _run(browser: WebDriver, action: str, params: str) -> None:
 
 def test_the_pendants_actions_are_the_declared_ones(sim: Sim, browser: WebDriver) -> None:
     browser.get(f"http://127.0.0.1:{sim.http}/")
-    _wait(browser, lambda d: d.find_elements(By.ID, "action-name"), "the action picker")
+    wait_for(browser, lambda d: d.find_elements(By.ID, "action-name"), "the action picker")
     listed = browser.execute_script("return Object.keys(window.pendant.actions)")
     assert listed == [a["name"] for a in sim.api("/api/pendant/actions")]
     assert {"estop", "eco", "io_failure", "drop_motion"} <= set(listed)
@@ -64,10 +39,10 @@ def test_the_pendants_actions_are_the_declared_ones(sim: Sim, browser: WebDriver
     assert browser.find_element(By.ID, "fsu-pct").get_attribute("min") == "1"
     # any declared action runs from the picker
     _run(browser, "hold", '{"on": true}')
-    _wait(browser, lambda d: sim.api("/api/state")["hold"] is True, "HOLD from the picker")
+    wait_for(browser, lambda d: sim.api("/api/state")["hold"] is True, "HOLD from the picker")
     # a refused value is shown in the words every surface uses
     _run(browser, "fsu", '{"tcp_speed_mm_s": 0}')
     words = "POST /api/fsu: tcp_speed_mm_s: must be > 0 mm/s, not 0"
-    _wait(browser, lambda d: d.find_element(By.ID, "message").text == words, "the refusal")
+    wait_for(browser, lambda d: d.find_element(By.ID, "message").text == words, "the refusal")
     _run(browser, "hold", '{"on": false}')
-    _wait(browser, lambda d: sim.api("/api/state")["hold"] is False, "HOLD off")
+    wait_for(browser, lambda d: sim.api("/api/state")["hold"] is False, "HOLD off")

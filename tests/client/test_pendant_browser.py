@@ -15,18 +15,13 @@ from __future__ import annotations
 import concurrent.futures
 import json
 import math
-import os
 import re
-import shutil
-from base64 import b64encode
-from collections.abc import Callable, Iterator
 from pathlib import Path
-from typing import Any
 from urllib.parse import urlsplit
 
 import pytest
-from client_sim import Sim, running_sim
-from headless import headless_chromium
+from client_sim import Sim, running_sim, sim_fixture
+from headless import BROWSER_TEST, WAIT_S, browser_fixture, count_in_png, wait_for
 
 from pymotoros.client import NotReadyError, SyncRobotClient
 
@@ -34,22 +29,13 @@ webdriver = pytest.importorskip("selenium.webdriver", reason="selenium is not in
 
 from selenium.webdriver.common.by import By  # noqa: E402
 from selenium.webdriver.remote.webdriver import WebDriver  # noqa: E402
-from selenium.webdriver.support.ui import WebDriverWait  # noqa: E402
 
-SCREENSHOT_DIR_ENV = "PYMOTOROS_SCREENSHOT_DIR"
-"""Where the screenshots go when set (tools/pendant_screenshots.py); else a tmp_path."""
 SCREENSHOTS = ("pendant.png", "pendant-estop.png")
-CHROMIUM = shutil.which("chromium") or shutil.which("chromium-browser")
-CHROMEDRIVER = shutil.which("chromedriver")
-WAIT_S = 20.0
-"""Bound on every wait for the page (a cold Chromium start on a busy 2-core machine)."""
 MOVING_TOLERANCE_DEG = 15.0
 """Page vs ``GET /api/state`` while moving: the two readings are up to ~0.3 s apart, at
 most ~40 °/s at the test's speed scale."""
 RESTING_TOLERANCE_DEG = 0.01
 """Page vs ``GET /api/state`` at rest: the same value shown with two decimals."""
-DEAD_PROXY = "127.0.0.1:9"
-"""Every non-loopback request goes to this closed port (the discard port): blocked."""
 GOAL = (1.2, 0.5, 0.6, 0.8, -1.2, 1.0)
 LIGHT_ON_JS = 'return document.getElementById("estop-light").classList.contains("on")'
 ANSWERED_JS = "return window.pendant.answeredAt"
@@ -58,6 +44,11 @@ const p = window.pendant, stale = JSON.parse(JSON.stringify(p.last));
 stale.estop = false;
 stale.tick.count = p.answeredAt;
 return p.fromFeed(stale);
+"""
+DISTINCT_COLOURS_JS = """
+const seen = new Set();
+for (let i = 0; i < d.length; i += 4) seen.add((d[i] << 16) | (d[i+1] << 8) | d[i+2]);
+return seen.size;
 """
 MIN_COLOURS = 20
 """A blank canvas has one colour; grid, links, joints and ghost give far more."""
@@ -86,25 +77,9 @@ servo = true
 eco = true
 """
 
-pytestmark = [
-    pytest.mark.timeout(180),
-    pytest.mark.skipif(
-        CHROMIUM is None or CHROMEDRIVER is None,
-        reason="chromium and chromium-driver are not installed (.ci/run installs them)",
-    ),
-]
-
-
-@pytest.fixture(scope="module")
-def sim() -> Iterator[Sim]:
-    with running_sim() as sim:
-        yield sim
-
-
-@pytest.fixture(scope="module")
-def browser() -> Iterator[WebDriver]:
-    with headless_chromium(window="1500,1150", logs={"performance": "ALL"}) as driver:
-        yield driver
+pytestmark = BROWSER_TEST
+sim = sim_fixture()
+browser = browser_fixture(window="1500,1150", logs={"performance": "ALL"})
 
 
 def _requested_urls(driver: WebDriver) -> list[str]:
@@ -126,10 +101,6 @@ def _non_local(urls: list[str]) -> list[str]:
     ]
 
 
-def _wait(driver: WebDriver, condition: Callable[[WebDriver], Any], what: str) -> Any:
-    return WebDriverWait(driver, WAIT_S, poll_frequency=0.05).until(condition, what)
-
-
 def _page_feedback_deg(driver: WebDriver) -> list[float]:
     """The first group's feedback as the page shows it (read in one script: the table is
     redrawn at every update, so element handles go stale)."""
@@ -149,31 +120,8 @@ def _canvas_png(driver: WebDriver) -> bytes:
 
 
 def _colours(driver: WebDriver, png: bytes) -> int:
-    """Distinct colours in a PNG (decoded by the browser itself: no imaging library)."""
-    return int(
-        driver.execute_async_script(
-            """
-            const done = arguments[arguments.length - 1];
-            const img = new Image();
-            img.onload = () => {
-              const c = document.createElement("canvas");
-              c.width = img.width; c.height = img.height;
-              const ctx = c.getContext("2d"); ctx.drawImage(img, 0, 0);
-              const d = ctx.getImageData(0, 0, c.width, c.height).data, seen = new Set();
-              for (let i = 0; i < d.length; i += 4) seen.add((d[i] << 16) | (d[i+1] << 8) | d[i+2]);
-              done(seen.size);
-            };
-            img.src = "data:image/png;base64," + arguments[0];
-            """,
-            b64encode(png).decode(),
-        )
-    )
-
-
-@pytest.fixture
-def screenshot_dir(tmp_path: Path) -> Path:
-    chosen = os.environ.get(SCREENSHOT_DIR_ENV)
-    return Path(chosen) if chosen else tmp_path
+    """Distinct colours in a PNG."""
+    return count_in_png(driver, png, DISTINCT_COLOURS_JS)
 
 
 def test_pendant_in_a_real_browser_offline(
@@ -188,22 +136,22 @@ def test_pendant_in_a_real_browser_offline(
         move = pool.submit(robot.move_joints, GOAL, speed_scale=SPEED_SCALE)
 
         browser.get(url)
-        _wait(browser, lambda d: d.find_element(By.ID, "link").text == "live", "the live feed")
-        _wait(browser, lambda d: any(abs(v) > 1.0 for v in _page_feedback_deg(d)), "motion")
+        wait_for(browser, lambda d: d.find_element(By.ID, "link").text == "live", "the live feed")
+        wait_for(browser, lambda d: any(abs(v) > 1.0 for v in _page_feedback_deg(d)), "motion")
 
         # the page's joint values change and match GET /api/state
         first = _page_feedback_deg(browser)
         api = _api_feedback_deg(sim)
         assert max(abs(a - b) for a, b in zip(first, api, strict=True)) < MOVING_TOLERANCE_DEG
-        _wait(browser, lambda d: _page_feedback_deg(d) != first, "joint values to change")
+        wait_for(browser, lambda d: _page_feedback_deg(d) != first, "joint values to change")
 
         # the 3D view renders and moves
         shot_a = _canvas_png(browser)
-        _wait(browser, lambda d: _canvas_png(d) != shot_a, "the 3D view to change")
+        wait_for(browser, lambda d: _canvas_png(d) != shot_a, "the 3D view to change")
         assert (
             _colours(browser, _canvas_png(browser)) > MIN_COLOURS
         )  # not blank: floor grid, links, ghost
-        _wait(  # a few seconds of plot history for the screenshot
+        wait_for(  # a few seconds of plot history for the screenshot
             browser,
             lambda d: d.execute_script("return window.pendant.history.length") >= PLOT_SAMPLES,
             "plot history",
@@ -212,7 +160,7 @@ def test_pendant_in_a_real_browser_offline(
 
         # E-STOP from the page: the light, the state, the client's typed error
         browser.find_element(By.ID, "btn-estop").click()
-        _wait(
+        wait_for(
             browser,
             lambda d: d.execute_script(LIGHT_ON_JS),
             "the E-stop light",
@@ -220,7 +168,7 @@ def test_pendant_in_a_real_browser_offline(
         assert browser.find_element(By.ID, "st-estop").text == "PRESSED"
         # a feed document captured before the press but sent after the button's answer
         # must not switch the light off again
-        _wait(browser, lambda d: d.execute_script(ANSWERED_JS) >= 0, "the button's answer")
+        wait_for(browser, lambda d: d.execute_script(ANSWERED_JS) >= 0, "the button's answer")
         assert browser.execute_script(STALE_FEED_JS) is False
         assert browser.find_element(By.ID, "st-estop").text == "PRESSED"
         assert browser.execute_script(LIGHT_ON_JS)
@@ -229,7 +177,7 @@ def test_pendant_in_a_real_browser_offline(
             move.result(WAIT_S)
         assert "E-stop" in str(info.value) or "estop" in str(info.value).lower()
         # at rest the page and the API agree to the displayed two decimals
-        _wait(
+        wait_for(
             browser,
             lambda d: (
                 max(
@@ -244,9 +192,9 @@ def test_pendant_in_a_real_browser_offline(
 
         # release, RESET, and the client moves again
         browser.find_element(By.ID, "btn-estop").click()
-        _wait(browser, lambda d: d.find_element(By.ID, "st-estop").text == "released", "release")
+        wait_for(browser, lambda d: d.find_element(By.ID, "st-estop").text == "released", "release")
         browser.find_element(By.ID, "btn-reset").click()
-        _wait(browser, lambda d: sim.api("/api/state")["alarms"] == [], "alarms cleared")
+        wait_for(browser, lambda d: sim.api("/api/state")["alarms"] == [], "alarms cleared")
         robot.enable()
         result = robot.move_joints((0.0,) * 6, speed_scale=0.5)
         assert result is not None
@@ -273,8 +221,8 @@ def test_every_group_has_its_live_plot_and_eco_mode_shows(
         groups = [g["name"] for g in sim.api("/api/state")["groups"]]
         assert len(groups) > 1
         browser.get(f"http://127.0.0.1:{sim.http}/")
-        _wait(browser, lambda d: d.find_element(By.ID, "link").text == "live", "the live feed")
-        _wait(
+        wait_for(browser, lambda d: d.find_element(By.ID, "link").text == "live", "the live feed")
+        wait_for(
             browser,
             lambda d: d.execute_script("return window.pendant.history.length") >= PLOT_MIN_SAMPLES,
             "plot history",
@@ -289,7 +237,7 @@ def test_every_group_has_its_live_plot_and_eco_mode_shows(
             assert _colours(browser, png) >= MIN_PLOT_COLOURS, plot
         assert "ECO" in browser.find_element(By.ID, "st-eco").text
         sim.api("/api/servo", {"on": False})
-        _wait(browser, lambda d: d.find_element(By.ID, "st-eco").text == "off", "eco mode off")
+        wait_for(browser, lambda d: d.find_element(By.ID, "st-eco").text == "off", "eco mode off")
         assert _non_local(_requested_urls(browser)) == []
 
 
@@ -328,9 +276,9 @@ def test_plots_have_ticks_units_and_a_joint_legend(sim: Sim, browser: WebDriver)
     """Each plot draws value ticks, time ticks in seconds, its unit and a legend naming
     every joint (the texts the page draws on the canvases, recorded as it draws them)."""
     browser.get(f"http://127.0.0.1:{sim.http}/")
-    _wait(browser, lambda d: d.find_element(By.ID, "link").text == "live", "the live feed")
+    wait_for(browser, lambda d: d.find_element(By.ID, "link").text == "live", "the live feed")
     browser.execute_script(RECORD_PLOT_TEXT_JS)
-    _wait(
+    wait_for(
         browser,
         lambda d: {"plot-joints-0", "plot-lateness"} <= set(d.execute_script(PLOT_TEXTS_JS)),
         "the plots to be redrawn",

@@ -4,12 +4,10 @@ finding (code, connection, remedy) and its Clear button empties it (issue 31).""
 from __future__ import annotations
 
 import socket
-from collections.abc import Callable
-from typing import Any
 
 import pytest
 from client_sim import running_sim
-from headless import CHROMEDRIVER, CHROMIUM, headless_chromium
+from headless import NEEDS_CHROMIUM, headless_chromium, wait_for
 
 from pymotoros.protocol.constants import ByteOrder
 from pymotoros.protocol.framing import encode
@@ -19,22 +17,8 @@ pytest.importorskip("selenium.webdriver", reason="selenium is not installed")
 
 from selenium.webdriver.common.by import By
 from selenium.webdriver.remote.webdriver import WebDriver
-from selenium.webdriver.support.ui import WebDriverWait
 
-WAIT_S = 20.0
-"""Bound on every wait for the page (a cold Chromium start on a busy machine)."""
-
-pytestmark = [
-    pytest.mark.timeout(120),
-    pytest.mark.skipif(
-        CHROMIUM is None or CHROMEDRIVER is None,
-        reason="chromium and chromium-driver are not installed (.ci/run installs them)",
-    ),
-]
-
-
-def _wait(driver: WebDriver, condition: Callable[[WebDriver], Any], what: str) -> Any:
-    return WebDriverWait(driver, WAIT_S, poll_frequency=0.05).until(condition, what)
+pytestmark = [pytest.mark.timeout(120), NEEDS_CHROMIUM]
 
 
 def _panel(driver: WebDriver) -> str:
@@ -44,15 +28,15 @@ def _panel(driver: WebDriver) -> str:
 def test_the_panel_shows_a_finding_and_clears_it() -> None:
     with running_sim() as sim, headless_chromium(window="1400,1000") as driver:
         driver.get(f"http://{sim.host}:{sim.http}/")
-        _wait(driver, lambda d: "none:" in _panel(d), "the empty panel")
+        wait_for(driver, lambda d: "none:" in _panel(d), "the empty panel")
         with socket.create_connection((sim.host, sim.motion), timeout=10) as sock:
             sock.sendall(encode(MotoMotionCtrl(0, 0, 200199, (0.0,) * 10), ByteOrder.LITTLE))
             sock.recv(1024)
-        _wait(driver, lambda d: "unknown-command" in _panel(d), "the finding on the page")
+        wait_for(driver, lambda d: "unknown-command" in _panel(d), "the finding on the page")
         text = _panel(driver)
         assert "stale-reply" in text
         assert "127.0.0.1:" in text
         assert "fix: Send only the commands of §3.1" in text
         driver.find_element(By.ID, "btn-lint-clear").click()
-        _wait(driver, lambda d: "none:" in _panel(d), "the panel cleared")
+        wait_for(driver, lambda d: "none:" in _panel(d), "the panel cleared")
         assert sim.api("/api/lint") == {"findings": []}

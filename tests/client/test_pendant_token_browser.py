@@ -5,46 +5,24 @@ live feed and the buttons work; a reload asks nothing (issue 23, item 5)."""
 from __future__ import annotations
 
 import json
-import shutil
 import urllib.request
-from collections.abc import Iterator
 from typing import Any
 
 import pytest
-from client_sim import Sim, running_sim
-from headless import headless_chromium
+from client_sim import Sim, sim_fixture
+from headless import BROWSER_TEST, browser_fixture, wait_for
 
 webdriver = pytest.importorskip("selenium.webdriver", reason="selenium is not installed")
 from selenium.common.exceptions import NoAlertPresentException  # noqa: E402
 from selenium.webdriver.common.by import By  # noqa: E402
 from selenium.webdriver.remote.webdriver import WebDriver  # noqa: E402
 from selenium.webdriver.support import expected_conditions  # noqa: E402
-from selenium.webdriver.support.ui import WebDriverWait  # noqa: E402
 
-CHROMIUM = shutil.which("chromium") or shutil.which("chromium-browser")
-CHROMEDRIVER = shutil.which("chromedriver")
-WAIT_S = 20.0
 TOKEN = "browser-test-token"  # noqa: S105 - a test token
 
-pytestmark = [
-    pytest.mark.timeout(180),
-    pytest.mark.skipif(
-        CHROMIUM is None or CHROMEDRIVER is None,
-        reason="chromium and chromium-driver are not installed (.ci/run installs them)",
-    ),
-]
-
-
-@pytest.fixture(scope="module")
-def sim() -> Iterator[Sim]:
-    with running_sim("--token", TOKEN) as sim:
-        yield sim
-
-
-@pytest.fixture(scope="module")
-def browser() -> Iterator[WebDriver]:
-    with headless_chromium() as driver:
-        yield driver
+pytestmark = BROWSER_TEST
+sim = sim_fixture("--token", TOKEN)
+browser = browser_fixture()
 
 
 def api_state(sim: Sim) -> dict[str, Any]:
@@ -57,21 +35,20 @@ def api_state(sim: Sim) -> dict[str, Any]:
 
 
 def test_the_pendant_asks_once_and_keeps_the_token(sim: Sim, browser: WebDriver) -> None:
-    wait = WebDriverWait(browser, WAIT_S, poll_frequency=0.05)
     browser.get(f"http://127.0.0.1:{sim.http}/")
-    alert = wait.until(expected_conditions.alert_is_present(), "the token prompt")
+    alert = wait_for(browser, expected_conditions.alert_is_present(), "the token prompt")
     assert "token" in alert.text
     alert.send_keys(TOKEN)
     alert.accept()
-    wait.until(lambda d: d.find_element(By.ID, "link").text == "live", "the live feed")
+    wait_for(browser, lambda d: d.find_element(By.ID, "link").text == "live", "the live feed")
     stored = browser.execute_script('return sessionStorage.getItem("pymotoros-token")')
     assert stored == TOKEN
     assert api_state(sim)["hold"] is False
     browser.find_element(By.ID, "btn-hold").click()  # a POST through the token
-    wait.until(lambda _: api_state(sim)["hold"] is True, "HOLD pressed from the page")
+    wait_for(browser, lambda _: api_state(sim)["hold"] is True, "HOLD pressed from the page")
     # a reload in the same tab asks nothing: the session keeps the token
     browser.refresh()
-    wait.until(lambda d: d.find_element(By.ID, "link").text == "live", "the feed again")
+    wait_for(browser, lambda d: d.find_element(By.ID, "link").text == "live", "the feed again")
     with pytest.raises(NoAlertPresentException):
         browser.switch_to.alert.text  # noqa: B018 - raises when no prompt is open
 
@@ -79,14 +56,15 @@ def test_the_pendant_asks_once_and_keeps_the_token(sim: Sim, browser: WebDriver)
 def test_the_docs_page_offers_to_send_the_token(sim: Sim, browser: WebDriver) -> None:
     """The OpenAPI document declares the bearer scheme (issue 28): swagger-ui shows its
     Authorize button, whose dialog takes the token for "Try it out"."""
-    wait = WebDriverWait(browser, WAIT_S, poll_frequency=0.05)
     browser.get(f"http://localhost:{sim.http}/docs")  # another of the twin's own names
-    button = wait.until(
+    button = wait_for(
+        browser,
         expected_conditions.element_to_be_clickable((By.CSS_SELECTOR, "button.authorize")),
         "the Authorize button",
     )
     button.click()
-    dialog = wait.until(
+    dialog = wait_for(
+        browser,
         expected_conditions.visibility_of_element_located((By.CSS_SELECTOR, ".auth-container")),
         "the authorization dialog",
     )

@@ -8,23 +8,15 @@ directory, or to ``$PYMOTOROS_SCREENSHOT_DIR`` when it is set.
 
 from __future__ import annotations
 
-import os
 import urllib.request
-from base64 import b64encode
 from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
 import pytest
-from client_sim import Sim, running_sim
-from test_pendant_browser import (
-    CHROMEDRIVER,
-    CHROMIUM,
-    SCREENSHOT_DIR_ENV,
-    _canvas_png,
-    _wait,
-    browser,
-)
+from client_sim import Sim, running_sim, sim_fixture
+from headless import BROWSER_TEST, count_in_png, wait_for
+from test_pendant_browser import _canvas_png, browser
 
 from pymotoros.models import ROBOTS
 
@@ -41,46 +33,20 @@ CRATE = {"name": "crate", "sphere": 0.12, "xyz": [0.0, 0.0, 0.975]}
 """Around the HC10's elbow at its zero pose (where the simulator boots): a contact."""
 SCENE_JS = "return window.pendant.scene || null"
 RED_PIXELS_JS = """
-const done = arguments[arguments.length - 1];
-const img = new Image();
-img.onload = () => {
-  const c = document.createElement("canvas");
-  c.width = img.width; c.height = img.height;
-  const ctx = c.getContext("2d"); ctx.drawImage(img, 0, 0);
-  const d = ctx.getImageData(0, 0, c.width, c.height).data;
-  let red = 0;
-  for (let i = 0; i < d.length; i += 4) if (d[i] > 150 && d[i + 1] < 90 && d[i + 2] < 90) red++;
-  done(red);
-};
-img.src = "data:image/png;base64," + arguments[0];
+let red = 0;
+for (let i = 0; i < d.length; i += 4) if (d[i] > 150 && d[i + 1] < 90 && d[i + 2] < 90) red++;
+return red;
 """
 MIN_RED_PIXELS = 200
 """A touched obstacle filled red covers far more than this; the robot and the grid have
 no red at all."""
 
-pytestmark = [
-    pytest.mark.timeout(180),
-    pytest.mark.skipif(
-        CHROMIUM is None or CHROMEDRIVER is None,
-        reason="chromium and chromium-driver are not installed (.ci/run installs them)",
-    ),
-]
-
-
-@pytest.fixture(scope="module")
-def sim() -> Iterator[Sim]:
-    with running_sim("--robot", "hc10") as sim:
-        yield sim
-
-
-@pytest.fixture
-def screenshot_dir(tmp_path: Path) -> Path:
-    chosen = os.environ.get(SCREENSHOT_DIR_ENV)
-    return Path(chosen) if chosen else tmp_path
+pytestmark = BROWSER_TEST
+sim = sim_fixture("--robot", "hc10")
 
 
 def _red_pixels(driver: WebDriver, png: bytes) -> int:
-    return int(driver.execute_async_script(RED_PIXELS_JS, b64encode(png).decode()))
+    return count_in_png(driver, png, RED_PIXELS_JS)
 
 
 def _scene(driver: WebDriver) -> dict[str, Any] | None:
@@ -100,8 +66,8 @@ def test_the_pendant_draws_obstacles_capsules_and_a_contact_in_red(
     sim.api("/api/workspace", TABLE)
     sim.api("/api/workspace", POST)
     browser.get(f"http://127.0.0.1:{sim.http}/")
-    _wait(browser, lambda d: d.find_element(By.ID, "link").text == "live", "the live feed")
-    _wait(browser, lambda d: len((_scene(d) or {}).get("obstacles", [])) == 2, "two obstacles")
+    wait_for(browser, lambda d: d.find_element(By.ID, "link").text == "live", "the live feed")
+    wait_for(browser, lambda d: len((_scene(d) or {}).get("obstacles", [])) == 2, "two obstacles")
     scene = _scene(browser)
     assert scene is not None
     assert [(o["name"], o["shape"], o["contact"]) for o in scene["obstacles"]] == [
@@ -116,7 +82,7 @@ def test_the_pendant_draws_obstacles_capsules_and_a_contact_in_red(
     # the crate appears on the elbow: the twin reports a contact, the page draws it red
     state = sim.api("/api/workspace", CRATE)
     assert [o["name"] for o in state["workspace"]["obstacles"]] == ["table", "post", "crate"]
-    crate = _wait(
+    crate = wait_for(
         browser,
         lambda d: (o := _obstacle(d, "crate")) is not None and o["contact"] and o,
         "the crate drawn as touched",
@@ -126,7 +92,7 @@ def test_the_pendant_draws_obstacles_capsules_and_a_contact_in_red(
     assert table is not None
     assert not table["contact"]  # only what is touched turns red
     assert {c["obstacle"] for c in sim.api("/api/state")["workspace"]["contacts"]} == {"crate"}
-    _wait(
+    wait_for(
         browser,
         lambda d: _red_pixels(d, _canvas_png(d)) > MIN_RED_PIXELS,
         "red in the 3D view",
@@ -139,7 +105,7 @@ def test_the_pendant_draws_obstacles_capsules_and_a_contact_in_red(
     )
     with urllib.request.urlopen(request, timeout=10) as response:  # noqa: S310
         assert response.status == 200
-    _wait(browser, lambda d: _obstacle(d, "crate") is None, "the crate gone from the view")
+    wait_for(browser, lambda d: _obstacle(d, "crate") is None, "the crate gone from the view")
 
 
 FIXTURE_CELL = (
@@ -163,8 +129,8 @@ def test_the_pendant_draws_the_tool_in_force_and_the_frames(
     mounts it, and its TCP), so an obstacle touched by the tool is seen touching it; the
     obstacles' frame and the poses' frame are drawn and the pose readout names its frame."""
     browser.get(f"http://127.0.0.1:{cell_sim.http}/")
-    _wait(browser, lambda d: d.find_element(By.ID, "link").text == "live", "the live feed")
-    scene = _wait(
+    wait_for(browser, lambda d: d.find_element(By.ID, "link").text == "live", "the live feed")
+    scene = wait_for(
         browser, lambda d: (s := _scene(d)) is not None and s.get("tools") and s, "a tool"
     )
     [tool] = scene["tools"]
@@ -184,7 +150,7 @@ def test_the_pendant_draws_the_tool_in_force_and_the_frames(
     probe = {"name": "probe", "sphere": 0.05, "xyz": tool["tcp"]}
     touched = cell_sim.api("/api/workspace", probe)["workspace"]["contacts"]
     assert {(c["obstacle"], c["link"]) for c in touched} == {("probe", "tool")}
-    _wait(
+    wait_for(
         browser,
         lambda d: (o := _obstacle(d, "probe")) is not None and o["contact"],
         "the probe drawn as touched",
@@ -194,6 +160,6 @@ def test_the_pendant_draws_the_tool_in_force_and_the_frames(
         png = _canvas_png(d)
         return png if _red_pixels(d, png) > 0 else None
 
-    png = _wait(browser, red_canvas, "the touched probe drawn red")
+    png = wait_for(browser, red_canvas, "the touched probe drawn red")
     assert browser.save_screenshot(str(screenshot_dir / "pendant-tool.png"))
     (screenshot_dir / "pendant-tool-view.png").write_bytes(png)

@@ -17,6 +17,7 @@ import tomllib
 from pathlib import Path
 
 import pytest
+from cell_twin import twin_of_cell
 from hypothesis import HealthCheck, event, given, settings
 from hypothesis import strategies as st
 
@@ -182,12 +183,7 @@ async def test_avoid_goes_around_the_ball_to_a_pose() -> None:
         "initial": {"joints": {"R1": LEFT}},
         "workspace": {"obstacles": [BALL]},
     }
-    async with (
-        Twin(cell_from_dict(data)) as the_twin,
-        the_twin.client(cell=cell_models_from_dict(data)) as client,
-    ):
-        await client.wait_for_state()
-        await client.enable()
+    async with twin_of_cell(data) as (client, the_twin):
         goal = client.tools.chain(0).pose(RIGHT, "tcp", "base")
         with pytest.raises(PathBlockedError, match="the planned move would hit"):
             await client.move_pose(goal)  # straight in joint space: not free
@@ -203,12 +199,7 @@ GP7_BOX = {
 
 
 async def test_a_collision_alarm_names_the_alarm_link_and_obstacle() -> None:
-    async with (
-        Twin(cell_from_dict(GP7_BOX)) as the_twin,
-        the_twin.client(cell=cell_models_from_dict(GP7_BOX)) as client,
-    ):
-        await client.wait_for_state()
-        await client.enable()
+    async with twin_of_cell(GP7_BOX) as (client, _the_twin):
         with pytest.raises(PathBlockedError, match="obstacle 'box'"):
             await client.move_joints([0.0, 1.0, 0.0, 0.0, 0.0, 0.0])
         with pytest.raises(NotReadyError) as info:
@@ -249,12 +240,7 @@ def _stuck_in_the_ball() -> dict[str, object]:
 
 async def test_a_joint_move_backs_out_of_a_contact_and_nothing_else() -> None:
     data = _stuck_in_the_ball()
-    async with (
-        Twin(cell_from_dict(data)) as the_twin,
-        the_twin.client(cell=cell_models_from_dict(data)) as client,
-    ):
-        await client.wait_for_state()
-        await client.enable()
+    async with twin_of_cell(data) as (client, the_twin):
         with pytest.raises(PathBlockedError) as info:
             await client.move_joints([0.0, 0.4, 0.0, 0.0, 0.0, 0.0])  # through its middle
         text = str(info.value)
@@ -269,12 +255,7 @@ async def test_a_joint_move_backs_out_of_a_contact_and_nothing_else() -> None:
 
 async def test_avoid_from_a_start_in_contact_leaves_it_first() -> None:
     data = _stuck_in_the_ball()
-    async with (
-        Twin(cell_from_dict(data)) as the_twin,
-        the_twin.client(cell=cell_models_from_dict(data)) as client,
-    ):
-        await client.wait_for_state()
-        await client.enable()
+    async with twin_of_cell(data) as (client, the_twin):
         result = await client.move_joints(RIGHT, avoid=True)  # was "the start is in collision"
         assert list(result.final_positions) == pytest.approx(RIGHT, abs=1e-3)
         snapshot = the_twin.controller.snapshot()

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from collections.abc import Callable, Sequence
+from functools import partial
 
 from pymotoros.controller import Outcome, Pending, PointData, VirtualController
 from pymotoros.protocol.constants import MotionCommand, ResultCode
@@ -62,14 +63,26 @@ def current_pos(vc: VirtualController, group: int = 0) -> list[float]:
     return list(vc.snapshot().groups[group].command_rad)
 
 
+def resend_while_busy(
+    vc: VirtualController, request: Callable[[], Outcome | Pending], max_busy: int = 1000
+) -> tuple[Outcome, int]:
+    """``request()``'s answer, resent after a tick while it is BUSY (as clients do, §2),
+    at most ``max_busy`` times; the last answer (still BUSY if that was not enough) and
+    the number of BUSY answers."""
+    for busy in range(max_busy):
+        outcome = complete(vc, request())
+        if outcome.result != ResultCode.BUSY:
+            return outcome, busy
+        vc.tick()
+    return outcome, max_busy
+
+
 def send(vc: VirtualController, sequence: int, p: PointData, max_busy: int = 1000) -> Outcome:
     """Send a point, resending after a tick while BUSY (as clients do)."""
-    for _ in range(max_busy):
-        outcome = complete(vc, vc.trajectory_point(sequence, p))
-        if outcome.result != ResultCode.BUSY:
-            return outcome
-        vc.tick()
-    raise AssertionError(f"point {sequence} still BUSY after {max_busy} ticks")
+    outcome, _ = resend_while_busy(vc, partial(vc.trajectory_point, sequence, p), max_busy)
+    if outcome.result == ResultCode.BUSY:
+        raise AssertionError(f"point {sequence} still BUSY after {max_busy} ticks")
+    return outcome
 
 
 def start_at_current(vc: VirtualController, group: int = 0) -> Outcome:

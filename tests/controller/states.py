@@ -26,46 +26,24 @@ def ready(cell: CellConfig | None = None) -> VirtualController:
     return vc
 
 
-def estop() -> VirtualController:
-    vc = ready()
-    vc.press_estop(True)
-    settle_monitor(vc)
-    return vc
+def _ready_then(change: Callable[[VirtualController], object]) -> Callable[[], VirtualController]:
+    """The state reached from ``ready`` by one operator ``change``, once the monitor saw it."""
+
+    def reach() -> VirtualController:
+        vc = ready()
+        change(vc)
+        settle_monitor(vc)
+        return vc
+
+    return reach
 
 
-def hold() -> VirtualController:
-    vc = ready()
-    vc.set_hold(True)
-    settle_monitor(vc)
-    return vc
-
-
-def teach() -> VirtualController:
-    vc = ready()
-    vc.set_mode(PendantMode.TEACH)
-    settle_monitor(vc)
-    return vc
-
-
-def not_remote() -> VirtualController:
-    vc = ready()
-    vc.set_remote(False)
-    settle_monitor(vc)
-    return vc
-
-
-def alarm() -> VirtualController:
-    vc = ready()
-    vc.raise_alarm(1000, 2, "major alarm for the test")
-    settle_monitor(vc)
-    return vc
-
-
-def error() -> VirtualController:
-    vc = ready()
-    vc.raise_error(2010, 0, "operator error for the test")
-    settle_monitor(vc)
-    return vc
+estop = _ready_then(lambda vc: vc.press_estop(True))
+hold = _ready_then(lambda vc: vc.set_hold(True))
+teach = _ready_then(lambda vc: vc.set_mode(PendantMode.TEACH))
+not_remote = _ready_then(lambda vc: vc.set_remote(False))
+alarm = _ready_then(lambda vc: vc.raise_alarm(1000, 2, "major alarm for the test"))
+error = _ready_then(lambda vc: vc.raise_error(2010, 0, "operator error for the test"))
 
 
 def pfl() -> VirtualController:

@@ -15,6 +15,7 @@ from __future__ import annotations
 import itertools
 from collections import Counter
 from collections.abc import Iterator, Sequence
+from functools import partial
 
 import pytest
 
@@ -22,7 +23,7 @@ from pymotoros.controller import PointData, VirtualController, cell_from_dict
 from pymotoros.motion.interpolator import GroupInterpolator
 from pymotoros.protocol.constants import ResultCode as R
 
-from .helpers import CMD, command, complete, point
+from .helpers import CMD, command, complete, point, resend_while_busy
 
 ZERO = [0.0] * 6
 FAR_S = 5.0
@@ -116,13 +117,11 @@ def accepted(monkeypatch: pytest.MonkeyPatch) -> Counter[str]:
 def resend_until_accepted(vc: VirtualController, sequence: int, pts: list[PointData]) -> int:
     """What every client does (reference §2: BUSY makes it resend the same point):
     resend after a tick until the reply is not BUSY. Returns the BUSY replies seen."""
-    for busy in range(5000):
-        o = complete(vc, vc.trajectory_point_ex(sequence, pts))
-        if o.result != R.BUSY:
-            assert o.ok, o
-            return busy
-        vc.tick()
-    raise AssertionError("still BUSY after 5000 ticks")
+    o, busy = resend_while_busy(vc, partial(vc.trajectory_point_ex, sequence, pts), 5000)
+    if o.result == R.BUSY:
+        raise AssertionError("still BUSY after 5000 ticks")
+    assert o.ok, o
+    return busy
 
 
 @pytest.mark.parametrize("n", [2, 3, 4])

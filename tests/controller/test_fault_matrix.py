@@ -124,14 +124,7 @@ def test_fault_in_phase(fault: str, phase: str) -> None:
     # a new trajectory from where the robot stands runs to its end.
     f.recover(vc)
     settle_monitor(vc)
-    started = command(vc, CMD.START_TRAJ_MODE)
-    assert started.ok, (fault, phase, started)
-    assert start_at_current(vc).ok
-    target = current_pos(vc)
-    target[0] += RECOVERY_MOVE_RAD
-    assert send(vc, 1, point(0, 0.5, target)).ok
-    finish(vc)
-    assert current_pos(vc)[0] == pytest.approx(target[0], abs=1e-4)
+    recovery_move(vc)
 
 
 @pytest.mark.parametrize("phase", list(PHASES))
@@ -149,13 +142,7 @@ def test_eco_mode_in_phase(phase: str) -> None:
     vc.set_eco(False)
     settle_monitor(vc)
     finish(vc)
-    assert command(vc, CMD.START_TRAJ_MODE).ok
-    assert start_at_current(vc).ok
-    target = current_pos(vc)
-    target[0] += RECOVERY_MOVE_RAD
-    assert send(vc, 1, point(0, 0.5, target)).ok
-    finish(vc)
-    assert current_pos(vc)[0] == pytest.approx(target[0], abs=1e-4)
+    recovery_move(vc)
 
 
 def recovery_move(vc: VirtualController) -> None:

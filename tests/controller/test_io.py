@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import pytest
 
 from pymotoros.controller import VirtualController, default_cell
@@ -19,79 +21,25 @@ from pymotoros.controller.signals import (
 from pymotoros.models import CONTROLLERS, ControllerType
 from pymotoros.protocol.constants import IoResultCode as Io
 
-# (area, first, last, writable) per controller: reference §6.2, column by column
-RANGES: dict[str, list[tuple[int, int, bool]]] = {
-    "dx100": [
-        (10, 2567, False),
-        (10010, 12567, True),
-        (20010, 22567, False),
-        (25010, 27567, True),
-        (30010, 32567, False),
-        (35010, 37567, False),
-        (40010, 41607, False),
-        (50010, 52007, False),
-        (60010, 60647, True),
-        (70010, 79997, False),
-        (80010, 80647, False),
-        (82010, 82207, False),
-    ],
-    "fs100": [
-        (10, 1287, False),
-        (10010, 11287, True),
-        (20010, 21287, False),
-        (25010, 26287, True),
-        (30010, 31287, False),
-        (35010, 36287, False),
-        (40010, 41607, False),
-        (50010, 52007, False),
-        (60010, 60647, True),
-        (70010, 79997, False),
-        (80010, 80647, False),
-        (82010, 82207, False),
-    ],
-    "dx200": [
-        (10, 5127, False),
-        (10010, 15127, True),
-        (20010, 25127, False),
-        (27010, 29567, True),
-        (30010, 35127, False),
-        (37010, 39567, False),
-        (40010, 41607, False),
-        (50010, 53007, False),
-        (60010, 60647, True),
-        (70010, 79997, False),
-        (80010, 82007, False),
-        (82010, 82207, False),
-    ],
-    "yrc1000": [
-        (10, 5127, False),
-        (10010, 15127, True),
-        (20010, 25127, False),
-        (27010, 29567, True),
-        (30010, 35127, False),
-        (37010, 39567, False),
-        (40010, 42567, False),
-        (50010, 55127, False),
-        (60010, 60647, True),
-        (70010, 79997, False),
-        (80010, 85127, False),
-        (87010, 87207, False),
-    ],
-    "yrc1000micro": [
-        (10, 5127, False),
-        (10010, 15127, True),
-        (20010, 21287, False),
-        (27010, 29567, True),
-        (30010, 31287, False),
-        (37010, 39567, False),
-        (40010, 42567, False),
-        (50010, 55127, False),
-        (60010, 60647, True),
-        (70010, 79997, False),
-        (80010, 85127, False),
-        (87010, 87207, False),
-    ],
-}
+AREAS = Path(__file__).with_name("io_areas.txt")
+"""The IO areas of reference §6.2, a row per area: first-last address per controller."""
+
+
+def _ranges(table: str) -> dict[str, list[tuple[int, int, bool]]]:
+    """(first, last, writable) per controller, from a table such as AREAS."""
+    lines = [line for line in table.splitlines() if line.strip() and not line.startswith("#")]
+    header, *rows = lines
+    controllers = header.split()[1:]
+    ranges: dict[str, list[tuple[int, int, bool]]] = {c: [] for c in controllers}
+    for row in rows:
+        writable, *spans = row.split()
+        for controller, span in zip(controllers, spans, strict=True):
+            first, last = span.split("-")
+            ranges[controller].append((int(first), int(last), writable == "yes"))
+    return ranges
+
+
+RANGES = _ranges(AREAS.read_text(encoding="utf-8"))
 
 
 def vc_for(controller: str) -> VirtualController:

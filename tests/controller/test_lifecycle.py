@@ -3,12 +3,13 @@
 from __future__ import annotations
 
 import math
+from functools import partial
 
 from pymotoros.controller import Pending, VirtualController
 from pymotoros.controller.signals import OPERATING, ROS_DONE, ROS_READY
 from pymotoros.protocol.constants import NotReadySubcode, ResultCode
 
-from .helpers import CMD, command, complete, point, tick_until
+from .helpers import CMD, command, complete, point, resend_while_busy, tick_until
 
 
 def test_boot_start_stream_stop() -> None:
@@ -51,12 +52,8 @@ def test_boot_start_stream_stop() -> None:
         shape = 10 * s**3 - 15 * s**4 + 6 * s**5  # smooth start and stop
         dshape = (30 * s**2 - 60 * s**3 + 30 * s**4) / (n * 0.05)
         p = point(0, seq * 0.05, [t * shape for t in target], [t * dshape for t in target])
-        for _ in range(500):
-            result = complete(vc, vc.trajectory_point(seq, p))
-            if result.result != ResultCode.BUSY:
-                break
-            busy += 1
-            vc.tick()
+        result, retries = resend_while_busy(vc, partial(vc.trajectory_point, seq, p), 500)
+        busy += retries
         assert result.ok, (seq, result)
     assert busy > 0, "the stream should have met BUSY at least once"
     assert vc.robot_status().in_motion == 1

@@ -3,22 +3,19 @@
 from __future__ import annotations
 
 import math
+from functools import partial
 
 from pymotoros.controller import PointData, VirtualController, cell_from_dict, default_cell
 from pymotoros.protocol.constants import ResultCode as R
 
-from .helpers import CMD, command, complete, point, tick_until
+from .helpers import CMD, command, complete, point, resend_while_busy, tick_until
 
 
 def stream_ex(vc: VirtualController, points: list[list[PointData]]) -> int:
     busy = 0
     for seq, pts in enumerate(points):
-        for _ in range(1000):
-            o = complete(vc, vc.trajectory_point_ex(seq, pts))
-            if o.result != R.BUSY:
-                break
-            busy += 1
-            vc.tick()
+        o, retries = resend_while_busy(vc, partial(vc.trajectory_point_ex, seq, pts))
+        busy += retries
         assert o.ok, (seq, o)
         assert o.group_no == pts[-1].group_no
     return busy

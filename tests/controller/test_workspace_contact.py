@@ -9,18 +9,17 @@ twin (virtual time) and over TCP against ``pymotoros sim --config``.
 from __future__ import annotations
 
 import sys
-from operator import mul
 from pathlib import Path
 from typing import Any
 
 import pytest
 
-from pymotoros.client import NotReadyError, SyncRobotClient
+from contact_depth import commanded_joints, depth_and_one_tick
+from pymotoros.client import NotReadyError, RobotClient, SyncRobotClient
 from pymotoros.controller import VirtualController
-from pymotoros.controller.cell import CellConfig, cell_from_dict
+from pymotoros.controller.cell import cell_from_dict
 from pymotoros.controller.safety.contact import COLLISION_ALARM, is_clamping
 from pymotoros.kinematics.collision import CollisionWorld, Contact
-from pymotoros.motion import GroupAxes, from_pulses
 from pymotoros.protocol.constants import NotReadySubcode
 from pymotoros.testing import twin
 
@@ -47,64 +46,43 @@ def _ball(xyz: list[float], name: str = "ball") -> dict[str, Any]:
     return {"name": name, "sphere": 0.1, "xyz": xyz}
 
 
-def _axes(controller: VirtualController) -> GroupAxes:
-    return GroupAxes.from_model(controller.cell.groups[0], controller.cell.controller)
-
-
-def _joints(controller: VirtualController) -> list[float]:
-    axes = _axes(controller)
-    return list(from_pulses(controller.commanded_pulses(0), axes)[: axes.num_axes])
-
-
-def _depth_and_one_tick(cell: CellConfig, controller: VirtualController) -> tuple[float, float]:
-    """How deep the robot is in the obstacle, and the farthest one tick can carry it."""
-    world = CollisionWorld(cell.groups, cell.workspace)
-    _, contacts = world.probe([_joints(controller)])
-    depth = max((-c.distance_m for c in contacts), default=0.0)
-    axes = _axes(controller)
-    reach = world.joint_reach(0)
-    per_slot = [0.0] * 8
-    for k in range(axes.num_axes):
-        slot = axes.ros_to_slot[k]
-        per_slot[slot] = reach[k] / axes.pulses_per_unit[slot]
-    return depth, sum(map(mul, axes.max_increment, per_slot))
+async def _move_refused(robot: RobotClient) -> NotReadyError:
+    """Enable and move towards GOAL: an obstacle on the way, the move is refused."""
+    await robot.enable()
+    with pytest.raises(NotReadyError) as info:
+        await robot.move_joints(GOAL, speed_scale=0.5)
+    return info.value
 
 
 async def test_an_hc10_driven_into_an_obstacle_gets_the_pfl_refusal_and_stops_at_it() -> None:
     cell = cell_from_dict(_cell("hc10", [_ball(HC10_BALL)]))
     async with twin(cell=cell) as (robot, the_twin):
-        await robot.enable()
-        with pytest.raises(NotReadyError) as info:
-            await robot.move_joints(GOAL, speed_scale=0.5)
-        assert info.value.reason is NotReadySubcode.PFL_ACTIVE
+        assert (await _move_refused(robot)).reason is NotReadySubcode.PFL_ACTIVE
         controller = the_twin.controller
         assert controller.snapshot().pfl == "stop"
         touched = controller.workspace_contacts
         assert [(c.obstacle, c.link) for c in touched] == [("ball", "link_2_l")]
-        depth, one_tick = _depth_and_one_tick(cell, controller)
+        depth, one_tick = depth_and_one_tick(cell, controller)
         assert 0.0 < depth <= one_tick
-        assert 0.3 < _joints(controller)[1] < 0.7  # stopped on the way, at the ball
+        assert 0.3 < commanded_joints(controller)[1] < 0.7  # stopped on the way, at the ball
         # moving out of the contact is allowed once PFL has cleared
         await the_twin.sleep(1.0)
         await robot.enable()
         await robot.move_joints(HOME, speed_scale=0.5)
-        assert max(abs(v) for v in _joints(controller)) < 1e-3
+        assert max(abs(v) for v in commanded_joints(controller)) < 1e-3
         assert controller.workspace_contacts == ()
 
 
 async def test_a_gp7_gets_the_collision_alarm_with_servo_off() -> None:
     cell = cell_from_dict(_cell("gp7", [_ball(GP7_BALL)]))
     async with twin(cell=cell) as (robot, the_twin):
-        await robot.enable()
-        with pytest.raises(NotReadyError) as info:
-            await robot.move_joints(GOAL, speed_scale=0.5)
-        assert info.value.reason is NotReadySubcode.ALARM
+        assert (await _move_refused(robot)).reason is NotReadySubcode.ALARM
         snapshot = the_twin.controller.snapshot()
         alarms = [(a.code, a.text) for a in snapshot.alarms]
         assert alarms == [(COLLISION_ALARM, "COLLISION DETECT")]
         assert snapshot.alarms[0].subcode == 1  # R1
         assert not snapshot.servo
-        depth, one_tick = _depth_and_one_tick(cell, the_twin.controller)
+        depth, one_tick = depth_and_one_tick(cell, the_twin.controller)
         assert 0.0 < depth <= one_tick
         # START_TRAJ_MODE resets the alarm and powers the servos; backing out is allowed
         await robot.enable()
@@ -117,20 +95,18 @@ async def test_a_link_pinned_between_two_obstacles_is_a_clamping_and_backs_off()
     pair = [_ball([x, 0.12, z], "left"), _ball([x, -0.12, z], "right")]
     cell = cell_from_dict(_cell("hc10", pair))
     async with twin(cell=cell) as (robot, the_twin):
-        await robot.enable()
-        with pytest.raises(NotReadyError):
-            await robot.move_joints(GOAL, speed_scale=0.5)
+        await _move_refused(robot)
         controller = the_twin.controller
         assert is_clamping(controller.workspace_contacts)
-        stopped = _joints(controller)[1]
+        stopped = commanded_joints(controller)[1]
         phases = {controller.snapshot().pfl}
         for _ in range(100):  # 1.2 s: the stop, then the escape
             await the_twin.sleep(0.012)
             phases.add(controller.snapshot().pfl)
         assert {"stop", "escape", "idle"} <= phases
-        assert _joints(controller)[1] < stopped  # backed off along its path
+        assert commanded_joints(controller)[1] < stopped  # backed off along its path
         world = CollisionWorld(cell.groups, cell.workspace)
-        assert world.contacts([_joints(controller)]) == []
+        assert world.contacts([commanded_joints(controller)]) == []
 
 
 def test_is_clamping_needs_one_link_on_two_obstacles() -> None:
@@ -187,10 +163,7 @@ async def test_an_obstacle_put_at_run_time_stops_the_robot_and_shows_in_the_stat
         controller = the_twin.controller
         assert controller._workspace.contact is None
         controller.put_obstacle({"name": "person", "sphere": 0.1, "xyz": HC10_BALL})
-        await robot.enable()
-        with pytest.raises(NotReadyError) as info:
-            await robot.move_joints(GOAL, speed_scale=0.5)
-        assert info.value.reason is NotReadySubcode.PFL_ACTIVE
+        assert (await _move_refused(robot)).reason is NotReadySubcode.PFL_ACTIVE
         state = controller.workspace_state()
         assert state["obstacles"] == [
             {"name": "person", "sphere": 0.1, "xyz": HC10_BALL, "rpy_deg": [0.0, 0.0, 0.0]}
@@ -204,7 +177,7 @@ async def test_an_obstacle_put_at_run_time_stops_the_robot_and_shows_in_the_stat
         await the_twin.sleep(1.0)
         await robot.enable()
         await robot.move_joints(GOAL, speed_scale=0.5)
-        assert _joints(controller)[1] == pytest.approx(1.0, abs=1e-3)
+        assert commanded_joints(controller)[1] == pytest.approx(1.0, abs=1e-3)
 
 
 async def test_moving_an_obstacle_by_name_moves_the_check_with_it() -> None:

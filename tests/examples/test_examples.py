@@ -5,23 +5,19 @@ from __future__ import annotations
 import os
 import subprocess
 import sys
-from collections.abc import Iterator
 from pathlib import Path
 
 import pytest
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "client"))
-from client_sim import Sim, running_sim
+from client_sim import Sim, sim_fixture
 
 EXAMPLES = Path(__file__).resolve().parents[2] / "examples"
 SCRIPTS = sorted(p.name for p in EXAMPLES.glob("*.py"))
 RUN_TIMEOUT_S = 120
 
 
-@pytest.fixture(scope="module")
-def sim() -> Iterator[Sim]:
-    with running_sim() as s:
-        yield s
+sim = sim_fixture()
 
 
 def run_example(sim: Sim, script: str, *args: str) -> subprocess.CompletedProcess[str]:
@@ -103,14 +99,7 @@ def test_examples_take_ports_as_arguments(sim: Sim) -> None:
         [
             sys.executable,
             str(EXAMPLES / "io_signal.py"),
-            "--host",
-            sim.host,
-            "--motion-port",
-            str(sim.motion),
-            "--state-port",
-            str(sim.state),
-            "--io-port",
-            str(sim.io),
+            *sim.cli_args(),
             "--address",
             "10041",
         ],

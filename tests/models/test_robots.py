@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+from pathlib import Path
 
 import pytest
 
@@ -20,68 +21,26 @@ from pymotoros.models import (
 )
 from pymotoros.motion import GroupAxes
 
-# (joint, lower °, upper °, speed °/s) per robot, transcribed from robot-models.md §1.
-TABLES: dict[str, list[tuple[str, float, float, float]]] = {
-    "hc10": [
-        ("joint_1_s", -180, 180, 130),
-        ("joint_2_l", -180, 180, 130),
-        ("joint_3_u", -5, 355, 180),
-        ("joint_4_r", -180, 180, 180),
-        ("joint_5_b", -180, 180, 250),
-        ("joint_6_t", -180, 180, 250),
-    ],
-    "gp7": [
-        ("joint_1_s", -170, 170, 375),
-        ("joint_2_l", -65, 145, 315),
-        ("joint_3_u", -70, 190, 410),
-        ("joint_4_r", -190, 190, 550),
-        ("joint_5_b", -135, 135, 550),
-        ("joint_6_t", -360, 360, 1000),
-    ],
-    "gp8": [
-        ("joint_1_s", -170, 170, 455),
-        ("joint_2_l", -65, 145, 385),
-        ("joint_3_u", -70, 190, 520),
-        ("joint_4_r", -190, 190, 550),
-        ("joint_5_b", -135, 135, 550),
-        ("joint_6_t", -360, 360, 1000),
-    ],
-    "gp12": [
-        ("joint_1_s", -170, 170, 260),
-        ("joint_2_l", -90, 155, 230),
-        ("joint_3_u", -85, 150, 260),
-        ("joint_4_r", -200, 200, 470),
-        ("joint_5_b", -150, 150, 470),
-        ("joint_6_t", -455, 455, 700),
-    ],
-    "mh5": [  # ROS2 package numbers (from the manuals), ROS1 joint names
-        ("joint_s", -170, 170, 376),
-        ("joint_l", -65, 150, 350),
-        ("joint_u", -70, 190, 400),
-        ("joint_r", -190, 190, 450),
-        ("joint_b", -135, 135, 450),
-        ("joint_t", -360, 360, 720),
-    ],
-    "sia20d": [
-        ("joint_s", -180, 180, 130),
-        ("joint_l", -110, 110, 130),
-        ("joint_e", -170, 170, 170),
-        ("joint_u", -130, 130, 170),
-        ("joint_r", -180, 180, 200),
-        ("joint_b", -110, 110, 200),
-        ("joint_t", -180, 180, 400),
-    ],
-}
+JOINT_TABLES = Path(__file__).with_name("joint_tables.txt")
+"""(joint, lower °, upper °, speed °/s) per robot, transcribed from robot-models.md §1."""
+
+
+def _joint_tables(text: str) -> dict[str, list[tuple[str, float, float, float]]]:
+    """The ``[name]`` sections of a table such as JOINT_TABLES, a joint per row."""
+    tables: dict[str, list[tuple[str, float, float, float]]] = {}
+    for line in text.splitlines():
+        line = line.split("#", 1)[0].strip()
+        if line.startswith("["):
+            rows = tables.setdefault(line.strip("[]"), [])
+        elif line:
+            joint, lower, upper, speed = line.split()
+            rows.append((joint, float(lower), float(upper), float(speed)))
+    return tables
+
+
+TABLES = _joint_tables(JOINT_TABLES.read_text(encoding="utf-8"))
+SDA_ARM = TABLES.pop("sda10f arm")
 TABLES["hc10dt"] = TABLES["hc10"]
-SDA_ARM = [
-    ("joint_1_s", -180, 180, 170),
-    ("joint_2_l", -110, 110, 170),
-    ("joint_3_e", -170, 170, 170),
-    ("joint_4_u", -135, 135, 170),
-    ("joint_5_r", -180, 180, 200),
-    ("joint_6_b", -110, 110, 200),
-    ("joint_7_t", -180, 180, 400),
-]
 
 
 def test_every_robot_of_the_issue_is_there() -> None:

@@ -247,6 +247,14 @@ class SimpleMessageConnection:
         self.connected = False
 
 
+async def cancel_and_wait(task: asyncio.Task[None] | None) -> None:
+    """Cancel ``task`` (if there is one) and wait until it has ended."""
+    if task is not None:
+        task.cancel()
+        with contextlib.suppress(asyncio.CancelledError):
+            await task
+
+
 class MotionInterface:
     """MotomanJointTrajectoryStreamer on port 50240: trajectories, robot_enable, its loop."""
 
@@ -281,10 +289,7 @@ class MotionInterface:
         return self
 
     async def __aexit__(self, *exc: object) -> None:
-        if self._task is not None:
-            self._task.cancel()
-            with contextlib.suppress(asyncio.CancelledError):
-                await self._task
+        await cancel_and_wait(self._task)
         self.conn.close()
 
     # ------------------------------------------------------------------ requests
@@ -465,10 +470,7 @@ class StateInterface:
         return self
 
     async def __aexit__(self, *exc: object) -> None:
-        if self._task is not None:
-            self._task.cancel()
-            with contextlib.suppress(asyncio.CancelledError):
-                await self._task
+        await cancel_and_wait(self._task)
         self.conn.close()
 
     def joint_state(self) -> tuple[float, ...] | None:

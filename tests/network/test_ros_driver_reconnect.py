@@ -212,6 +212,23 @@ def sever_driver_side(link: Link) -> None:
         task.cancel()
 
 
+async def reset_with_motion_queued(cell: Cell, points: Sequence[JointTrajPtFull]) -> int:
+    """Once the driver streams past AT_POINT, with the twin's points well ahead of the
+    robot (motion queued), reset the motion connection; the driver notices, reconnects
+    at once (its connect succeeds at the proxy) and sends the point it had no answer
+    for, which waits at the door with it. The number of that point."""
+    motion = cell.motion
+    await motion.recorder.wait_until(lambda: motion.current_point >= AT_POINT)
+    robot = cell.watcher.state.positions(0)
+    assert robot is not None
+    ahead = distance(points[motion.current_point - 1].pos[:6], robot)
+    assert ahead > 0.02, f"only {ahead:.4f} rad queued: the machine is too slow for this test"
+    cell.motion_proxy.gate.clear()  # the reconnect will wait at the door
+    cell.motion_proxy.reset()
+    await cell.motion_proxy.wait_until(lambda: cell.motion_proxy.held == 1)
+    return motion.current_point
+
+
 async def test_reset_mid_trajectory_driver_resumes_and_reaches_the_goal(
     pymotoros_twin: RunningTwin,
 ) -> None:
@@ -221,15 +238,7 @@ async def test_reset_mid_trajectory_driver_resumes_and_reaches_the_goal(
     async with cell_with_driver(pymotoros_twin) as cell:
         motion = cell.motion
         points = await enable_and_stream(cell, speed_scale=0.1)
-        await motion.recorder.wait_until(lambda: motion.current_point >= AT_POINT)
-        robot = cell.watcher.state.positions(0)
-        assert robot is not None
-        ahead = distance(points[motion.current_point - 1].pos[:6], robot)
-        assert ahead > 0.02, f"only {ahead:.4f} rad queued: the machine is too slow for this test"
-        cell.motion_proxy.gate.clear()  # the reconnect will wait at the door
-        cell.motion_proxy.reset()
-        await cell.motion_proxy.wait_until(lambda: cell.motion_proxy.held == 1)
-        failed_at = motion.current_point
+        failed_at = await reset_with_motion_queued(cell, points)
         # the twin meanwhile: motion connection gone, the robot still, the queue kept
         # (so ROBOT_STATUS keeps in_motion 1, as MotoROS computes it from the queues)
         stopped_at = await still(cell)
@@ -277,18 +286,7 @@ async def test_reset_mid_trajectory_driver_resumes_and_application_recovers(
             MotionCommand.START_TRAJ_MODE,  # robot_enable
             MotionCommand.CHECK_MOTION_READY,  # send_to_robot, before the first point
         ]
-        await motion.recorder.wait_until(lambda: motion.current_point >= AT_POINT)
-        # the twin has accepted points well ahead of the robot: motion is queued
-        robot = cell.watcher.state.positions(0)
-        assert robot is not None
-        ahead = distance(points[motion.current_point - 1].pos[:6], robot)
-        assert ahead > 0.02, f"only {ahead:.4f} rad queued: the machine is too slow for this test"
-        cell.motion_proxy.gate.clear()  # the reconnect will wait at the door
-        cell.motion_proxy.reset()
-        # the driver notices, reconnects at once (its connect succeeds at the proxy) and
-        # sends the point it had no answer for, which waits at the door with it
-        await cell.motion_proxy.wait_until(lambda: cell.motion_proxy.held == 1)
-        failed_at = motion.current_point
+        failed_at = await reset_with_motion_queued(cell, points)
         assert motion.state is TransferState.STREAMING
         # the twin meanwhile: motion connection gone, queues cleared, robot at rest
         stopped_at = await cell.at_rest()

@@ -80,6 +80,13 @@ NEXT: dict[str, Callable[[FrameDecoder], object]] = {
 }
 
 
+def any_chunked_stream(test: Callable[..., None]) -> Callable[..., None]:
+    """``test`` in both byte orders, on 150 STREAMS each cut into chunks anywhere."""
+    test = examples(150)(test)
+    test = given(data=STREAMS, cuts=st.lists(st.integers(0, 10_000), max_size=8))(test)
+    return pytest.mark.parametrize("order", ORDERS, ids=["le", "be"])(test)
+
+
 def run_stream(decoder: FrameDecoder, chunks: list[bytes], read: Callable[..., object]) -> int:
     """Feed every chunk, read until None; on RemoteProtocolError discard and go on."""
     values = 0
@@ -99,9 +106,7 @@ def run_stream(decoder: FrameDecoder, chunks: list[bytes], read: Callable[..., o
 
 
 @pytest.mark.parametrize("path", sorted(NEXT))
-@pytest.mark.parametrize("order", ORDERS, ids=["le", "be"])
-@given(data=STREAMS, cuts=st.lists(st.integers(0, 10_000), max_size=8))
-@examples(150)
+@any_chunked_stream
 def test_any_bytes_any_chunking_yield_values_or_the_typed_error(
     path: str, order: ByteOrder, data: bytes, cuts: list[int]
 ) -> None:
@@ -109,9 +114,7 @@ def test_any_bytes_any_chunking_yield_values_or_the_typed_error(
 
 
 @pytest.mark.parametrize("port", [Port.MOTION, Port.IO])
-@pytest.mark.parametrize("order", ORDERS, ids=["le", "be"])
-@given(data=STREAMS, cuts=st.lists(st.integers(0, 10_000), max_size=8))
-@examples(150)
+@any_chunked_stream
 def test_the_servers_size_rules_on_any_frame(
     port: Port, order: ByteOrder, data: bytes, cuts: list[int]
 ) -> None:

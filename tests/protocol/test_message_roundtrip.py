@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from collections.abc import Callable
+
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
@@ -124,9 +126,14 @@ COVERED: dict[str, type[Message]] = {
 }
 
 
-@pytest.mark.parametrize("name", sorted(MESSAGES))
-@given(data=st.data(), order=orders)
-@settings(max_examples=40)
+def each_message(test: Callable[..., None]) -> Callable[..., None]:
+    """``test`` for every message of MESSAGES, 40 drawn in either byte order."""
+    test = settings(max_examples=40)(test)
+    test = given(data=st.data(), order=orders)(test)
+    return pytest.mark.parametrize("name", sorted(MESSAGES))(test)
+
+
+@each_message
 def test_body_round_trip(name: str, data: st.DataObject, order: ByteOrder) -> None:
     strategy, _port, _request = MESSAGES[name]
     message = data.draw(strategy)
@@ -135,9 +142,7 @@ def test_body_round_trip(name: str, data: st.DataObject, order: ByteOrder) -> No
     assert type(message).unpack(body, order) == message
 
 
-@pytest.mark.parametrize("name", sorted(MESSAGES))
-@given(data=st.data(), order=orders)
-@settings(max_examples=40)
+@each_message
 def test_frame_round_trip(name: str, data: st.DataObject, order: ByteOrder) -> None:
     strategy, port, request = MESSAGES[name]
     message = data.draw(strategy)

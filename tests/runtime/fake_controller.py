@@ -231,3 +231,12 @@ class FakeController:
         if address % 10 > 7:
             raise ValueError(f"address {address}: the last digit must be 0..7")
         self.bits[address] = value
+
+
+class BrokenAtTick3(FakeController):
+    """A controller with a bug: its third tick raises."""
+
+    def tick(self) -> None:
+        super().tick()
+        if self.ticks == 3:
+            raise RuntimeError("controller bug")

@@ -5,9 +5,14 @@ from __future__ import annotations
 import asyncio
 import contextlib
 
-from pymotoros.protocol.constants import ByteOrder, Port
+from pymotoros.protocol.constants import ByteOrder, MotionCommand, Port, ResultCode
 from pymotoros.protocol.framing import Frame, FrameDecoder, decode_reply, encode
-from pymotoros.protocol.messages import MotoMotionCtrl, MotoMotionReply, WireMessage
+from pymotoros.protocol.messages import (
+    JointTrajPtFull,
+    MotoMotionCtrl,
+    MotoMotionReply,
+    WireMessage,
+)
 
 TIMEOUT = 5.0
 
@@ -68,9 +73,24 @@ class Peer:
             await self.writer.wait_closed()
 
 
+def header(frame: Frame) -> tuple[int, int, int]:
+    """The (message type, communication type, reply type) of ``frame``'s header."""
+    return frame.msg_type, frame.comm_type, frame.reply_type
+
+
 async def ctrl(peer: Peer, command: int, group: int = 0, sequence: int = 0) -> tuple[int, int]:
     """Send a MOTO_MOTION_CTRL; (result, subcode) of the reply, whose echo is checked."""
     reply = await peer.request(MotoMotionCtrl(group, sequence, command))
     assert isinstance(reply, MotoMotionReply)
     assert (reply.group_no, reply.sequence, reply.command) == (group, sequence, command)
     return reply.result, reply.subcode
+
+
+async def start_a_far_move(peer: Peer) -> JointTrajPtFull:
+    """START_TRAJ_MODE and the start point (all joints at 0), both accepted; returns the
+    point to send next: joint 1 to 0.5 rad 14,399 s later (legal, and extreme: issue 13)."""
+    ok = ResultCode.SUCCESS
+    assert await ctrl(peer, MotionCommand.START_TRAJ_MODE) == (ok, 0)
+    start = JointTrajPtFull.for_joints(0, 0, 0.0, [0.0] * 6, [0.0] * 6)
+    assert await peer.request(start) == MotoMotionReply(0, 0, 14, ok, 0)
+    return JointTrajPtFull.for_joints(0, 1, 14399.0, [0.5] + [0.0] * 5, [0.0] * 6)

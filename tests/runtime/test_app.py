@@ -15,7 +15,7 @@ from pymotoros.runtime.app import SimulatorApp
 from pymotoros.runtime.connections import AdmissionKind, SlotTable
 from pymotoros.runtime.tcp import is_loopback
 
-from .fake_controller import FakeController
+from .fake_controller import BrokenAtTick3
 from .peer import Peer
 from .support import LOCAL
 
@@ -61,15 +61,8 @@ async def test_serve_can_be_cancelled(controller: VirtualController) -> None:
     await peer.close()
 
 
-class _Broken(FakeController):
-    def tick(self) -> None:
-        super().tick()
-        if self.ticks == 3:
-            raise RuntimeError("controller bug")
-
-
 async def test_a_crashing_tick_stops_everything_and_propagates() -> None:
-    sim = SimulatorApp(_Broken(), LOCAL)
+    sim = SimulatorApp(BrokenAtTick3(), LOCAL)
 
     async def run() -> None:
         async with asyncio.timeout(5.0), sim:

@@ -9,10 +9,10 @@ import asyncio
 
 from load_proof import Stopwatch, assert_loop_kept_time, within
 from pymotoros.protocol.constants import MotionCommand, Port, ResultCode
-from pymotoros.protocol.messages import JointTrajPtFull, MotoMotionReply
+from pymotoros.protocol.messages import MotoMotionReply
 from pymotoros.runtime.app import SimulatorApp
 
-from .peer import Peer, ctrl
+from .peer import Peer, ctrl, start_a_far_move
 
 OK = ResultCode.SUCCESS
 
@@ -29,12 +29,9 @@ WATCH_TICKS = 500
 
 async def test_a_point_14399_s_away_keeps_the_loop_on_time(app: SimulatorApp) -> None:
     peer = await Peer.connect(app.ports.motion, Port.MOTION)
-    assert await ctrl(peer, MotionCommand.START_TRAJ_MODE) == (OK, 0)
-    start = JointTrajPtFull.for_joints(0, 0, 0.0, [0.0] * 6, [0.0] * 6)
-    assert await peer.request(start) == MotoMotionReply(0, 0, 14, OK, 0)
+    far = await start_a_far_move(peer)
     app.ticker.reset_stats()
     watch = Stopwatch()
-    far = JointTrajPtFull.for_joints(0, 1, 14399.0, [0.5] + [0.0] * 5, [0.0] * 6)
     async with within(REPLY_BUDGET_S):
         reply = await peer.request(far)
     assert reply == MotoMotionReply(0, 1, 14, OK, 0)

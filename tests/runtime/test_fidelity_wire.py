@@ -21,13 +21,14 @@ from pymotoros.models.fidelity import Fidelity
 from pymotoros.protocol.constants import (
     TCP_PORT_IO,
     TCP_PORT_MOTION,
+    ByteOrder,
     InvalidSubcode,
     MotionCommand,
     MsgType,
     Port,
     ResultCode,
 )
-from pymotoros.protocol.framing import FrameDecoder, decode_reply, encode
+from pymotoros.protocol.framing import encode
 from pymotoros.protocol.messages import (
     IoErrorReply,
     JointTrajPtExData,
@@ -43,6 +44,8 @@ from pymotoros.protocol.messages import (
 from pymotoros.runtime.motion_server import ZERO_REPLY_BUFFER
 from pymotoros.testing import Twin
 
+from .peer import Peer
+
 LE = "<"
 EXACT, SAFE = Fidelity.EXACT, Fidelity.SAFE
 BOTH = pytest.mark.parametrize("fidelity", [EXACT, SAFE], ids=["exact", "safe"])
@@ -50,25 +53,18 @@ QUEUE_CNT = MotionCommand.CHECK_QUEUE_CNT
 TIMEOUT_S = 5.0
 
 
-class Raw:
+class Raw(Peer):
     """A raw client of one twin port: bytes out, decoded replies in."""
 
     def __init__(self, reader: asyncio.StreamReader, writer: asyncio.StreamWriter, port: Port):
-        self.reader, self.writer, self.port = reader, writer, port
-        self.decoder = FrameDecoder(LE)
+        super().__init__(reader, writer, port, ByteOrder.LITTLE)
 
     async def write(self, data: bytes) -> None:
-        self.writer.write(data)
-        await self.writer.drain()
+        await self.send_raw(data)
 
     async def reply(self) -> WireMessage:
         """The next reply (whole frames, cut by their prefix: what the twin sends is exact)."""
-        async with asyncio.timeout(TIMEOUT_S):
-            while (frame := self.decoder.next_frame()) is None:
-                data = await self.reader.read(4096)
-                assert data, "the twin closed the connection"
-                self.decoder.feed(data)
-        return decode_reply(frame, LE, self.port)
+        return await self.message()
 
     async def request_ping(self) -> WireMessage:
         await self.write(encode(Ping(), LE))
@@ -104,6 +100,14 @@ async def connected(fidelity: Fidelity, port: int = TCP_PORT_MOTION) -> AsyncIte
 
 def queue_cnt(sequence: int) -> bytes:
     return encode(MotoMotionCtrl(0, sequence, QUEUE_CNT), LE)
+
+
+async def with_prefix(peer: Raw, message: bytes, prefix: int) -> WireMessage:
+    """The reply to ``message`` sent with its length prefix replaced by ``prefix``."""
+    data = bytearray(message)
+    struct.pack_into("<i", data, 0, prefix)
+    await peer.write(bytes(data))
+    return await peer.reply()
 
 
 def counted(sequence: int) -> MotoMotionReply:
@@ -155,10 +159,7 @@ async def test_the_length_prefix_is_never_read(fidelity: Fidelity) -> None:
     """A CHECK_QUEUE_CNT whose prefix says 60 instead of 64: exact sizes it by its type and
     answers it; safe cuts the frame by the prefix and answers 3001."""
     async with connected(fidelity) as peer:
-        data = bytearray(queue_cnt(4))
-        struct.pack_into("<i", data, 0, 60)
-        await peer.write(bytes(data))
-        reply = await peer.reply()
+        reply = await with_prefix(peer, queue_cnt(4), 60)
         if fidelity is EXACT:
             assert reply == counted(4)
             assert isinstance(await peer.request_ping(), PingReply)
@@ -171,10 +172,7 @@ async def test_a_prefix_outside_12_to_548(fidelity: Fidelity) -> None:
     """exact: not looked at, the message is served; safe: INVALID/3001 and the buffered
     bytes dropped, the connection kept."""
     async with connected(fidelity) as peer:
-        data = bytearray(queue_cnt(5))
-        struct.pack_into("<i", data, 0, 100_000)
-        await peer.write(bytes(data))
-        reply = await peer.reply()
+        reply = await with_prefix(peer, queue_cnt(5), 100_000)
         if fidelity is EXACT:
             assert reply == counted(5)
         else:

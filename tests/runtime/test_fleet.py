@@ -16,7 +16,7 @@ from pymotoros.controller import VirtualController
 from pymotoros.controller.cell import default_cell, load_cell
 from pymotoros.errors import ConfigError
 from pymotoros.protocol.constants import ByteOrder, MotionCommand, Port, ResultCode
-from pymotoros.protocol.messages import JointTrajPtFull, MotoMotionReply, Ping, PingReply
+from pymotoros.protocol.messages import MotoMotionReply, Ping, PingReply
 from pymotoros.runtime.clock import ManualClock
 from pymotoros.runtime.fleet import (
     CellPorts,
@@ -28,8 +28,8 @@ from pymotoros.runtime.fleet import (
 )
 from pymotoros.runtime.ticker import IDLE_BATCH_TICKS
 
-from .fake_controller import FakeController
-from .peer import Peer, ctrl
+from .fake_controller import BrokenAtTick3, FakeController
+from .peer import Peer, ctrl, start_a_far_move
 from .support import LOCAL, virtual_time
 
 OK = ResultCode.SUCCESS
@@ -134,15 +134,8 @@ async def test_stop_closes_every_cell_and_is_idempotent() -> None:
     await fleet.wait_stopped()  # returns at once, no error
 
 
-class _Broken(FakeController):
-    def tick(self) -> None:
-        super().tick()
-        if self.ticks == 3:
-            raise RuntimeError("controller bug")
-
-
 async def test_a_crashing_tick_stops_every_cell_and_propagates() -> None:
-    fleet = _fleet(FakeController(), _Broken())
+    fleet = _fleet(FakeController(), BrokenAtTick3())
 
     async def run() -> list[int]:
         async with asyncio.timeout(5.0), fleet:
@@ -202,12 +195,9 @@ async def test_a_misbehaving_client_of_one_cell_leaves_the_other_alone() -> None
         await half.send_raw(b"\x40\x00\x00\x00\x0a")  # a length prefix, then nothing
         deaf = await Peer.connect(a.state, Port.STATE)  # never reads its stream
         hostile = await Peer.connect(a.motion, Port.MOTION)
-        assert await ctrl(hostile, MotionCommand.START_TRAJ_MODE) == (OK, 0)
-        start = JointTrajPtFull.for_joints(0, 0, 0.0, [0.0] * 6, [0.0] * 6)
-        assert await hostile.request(start) == MotoMotionReply(0, 0, 14, OK, 0)
+        far = await start_a_far_move(hostile)
         fleet.ticker.reset_stats()
         watch = Stopwatch()
-        far = JointTrajPtFull.for_joints(0, 1, 14399.0, [0.5] + [0.0] * 5, [0.0] * 6)
         await hostile.send(far)
 
         good = await Peer.connect(b.motion, Port.MOTION, ByteOrder.BIG)

@@ -22,7 +22,7 @@ from pymotoros.protocol.messages import (
 )
 from pymotoros.runtime.app import SimulatorApp
 
-from .peer import Peer
+from .peer import Peer, header
 
 
 async def io_peer(app: SimulatorApp) -> Peer:
@@ -33,11 +33,7 @@ async def test_io_error_reply_layout_for_unknown_type(app: SimulatorApp) -> None
     peer = await io_peer(app)
     await peer.send(Ping())
     frame = await peer.frame()
-    assert (frame.msg_type, frame.comm_type, frame.reply_type) == (
-        MsgType.MOTO_MOTION_REPLY,
-        CommType.SERVICE_REPLY,
-        ReplyType.SUCCESS,
-    )
+    assert header(frame) == (MsgType.MOTO_MOTION_REPLY, CommType.SERVICE_REPLY, ReplyType.SUCCESS)
     assert len(frame.body) == 60
     assert struct.unpack_from("<ii", frame.body) == (3, 3003)
     assert frame.body[8:] == bytes(52)

@@ -76,11 +76,22 @@ def limiter(clock: FakeClock, burst: int = 3, interval: float = 5.0) -> LogLimit
     return LogLimiter("motion: client 1.2.3.4:5", clock, burst=burst, interval=interval)
 
 
-def test_the_first_lines_of_a_burst_are_logged_then_counted(
-    fake_clock: FakeClock, caplog: pytest.LogCaptureFixture
-) -> None:
+@pytest.fixture
+def lim(fake_clock: FakeClock, caplog: pytest.LogCaptureFixture) -> LogLimiter:
+    """A limiter (3 a burst, 5 s interval) on the fake clock; its INFO lines captured."""
     caplog.set_level(logging.INFO, logger="test.log_limit")
-    lim = limiter(fake_clock)
+    return limiter(fake_clock)
+
+
+def refused_frames(lim: LogLimiter, count: int) -> None:
+    """``count`` refused frames offered to ``lim``."""
+    for _ in range(count):
+        lim.allow("refused frames", log, logging.WARNING)
+
+
+def test_the_first_lines_of_a_burst_are_logged_then_counted(
+    lim: LogLimiter, fake_clock: FakeClock, caplog: pytest.LogCaptureFixture
+) -> None:
     decisions = [lim.allow("refused frames", log, logging.WARNING) for _ in range(10)]
     assert decisions == [True] * 3 + [False] * 7
     assert lim.suppressed("refused frames") == 7
@@ -88,15 +99,11 @@ def test_the_first_lines_of_a_burst_are_logged_then_counted(
 
 
 def test_a_summary_at_most_once_per_interval_with_the_exact_count(
-    fake_clock: FakeClock, caplog: pytest.LogCaptureFixture
+    lim: LogLimiter, fake_clock: FakeClock, caplog: pytest.LogCaptureFixture
 ) -> None:
-    caplog.set_level(logging.INFO, logger="test.log_limit")
-    lim = limiter(fake_clock)
-    for _ in range(1_003):  # 3 logged, 1,000 counted, all at once
-        lim.allow("refused frames", log, logging.WARNING)
+    refused_frames(lim, 1_003)  # 3 logged, 1,000 counted, all at once
     fake_clock.t += 1.0
-    for _ in range(500):  # still within the interval of the first counted line
-        lim.allow("refused frames", log, logging.WARNING)
+    refused_frames(lim, 500)  # still within the interval of the first counted line
     assert not caplog.records
     fake_clock.t += 4.0  # 5 s after the first counted line, only 1 s after the last one
     assert lim.allow("refused frames", log, logging.WARNING) is False  # still a burst
@@ -109,12 +116,9 @@ def test_a_summary_at_most_once_per_interval_with_the_exact_count(
 
 
 def test_a_quiet_interval_ends_the_burst(
-    fake_clock: FakeClock, caplog: pytest.LogCaptureFixture
+    lim: LogLimiter, fake_clock: FakeClock, caplog: pytest.LogCaptureFixture
 ) -> None:
-    caplog.set_level(logging.INFO, logger="test.log_limit")
-    lim = limiter(fake_clock)
-    for _ in range(5):
-        lim.allow("refused frames", log, logging.WARNING)
+    refused_frames(lim, 5)
     fake_clock.t += 5.0  # nothing for a whole interval
     assert lim.allow("refused frames", log, logging.WARNING) is True  # a fresh allowance
     [summary] = [r.getMessage() for r in caplog.records]
@@ -129,12 +133,9 @@ def test_a_quiet_interval_ends_the_burst(
 
 
 def test_kinds_are_counted_separately_and_totals_written_at_close(
-    fake_clock: FakeClock, caplog: pytest.LogCaptureFixture
+    lim: LogLimiter, fake_clock: FakeClock, caplog: pytest.LogCaptureFixture
 ) -> None:
-    caplog.set_level(logging.INFO, logger="test.log_limit")
-    lim = limiter(fake_clock)
-    for _ in range(8):
-        lim.allow("refused frames", log, logging.WARNING)
+    refused_frames(lim, 8)
     io = [lim.allow("refused IO requests", log, logging.INFO) for _ in range(4)]
     assert io == [True, True, True, False]
     lim.allow("connections", log, logging.INFO)  # one line: nothing to report at close
@@ -188,14 +189,18 @@ class FakeTimer:
         self.cancelled = True
 
 
+def scheduled_limiter(name: str, clock: FakeClock, burst: int) -> tuple[LogLimiter, FakeScheduler]:
+    """A limiter whose delayed reports go to a :class:`FakeScheduler` (returned too)."""
+    later = FakeScheduler()
+    return LogLimiter(name, clock, burst=burst, schedule=later), later
+
+
 def test_a_flood_that_stops_is_reported_one_interval_after_its_first_counted_line(
     fake_clock: FakeClock, caplog: pytest.LogCaptureFixture
 ) -> None:
     caplog.set_level(logging.INFO, logger="test.log_limit")
-    later = FakeScheduler()
-    lim = LogLimiter("motion: client 1.2.3.4:5", fake_clock, burst=3, schedule=later)
-    for _ in range(3):  # logged in full: nothing to report, nothing scheduled
-        lim.allow("refused frames", log, logging.WARNING)
+    lim, later = scheduled_limiter("motion: client 1.2.3.4:5", fake_clock, burst=3)
+    refused_frames(lim, 3)  # logged in full: nothing to report, nothing scheduled
     assert later.calls == []
     for _ in range(40):  # counted: one report scheduled, however many are counted
         fake_clock.t += 0.01
@@ -218,8 +223,7 @@ def test_a_report_on_a_clock_slower_than_the_schedulers_waits_for_the_interval(
 ) -> None:
     """The limiter's clock may be a virtual one: the report waits for *its* interval."""
     caplog.set_level(logging.INFO, logger="test.log_limit")
-    later = FakeScheduler()
-    lim = LogLimiter("io", fake_clock, burst=0, schedule=later)
+    lim, later = scheduled_limiter("io", fake_clock, burst=0)
     lim.allow("connections", log, logging.INFO)
     fake_clock.t += 2.0  # the scheduler's 5 s passed, the limiter's clock only 2 s
     assert later.run_due() == [5.0]
@@ -234,8 +238,7 @@ def test_close_cancels_the_scheduled_report(
     fake_clock: FakeClock, caplog: pytest.LogCaptureFixture
 ) -> None:
     caplog.set_level(logging.INFO, logger="test.log_limit")
-    later = FakeScheduler()
-    lim = LogLimiter("io", fake_clock, burst=1, schedule=later)
+    lim, later = scheduled_limiter("io", fake_clock, burst=1)
     for _ in range(5):
         lim.allow("connections", log, logging.INFO)
     lim.close()

@@ -44,7 +44,8 @@ from pymotoros.protocol.messages import (
 )
 from pymotoros.runtime.app import SimulatorApp
 
-from .peer import Peer, ctrl
+from .peer import Peer, ctrl, header
+from .support import until
 
 LE = ByteOrder.LITTLE
 OK = (ResultCode.SUCCESS, 0)
@@ -54,17 +55,6 @@ MOTION_SERVER_OUTPUT = 11124
 
 async def motion_peer(app: SimulatorApp) -> Peer:
     return await Peer.connect(app.ports.motion, Port.MOTION)
-
-
-async def until(app: SimulatorApp, what: str, condition: object, ticks: int = 2000) -> None:
-    """Tick by tick until ``condition()`` holds (bounded in ticks and time)."""
-    assert callable(condition)
-    async with asyncio.timeout(10.0):
-        for _ in range(ticks):
-            if condition():
-                return
-            await app.ticker.wait_ticks(1)
-    pytest.fail(f"{what} did not happen within {ticks} ticks")
 
 
 async def start_trajectory(peer: Peer, app: SimulatorApp) -> None:
@@ -82,11 +72,7 @@ async def test_ping_and_single_write_replies(app: SimulatorApp) -> None:
     peer = await motion_peer(app)
     await peer.send(Ping())
     frame = await peer.frame()
-    assert (frame.msg_type, frame.comm_type, frame.reply_type) == (
-        MsgType.PING,
-        CommType.SERVICE_REPLY,
-        ReplyType.SUCCESS,
-    )
+    assert header(frame) == (MsgType.PING, CommType.SERVICE_REPLY, ReplyType.SUCCESS)
     assert frame.body == b""
     await peer.close()
 

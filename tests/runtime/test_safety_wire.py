@@ -2,10 +2,10 @@
 
 from __future__ import annotations
 
-import asyncio
 import contextlib
 from collections.abc import AsyncIterator, Callable
 from dataclasses import replace
+from functools import partial
 
 import httpx
 import pytest
@@ -16,6 +16,7 @@ from pymotoros.protocol.messages import JointTrajPtFull, MotoMotionReply, RobotS
 from pymotoros.runtime.app import SimulatorApp
 from pymotoros.runtime.clock import ManualClock
 
+from . import support
 from .peer import Peer, ctrl
 from .support import LOCAL, virtual_time
 
@@ -25,14 +26,7 @@ MAX_STATE_MESSAGES = 2000
 OK = (ResultCode.SUCCESS, 0)
 
 
-async def until(app: SimulatorApp, what: str, condition: object, ticks: int = 2000) -> None:
-    assert callable(condition)
-    async with asyncio.timeout(20.0):
-        for _ in range(ticks):
-            if condition():
-                return
-            await app.ticker.wait_ticks(1)
-    pytest.fail(f"{what} did not happen within {ticks} ticks")
+until = partial(support.until, timeout_s=20.0)
 
 
 @pytest.fixture(params=["real time", "virtual time"])

@@ -14,6 +14,8 @@ import pytest
 from pymotoros.runtime.clock import ThreadClock, TimerFdClock
 from pymotoros.runtime.ticker import Ticker
 
+from .support import running
+
 PERIOD_S = 0.004
 """The interpolation period of the controllers (YRC1000)."""
 
@@ -22,8 +24,9 @@ SETUP_S = 0.2
 machine may take milliseconds; a deadline already past returns at once, out of order)."""
 
 
-async def test_sleepers_wake_at_or_after_their_deadlines_in_order() -> None:
-    clock = ThreadClock()
+async def _six_sleepers_wake_in_order_never_early(clock: ThreadClock | TimerFdClock) -> None:
+    """Six sleepers 2 ms apart, put to sleep last first: each wakes at or after its
+    deadline, in the order of the deadlines."""
     woke: list[tuple[int, float]] = []
     start = clock.now()
 
@@ -36,6 +39,10 @@ async def test_sleepers_wake_at_or_after_their_deadlines_in_order() -> None:
         await asyncio.gather(*(sleeper(k) for k in reversed(range(6))))
     assert [k for k, _ in woke] == list(range(6))
     assert all(late >= 0.0 for _, late in woke), woke
+
+
+async def test_sleepers_wake_at_or_after_their_deadlines_in_order() -> None:
+    await _six_sleepers_wake_in_order_never_early(ThreadClock())
 
 
 async def test_a_past_deadline_returns_after_one_loop_turn() -> None:
@@ -57,12 +64,8 @@ async def test_cancelled_sleepers_do_not_disturb_the_others() -> None:
 async def test_a_ticker_on_the_thread_clock_counts_ticks() -> None:
     ticks: list[int] = []
     ticker = Ticker(lambda: ticks.append(1), PERIOD_S, ThreadClock())
-    task = asyncio.create_task(ticker.run())
-    try:
-        async with asyncio.timeout(10.0):
-            await ticker.wait_ticks(50)
-    finally:
-        task.cancel()
+    async with running(ticker), asyncio.timeout(10.0):
+        await ticker.wait_ticks(50)
     assert len(ticks) >= 50
     assert ticker.stats().lateness_ms.p50 >= 0.0
 
@@ -94,18 +97,7 @@ needs_timerfd = pytest.mark.skipif(not TimerFdClock.available(), reason="Linux t
 @needs_timerfd
 async def test_timerfd_sleepers_wake_in_order_never_early() -> None:
     clock = TimerFdClock()
-    woke: list[tuple[int, float]] = []
-    start = clock.now()
-
-    async def sleeper(k: int) -> None:
-        deadline = start + SETUP_S + 0.002 * k
-        await clock.sleep_until(deadline)
-        woke.append((k, clock.now() - deadline))
-
-    async with asyncio.timeout(5.0):
-        await asyncio.gather(*(sleeper(k) for k in reversed(range(6))))
-    assert [k for k, _ in woke] == list(range(6))
-    assert all(late >= 0.0 for _, late in woke), woke
+    await _six_sleepers_wake_in_order_never_early(clock)
     clock.close()
 
 
@@ -129,14 +121,8 @@ async def test_timerfd_is_released_when_the_last_sleeper_is_cancelled() -> None:
 @needs_timerfd
 async def test_a_ticker_on_the_timerfd_clock_counts_ticks() -> None:
     ticker = Ticker(lambda: None, PERIOD_S, TimerFdClock())
-    task = asyncio.create_task(ticker.run())
-    try:
-        async with asyncio.timeout(10.0):
-            await ticker.wait_ticks(50)
-    finally:
-        task.cancel()
-        with contextlib.suppress(asyncio.CancelledError):
-            await task
+    async with running(ticker), asyncio.timeout(10.0):
+        await ticker.wait_ticks(50)
     assert ticker.count >= 50
 
 

@@ -5,32 +5,15 @@ from __future__ import annotations
 import asyncio
 import contextlib
 import time
-from collections.abc import AsyncIterator
 
 import pytest
 
 from pymotoros.runtime.clock import LoopClock, ManualClock
 from pymotoros.runtime.ticker import RESYNC_PERIODS, Ticker
 
+from .support import running, settle
+
 PERIOD = 0.004
-
-
-async def settle() -> None:
-    """Let woken tasks run (bounded number of loop turns)."""
-    for _ in range(5):
-        await asyncio.sleep(0)
-
-
-@contextlib.asynccontextmanager
-async def running(ticker: Ticker) -> AsyncIterator[asyncio.Task[None]]:
-    task = asyncio.create_task(ticker.run(), name="ticker-under-test")
-    await settle()
-    try:
-        yield task
-    finally:
-        task.cancel()
-        with contextlib.suppress(asyncio.CancelledError):
-            await task
 
 
 class Recorder:
@@ -73,10 +56,15 @@ async def test_manual_clock_past_deadline_returns_at_once() -> None:
     assert clock.sleepers == 0
 
 
-async def test_ticks_land_on_absolute_deadlines() -> None:
+def recorded_ticker() -> tuple[ManualClock, Recorder, Ticker]:
+    """A ticker on a manual clock whose step records the clock's time of every tick."""
     clock = ManualClock()
     rec = Recorder(clock)
-    ticker = Ticker(rec, PERIOD, clock)
+    return clock, rec, Ticker(rec, PERIOD, clock)
+
+
+async def test_ticks_land_on_absolute_deadlines() -> None:
+    clock, rec, ticker = recorded_ticker()
     async with running(ticker):
         for _ in range(10):
             clock.advance(PERIOD)
@@ -90,9 +78,7 @@ async def test_ticks_land_on_absolute_deadlines() -> None:
 
 
 async def test_late_wakeups_do_not_drift_the_schedule() -> None:
-    clock = ManualClock()
-    rec = Recorder(clock)
-    ticker = Ticker(rec, PERIOD, clock)
+    clock, _rec, ticker = recorded_ticker()
     async with running(ticker):
         for _ in range(5):
             clock.advance(PERIOD + 0.001)  # each wake-up 1 ms late
@@ -107,9 +93,7 @@ async def test_late_wakeups_do_not_drift_the_schedule() -> None:
 
 
 async def test_small_stall_catches_up_and_counts_overruns() -> None:
-    clock = ManualClock()
-    rec = Recorder(clock)
-    ticker = Ticker(rec, PERIOD, clock)
+    clock, _rec, ticker = recorded_ticker()
     async with running(ticker):
         clock.advance(3 * PERIOD + 0.001)  # three deadlines missed, below the resync limit
         await settle()
@@ -119,9 +103,7 @@ async def test_small_stall_catches_up_and_counts_overruns() -> None:
 
 
 async def test_large_stall_resyncs_instead_of_bursting() -> None:
-    clock = ManualClock()
-    rec = Recorder(clock)
-    ticker = Ticker(rec, PERIOD, clock)
+    clock, rec, ticker = recorded_ticker()
     stall = (RESYNC_PERIODS + 20) * PERIOD + 0.0005
     async with running(ticker):
         clock.advance(stall)

@@ -80,11 +80,17 @@ def _still(t: float) -> list[float]:
     return [0.0] * len(NAMES)
 
 
-def test_accepted_planned_trajectory_matches_the_twin_increment_for_increment() -> None:
+def there_and_back() -> Trajectory:
+    """A planned trajectory from START (where the twin boots) to S +0.4 rad and B -0.3
+    rad, and back."""
     goal = list(START)
     goal[0] += 0.4
     goal[4] -= 0.3
-    traj = plan_waypoints([START, goal, START], HC10, YRC)
+    return plan_waypoints([START, goal, START], HC10, YRC)
+
+
+def test_accepted_planned_trajectory_matches_the_twin_increment_for_increment() -> None:
+    traj = there_and_back()
     report = check_trajectory(traj, HC10, YRC)
     assert report.exit_code == EXIT_OK, report.to_json()
     _assert_same_as_twin(traj)
@@ -319,10 +325,7 @@ def _fsu_cell(tmp_path: Path, pct: int = FSU_PCT) -> Path:
 def test_a_cell_with_an_fsu_limit_warns_where_the_built_in_model_passes_and_predicts_the_twin(
     tmp_path: Path,
 ) -> None:
-    goal = list(START)
-    goal[0] += 0.4
-    goal[4] -= 0.3
-    traj = plan_waypoints([START, goal, START], HC10, YRC)
+    traj = there_and_back()
     built_in = check_trajectory(traj, HC10, YRC)
     assert built_in.exit_code == EXIT_OK, built_in.to_json()
     path = _fsu_cell(tmp_path)
