@@ -14,7 +14,7 @@ import struct
 from collections.abc import Callable
 
 import pytest
-from hypothesis import given, settings
+from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 from sm_wire import Body, frame
 from test_message_roundtrip import COVERED, MESSAGES
@@ -61,7 +61,10 @@ def _outcome(decode: Callable[..., object], *args: object) -> object:
 @pytest.mark.parametrize("entry", ENTRIES, ids=[_entry_id(e) for e in ENTRIES])
 @pytest.mark.parametrize("order", ORDERS, ids=["le", "be"])
 @given(data=st.data(), pad_front=st.integers(0, 20), pad_back=st.integers(0, 20))
-@settings(max_examples=15)
+# The DH reply draws hundreds of floats per example: on a loaded 2-core CI machine its
+# generation passes Hypothesis's 1 s health-check bound (seen twice in issue 30's runs);
+# the number of examples stays bounded by max_examples.
+@settings(max_examples=15, suppress_health_check=[HealthCheck.too_slow])
 def test_bound_unpack_from_agrees_with_generic_unpack(
     entry: tuple[str, Port, int, type[Message]],
     order: ByteOrder,
