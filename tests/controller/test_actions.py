@@ -13,8 +13,11 @@ from pymotoros.controller import VirtualController
 from pymotoros.controller.actions import (
     CONTROL_ACTIONS,
     ActionParamError,
+    ActionSpec,
+    Param,
     actions_by_name,
 )
+from pymotoros.controller.safety import SAFETY_ACTIONS
 from pymotoros.controller.scenario import ACTIONS, parse_scenario, perform
 from pymotoros.errors import ConfigError, PymotorosError
 
@@ -120,3 +123,38 @@ def test_nothing_outside_controller_reads_a_controller_attribute_by_getattr() ->
                 and "controller" in ast.unparse(node.args[0])
             ):
                 raise AssertionError(f"{path.relative_to(SRC)}:{node.lineno}: {ast.unparse(node)}")
+
+
+def test_the_safety_unit_declares_its_functions_actions_and_the_surface_takes_them() -> None:
+    """A safety function's action lives with the unit that builds the function
+    (``SAFETY_ACTIONS``), so a new fault needs no edit of ``actions.py``: the control
+    surface takes the unit's declarations, in their order, where the OpenAPI document
+    has always listed them (after io_failure)."""
+    names = [s.name for s in CONTROL_ACTIONS]
+    unit = [s.name for s in SAFETY_ACTIONS]
+    assert unit == ["pfl", "fsu"]
+    start = names.index("pfl")
+    assert names[start - 1 : start + len(unit)] == ["io_failure", *unit]
+    assert all(s.tag == "safety" for s in SAFETY_ACTIONS)
+    vc = VirtualController()
+    actions_by_name(SAFETY_ACTIONS)["fsu"].perform(vc, {"joint_speed_pct": 40})
+    assert vc.snapshot().safety.fsu.joint_speed_pct == 40  # reached through target.safety
+
+
+def test_an_operator_action_reaches_the_keys_which_fill_their_own_part() -> None:
+    """The pendant's keys are the actions' target for a key of their own (``target.keys``)
+    and fill the operator part of the snapshot themselves (no facade method, no line in
+    the controller's ``snapshot()``); the snapshot still reads ``hold`` as before."""
+    vc = VirtualController()
+    keys = vc.keys
+    toy = ActionSpec(
+        "toy_hold",
+        "/api/toy_hold",
+        "a toy key",
+        lambda t, p: t.keys.set_hold(p["on"]),
+        (Param("on", "bool", "true switches HOLD on"),),
+    )
+    toy.perform(vc, {"on": True})
+    snapshot = vc.snapshot()
+    assert snapshot.operator == keys.snapshot()
+    assert snapshot.operator.hold is snapshot.hold is True

@@ -16,6 +16,7 @@ from pymotoros.controller.api import (
     FeedbackData,
     GroupSnapshot,
     IoRead,
+    OperatorSnapshot,
     Outcome,
     Pending,
     PointData,
@@ -175,12 +176,14 @@ class FakeController:
         return ControllerSnapshot(
             time_ms=self.ticks * self._period,
             tick_count=self.ticks,
-            mode=self.mode,
-            remote=self.remote,
-            servo=self.servo,
-            estop=self.estop,
-            hold=self.hold,
-            alarms=tuple(self.alarms),
+            operator=OperatorSnapshot(
+                mode=self.mode,
+                remote=self.remote,
+                servo=self.servo,
+                estop=self.estop,
+                hold=self.hold,
+                alarms=tuple(self.alarms),
+            ),
             motion_ready=False,
             groups=tuple(
                 GroupSnapshot(f"R{g + 1}", ("s", "l"), (0.0, 0.0), (0.0, 0.0), (0, 0), 0, 0)

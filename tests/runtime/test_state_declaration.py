@@ -13,7 +13,13 @@ import httpx
 import pytest
 
 from pymotoros.controller import VirtualController
-from pymotoros.controller.api import INLINE, OMIT, ControllerSnapshot, described
+from pymotoros.controller.api import (
+    INLINE,
+    OMIT,
+    ControllerSnapshot,
+    OperatorSnapshot,
+    described,
+)
 from pymotoros.controller.safety import SafetySnapshot
 from pymotoros.runtime.http_api import StateModel, create_http_app
 from pymotoros.runtime.snapshot_document import document_encoder, document_model, field_docs
@@ -142,3 +148,19 @@ def test_a_description_is_data_so_a_type_without_source_keeps_it() -> None:
     schema = document_model(tank).model_json_schema()
     assert schema["properties"]["level"]["description"] == "The tank's level (%)."
     assert document_encoder(tank)(tank()) == {"level": 3}
+
+
+def test_the_operator_keys_part_shows_each_key_at_the_top_level() -> None:
+    """mode … alarms are the pendant's keys' fields (their own part of the snapshot, filled
+    by ``OperatorKeys.snapshot``), inlined where the document has always had them; the
+    pendant's extras of the part (errors, eco) stay out of the document."""
+    vc = VirtualController()
+    vc.set_hold(True)
+    shown = [f.name for f in dataclasses.fields(OperatorSnapshot) if f.metadata != OMIT]
+    doc = document_encoder(ControllerSnapshot)(vc.snapshot())
+    assert (
+        list(doc)[: len(shown)] == shown == ["mode", "remote", "servo", "estop", "hold", "alarms"]
+    )
+    assert doc["hold"] is True
+    assert not {"operator", "errors", "eco"} & set(doc)
+    assert StateModel.model_fields["hold"].description == field_docs(OperatorSnapshot)["hold"]

@@ -25,23 +25,36 @@ when the action runs (a PFL contact while standing still) becomes an
 
 Adding an action is one more :class:`ActionSpec` in :data:`CONTROL_ACTIONS`; when it
 calls a controller method that no action called before, that method is declared on
-:class:`ActionTarget` here and implemented by the controller. Nothing else changes: the
-endpoint, its schema, the scenario key and the pendant's list follow. A parameter may
-be an array of numbers with a length and bounds (a position, a size) or carry its own
-check (a shape), and may be given in the path with another method
-(``DELETE /api/workspace/{name}``), so issue 21's obstacles are declarations too.
+:class:`ActionTarget` here and implemented by the controller. An operator key with
+state of its own calls its key directly (``target.keys``, the pendant's keys, which fill
+their own part of the snapshot), so it needs no such method; a safety function's action
+is declared with the safety unit (``controller/safety/__init__.py``'s
+``SAFETY_ACTIONS``, included here) and calls its module through ``target.safety``. The
+declaration itself (:class:`ActionSpec`, :class:`Param`, the errors) is the leaf
+``controller/action_spec.py``, re-exported here. Nothing else changes: the endpoint,
+its schema, the scenario key and the pendant's list follow. A parameter may be an array
+of numbers with a length and bounds (a position, a size) or carry its own check (a
+shape), and may be given in the path with another method (``DELETE
+/api/workspace/{name}``), so issue 21's obstacles are declarations too.
 """
 
 from __future__ import annotations
 
-import math
-from collections.abc import Callable, Mapping, Sequence
-from dataclasses import dataclass
-from typing import Any, Final, Literal, Protocol
+from collections.abc import Callable, Mapping
+from typing import Any, Final, Protocol
 
+from pymotoros.controller.action_spec import (
+    ActionParamError,
+    ActionRefusedError,
+    ActionSpec,
+    Param,
+    ParamKind,
+    Params,
+    Rule,
+    actions_by_name,
+)
 from pymotoros.controller.api import FaultInjection, OperatorPanel, SafetyPanel
-from pymotoros.controller.safety.pfl import MAX_RETREAT_MS
-from pymotoros.errors import PymotorosError
+from pymotoros.controller.safety import SAFETY_ACTIONS
 from pymotoros.models.workspace import MAX_SIZE_M, SHAPE_KEYS, Obstacle, UnknownObstacleError
 from pymotoros.protocol.constants import PendantMode
 
@@ -59,36 +72,6 @@ __all__ = [
     "Rule",
     "actions_by_name",
 ]
-
-ParamKind = Literal["bool", "int", "number", "str", "numbers", "tables"]
-"""``number`` takes integers too; ``numbers`` is an array of numbers (a position, a
-size: ``length`` of them, each within the bounds); ``tables`` an array of tables (JSON
-objects)."""
-
-_KIND_TEXT: Final[Mapping[str, str]] = {
-    "bool": "true or false",
-    "int": "an integer",
-    "number": "a number",
-    "str": "a string",
-    "numbers": "an array of numbers",
-    "tables": "an array of tables",
-}
-
-
-class ActionParamError(PymotorosError, ValueError):
-    """A parameter of an action is wrong; ``key`` is the parameter ("" for the action).
-
-    ``str()`` is ``"key: text"``: every surface shows that, after where it came from.
-    """
-
-    def __init__(self, key: str, text: str) -> None:
-        super().__init__(f"{key}: {text}" if key else text)
-        self.key = key
-        self.text = text
-
-
-class ActionRefusedError(PymotorosError, ValueError):
-    """The controller refused an action when it ran (the message says why)."""
 
 
 class ActionTargetMissingError(ActionRefusedError, LookupError):
@@ -112,224 +95,12 @@ class ActionTarget(OperatorPanel, FaultInjection, SafetyPanel, Protocol):
         ...
 
 
-Params = Mapping[str, Any]
-"""An action's parameters, already checked (each key declared, each value valid)."""
-
-
-@dataclass(frozen=True, slots=True)
-class Param:
-    """One parameter of an action: its kind, bounds, unit and meaning."""
-
-    name: str
-    kind: ParamKind
-    doc: str
-    unit: str = ""
-    required: bool = True
-    default: Any = None
-    """The value when an optional parameter is not given (None: the controller's own)."""
-    choices: tuple[str, ...] = ()
-    ge: float | None = None
-    gt: float | None = None
-    le: float | None = None
-    max_length: int | None = None
-    """A string's longest length."""
-    length: int | None = None
-    """How many numbers a ``numbers`` parameter holds (None: any)."""
-    check: Callable[[Any], str | None] | None = None
-    """A check beyond kind and bounds (e.g. an obstacle's shape): why the value is wrong,
-    or None. Runs on every surface like the others."""
-
-    @property
-    def description(self) -> str:
-        """The documentation with the unit, as the OpenAPI schema shows it."""
-        return f"{self.doc} ({self.unit})" if self.unit else self.doc
-
-    def bounds_text(self) -> str:
-        """The range in words: "1..100 %", ">= 0", "> 0 mm/s" ("" when unbounded)."""
-        unit = f" {self.unit}" if self.unit else ""
-        lo = self.ge if self.ge is not None else self.gt
-        if lo is not None and self.le is not None and self.gt is None:
-            return f"{_num(lo)}..{_num(self.le)}{unit}"
-        parts = []
-        if self.ge is not None:
-            parts.append(f">= {_num(self.ge)}")
-        if self.gt is not None:
-            parts.append(f"> {_num(self.gt)}")
-        if self.le is not None:
-            parts.append(f"<= {_num(self.le)}")
-        return " and ".join(parts) + unit if parts else ""
-
-    def problem(self, value: object) -> str | None:
-        """Why ``value`` is not valid for this parameter (None: it is)."""
-        kind = self.kind
-        if kind == "bool":
-            ok = isinstance(value, bool)
-        elif kind == "int":
-            ok = isinstance(value, int) and not isinstance(value, bool)
-        elif kind == "number":
-            ok = _is_number(value)
-        elif kind == "str":
-            ok = isinstance(value, str)
-        elif kind == "numbers":
-            ok = isinstance(value, list) and all(_is_number(v) for v in value)
-        else:
-            ok = isinstance(value, list) and all(isinstance(v, Mapping) for v in value)
-        if not ok:
-            return f"must be {_KIND_TEXT[kind]}, not {value!r}"
-        problem = self._value_problem(value)
-        if problem is None and self.check is not None:
-            problem = self.check(value)
-        return problem
-
-    def _value_problem(self, value: Any) -> str | None:
-        """Choices, bounds and lengths of a value of the right kind."""
-        if self.choices and value not in self.choices:
-            return f"must be one of {', '.join(self.choices)}, not {value!r}"
-        if self.kind in ("int", "number"):
-            return self._range_problem(value)
-        if self.kind == "numbers":
-            if self.length is not None and len(value) != self.length:
-                return f"must hold {self.length} numbers, not {len(value)}"
-            for i, v in enumerate(value):
-                problem = self._range_problem(v)
-                if problem is not None:
-                    return f"[{i}] {problem}"
-        if self.max_length is not None and isinstance(value, str) and len(value) > self.max_length:
-            return f"must be at most {self.max_length} characters, not {len(value)}"
-        return None
-
-    def _range_problem(self, number: int | float) -> str | None:
-        # compared as given: an integer of any size never goes through float()
-        if isinstance(number, float) and not math.isfinite(number):
-            return f"must be a finite number, not {number!r}"
-        if (
-            (self.ge is not None and number < self.ge)
-            or (self.gt is not None and number <= self.gt)
-            or (self.le is not None and number > self.le)
-        ):
-            verb = "must lie in" if ".." in self.bounds_text() else "must be"
-            return f"{verb} {self.bounds_text()}, not {number!r}"
-        return None
-
-
-def _is_number(value: object) -> bool:
-    return isinstance(value, int | float) and not isinstance(value, bool)
-
-
-def _num(value: float) -> str:
-    return str(int(value)) if float(value).is_integer() else repr(value)
-
-
-Rule = Callable[[Params], ActionParamError | None]
-"""A rule between an action's parameters: the error when the parameters break it."""
-
 Call = Callable[[ActionTarget, Params], None]
-"""What the action does: the controller method it calls, with every declared parameter
-(optional ones at their default when not given)."""
-
-
-@dataclass(frozen=True, slots=True)
-class ActionSpec:
-    """One action of the control surface, declared once for every surface."""
-
-    name: str
-    """The scenario file's ``action`` and the pendant's name for it."""
-    path: str
-    """The control API's path; a parameter named in braces (``/api/workspace/{name}``)
-    is given in the path, the others in the JSON body."""
-    doc: str
-    """What the action does (the endpoint's description, the pendant's tooltip)."""
-    call: Call
-    params: tuple[Param, ...] = ()
-    rules: tuple[Rule, ...] = ()
-    tag: str = "operator"
-    """The OpenAPI tag: operator, io, safety."""
-    in_scenarios: bool = True
-    """Whether a scenario event may carry it (loading a scenario may not)."""
-    method: Literal["POST", "PUT", "DELETE"] = "POST"
-    """The control API's method (DELETE for removing something by name)."""
-
-    @property
-    def path_keys(self) -> tuple[str, ...]:
-        """The parameters given in the path."""
-        return tuple(p.name for p in self.params if "{" + p.name + "}" in self.path)
-
-    def param(self, key: str) -> Param | None:
-        for p in self.params:
-            if p.name == key:
-                return p
-        return None
-
-    @property
-    def keys(self) -> tuple[str, ...]:
-        return tuple(p.name for p in self.params)
-
-    def check_value(self, key: str, value: object) -> None:
-        """Refuse a declared parameter's bad value (ActionParamError)."""
-        p = self.param(key)
-        if p is None:  # the surfaces refuse unknown keys in their own words first
-            raise ActionParamError(key, f"unknown key for action {self.name!r}")
-        problem = p.problem(value)
-        if problem is not None:
-            raise ActionParamError(key, problem)
-
-    def check_values(self, params: Mapping[str, object]) -> None:
-        """Check every declared parameter that ``params`` gives, in declaration order."""
-        for p in self.params:
-            if p.name in params:
-                self.check_value(p.name, params[p.name])
-
-    def check_rules(self, params: Params) -> None:
-        """Refuse parameters that break a rule between them (ActionParamError)."""
-        for rule in self.rules:
-            error = rule(params)
-            if error is not None:
-                raise error
-
-    def complete(self, params: Params) -> dict[str, Any]:
-        """``params`` with every optional parameter not given at its default."""
-        return {p.name: params.get(p.name, p.default) for p in self.params}
-
-    def perform(self, target: ActionTarget, params: Params) -> None:
-        """Run the action with checked parameters; what the controller refuses raises
-        :class:`ActionRefusedError` (our error, with the controller's words)."""
-        self.check_rules(params)
-        try:
-            self.call(target, self.complete(params))
-        except PymotorosError:
-            raise
-        except ValueError as exc:  # the controller's documented refusal (OperatorPanel)
-            raise ActionRefusedError(str(exc)) from exc
-
-
-def actions_by_name(actions: Sequence[ActionSpec]) -> dict[str, ActionSpec]:
-    """The actions keyed by name; a name or path declared twice is a bug."""
-    out: dict[str, ActionSpec] = {}
-    paths: set[str] = set()
-    for spec in actions:
-        if spec.name in out or spec.path in paths:
-            raise ValueError(f"action {spec.name!r} ({spec.path}) is declared twice")
-        out[spec.name] = spec
-        paths.add(spec.path)
-    return out
+"""What an action of the whole surface does: the controller method it calls, with every
+declared parameter (optional ones at their default when not given)."""
 
 
 # --------------------------------------------------------------------------- rules
-
-
-def _retreat_only_for_clamping(p: Params) -> ActionParamError | None:
-    if p.get("retreat_ms") is not None and p.get("event") != "clamping":
-        return ActionParamError("retreat_ms", "applies to a clamping only")
-    return None
-
-
-def _fsu_something(p: Params) -> ActionParamError | None:
-    limits = p.get("joint_speed_pct") is not None or p.get("tcp_speed_mm_s") is not None
-    if p.get("off") and limits:
-        return ActionParamError("off", "give either off = true or limits, not both")
-    if not limits and not p.get("off"):
-        return ActionParamError("", "needs joint_speed_pct, tcp_speed_mm_s or off = true")
-    return None
 
 
 def _one_shape(p: Params) -> ActionParamError | None:
@@ -360,20 +131,6 @@ def _obstacle_name(value: object) -> str | None:
     if not isinstance(value, str) or not value.strip() or "/" in value:
         return "must be a non-empty name without '/'"
     return None
-
-
-def _pfl(target: ActionTarget, p: Params) -> None:
-    kwargs = {k: p[k] for k in ("retreat_ms", "stop_ms") if p[k] is not None}
-    target.pfl_event(p["event"], **kwargs)
-
-
-def _fsu(target: ActionTarget, p: Params) -> None:
-    tcp = p["tcp_speed_mm_s"]
-    target.set_fsu(
-        joint_speed_pct=p["joint_speed_pct"],
-        tcp_speed_mm_s=None if tcp is None else float(tcp),
-        off=bool(p["off"]),
-    )
 
 
 def _on(doc: str) -> tuple[Param, ...]:
@@ -413,7 +170,7 @@ _TEXT = Param(
     "text", "str", "text shown on the pendant", required=False, default="", max_length=128
 )
 
-CONTROL_ACTIONS: Final[tuple[ActionSpec, ...]] = (
+CONTROL_ACTIONS: Final[tuple[ActionSpec[ActionTarget], ...]] = (
     ActionSpec(
         "estop",
         "/api/estop",
@@ -502,68 +259,7 @@ CONTROL_ACTIONS: Final[tuple[ActionSpec, ...]] = (
         ),
         tag="io",
     ),
-    ActionSpec(
-        "pfl",
-        "/api/pfl",
-        "A PFL contact (PFL stop) or clamping (stop, then retreat with PFL escape).",
-        _pfl,
-        (
-            Param(
-                "event",
-                "str",
-                "contact: PFL stop; clamping: PFL stop, then retreat with PFL escape",
-                choices=("contact", "clamping"),
-            ),
-            Param(
-                "retreat_ms",
-                "int",
-                "clamping only: how much of the last motion to retreat",
-                unit="ms",
-                required=False,
-                ge=1,
-                le=MAX_RETREAT_MS,
-            ),
-            Param(
-                "stop_ms",
-                "int",
-                "how long PFL stop stays on (default 500)",
-                unit="ms",
-                required=False,
-                ge=0,
-                le=60_000,
-            ),
-        ),
-        rules=(_retreat_only_for_clamping,),
-        tag="safety",
-    ),
-    ActionSpec(
-        "fsu",
-        "/api/fsu",
-        "Switch the FSU speed limits at run time (the cell file's value is the boot value).",
-        _fsu,
-        (
-            Param(
-                "joint_speed_pct",
-                "int",
-                "share of each axis's maximum speed",
-                unit="%",
-                required=False,
-                ge=1,
-                le=100,
-            ),
-            Param(
-                "tcp_speed_mm_s",
-                "number",
-                "TCP speed limit (needs the kinematics model)",
-                unit="mm/s",
-                required=False,
-                gt=0,
-            ),
-            Param("off", "bool", "switch every FSU speed limit off", required=False, default=False),
-        ),
-        rules=(_fsu_something,),
-        tag="safety",
-    ),
+    *SAFETY_ACTIONS,
     ActionSpec(
         "obstacle",
         "/api/workspace",

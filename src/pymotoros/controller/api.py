@@ -25,7 +25,8 @@ from typing import Protocol, Unpack
 import pymotoros.protocol.constants as constants
 from pymotoros.controller.alarms import Alarm
 from pymotoros.controller.lint import ClientLint, ResumedMotion
-from pymotoros.controller.safety import SafetyUnit
+from pymotoros.controller.operator_keys import OperatorKeys
+from pymotoros.controller.safety import SafetyTarget
 from pymotoros.controller.safety.fsu import FsuRequest
 from pymotoros.controller.values import (
     INLINE,
@@ -41,6 +42,7 @@ from pymotoros.controller.values import (
     IoRead,
     JobPosition,
     NotReadyInfo,
+    OperatorSnapshot,
     Outcome,
     Pending,
     PointData,
@@ -70,6 +72,7 @@ __all__ = [
     "MotoRosController",
     "NotReadyInfo",
     "OperatorPanel",
+    "OperatorSnapshot",
     "Outcome",
     "Pending",
     "PointData",
@@ -172,6 +175,13 @@ class OperatorPanel(Protocol):
     legal actions never raise, whatever the state (pressing E-stop twice is fine).
     """
 
+    @property
+    def keys(self) -> OperatorKeys:
+        """The pendant's keys themselves: an operator action with state of its own
+        (``controller/actions.py``) calls its key here, so a new key needs no method on
+        this protocol or the facade."""
+        ...
+
     def press_estop(self, pressed: bool) -> None:
         """Pendant E-stop: cuts servo power and stops the job; raises no alarm."""
         ...
@@ -231,23 +241,15 @@ class FaultInjection(Protocol):
         ...
 
 
-class SafetyPanel(Protocol):
+class SafetyPanel(SafetyTarget, Protocol):
     """The cell's safety functions as the operator drives them (HTTP ``/api/pfl``,
-    ``/api/fsu``, ``/api/scenario``). ``VirtualController`` implements it; refusals raise
-    ``ValueError`` saying why."""
-
-    @property
-    def safety(self) -> SafetyUnit:
-        """The safety unit itself: a safety function's action (``controller/actions.py``)
-        calls its module here, so a new fault needs no facade method."""
-        ...
+    ``/api/fsu``, ``/api/scenario``): what their actions act on
+    (:class:`~pymotoros.controller.safety.SafetyTarget`: the safety unit and the PFL
+    event), scenarios and the FSU's limits. ``VirtualController`` implements it;
+    refusals raise ``ValueError`` saying why."""
 
     def load_scenario(self, scenario: Scenario) -> None:
         """Run a scenario's timed events from the next tick."""
-        ...
-
-    def pfl_event(self, event: str, *, retreat_ms: int = ..., stop_ms: int = ...) -> None:
-        """A PFL "contact" or "clamping" (retreating ``retreat_ms``) now."""
         ...
 
     def set_fsu(self, **request: Unpack[FsuRequest]) -> None:

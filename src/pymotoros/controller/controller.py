@@ -57,7 +57,7 @@ from pymotoros.controller.io_image import IoImage
 from pymotoros.controller.lint import ClientLint, ResumedMotion
 from pymotoros.controller.machine import EstopSource, Event, OperatorState
 from pymotoros.controller.motoros import MotoRos
-from pymotoros.controller.operator_keys import MAX_ALARM_CODE
+from pymotoros.controller.operator_keys import MAX_ALARM_CODE, OperatorKeys
 from pymotoros.controller.peripherals import Peripherals
 from pymotoros.controller.ports import MotionLink
 from pymotoros.controller.processes import Scheduler
@@ -348,19 +348,12 @@ class VirtualController:
     def snapshot(self) -> ControllerSnapshot:
         """An immutable picture of the controller now (what ``GET /api/state`` and the pendant
         show)."""
-        s = self._machine.state
         return ControllerSnapshot(
             time_ms=self._clock.time_ms,
             tick_count=self._clock.tick_count,
-            mode=s.mode,
-            remote=s.remote,
-            servo=s.servo_on,
-            estop=s.estopped,
-            hold=s.hold,
-            alarms=tuple(a.info for a in s.alarms),
+            operator=self._keys.snapshot(),
             motion_ready=self._readiness.monitor.outlook(),
             groups=self._state.group_snapshots(),
-            errors=tuple(e.info for e in s.errors),
             safety=self._safety.snapshot(),
             motoros=self._startup.phase,
             workspace=self._workspace.snapshot(),
@@ -370,7 +363,6 @@ class VirtualController:
             ),
             # what only a pendant shows
             period_ms=self._clock.period_ms,
-            eco=s.eco,
             not_ready=NotReadyInfo(*self._motoros.not_ready_reason()),
             jobs=tuple(JobPosition(job, line) for job, line in self._ctx.runner.position()),
             motoros_outputs=self._motoros_outputs(),
@@ -496,6 +488,11 @@ class VirtualController:
     def motoros_phase(self) -> str:
         """Where MotoROS's start-up is: "running", waiting (for what), or halted (why)."""
         return self._startup.phase
+
+    @property
+    def keys(self) -> OperatorKeys:
+        """The pendant's keys (the operator state's part), for the declared actions."""
+        return self._keys
 
     @property
     def safety(self) -> SafetyUnit:

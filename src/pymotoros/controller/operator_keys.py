@@ -5,6 +5,14 @@ the controller's time, and keeps the alarm history. It is the operator-panel par
 :class:`~pymotoros.controller.controller.VirtualController`, which delegates to it, and
 the :class:`~pymotoros.controller.ports.OperatorPort` the safety functions act through
 (read the state, raise an alarm, cut servo power).
+
+It fills its own part of the controller's snapshot (:meth:`OperatorKeys.snapshot`, an
+:class:`~pymotoros.controller.values.OperatorSnapshot`), and the declared actions reach
+it directly (``target.keys``). So a new key with state of its own is three source files
+(docs/architecture.md counts them): its method and state here, filled in
+:meth:`OperatorKeys.snapshot`; its field on ``OperatorSnapshot`` in
+``controller/values.py``; its ``ActionSpec`` in ``controller/actions.py``, calling
+``target.keys``. No facade method, no edit of the controller's ``snapshot()``.
 """
 
 from __future__ import annotations
@@ -15,6 +23,7 @@ from typing import Final
 from pymotoros.controller.alarms import Alarm, AlarmHistory
 from pymotoros.controller.machine import EstopSource, Event, OperatorMachine, OperatorState
 from pymotoros.controller.processes import ControllerClock
+from pymotoros.controller.values import OperatorSnapshot
 from pymotoros.protocol.constants import PendantMode
 
 logger = logging.getLogger(__name__)
@@ -42,6 +51,21 @@ class OperatorKeys:
     def state(self) -> OperatorState:
         """The operator state now, frozen."""
         return self._machine.state
+
+    def snapshot(self) -> OperatorSnapshot:
+        """The operator state as the pendant shows it, frozen, for the controller's
+        snapshot."""
+        s = self._machine.state
+        return OperatorSnapshot(
+            mode=s.mode,
+            remote=s.remote,
+            servo=s.servo_on,
+            estop=s.estopped,
+            hold=s.hold,
+            alarms=tuple(a.info for a in s.alarms),
+            errors=tuple(e.info for e in s.errors),
+            eco=s.eco,
+        )
 
     def servo_off(self) -> None:
         """Cut servo power (a safety function's stop; the pendant's servo-off key)."""

@@ -14,7 +14,7 @@ import logging
 from collections.abc import Callable, Generator
 from typing import TypeAlias
 
-from pymotoros.controller.api import Outcome, Pending
+from pymotoros.controller.values import Outcome, Pending
 
 logger = logging.getLogger(__name__)
 

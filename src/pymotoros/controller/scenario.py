@@ -62,7 +62,7 @@ logger = logging.getLogger(__name__)
 
 TRIGGERS: Final = ("at", "after_motion", "when_io")
 
-ACTIONS: Final[Mapping[str, ActionSpec]] = {
+ACTIONS: Final[Mapping[str, ActionSpec[ActionTarget]]] = {
     name: spec for name, spec in actions_by_name(CONTROL_ACTIONS).items() if spec.in_scenarios
 }
 """Every action a scenario may carry, by name (the declarations of ``actions.py``)."""
@@ -87,7 +87,7 @@ def parse_scenario(
     data: Mapping[str, object],
     *,
     source: str = "<scenario>",
-    actions: Sequence[ActionSpec] = CONTROL_ACTIONS,
+    actions: Sequence[ActionSpec[ActionTarget]] = CONTROL_ACTIONS,
 ) -> Scenario:
     """Validate a parsed scenario ({"events": [...]}); refuse anything unknown or wrong.
 
@@ -115,7 +115,9 @@ def _nearest(key: str, valid: Sequence[str]) -> str:
     return f" (did you mean {close[0]!r}?)" if close else ""
 
 
-def _event(i: int, raw: object, source: str, actions: Mapping[str, ActionSpec]) -> ScenarioEvent:
+def _event(
+    i: int, raw: object, source: str, actions: Mapping[str, ActionSpec[ActionTarget]]
+) -> ScenarioEvent:
     where = f"{source}: events[{i}]"
     if not isinstance(raw, Mapping):
         raise ConfigError(f"{where}: must be a table")
@@ -132,7 +134,7 @@ def _event(i: int, raw: object, source: str, actions: Mapping[str, ActionSpec]) 
     return ScenarioEvent(i, trigger, seconds, io, spec.name, params, spec)
 
 
-def _trigger(raw: Mapping[str, object], where: str, spec: ActionSpec | None) -> str:
+def _trigger(raw: Mapping[str, object], where: str, spec: ActionSpec[ActionTarget] | None) -> str:
     """The event's one trigger; a misspelt one is named with the nearest trigger."""
     triggers = [t for t in TRIGGERS if t in raw]
     if len(triggers) == 1:
@@ -165,7 +167,7 @@ def _trigger_value(value: object, trigger: str, where: str) -> tuple[float, tupl
 
 
 def _params(
-    raw: Mapping[str, object], trigger: str, spec: ActionSpec, where: str
+    raw: Mapping[str, object], trigger: str, spec: ActionSpec[ActionTarget], where: str
 ) -> dict[str, object]:
     """The action's parameters, checked by its declaration (the control API's words)."""
     params: dict[str, object] = {}
@@ -203,7 +205,7 @@ class FiredEvent:
 Action = Callable[[ScenarioEvent], None]
 
 
-def scenario_loader(actions: Sequence[ActionSpec] = CONTROL_ACTIONS) -> Call:
+def scenario_loader(actions: Sequence[ActionSpec[ActionTarget]] = CONTROL_ACTIONS) -> Call:
     """Loading a scenario whose events may carry ``actions``: the scenario action's call."""
 
     def load(target: ActionTarget, p: Params) -> None:
@@ -213,7 +215,9 @@ def scenario_loader(actions: Sequence[ActionSpec] = CONTROL_ACTIONS) -> Call:
     return load
 
 
-def scenario_action(actions: Sequence[ActionSpec] = CONTROL_ACTIONS) -> ActionSpec:
+def scenario_action(
+    actions: Sequence[ActionSpec[ActionTarget]] = CONTROL_ACTIONS,
+) -> ActionSpec[ActionTarget]:
     """The action that loads a scenario (``POST /api/scenario``), its events taking any of
     ``actions``. Declared here, over the declarations it is given, so that the actions'
     module never needs this one."""
@@ -232,7 +236,9 @@ def scenario_action(actions: Sequence[ActionSpec] = CONTROL_ACTIONS) -> ActionSp
     )
 
 
-def with_scenario_of(actions: Sequence[ActionSpec]) -> tuple[ActionSpec, ...]:
+def with_scenario_of(
+    actions: Sequence[ActionSpec[ActionTarget]],
+) -> tuple[ActionSpec[ActionTarget], ...]:
     """A surface's whole action list: ``actions`` and the scenario loader, whose events
     take every one of them (an action named "scenario" among them is bound to them in
     its place; otherwise the loader comes last, as in the OpenAPI document)."""

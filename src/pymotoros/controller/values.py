@@ -297,6 +297,35 @@ class SafetySnapshot:
     )
 
 
+# ------------------------------------------------------------------- the operator's part
+
+
+@dataclass(frozen=True, slots=True)
+class OperatorSnapshot:
+    """What the pendant's keys show the operator, one field each: the controller's
+    snapshot carries it and the state document lists its fields at its top level
+    (``"mode"`` … ``"alarms"``). A new key with state of its own adds its field here,
+    described (:func:`described`: the OpenAPI schema's description), and fills it in
+    :meth:`~pymotoros.controller.operator_keys.OperatorKeys.snapshot`."""
+
+    mode: PendantMode = field(metadata=described("The pendant's mode switch."))
+    remote: bool = field(
+        metadata=described("Remote mode: play commands come from outside (MotoROS needs it).")
+    )
+    servo: bool = field(metadata=described("Servo power is on."))
+    estop: bool = field(
+        metadata=described("An E-stop is pressed (pendant, external or the cell's).")
+    )
+    hold: bool = field(metadata=described("The hold key (or the external hold input) is on."))
+    alarms: tuple[AlarmInfo, ...] = field(
+        metadata=described("Active alarms: code, subcode and text.")
+    )
+    errors: tuple[AlarmInfo, ...] = field(default=(), metadata=OMIT)
+    """Active operator errors (the pendant's extras)."""
+    eco: bool | None = field(default=None, metadata=OMIT)
+    """Eco mode: servo power saved while idle (the pendant's extras; None: not modelled)."""
+
+
 # ------------------------------------------------------------------------------ the cell
 
 SERVO_ON_DELAY_MS: Final = 500
@@ -501,7 +530,10 @@ def _no_safety() -> SafetySnapshot:
     return SafetySnapshot()
 
 
-@dataclass(frozen=True, slots=True)
+# Not slotted: on Python 3.11 a frozen slotted dataclass answers an assignment to one of
+# its properties (``snapshot.hold = False``) with a TypeError from its generated
+# ``__setattr__``; unslotted, it is the FrozenInstanceError that names the attribute.
+@dataclass(frozen=True)
 class ControllerSnapshot:
     """An immutable picture of the controller for observers (HTTP API, pendant, tests).
 
@@ -510,23 +542,19 @@ class ControllerSnapshot:
     these fields, their types and their descriptions (:func:`described`, in each
     field's metadata; :mod:`pymotoros.runtime.snapshot_document`). A new field appears
     in all of them with no other edit; metadata :data:`OMIT` keeps one out of the
-    document, :data:`INLINE` merges a part's fields into it. A safety function shows its
-    state through :attr:`safety`, the part its module fills.
+    document, :data:`INLINE` merges a part's fields into it. Two parts fill their own
+    state: the pendant's keys (:attr:`operator`, whose fields ``mode`` … ``alarms`` are
+    the document's first keys and readable here as properties) and the safety unit
+    (:attr:`safety`).
     """
 
     time_ms: int = field(metadata=OMIT)
     tick_count: int = field(metadata=OMIT)
-    mode: PendantMode = field(metadata=described("The pendant's mode switch."))
-    remote: bool = field(
-        metadata=described("Remote mode: play commands come from outside (MotoROS needs it).")
-    )
-    servo: bool = field(metadata=described("Servo power is on."))
-    estop: bool = field(
-        metadata=described("An E-stop is pressed (pendant, external or the cell's).")
-    )
-    hold: bool = field(metadata=described("The hold key (or the external hold input) is on."))
-    alarms: tuple[AlarmInfo, ...] = field(
-        metadata=described("Active alarms: code, subcode and text.")
+    operator: OperatorSnapshot = field(
+        metadata=described(
+            "The operator state the pendant's keys show (``controller/operator_keys.py``).",
+            INLINE,
+        )
     )
     motion_ready: bool = field(
         metadata=described(
@@ -538,7 +566,6 @@ class ControllerSnapshot:
     groups: tuple[GroupSnapshot, ...] = field(
         metadata=described("Every control group, in group order.")
     )
-    errors: tuple[AlarmInfo, ...] = field(default=(), metadata=OMIT)
     safety: SafetySnapshot = field(
         default_factory=_no_safety,
         metadata=described(
@@ -570,8 +597,6 @@ class ControllerSnapshot:
     # None where a controller (a test double) does not model it.
     period_ms: int | None = field(default=None, metadata=OMIT)
     """The interpolation period (ms)."""
-    eco: bool | None = field(default=None, metadata=OMIT)
-    """Eco mode: servo power saved while idle."""
     not_ready: NotReadyInfo | None = field(default=None, metadata=OMIT)
     """Why motion is not ready now (subcode 0 when it is)."""
     jobs: tuple[JobPosition, ...] | None = field(default=None, metadata=OMIT)
@@ -585,3 +610,44 @@ class ControllerSnapshot:
     def pfl(self) -> PflPhase:
         """The PFL function: "off", "idle", "stop" or "escape"."""
         return self.safety.pfl
+
+    # The operator part's fields, read as they were before the keys filled their own part.
+    @property
+    def mode(self) -> PendantMode:
+        """The pendant's mode switch."""
+        return self.operator.mode
+
+    @property
+    def remote(self) -> bool:
+        """Remote mode: play commands come from outside (MotoROS needs it)."""
+        return self.operator.remote
+
+    @property
+    def servo(self) -> bool:
+        """Servo power is on."""
+        return self.operator.servo
+
+    @property
+    def estop(self) -> bool:
+        """An E-stop is pressed (pendant, external or the cell's)."""
+        return self.operator.estop
+
+    @property
+    def hold(self) -> bool:
+        """The hold key (or the external hold input) is on."""
+        return self.operator.hold
+
+    @property
+    def alarms(self) -> tuple[AlarmInfo, ...]:
+        """Active alarms: code, subcode and text."""
+        return self.operator.alarms
+
+    @property
+    def errors(self) -> tuple[AlarmInfo, ...]:
+        """Active operator errors (not alarms): code, subcode and text."""
+        return self.operator.errors
+
+    @property
+    def eco(self) -> bool | None:
+        """Eco mode: servo power saved while idle (None: not modelled)."""
+        return self.operator.eco

@@ -37,6 +37,7 @@ from pymotoros.controller.actions import (
     ActionParamError,
     ActionRefusedError,
     ActionSpec,
+    ActionTarget,
     ActionTargetMissingError,
     Param,
     actions_by_name,
@@ -81,7 +82,7 @@ class ActionBody(BaseModel):
     words of a refusal are the declaration's (the scenario file's), not pydantic's."""
 
     model_config = _STRICT
-    spec: ClassVar[ActionSpec]
+    spec: ClassVar[ActionSpec[ActionTarget]]
 
     @model_validator(mode="before")
     @classmethod
@@ -96,7 +97,7 @@ class ActionBody(BaseModel):
         return data
 
 
-def _as_documented(spec: ActionSpec, data: dict[str, Any]) -> dict[str, Any]:
+def _as_documented(spec: ActionSpec[ActionTarget], data: dict[str, Any]) -> dict[str, Any]:
     """The body as the OpenAPI document reads it, for the declaration's check:
 
     * ``3080.0`` for an integer parameter is 3080: JSON has one kind of number, and the
@@ -149,7 +150,7 @@ def _field(param: Param) -> tuple[Any, Any]:
     return kind, Field(default, description=param.description, **bounds)
 
 
-def action_body_model(spec: ActionSpec) -> type[ActionBody] | None:
+def action_body_model(spec: ActionSpec[ActionTarget]) -> type[ActionBody] | None:
     """The JSON body of an action's endpoint (None: it takes no body)."""
     in_body = [p for p in spec.params if p.name not in spec.path_keys]
     if not in_body:
@@ -326,7 +327,7 @@ def create_http_app(
     clients: Callable[[], dict[str, int]] | None = None,
     after_ticks: Callable[[int], Awaitable[None]] | None = None,
     observers: Observers | None = None,
-    actions: Sequence[ActionSpec] = CONTROL_ACTIONS,
+    actions: Sequence[ActionSpec[ActionTarget]] = CONTROL_ACTIONS,
 ) -> FastAPI:
     """The control API of one simulated controller; ``actions``: the declared actions
     it serves (one endpoint each; a scenario's events may carry any of them)."""
@@ -396,7 +397,7 @@ def _install_state_routes(
 
 def _install_action(
     app: FastAPI,
-    spec: ActionSpec,
+    spec: ActionSpec[ActionTarget],
     controller: SimulatedController,
     state: StateFn,
     answer: type[Answer] = StateModel,
@@ -441,7 +442,7 @@ _PATH_TYPES: dict[str, type] = {"str": str, "int": int, "number": float}
 """What a path can carry (an action's other kinds go in the body)."""
 
 
-def _param(spec: ActionSpec, key: str) -> Param:
+def _param(spec: ActionSpec[ActionTarget], key: str) -> Param:
     param = spec.param(key)
     if param is None or param.kind not in _PATH_TYPES:
         raise ValueError(f"action {spec.name!r}: {key!r} in {spec.path} is not a str or number")

@@ -60,7 +60,12 @@ from fastapi.responses import FileResponse, RedirectResponse
 from fastapi.staticfiles import StaticFiles
 from pydantic import BaseModel, ConfigDict, Field
 
-from pymotoros.controller.actions import CONTROL_ACTIONS, ActionSpec, actions_by_name
+from pymotoros.controller.actions import (
+    CONTROL_ACTIONS,
+    ActionSpec,
+    ActionTarget,
+    actions_by_name,
+)
 from pymotoros.controller.api import (
     MOTOROS_FIRST_OUTPUT,
     ControllerSnapshot,
@@ -342,7 +347,7 @@ class PendantDocument:
         return out
 
 
-def action_list(actions: Sequence[ActionSpec]) -> list[dict[str, Any]]:
+def action_list(actions: Sequence[ActionSpec[ActionTarget]]) -> list[dict[str, Any]]:
     """``GET /api/pendant/actions``: what the pendant's buttons call, from the declarations
     (each action's name, path, description and parameters with their bounds)."""
     return [
@@ -383,7 +388,7 @@ def install_pendant(
     clients: Callable[[], dict[str, int]] | None = None,
     after_ticks: Callable[[int], Awaitable[None]] | None = None,
     *,
-    actions: Sequence[ActionSpec] = CONTROL_ACTIONS,
+    actions: Sequence[ActionSpec[ActionTarget]] = CONTROL_ACTIONS,
 ) -> None:
     """Serve the pendant at ``/`` (assets under ``/pendant``), its feed at ``/ws/state``
     and the actions its buttons call at ``/api/pendant/actions``.
@@ -425,7 +430,10 @@ def install_pendant(
 
 
 def _install_actions_routes(
-    app: FastAPI, controller: SimulatedController, feed: PendantFeed, actions: Sequence[ActionSpec]
+    app: FastAPI,
+    controller: SimulatedController,
+    feed: PendantFeed,
+    actions: Sequence[ActionSpec[ActionTarget]],
 ) -> None:
     """The pendant's buttons: the list of actions, and the scenario file it loads."""
     listed = action_list(actions)
