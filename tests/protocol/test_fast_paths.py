@@ -43,15 +43,15 @@ from pymotoros.protocol.messages import (
     UnknownMessage,
 )
 from pymotoros.protocol.messages._base import (
-    _F32,
-    _I32,
-    _JOINTS,
-    _U32,
+    F32,
+    I32,
+    JOINTS,
     REPLY_CLASSES,
     REQUEST_CLASSES,
+    U32,
+    Kind,
     Message,
     Role,
-    _Kind,
 )
 from pymotoros.protocol.messages.trajectory import JointTrajPtExData
 
@@ -121,18 +121,18 @@ def _classes() -> list[type[Message]]:
 CLASSES = _classes()
 
 
-def _good(kind: _Kind, rng: random.Random) -> object:
-    if kind is _JOINTS:
+def _good(kind: Kind, rng: random.Random) -> object:
+    if kind is JOINTS:
         return tuple(rng.uniform(-4.0, 4.0) for _ in range(MAX_JOINTS))
-    if kind is _F32:
+    if kind is F32:
         return rng.uniform(-1e3, 1e3)
-    if kind is _I32:
+    if kind is I32:
         return rng.randint(-(2**31), 2**31 - 1)
     return rng.randint(0, 2**32 - 1)
 
 
-def _odd(kind: _Kind, rng: random.Random) -> object:
-    if kind is _JOINTS:
+def _odd(kind: Kind, rng: random.Random) -> object:
+    if kind is JOINTS:
         choice = rng.randrange(6)
         size = MAX_JOINTS if choice < 4 else rng.choice((0, 6, 9, 11))
         values = [rng.choice(FLOATS) if rng.random() < 0.3 else rng.random() for _ in range(size)]
@@ -141,7 +141,7 @@ def _odd(kind: _Kind, rng: random.Random) -> object:
         if choice == 2:
             return iter(values) if rng.random() < 0.5 else "x" * size
         return tuple(values)
-    if kind is _F32:
+    if kind is F32:
         return rng.choice(FLOATS)
     return rng.choice(INTS)
 
@@ -326,9 +326,9 @@ def _encode_reference(message: Message | UnknownMessage, order: ByteOrder) -> by
 def _sample(cls: type[Message], rng: random.Random) -> Message:
     values = []
     for _name, kind in cls.FIELDS:
-        if kind is _U32:
+        if kind is U32:
             values.append(rng.choice((0, 0, 1, 5, 2**32 - 1)))
-        elif kind is _I32:
+        elif kind is I32:
             values.append(rng.choice((0, 0, 1, -3, 2**31 - 1)))
         else:
             values.append(_good(kind, rng))
@@ -368,7 +368,7 @@ def _pack_reference(message: Message, order: ByteOrder) -> bytes:
     try:
         flat: list[object] = []
         for (_name, kind), value in zip(message.FIELDS, message, strict=True):
-            if kind is _JOINTS:
+            if kind is JOINTS:
                 flat.extend(value)
             else:
                 flat.append(value)
