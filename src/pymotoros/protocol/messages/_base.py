@@ -163,32 +163,35 @@ def check_float(owner: str, name: str, value: object) -> None:
 _FIELD_TYPE: Final[Mapping[Kind, type]] = MappingProxyType(
     {I32: int, U32: int, F32: float, JOINTS: tuple}
 )
-"""The exact type the fast check wants per kind (a bool, an int for a float, a list or a
-subclass are valid too, but they take the field-by-field path)."""
+"""The exact type per kind the quick stage of a check vouches for (a bool, an int for a
+float, a list or a subclass are valid too: the field-by-field stage takes them)."""
 
 _JOINT_VALUE_TYPES: Final = frozenset((float, int))
 
 
-def _never(_message: object) -> bool:
-    """The fast check of a layout without ``FIELDS``: always ask the full check."""
-    return False
+def _as_is(message: _T) -> _T:
+    """The check of a layout without fields: nothing to check."""
+    return message
 
 
-def _bind_fast_check(fields: tuple[tuple[str, Kind], ...]) -> Callable[[Any], bool]:
-    """A check that ``message`` would pass :meth:`Message._validated_fields` unchanged.
+def bind_check(cls: type[Message]) -> Callable[[Any], Any]:
+    """The one check of ``cls``'s ``FIELDS``: ``check(message)`` returns the message (joint
+    arrays as tuples) or raises :class:`LocalProtocolError` naming its first bad field.
 
-    Why: the state server builds JOINT_FEEDBACK and ROBOT_STATUS every cycle and the
-    client builds a JOINT_TRAJ_PT_FULL per point; checking their 31 floats one Python
-    call each was a tenth of a streamed move's time. Here the types are compared in one
-    ``tuple(map(type, …))`` against the layout's exact types, and the ranges are tested
-    by ``struct`` packing, which is what ``check_float`` and ``check_int`` test
-    (float32 overflow; int32/uint32 range for an exact ``int``). True only when every
-    field passes; on False the caller runs the field-by-field check, so a refusal keeps
-    its exact wording and an unusual valid value (a bool, a list, a numpy float) is
-    still accepted, as before.
+    Why it is quick: the state server builds JOINT_FEEDBACK and ROBOT_STATUS every cycle
+    and the client builds a JOINT_TRAJ_PT_FULL per point; checking their 31 floats one
+    Python call each was a tenth of a streamed move's time. So the types are compared in
+    one ``tuple(map(type, …))`` against the layout's exact types, and the ranges are
+    tested by ``struct`` packing, which is what :func:`check_float` and
+    :func:`check_int` test (float32 overflow; int32/uint32 range for an exact ``int``).
+    A message that passes is returned as it is. Anything else, a refusal or an unusual
+    valid value (a bool, a list, a numpy float), is walked in wire order by
+    :func:`walk_fields`, the one place the errors are worded.
     """
+    fields = cls.FIELDS
     if not fields:
-        return _never
+        return _as_is
+    owner = cls.__name__
     signature = tuple(_FIELD_TYPE[kind] for _name, kind in fields)
     scalar_at = tuple(i for i, (_name, kind) in enumerate(fields) if kind is not JOINTS)
     joints_at = tuple(i for i, (_name, kind) in enumerate(fields) if kind is JOINTS)
@@ -198,25 +201,54 @@ def _bind_fast_check(fields: tuple[tuple[str, Kind], ...]) -> Callable[[Any], bo
     pack_joints = struct.Struct(ByteOrder.LITTLE + JOINTS.value).pack
     value_types = _JOINT_VALUE_TYPES
     size = MAX_JOINTS
-
     count = len(scalar_at)
     leading = scalar_at == tuple(range(count))  # scalars first: every layout so far
 
-    def fast_check(message: _AnyTuple) -> bool:
-        if tuple(map(type, message)) != signature:
-            return False
-        try:
-            pack_scalars(*(message[:count] if leading else [message[i] for i in scalar_at]))
-            for i in joints_at:
-                values = message[i]
-                if len(values) != size or not value_types.issuperset(map(type, values)):
-                    return False
-                pack_joints(*values)
-        except (struct.error, OverflowError):
-            return False
-        return True
+    def check(message: _AnyTuple) -> Any:
+        if tuple(map(type, message)) == signature:
+            try:
+                pack_scalars(*(message[:count] if leading else [message[i] for i in scalar_at]))
+                for i in joints_at:
+                    values = message[i]
+                    if len(values) != size or not value_types.issuperset(map(type, values)):
+                        break
+                    pack_joints(*values)
+                else:
+                    return message
+            except (struct.error, OverflowError):
+                pass
+        return walk_fields(cls, owner, fields, message)
 
-    return fast_check
+    return check
+
+
+def walk_fields(
+    cls: type[_T], owner: str, fields: tuple[tuple[str, Kind], ...], message: Any
+) -> _T:
+    """Field by field in wire order: joint arrays made tuples, the first bad field
+    refused in words (:func:`check_float`, :func:`check_int`). What :func:`bind_check`'s
+    quick stage could not vouch for comes here."""
+    values = list(message)
+    changed = False
+    for index, (name, kind) in enumerate(fields):
+        value = values[index]
+        if kind is JOINTS:
+            joints = tuple(value)
+            if len(joints) != MAX_JOINTS:
+                raise LocalProtocolError(
+                    f"{owner}.{name} has {len(joints)} values; the wire carries exactly "
+                    f"{MAX_JOINTS} (use for_joints() to pad)"
+                )
+            for slot, item in enumerate(joints):
+                check_float(owner, f"{name}[{slot}]", item)
+            if joints is not value:
+                values[index] = joints
+                changed = True
+        elif kind is F32:
+            check_float(owner, name, value)
+        else:
+            check_int(owner, name, value, kind)
+    return tnew(cls, values) if changed else cast(_T, message)
 
 
 def pad_joints(owner: str, name: str, values: Iterable[float] | None) -> tuple[float, ...]:
@@ -343,9 +375,9 @@ class Message:
     generated ``__new__`` (a Python call that only packs them into the tuple)."""
     _LEADING: ClassVar[int] = -1
     """With every joint array after every scalar field, how many scalars lead; else -1."""
-    _FAST_CHECK: ClassVar[Callable[[Any], bool]]
-    """Whether a constructed message certainly passes :meth:`_validated_fields` unchanged
-    (False means "ask it", never "invalid"): see :func:`_bind_fast_check`."""
+    _CHECK: ClassVar[Callable[[Any], Any]]
+    """The class's one construction check: :func:`bind_check` of its ``FIELDS``, or
+    its own :meth:`_validated` (hand-laid layouts)."""
 
     def __init_subclass__(cls, **kwargs: Any) -> None:
         """Derive the layout from ``FIELDS`` and register the class (see the class doc)."""
@@ -354,10 +386,9 @@ class Message:
         cls._STRUCTS = struct_pair("".join(kind.value for _name, kind in cls.FIELDS))
         cls._FLAT = all(kind is not JOINTS for _name, kind in cls.FIELDS)
         cls._DECODERS = {}
-        # A class with its own _validated is checked by it alone (__new__ asks the fast
-        # check first).
+        # A class with its own _validated (a hand-laid layout) is checked by it alone.
         own_check = cls._validated.__func__ is not Message._validated.__func__  # type: ignore[attr-defined]
-        cls._FAST_CHECK = _never if own_check else _bind_fast_check(cls.FIELDS)
+        cls._CHECK = cls._validated if own_check else bind_check(cls)
         cls._ARITY = len(getattr(cls, "_fields", ()))
         kinds = [kind for _name, kind in cls.FIELDS]
         leading = kinds.index(JOINTS) if JOINTS in kinds else len(kinds)
@@ -395,45 +426,14 @@ class Message:
                 message = tnew(cls, args)  # what the NamedTuple's __new__ does
             else:
                 message = super().__new__(cls, *args, **kwargs)
-            return message if cls._FAST_CHECK(message) else cls._validated(message)
+            return cls._CHECK(message)
 
     @classmethod
     def _validated(cls, message: Self) -> Self:
-        """Check every field; return the message with joint arrays as tuples.
-
-        The common case (exact ``int``/``float``/``tuple`` values that all fit) is
-        answered by :func:`_bind_fast_check` in a few C calls; anything else, valid or
-        not, goes through :meth:`_validated_fields`, the one place the errors are worded.
-        """
-        if cls._FAST_CHECK(message):
-            return message
-        return cls._validated_fields(message)
-
-    @classmethod
-    def _validated_fields(cls, message: Self) -> Self:
-        """Field by field: the reference check, and the one that words every error."""
-        owner = cls.__name__
-        values = list(cast(_AnyTuple, message))
-        changed = False
-        for index, (name, kind) in enumerate(cls.FIELDS):
-            value = values[index]
-            if kind is JOINTS:
-                joints = tuple(value)
-                if len(joints) != MAX_JOINTS:
-                    raise LocalProtocolError(
-                        f"{owner}.{name} has {len(joints)} values; the wire carries exactly "
-                        f"{MAX_JOINTS} (use for_joints() to pad)"
-                    )
-                for slot, item in enumerate(joints):
-                    check_float(owner, f"{name}[{slot}]", item)
-                if joints is not value:
-                    values[index] = joints
-                    changed = True
-            elif kind is F32:
-                check_float(owner, name, value)
-            else:
-                check_int(owner, name, value, kind)
-        return tnew(cls, values) if changed else message
+        """Check every field; return the message with joint arrays as tuples
+        (:func:`bind_check`; a hand-laid layout overrides this)."""
+        checked: Self = cls._CHECK(message)
+        return checked
 
     def __eq__(self, other: object) -> bool:
         return type(self) is type(other) and _tuple_eq(self, other)
