@@ -1,13 +1,12 @@
 """The S1CxG register output functions: the M-registers as they are after each tick.
 
 The rules (which value goes to which register, in which unit and size) are in
-:mod:`pymotoros.models.s1cxg`, with :func:`~pymotoros.models.s1cxg.write_outputs` as the
-reference. This module compiles a group's table once into index and scale arrays; to
-write the words it gathers the values from the servo model and the kinematics into one
-vector and computes every register word with a few numpy operations (the reference path
-costs a Python call per output; tests check both give the same words). That costs tens
-of microseconds while the arm moves (two forward kinematics and more per group), which
-is why it is not done in the tick.
+:mod:`pymotoros.models.s1cxg`. This module compiles a group's table once into index and
+scale arrays; to write the words it gathers the values from the servo model and the
+kinematics into one vector and computes every register word with a few numpy operations
+(the tests compare them with the rule applied output by output,
+``tests/oracles/s1cxg.py``). That costs tens of microseconds while the arm moves (two
+forward kinematics and more per group), which is why it is not done in the tick.
 
 A real controller writes the words every interpolation period. Here the tick only keeps
 what that would read at its place in the tick (each table's servo state, a few short
