@@ -200,8 +200,8 @@ class TrajectoryPoints:
     ) -> Outcome:
         """Sequence > 0: BUSY while a point is pending, then the speed check (§3.4 step 6)."""
         interp = self._interpolators[g]
-        if interp.pending:
-            return self._busy(g, sequence, group_no=group_no)
+        if interp.pending:  # type 14's BUSY (no group number) is made once: no call
+            return self._busy_replies[g] if group_no is None else self._busy(g, sequence, group_no)
         ready = GroupPoint.from_values(
             point.time, point.pos[:SLOTS], point.vel[:SLOTS], self._float_modes[g]
         )
