@@ -31,8 +31,8 @@ the step durations would be on a quiet machine.
 
 ``--reference`` adds a third mode, ``streaming-batch``, right after each streaming run:
 the same with every queued segment's pulses computed at once when the first is due
-(``GroupInterpolator.front`` off, the path before issue 13's second round), so the two
-are compared side by side in one run.
+(the interpolator's front computation pointed at its all-at-once one for the run: the
+route before issue 13's second round), so the two are compared side by side in one run.
 """
 
 from __future__ import annotations
@@ -80,16 +80,15 @@ CELL = Path(__file__).resolve().parents[1] / "examples" / "cells" / "hc10_yrc100
 def serve(paths: list[Path], ports_file: Path, batch: bool = False) -> None:
     """The measured process: N cells served as ``pymotoros sim`` serves them. SIGUSR1
     resets the statistics (end of the warm-up); at SIGTERM it prints them as JSON.
-    ``batch``: every queued segment computed at once (``GroupInterpolator.front`` off)."""
+    ``batch``: every queued segment computed at once (:func:`compute_all_at_once`)."""
     from pymotoros.cli.ports_file import CellLabel
     from pymotoros.cli.sim_cells import run_fleet
     from pymotoros.controller import VirtualController
     from pymotoros.controller.cell import load_cell
-    from pymotoros.motion import GroupInterpolator
     from pymotoros.runtime.app import SimulatorConfig
     from pymotoros.runtime.fleet import Fleet, FleetCell, cell_names
 
-    GroupInterpolator.front = not batch
+    compute_all_at_once(batch)
 
     cells, labels = [], []
     for name, path in zip(cell_names(paths), paths, strict=True):
@@ -192,9 +191,8 @@ def tick_cost(streaming: bool, batch: bool = False) -> tuple[list[float], int]:
     noise, this is the work a step of N cells adds up. Also the points sent."""
     from pymotoros.controller import VirtualController
     from pymotoros.controller.api import Outcome, Pending, PointData
-    from pymotoros.motion import GroupInterpolator
 
-    GroupInterpolator.front = not batch
+    compute_all_at_once(batch)
     controller = VirtualController()
 
     def resolve(request: Outcome | Pending) -> Outcome:
@@ -217,8 +215,23 @@ def tick_cost(streaming: bool, batch: bool = False) -> tuple[list[float], int]:
         before = time.thread_time_ns()
         controller.tick()
         costs.append((time.thread_time_ns() - before) / 1000.0)
-    GroupInterpolator.front = True
+    compute_all_at_once(False)
     return costs, seq
+
+
+_FRONT: list[object] = []
+
+
+def compute_all_at_once(on: bool) -> None:
+    """Interpolators made from now on compute every queued segment at once when the first
+    is due (``on``) or the queue's oldest alone, as the controller does (off)."""
+    from pymotoros.motion import GroupInterpolator
+
+    if not _FRONT:
+        _FRONT.append(GroupInterpolator._compute_front)
+    GroupInterpolator._compute_front = (  # type: ignore[method-assign]
+        GroupInterpolator._compute if on else _FRONT[0]
+    )
 
 
 def print_tick_cost(modes: tuple[str, ...]) -> None:

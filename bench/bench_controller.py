@@ -20,10 +20,11 @@ Prints, for each point spacing, the best of ``--repeat`` runs:
 * the controller alone: ticks with the increment queue filled directly (IncMove, servo,
   job, status monitor, no interpolation), to separate the motion engine's share.
 
-Each spacing runs the controller's own paths ("fast") and, alternating with them, the
-paths of ``--reference`` (see :data:`PATHS`): ``before`` (points through a Process, the
-two-pass plain-Python segment kernel: the code before issue 13 item 4) or ``numpy``
-(the general paths), with the ratio of the two.
+Each spacing runs the controller as it is ("fast") and, with ``--reference batch``,
+alternating with it, the controller with every queued segment computed at once (see
+:data:`PATHS`), with the ratio of the two. The controller has one route per rule
+(issue 30); to compare with older code, run this file against that code's ``src``
+(``PYTHONPATH=<old>/src``), alternating.
 
 Run: ``python bench/bench_controller.py [--seconds 60] [--repeat 3] [--reference batch]``
 """
@@ -37,7 +38,6 @@ import time
 from typing import NamedTuple
 
 from pymotoros.controller import PointData, VirtualController
-from pymotoros.controller.trajectory import TrajectoryPoints
 from pymotoros.motion import QUEUE_SIZE, GroupInterpolator, Increment
 from pymotoros.protocol.constants import MotionCommand, ResultCode
 
@@ -59,21 +59,20 @@ def trajectory(seconds: float, spacing: float) -> list[PointData]:
 
 PREEMPTED_S = 0.001
 
-PATHS = ("fast", "before", "numpy", "batch")
-"""``fast``: the controller as it is. ``before``: points answered through a Process and
-a lone small segment by the two-pass plain-Python kernel (the code before issue 13
-item 4). ``numpy``: points through a Process, every segment by the numpy kernels (the
-general paths the fast ones are tested against). ``batch``: ``fast`` but every queued
-segment computed at once when the first is due (``GroupInterpolator.front`` off: the
-code before issue 13's second round computed the queue's segments one at a time)."""
+PATHS = ("fast", "batch")
+"""``fast``: the controller as it is. ``batch``: every queued segment computed at once
+when the first is due (the queue's oldest segment not computed alone: the code before
+issue 13's second round), by pointing the interpolator's front computation at its
+all-at-once one for the run."""
+
+_FRONT = GroupInterpolator._compute_front
 
 
 def use_paths(paths: str) -> None:
-    """Switch the controller's streaming paths (class-wide) to ``paths``."""
-    TrajectoryPoints.fast = paths in ("fast", "batch")
-    GroupInterpolator.scalar = paths != "numpy"
-    GroupInterpolator.fused = paths in ("fast", "batch")
-    GroupInterpolator.front = paths == "fast"
+    """Make interpolators made from now on compute as ``paths`` says (class-wide)."""
+    GroupInterpolator._compute_front = (  # type: ignore[method-assign]
+        GroupInterpolator._compute if paths == "batch" else _FRONT
+    )
 
 
 class Run(NamedTuple):
@@ -206,14 +205,14 @@ def main() -> None:
     parser.add_argument(
         "--reference",
         choices=[p for p in PATHS if p != "fast"],
-        default="before",
+        default=None,
         help="paths measured beside the controller's own, alternating (see PATHS)",
     )
     args = parser.parse_args()
     load = ", ".join(f"{x:.2f}" for x in os.getloadavg())
     print(
         f"{args.seconds:g} s trajectory, 6 axes, HC10 on YRC1000, best of {args.repeat}, "
-        f"reference paths: {args.reference}; load average {load}"
+        f"reference paths: {args.reference or 'none'}; load average {load}"
     )
     print(
         "work = tick() + answering the accepted points (the BUSY retries are the client's "
@@ -224,16 +223,17 @@ def main() -> None:
         f"{'× rt':>5} {'unpre.':>7} {'× rt':>5} {'>1ms':>5} {'BUSY µs':>8} {'loop × rt':>9} "
         f"{'CPU × rt':>8}"
     )
+    kinds = ("fast", args.reference) if args.reference else ("fast",)
     for spacing in args.spacings:
         best: dict[str, Run] = {}
         for _ in range(args.repeat):  # alternate, so both see the same machine
-            for paths in ("fast", args.reference):
+            for paths in kinds:
                 r = run(args.seconds, spacing, paths)
                 if paths not in best or r.unpreempted + r.intake_unpreempted < (
                     best[paths].unpreempted + best[paths].intake_unpreempted
                 ):
                     best[paths] = r
-        for paths in ("fast", args.reference):
+        for paths in kinds:
             r = best[paths]
             work = r.in_tick + r.intake
             trimmed = r.unpreempted + r.intake_unpreempted
@@ -246,6 +246,8 @@ def main() -> None:
                 f"{r.preempted:>5} {busy_us:>8.2f} {args.seconds / r.total:>9.0f} "
                 f"{args.seconds / r.cpu:>8.0f}"
             )
+        if not args.reference:
+            continue
         fast, ref = best["fast"], best[args.reference]
         ratio = (ref.unpreempted + ref.intake_unpreempted) / (
             fast.unpreempted + fast.intake_unpreempted

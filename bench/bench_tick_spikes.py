@@ -11,8 +11,9 @@ to tell the code from the machine.
 
 ``--paths`` runs the loop once per path, alternately, ``--rounds`` times, in one process:
 ``front`` (the queue's oldest segment computed alone when IncMove reaches it,
-``GroupInterpolator.front``, the default since issue 13's second round) and ``batch``
-(every queued segment at once when the first is due, the path before it).
+``GroupInterpolator._compute_front``, the controller's route since issue 13's second
+round) and ``batch`` (every queued segment at once when the first is due, the route
+before it: the front computation pointed at the all-at-once one for the run).
 
 Usage: ``python bench/bench_tick_spikes.py [--ticks 10000] [--slow-us 200]
 [--paths front batch] [--rounds 1]``
@@ -62,7 +63,8 @@ def steal_jiffies() -> int:
 
 
 PATHS: Final = ("front", "batch")
-"""``front``: GroupInterpolator.front on (one segment per computation); ``batch``: off."""
+"""``front``: the controller's route (one segment per computation); ``batch``: every
+queued segment at once."""
 MAX_ROUNDS: Final = 20
 """Bound on --rounds (each round runs every path once)."""
 
@@ -88,7 +90,6 @@ def main() -> None:
 
 def run(ticks: int, slow_us: float, *, front: bool) -> None:
     """One streaming run of ``ticks`` ticks with the given computation path; prints."""
-    interpolator.GroupInterpolator.front = front
     tick_no = 0
     compute_us: dict[int, float] = {}
     batches: dict[int, int] = {}
@@ -97,7 +98,8 @@ def run(ticks: int, slow_us: float, *, front: bool) -> None:
     gc_by_generation: dict[int, list[float]] = {}
     depth = [0]
     original = interpolator.GroupInterpolator._compute
-    original_front = interpolator.GroupInterpolator._compute_front
+    real_front = interpolator.GroupInterpolator._compute_front
+    original_front = real_front if front else original  # batch: every queued segment at once
 
     def timed(self: interpolator.GroupInterpolator, method: Any) -> None:
         if depth[0]:  # _compute_front calling _compute: counted once, by the outer call
@@ -163,7 +165,7 @@ def run(ticks: int, slow_us: float, *, front: bool) -> None:
         wall.append((time.perf_counter_ns() - w) / 1e3)
     gc.callbacks.remove(on_gc)
     interpolator.GroupInterpolator._compute = original  # type: ignore[method-assign]
-    interpolator.GroupInterpolator._compute_front = original_front  # type: ignore[method-assign]
+    interpolator.GroupInterpolator._compute_front = real_front  # type: ignore[method-assign]
 
     idle: list[float] = []
     for _ in range(ticks):  # the same count of do-nothing "ticks"

@@ -7,13 +7,16 @@ import asyncio
 
 import pytest
 
+from oracles.state_cycle import as_tasks
 from pymotoros.errors import PymotorosError
 from pymotoros.testing import Twin
 
 
 @pytest.mark.parametrize("task_paths", [False, True])
 async def test_a_failing_state_cycle_stops_the_twin_with_its_error(task_paths: bool) -> None:
-    the_twin = Twin(robot="hc10", task_paths=task_paths)
+    the_twin = Twin(robot="hc10")
+    if task_paths:  # the reference route: the cycle as a task (tests/oracles/state_cycle.py)
+        as_tasks(the_twin, reference_frames=False)
     calls = 0
 
     def broken() -> tuple[bytes, ...]:

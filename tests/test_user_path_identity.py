@@ -21,6 +21,7 @@ from typing import Any
 
 import pytest
 
+from oracles.state_cycle import as_tasks
 from pymotoros.client import RobotClient
 from pymotoros.controller import CellConfig, default_cell
 from pymotoros.controller.cell import load_cell
@@ -124,9 +125,9 @@ async def _conversation(client: RobotClient, the_twin: Twin, rec: Recording) -> 
 
 async def _record(cell: CellConfig, *, task_paths: bool) -> Recording:
     rec = Recording()
-    the_twin = Twin(cell, task_paths=task_paths)
-    if task_paths:  # the reference encoder too
-        the_twin.state.build_cycle = the_twin.state.build_cycle_reference  # type: ignore[method-assign]
+    the_twin = Twin(cell)
+    if task_paths:  # the state cycle as tasks, its frames through the message classes
+        as_tasks(the_twin)
     groups = len(cell.groups)
     the_twin.on_tick(
         lambda: rec.pulses.append(tuple(the_twin.commanded_pulses(g) for g in range(groups)))

@@ -341,7 +341,6 @@ class Twin:
         state_period: float = STATE_PERIOD_S,
         state_message_gap: float = TWIN_STATE_MESSAGE_GAP_S,
         start_time: float = 0.0,
-        task_paths: bool = False,
         fidelity: Fidelity | str | None = None,
     ) -> None:
         """``fidelity``: "exact" (MotoROS 1.9.12's surprises, docs/fidelity.md) or "safe";
@@ -368,10 +367,6 @@ class Twin:
             TCP_PORT_STATE: self.state,
             TCP_PORT_IO: self.io,
         }
-        self.task_paths = task_paths
-        """Run the state cycle as the simulator does (a broadcast task, a sender task per
-        client) instead of as clock callbacks writing directly: the same bytes at the
-        same virtual times, more event-loop work. For the tests that compare the two."""
         self._crash: BaseException | None = None
         self._numbers = itertools.count(1)
         self._stop = asyncio.Event()
@@ -419,12 +414,10 @@ class Twin:
         async with asyncio.TaskGroup() as tg:
             for service in services:
                 service.attach(tg)
-            loops = []
-            if self.task_paths:
-                loops.append(tg.create_task(self.state.broadcast(), name="twin-state-broadcast"))
-            else:
-                stop_cycles = self.state.schedule_cycles(self.clock, self._crashed)
-            loops.append(tg.create_task(self.clock.drive(), name="twin-virtual-time"))
+            # The state cycle as clock callbacks writing to idle clients directly: the
+            # simulator's broadcast task's bytes at the same virtual times, fewer loop turns.
+            stop_cycles = self.state.schedule_cycles(self.clock, self._crashed)
+            loops = [tg.create_task(self.clock.drive(), name="twin-virtual-time")]
             self._started.set()
             try:
                 await self._stop.wait()

@@ -1,13 +1,14 @@
-"""The streaming fast paths give the general paths' answers and increments, bit for bit.
+"""The streaming route gives the reference routes' answers and increments, bit for bit.
 
 At dense point spacing the controller answers a streamed point without a Process
-(:meth:`TrajectoryPoints.trajectory_point_now`) and computes a lone small segment in
-plain Python (:meth:`GroupInterpolator._compute_small`, fused kernel first). Each has a
-general path that stays in the code: the Process-based :meth:`trajectory_point` and the
-numpy kernels. Here random trajectories at 4, 8, 20 and 100 ms spacing and at irregular
-times are streamed by a random client (0, 1 or 2 requests per tick, so the queue both
-runs dry and fills) twice, once through the general paths and once through the fast
-ones, and every reply and every IncMove output of every tick must be equal.
+(:meth:`TrajectoryPoints.trajectory_point`) and computes a lone small segment in plain
+Python (:meth:`GroupInterpolator._compute_small`, fused kernel first). The plainer
+routes they replaced are oracles in ``tests/oracles``: every point through a Process
+with every check run (``trajectory.py``) and every segment by the numpy kernels at once
+(``interpolation.py``). Here random trajectories at 4, 8, 20 and 100 ms spacing and at
+irregular times are streamed by a random client (0, 1 or 2 requests per tick, so the
+queue both runs dry and fills) twice, once through the oracles and once through the
+library, and every reply and every IncMove output of every tick must be equal.
 """
 
 from __future__ import annotations
@@ -21,6 +22,8 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
+from oracles.interpolation import all_at_once
+from oracles.trajectory import through_a_process
 from pymotoros.controller import Outcome, PointData, VirtualController
 from pymotoros.controller import incmove_task as incmove_module
 from pymotoros.controller.cell import default_cell
@@ -101,17 +104,12 @@ Record = list[tuple[str, object]]
 
 @contextmanager
 def general_paths(on: bool) -> Iterator[None]:
-    """Switch the controller to its general paths (Process intake, numpy kernels, every
-    queued segment computed at once)."""
-    saved = TrajectoryPoints.fast, GroupInterpolator.scalar, GroupInterpolator.front
-    if on:
-        TrajectoryPoints.fast = False
-        GroupInterpolator.scalar = False
-        GroupInterpolator.front = False
-    try:
+    """Controllers made inside take the reference routes (the oracles) when ``on``."""
+    if not on:
         yield
-    finally:
-        TrajectoryPoints.fast, GroupInterpolator.scalar, GroupInterpolator.front = saved
+        return
+    with through_a_process(), all_at_once():
+        yield
 
 
 def stream(cell: tuple[str, str], plan: Plan, monkeypatch: pytest.MonkeyPatch) -> Record:
@@ -172,16 +170,16 @@ def test_fast_paths_equal_general_paths(cell: tuple[str, str]) -> None:
 
 
 def test_the_switch_reaches_both_paths() -> None:
-    """The comparison above is not vacuous: the general paths really are taken when
-    switched on (no fast answer, no plain-Python segment) and the fast ones otherwise."""
+    """The comparison above is not vacuous: the oracles really are taken when switched
+    on (no point answered by the library's intake, no plain-Python segment) and the
+    library's route otherwise."""
     calls = {"now": 0, "small": 0}
-    real_now = TrajectoryPoints.trajectory_point_now
+    real_now = TrajectoryPoints._queue_point
     real_small = GroupInterpolator._compute_small
 
-    def now(self: TrajectoryPoints, sequence: int, point: PointData) -> Outcome | None:
-        out = real_now(self, sequence, point)
-        calls["now"] += out is not None
-        return out
+    def now(self: TrajectoryPoints, *args: object, **kwargs: object) -> Outcome:
+        calls["now"] += 1
+        return real_now(self, *args, **kwargs)  # type: ignore[arg-type]
 
     def small(self: GroupInterpolator, *args: object) -> bool:
         calls["small"] += 1
@@ -194,7 +192,7 @@ def test_the_switch_reaches_both_paths() -> None:
         (1,),
     )
     with pytest.MonkeyPatch.context() as mp:
-        mp.setattr(TrajectoryPoints, "trajectory_point_now", now)
+        mp.setattr(TrajectoryPoints, "_queue_point", now)
         mp.setattr(GroupInterpolator, "_compute_small", small)
         with general_paths(True):
             stream(("yrc1000", "hc10"), plan, mp)

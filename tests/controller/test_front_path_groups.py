@@ -1,7 +1,8 @@
 """Several groups streaming with the queue's oldest segment computed alone, or not.
 
-``GroupInterpolator.front`` (the default) computes each group's oldest queued segment
-alone when IncMove reaches it; off, every queued segment of a group is computed at once.
+The interpolator computes each group's oldest queued segment alone when IncMove reaches
+it (``GroupInterpolator._compute_front``); the reference route
+(``tests/oracles/interpolation.py``) computes every queued segment of a group at once.
 Here every group of multi-group cells streams random points through
 JOINT_TRAJ_PT_FULL_EX, with segments long enough to take the front path and short
 ones that do not, and every tick's IncMove output and the final command positions must
@@ -12,14 +13,16 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
+from contextlib import nullcontext
 
 import pytest
 from hypothesis import HealthCheck, example, given, settings
 from hypothesis import strategies as st
 
+from oracles.interpolation import all_at_once
 from pymotoros.controller import VirtualController, default_cell
 from pymotoros.controller import incmove_task as incmove_module
-from pymotoros.motion import GroupInterpolator, Increment, interpolator
+from pymotoros.motion import Increment, interpolator
 from pymotoros.protocol.constants import ResultCode as R
 
 from .helpers import CMD, command, complete, point
@@ -51,8 +54,7 @@ def stream(
         alone[0] += 1
         return real_one(*args, **kwargs)  # type: ignore[arg-type]
 
-    with pytest.MonkeyPatch.context() as mp:
-        mp.setattr(GroupInterpolator, "front", front)
+    with pytest.MonkeyPatch.context() as mp, nullcontext() if front else all_at_once():
         mp.setattr(incmove_module, "inc_move", recording)
         mp.setattr(interpolator, "segment_targets", counting)
         vc = VirtualController(default_cell(*cell))

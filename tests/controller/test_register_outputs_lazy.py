@@ -3,8 +3,9 @@
 The same seeded conversation (streamed motion, M-register reads at random ticks, client
 writes, E-stop and servo off mid-motion, tool changes, a scenario that E-stops inside a
 tick and one that reads an M-register) runs on a controller computing the words every
-tick (``lazy_registers=False``) and on one computing them only when an M-register is
-read or written; every read and the final image must be identical, word for word.
+tick (the oracle ``tests/oracles/registers.py``) and on one as the library builds it,
+computing them only when an M-register is read or written; every read and the final
+image must be identical, word for word.
 """
 
 from __future__ import annotations
@@ -17,6 +18,7 @@ from typing import Any
 
 import pytest
 
+from oracles.registers import every_tick
 from pymotoros.controller import Outcome, Pending, PointData, VirtualController, cell_from_dict
 from pymotoros.controller.cell import CellConfig
 from pymotoros.controller.registers import RegisterOutputs
@@ -137,7 +139,9 @@ class _Conversation:
     """One seeded script of operator and client actions; ``log`` records every answer."""
 
     def __init__(self, cell: CellConfig, *, lazy: bool, seed: int) -> None:
-        self.vc = VirtualController(cell, seed=seed, lazy_registers=lazy)
+        self.vc = VirtualController(cell, seed=seed)
+        if not lazy:
+            every_tick(self.vc)
         self.rng = random.Random(seed)
         self.registers = _registers(cell)
         self.log: list[tuple[Any, ...]] = []
@@ -350,8 +354,8 @@ def test_a_read_between_ticks_sees_the_last_tick_not_the_sag_after_it() -> None:
     lazy controller reads nothing before the E-stop, so its words come from what the
     tick kept."""
     cell = _example(brake_sag_pulses=200)
-    eager = VirtualController(cell, lazy_registers=False)
-    lazy = VirtualController(cell, lazy_registers=True)
+    eager = every_tick(VirtualController(cell))
+    lazy = VirtualController(cell)
     for vc in (eager, lazy):
         vc.run_ticks(300)
         assert vc.snapshot().servo

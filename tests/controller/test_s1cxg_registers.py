@@ -345,15 +345,17 @@ def test_no_table_no_outputs() -> None:
 
 
 def test_vectorised_outputs_are_wired_like_the_reference_rules() -> None:
-    """controller/registers.py's compiled path writes the words of models/s1cxg.py's
-    reference ``write_outputs`` for the same values, on random tables.
+    """controller/registers.py's compiled path writes the words of the rule applied
+    output by output (``write_outputs``, tests/oracles/s1cxg.py) for the same values, on
+    random tables.
 
     Both sides take their scale from the same ``unit_scale``, so this checks the wiring
     (which value goes to which register, word split, truncation path), not the units:
     those are pinned by the examples above and, with written-out numbers, by
     :func:`test_axis_position_words_by_hand`."""
+    from oracles.s1cxg import GroupValues, write_outputs
     from pymotoros.controller.registers import RegisterOutputs, _Plan
-    from pymotoros.models.s1cxg import GroupValues, parse_s1cxg, write_outputs
+    from pymotoros.models.s1cxg import parse_s1cxg
 
     rng = np.random.default_rng(7)
     for _ in range(20):  # bounded

@@ -3,7 +3,7 @@
 ``batch.batch_increments`` (the offline engine) and ``batch.queued_targets`` (the tick
 engine's queued segments) compute many segments at once; ``GroupInterpolator``
 computes a lone segment of a few steps in plain Python floats. Both must give exactly what
-``interpolator._compute_segment`` gives one segment at a time, with the grid carried from
+``one_segment.compute_segment`` gives one segment at a time, with the grid carried from
 segment to segment as the real task carries it (leftover, its quirk, dropped points).
 """
 
@@ -16,8 +16,8 @@ from hypothesis import strategies as st
 
 from pymotoros.motion import GroupAxes, TrajPoint, batch, interpolate, numerics
 from pymotoros.motion.constants import SLOTS
-from pymotoros.motion.interpolator import _compute_segment as compute_segment
 from pymotoros.motion.numerics import LD, position_bound
+from pymotoros.motion.one_segment import compute_segment
 from pymotoros.motion.points import GroupPoint
 from pymotoros.motion.segment import plan_grid
 

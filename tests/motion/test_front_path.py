@@ -8,18 +8,21 @@ queued_targets`. Here the two are compared on single segments (random values, va
 whose positions land next to a float32 midpoint so that the longdouble fallback decides,
 subnormal and large values, pieces far into a long segment, zero and one step), against
 a long-double model of the x87, and through the tick engine taking entries as IncMove
-does, with the front path on and off, against the offline engine.
+does, against the reference route (every segment through the batch kernel,
+``tests/oracles/interpolation.py``) and the offline engine.
 """
 
 from __future__ import annotations
 
 import math
+from contextlib import nullcontext
 
 import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from oracles.interpolation import all_at_once
 from pymotoros.models import FloatMode
 from pymotoros.models.rules import f32
 from pymotoros.motion import (
@@ -168,7 +171,8 @@ def take_like_incmove(
     points: list[TrajPoint], axes: GroupAxes, *, front: bool
 ) -> tuple[list[tuple[int, list[int]]], int]:
     """Stream the points (the next one as soon as not BUSY) and take one entry per tick
-    through ``queue.due()`` as IncMove does; (every entry, segments computed alone)."""
+    through ``queue.due()`` as IncMove does; (every entry, segments computed alone).
+    ``front=False``: the reference route (``tests/oracles/interpolation.py``)."""
     alone = [0]
     real = interpolator.segment_targets
 
@@ -176,8 +180,7 @@ def take_like_incmove(
         alone[0] += 1
         return real(*args, **kwargs)  # type: ignore[arg-type]
 
-    with pytest.MonkeyPatch.context() as mp:
-        mp.setattr(GroupInterpolator, "front", front)
+    with pytest.MonkeyPatch.context() as mp, (nullcontext() if front else all_at_once()):
         mp.setattr(interpolator, "segment_targets", counting)
         g = GroupInterpolator(axes)
         g.start(points[0], to_pulses(points[0].pos, axes))

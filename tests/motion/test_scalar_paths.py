@@ -5,7 +5,8 @@ and positions in float64 and keeps them only where its error bounds prove them e
 the x87's; otherwise it returns None and the caller takes the longdouble path. Here its
 results are compared with the longdouble (x87) computation itself, on random values and
 on dense smooth trajectories (where the coefficient terms nearly cancel), and the
-tick engine is compared with and without it.
+tick engine is compared with the reference route (``tests/oracles/interpolation.py``:
+the numpy kernels for every segment) and with the two-pass form it falls back to.
 """
 
 from __future__ import annotations
@@ -17,8 +18,9 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from oracles.interpolation import all_at_once
 from pymotoros.models.rules import f32
-from pymotoros.motion import GroupInterpolator, TrajPoint, interpolate, numerics
+from pymotoros.motion import TrajPoint, interpolate, interpolator, numerics
 
 from .helpers import axes_for, x87_positions
 from .strategies import trajectories
@@ -97,15 +99,16 @@ def test_tick_engine_with_and_without_the_plain_python_paths(
     points: list[TrajPoint], cell: tuple[str, str]
 ) -> None:
     """Dense points streamed one at a time: the same entries from the fused kernel, the
-    two-pass one and the numpy kernels, and the offline engine agrees."""
+    two-pass form it falls back to (the fused kernel made to give up) and the numpy
+    kernels (the reference route), and the offline engine agrees."""
     axes = axes_for(*cell)
     points = fit(points, axes)
-    results = []
-    for scalar, fused in ((True, True), (True, False), (False, False)):
-        with pytest.MonkeyPatch.context() as mp:
-            mp.setattr(GroupInterpolator, "scalar", scalar)
-            mp.setattr(GroupInterpolator, "fused", fused)
-            results.append(queued_by_ticks(points, axes))
+    results = [queued_by_ticks(points, axes)]
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setattr(interpolator, "small_segment_x87", lambda *_args: None)
+        results.append(queued_by_ticks(points, axes))
+    with all_at_once():
+        results.append(queued_by_ticks(points, axes))
     times, incs = interpolate(points, axes, validate=False)
     offline = list(zip(times.tolist(), incs.tolist(), strict=True))
     assert results == [offline] * 3
@@ -128,18 +131,16 @@ def test_end_point_only_segments_with_and_without_the_plain_python_path(
 ) -> None:
     """Points exactly one period apart give segments that are only their end point
     (:meth:`GroupInterpolator._store_end_x87` on the x87 with slots in ROS order):
-    the same entries as the numpy kernels, also when a product leaves the int32 range
-    or is not a number (the general conversion then decides)."""
+    the same entries as the numpy kernels (the reference route), also when a product
+    leaves the int32 range or is not a number (the general conversion then decides)."""
     axes = axes_for("hc10", "yrc1000")
     points = [
         TrajPoint(k * 0.004 + 0.0005, tuple(0.01 * k * (j + 1) for j in range(6)), (0.0,) * 6)
         for k in range(14)
     ]
     points[where] = TrajPoint(points[where].time, tuple(odd), (0.0,) * 6)
-    results = []
-    for scalar in (True, False):
-        with pytest.MonkeyPatch.context() as mp:
-            mp.setattr(GroupInterpolator, "scalar", scalar)
-            results.append(queued_by_ticks(points, axes))
+    results = [queued_by_ticks(points, axes)]
+    with all_at_once():
+        results.append(queued_by_ticks(points, axes))
     assert results[0] == results[1]
     assert len(results[0]) == len(points) - 1  # one entry per segment: the end point

@@ -117,19 +117,12 @@ MUTANTS: tuple[Mutant, ...] = (
     ),
     # --- BUSY (§3.4 step 6.1, §3.5 step 2)
     Mutant(
-        "busy-single-fast-path",
-        "BUSY: a pending group answers BUSY (type 14, the intake's fast path)",
-        "controller/trajectory.py",
-        "        if interp.pending:\n            return self._busy_replies[g]\n",
-        "",
-        BUSY,
-    ),
-    Mutant(
         "busy-single-full-path",
-        "BUSY: a pending group answers BUSY (type 14 / 2016 apply step)",
+        "BUSY: a pending group answers BUSY (type 14, and the 2016 apply step: one route)",
         "controller/trajectory.py",
-        "        if interp.pending:\n"
-        "            return self._busy(g, sequence, group_no=group_no)\n",
+        "        if interp.pending:  # type 14's BUSY (no group number) is made once: no call\n"
+        "            return self._busy_replies[g] if group_no is None "
+        "else self._busy(g, sequence, group_no)\n",
         "",
         BUSY,
     ),

@@ -39,7 +39,7 @@ from pymotoros.protocol.messages import (
     Ping,
     Role,
 )
-from pymotoros.protocol.messages._base import _NoFields
+from pymotoros.protocol.messages._base import NoFields
 from pymotoros.protocol.sizes import (
     ECHO_ON_SHORT,
     IO_SIZES,
@@ -236,7 +236,7 @@ def test_every_registered_class_round_trips_on_its_port(
 def test_a_second_class_for_a_registered_type_and_port_is_refused() -> None:
     with pytest.raises(TypeError, match="already Ping"):
 
-        class _SecondPing(Message, _NoFields):
+        class _SecondPing(Message, NoFields):
             __slots__ = ()
             MSG_TYPE: ClassVar[MsgType] = MsgType.PING
             ROLE: ClassVar[Role] = Role.REQUEST

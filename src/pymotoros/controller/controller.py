@@ -90,14 +90,9 @@ class VirtualController:
         cell: CellConfig | None = None,
         *,
         seed: int = 0,
-        lazy_registers: bool = True,
         motion_link: MotionLink | None = None,
     ) -> None:
-        """``lazy_registers=False``: the S1CxG register outputs are computed in every tick
-        instead of when an M-register is read or written (same words either way; see
-        :class:`~pymotoros.controller.registers.RegisterOutputs`).
-
-        ``motion_link``: the motion connections a scenario's ``drop_motion`` closes, given
+        """``motion_link``: the motion connections a scenario's ``drop_motion`` closes, given
         by the runtime that serves this controller (``pymotoros.testing``'s twin,
         :meth:`SimulatorApp.for_cell <pymotoros.runtime.app.SimulatorApp.for_cell>`);
         None: no motion server, ``drop_motion`` is refused saying so."""
@@ -142,9 +137,7 @@ class VirtualController:
             readiness=self._readiness,
             drive_power=self._power,
             inc_move=self._inc_move,
-            registers=RegisterOutputs(
-                cell, ctx.io, self._tcp, ctx.clock.period_ms, lazy=lazy_registers
-            ),
+            registers=RegisterOutputs(cell, ctx.io, self._tcp, ctx.clock.period_ms),
             scenarios=self._scenarios,
             peripherals=Peripherals(ctx.io, cell.peripherals),
             scheduler=self._scheduler,
@@ -241,12 +234,11 @@ class VirtualController:
     def trajectory_point(self, sequence: int, point: PointData) -> Outcome | Pending:
         """JOINT_TRAJ_PT_FULL: one group's trajectory point, accepted (queued) or refused as
         MotoROS does."""
-        now = self._trajectory.trajectory_point_now(sequence, point)
-        if now is not None:  # the streaming hot path: answered without a Process
-            return now
+        answer = self._trajectory.trajectory_point(sequence, point)
+        if isinstance(answer, Outcome):  # all but a start in ECO mode: no Process
+            return answer
         return self._scheduler.run(
-            self._trajectory.trajectory_point(sequence, point),
-            lambda: f"JOINT_TRAJ_PT_FULL sequence {sequence} group {point.group_no}",
+            answer, lambda: f"JOINT_TRAJ_PT_FULL sequence {sequence} group {point.group_no}"
         )
 
     def trajectory_point_ex(self, sequence: int, points: Sequence[PointData]) -> Outcome | Pending:

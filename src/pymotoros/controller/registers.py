@@ -1,13 +1,12 @@
 """The S1CxG register output functions: the M-registers as they are after each tick.
 
 The rules (which value goes to which register, in which unit and size) are in
-:mod:`pymotoros.models.s1cxg`, with :func:`~pymotoros.models.s1cxg.write_outputs` as the
-reference. This module compiles a group's table once into index and scale arrays; to
-write the words it gathers the values from the servo model and the kinematics into one
-vector and computes every register word with a few numpy operations (the reference path
-costs a Python call per output; tests check both give the same words). That costs tens
-of microseconds while the arm moves (two forward kinematics and more per group), which
-is why it is not done in the tick.
+:mod:`pymotoros.models.s1cxg`. This module compiles a group's table once into index and
+scale arrays; to write the words it gathers the values from the servo model and the
+kinematics into one vector and computes every register word with a few numpy operations
+(the tests compare them with the rule applied output by output,
+``tests/oracles/s1cxg.py``). That costs tens of microseconds while the arm moves (two
+forward kinematics and more per group), which is why it is not done in the tick.
 
 A real controller writes the words every interpolation period. Here the tick only keeps
 what that would read at its place in the tick (each table's servo state, a few short
@@ -18,9 +17,9 @@ from what it kept. Only the latest tick's words can be seen, since each tick rew
 them all, so a reader sees bit for bit what a controller writing every tick would show,
 even when the servos moved after the tick's step (an E-stop's brake sag, a scenario); a
 client's write between ticks lands on those words and stays until the next tick. Several
-reads between two ticks compute once. ``RegisterOutputs(..., lazy=False)``
-(``VirtualController(lazy_registers=False)``) keeps the computation in every tick, to
-compare. Nothing runs for a cell without an S1CxG table.
+reads between two ticks compute once. The route that computes the words in every tick,
+as the controller does, is the tests' oracle (``tests/oracles/registers.py``), compared
+reader by reader. Nothing runs for a cell without an S1CxG table.
 
 TCP speed, here and in the snapshot, is the distance the TCP travels over one step of the
 joints divided by its time (:meth:`~pymotoros.kinematics.Chain.tcp_speed`): the command's
@@ -143,22 +142,12 @@ class HasTool(Protocol):
 class RegisterOutputs:
     """Every group's S1CxG outputs in the M-registers, as they are after the latest tick.
 
-    ``lazy`` (the default): the tick's :meth:`step` keeps the tick's inputs and the words
-    are computed when an M-register is next read or written (:meth:`materialise`, which
-    the IO image calls first on every M-register access). ``lazy=False``: :meth:`step`
-    computes them in every tick (:meth:`refresh`), as the controller does; both give the
-    same words to every reader (the eager path is kept to show it:
-    tests/controller/test_register_outputs_lazy.py)."""
+    The tick's :meth:`step` keeps the tick's inputs and the words are computed when an
+    M-register is next read or written (:meth:`materialise`, which the IO image calls
+    first on every M-register access); every reader sees the words a controller writing
+    them in every tick would show (tests/controller/test_register_outputs_lazy.py)."""
 
-    def __init__(
-        self,
-        cell: CellConfig,
-        io: IoImage,
-        tcp: TcpTracker,
-        period_ms: int,
-        *,
-        lazy: bool = True,
-    ) -> None:
+    def __init__(self, cell: CellConfig, io: IoImage, tcp: TcpTracker, period_ms: int) -> None:
         self._plans = [
             _Plan(cell, g, table)
             for g, table in enumerate(cell.s1cxg)
@@ -170,10 +159,9 @@ class RegisterOutputs:
         self._quiet_feedback = cell.servo.noise_pulses == 0
         """Without encoder noise a group at rest has constant outputs (see _write)."""
         self._groups = [plan.index for plan in self._plans]
-        self.lazy = lazy and bool(self._plans)
         self._pending: _Captured | None = None
-        """The latest tick's inputs, not yet written (lazy only)."""
-        if self.lazy:
+        """The latest tick's inputs, not yet written."""
+        if self._plans:
             io.before_mregister_access(self.materialise)
 
     @property
@@ -250,28 +238,16 @@ class RegisterOutputs:
         tick: int,
         powered: bool,
     ) -> None:
-        """The tick's step: (lazy) keep the servos' state and the tools now, a few tuples
-        per group, for :meth:`materialise`; else :meth:`refresh`.
+        """The tick's step: keep the servos' state and the tools now, a few tuples per
+        group, for :meth:`materialise`.
 
         Only the latest tick's words can ever be read (each tick writes every output
-        register again), so a lazy tick replaces the inputs it kept before."""
-        if self.lazy:
-            kept = [(servos[g].state(), interpolators[g].tool) for g in self._groups]
-            self._pending = (tick, powered, servos, kept)
-        else:
-            self.refresh(servos, [i.tool for i in interpolators], tick, powered)
-
-    def refresh(
-        self, servos: Sequence[ServoGroup], tools: Sequence[int], tick: int, powered: bool
-    ) -> None:
-        """Compute and write every output from the servos' state now (the eager tick;
-        inputs kept by an earlier lazy step are dropped: these words are newer)."""
-        self._pending = None
-        for plan in self._plans:
-            self._write(plan, servos[plan.index], tools[plan.index], tick, powered)
+        register again), so a tick replaces the inputs it kept before."""
+        kept = [(servos[g].state(), interpolators[g].tool) for g in self._groups]
+        self._pending = (tick, powered, servos, kept)
 
     def materialise(self) -> None:
-        """Write the words of the latest tick's kept inputs (lazy; nothing if written).
+        """Write the words of the latest tick's kept inputs (nothing if written).
 
         Called before any M-register access, so a client's write lands on the tick's
         words and stays until the next tick, and every reader sees what an eager tick
@@ -291,7 +267,7 @@ class RegisterOutputs:
         same values whenever its tool and command are the same: its words are rewritten
         from the last computation (a client may have written over them) instead of
         recomputed. Those words are a function of (tool, command) alone, so it does not
-        matter at which tick, eager or lazy, they were computed."""
+        matter at which tick they were computed."""
         key = None
         if self._quiet_feedback and servo.settled():
             key = (tool, tuple(servo.command[: plan.num_axes]))

@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import logging
 from collections.abc import Sequence
-from typing import ClassVar, Final
+from typing import Final
 
 from pymotoros.controller.api import Outcome, PointData
 from pymotoros.controller.commands import MotionCommands
@@ -48,11 +48,6 @@ DhTable = tuple[tuple[tuple[float, float, float, float], ...], ...]
 class TrajectoryPoints:
     """Validation and acceptance of trajectory points; the tool and DH requests."""
 
-    fast: ClassVar[bool] = True
-    """Answer streamed points through :meth:`trajectory_point_now`. Tests and
-    ``bench/bench_controller.py --reference`` turn it off, for the class, to compare
-    with the general path."""
-
     def __init__(self, ctx: MotoRosContext, readiness: Readiness, commands: MotionCommands) -> None:
         cell = ctx.cell
         self._cell = cell
@@ -88,8 +83,15 @@ class TrajectoryPoints:
     def _refused(self, refusal: Refusal, point_desc: str, group_no: int | None = None) -> Outcome:
         return invalid(int(refusal.subcode), f"{point_desc}: {refusal.message}", group_no)
 
-    def trajectory_point(self, sequence: int, point: PointData) -> Process:
-        """JOINT_TRAJ_PT_FULL (14): §3.4, in its order."""
+    def trajectory_point(self, sequence: int, point: PointData) -> Outcome | Process:
+        """JOINT_TRAJ_PT_FULL (14): §3.4, in its order.
+
+        An :class:`Outcome` at once, except a start (sequence 0) in ECO mode, which must
+        first re-enable the servos: that one is a Process. A client streams one point
+        per period at dense spacing, so this is the intake's hot path: a point that is
+        accepted or answered BUSY builds nothing but its float32 form, made once (the
+        speed check reads its velocities).
+        """
         if not self._flags.motion_ready:
             return self._readiness.not_ready()
         g = point.group_no
@@ -97,51 +99,23 @@ class TrajectoryPoints:
             return self._bad_group(g)
         if point.valid_fields & REQUIRED_FIELDS != REQUIRED_FIELDS:
             return self._insufficient(point)
-        traj = self._to_traj(point)
-        refusal = check_time(traj)
-        if refusal is not None:
-            return self._refused(refusal, f"point {sequence} of group {g}")
-        if sequence == 0:
-            if self._machine.state.eco:
-                yield from self._commands.eco_reenable()
-            return self._start_group(g, traj, sequence)
+        if not f32(point.time) < MAX_POINT_TIME_S:  # also NaN: check_time words it
+            refusal = check_time(self._to_traj(point))
+            if refusal is not None:
+                return self._refused(refusal, f"point {sequence} of group {g}")
         if sequence > 0:
-            return self._queue_point(g, traj, sequence)
+            return self._queue_point(g, point, sequence)
+        if sequence == 0:
+            traj = self._to_traj(point)
+            if self._machine.state.eco:
+                return self._start_after_eco(g, traj)
+            return self._start_group(g, traj, sequence)
         return self._bad_sequence(sequence)
 
-    def trajectory_point_now(self, sequence: int, point: PointData) -> Outcome | None:
-        """:meth:`trajectory_point`'s answer for a point that needs no more than the
-        usual checks, without a Process; None: ask :meth:`trajectory_point`.
-
-        A client streams one point per period at dense spacing, so this is the intake's
-        hot path: the same checks in the same order, but the float32 point is made once
-        (the speed check reads its velocities) and nothing is built for a point that is
-        accepted or answered BUSY. Anything unusual (sequence 0 or negative, not ready,
-        a bad group or fields, the 4-hour limit, a velocity above an axis limit, which
-        may be refused or logged) returns None before any state changes, and the full
-        path answers it.
-        """
-        if sequence <= 0 or not self.fast or not self._flags.motion_ready:
-            return None
-        g = point.group_no
-        if not 0 <= g < self._num_groups or point.valid_fields & REQUIRED_FIELDS != REQUIRED_FIELDS:
-            return None
-        interp = self._interpolators[g]
-        if not f32(point.time) < MAX_POINT_TIME_S:  # also NaN: check_time refuses it
-            return None
-        if interp.pending:
-            return self._busy_replies[g]
-        ready = GroupPoint.from_values(
-            point.time, point.pos[:SLOTS], point.vel[:SLOTS], self._float_modes[g]
-        )
-        # Within the lowest limit (tame: no NaN, which max() could pass over), or else
-        # within each axis's own; otherwise check_speed decides, and may log.
-        if not (ready.tame and max(map(abs, ready.vel)) <= self._lowest_limit[g]):
-            for v, limit in zip(ready.vel, self._speed_limits[g], strict=False):
-                if not -limit <= v <= limit:
-                    return None
-        interp.set_pending_point(ready)
-        return SUCCESS
+    def _start_after_eco(self, g: int, traj: TrajPoint) -> Process:
+        """Sequence 0 in ECO mode: the servos come back first (§4.5), then the start."""
+        yield from self._commands.eco_reenable()
+        return self._start_group(g, traj, 0)
 
     def trajectory_point_ex(self, sequence: int, points: Sequence[PointData]) -> Process:
         """MOTO_JOINT_TRAJ_PT_FULL_EX (2016): §3.5, in its order."""
@@ -165,13 +139,12 @@ class TrajectoryPoints:
         last = points[-1].group_no
         for p in points:
             g = p.group_no
-            traj = self._to_traj(p)
             if sequence == 0:
                 if self._machine.state.eco:
                     yield from self._commands.eco_reenable()
-                outcome = self._start_group(g, traj, sequence, group_no=g)
+                outcome = self._start_group(g, self._to_traj(p), sequence, group_no=g)
             elif sequence > 0:
-                outcome = self._queue_point(g, traj, sequence, group_no=g)
+                outcome = self._queue_point(g, p, sequence, group_no=g)
             else:
                 return self._bad_sequence(sequence, group_no=g)
             if not outcome.ok:
@@ -223,16 +196,23 @@ class TrajectoryPoints:
         return reply(ResultCode.SUCCESS, group_no=group_no)
 
     def _queue_point(
-        self, g: int, traj: TrajPoint, sequence: int, group_no: int | None = None
+        self, g: int, point: PointData, sequence: int, group_no: int | None = None
     ) -> Outcome:
+        """Sequence > 0: BUSY while a point is pending, then the speed check (§3.4 step 6)."""
         interp = self._interpolators[g]
-        if interp.pending:
-            return self._busy(g, sequence, group_no=group_no)
-        refusal = check_speed(traj, self._axes[g])
-        if refusal is not None:
-            return self._refused(refusal, f"point {sequence} of group {g}", group_no=group_no)
-        interp.set_pending(traj)
-        return reply(ResultCode.SUCCESS, group_no=group_no)
+        if interp.pending:  # type 14's BUSY (no group number) is made once: no call
+            return self._busy_replies[g] if group_no is None else self._busy(g, sequence, group_no)
+        ready = GroupPoint.from_values(
+            point.time, point.pos[:SLOTS], point.vel[:SLOTS], self._float_modes[g]
+        )
+        # Within the lowest limit (tame: no NaN, which max() could pass over), nothing to
+        # refuse or log; otherwise check_speed decides, axis by axis, and may log.
+        if not (ready.tame and max(map(abs, ready.vel)) <= self._lowest_limit[g]):
+            refusal = check_speed(self._to_traj(point), self._axes[g])
+            if refusal is not None:
+                return self._refused(refusal, f"point {sequence} of group {g}", group_no=group_no)
+        interp.set_pending_point(ready)
+        return SUCCESS if group_no is None else reply(ResultCode.SUCCESS, group_no=group_no)
 
     # ================================================================== tools and DH
 

@@ -32,7 +32,7 @@ from __future__ import annotations
 
 import enum
 import math
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field, replace
 from typing import Final
 
@@ -101,11 +101,6 @@ def from_words(low: int, high: int | None = None) -> int:
         return v - 0x10000 if v & 0x8000 else v
     v = (low & WORD_MASK) | ((high & WORD_MASK) << 16)
     return v - 0x1_0000_0000 if v & 0x8000_0000 else v
-
-
-def _round(value: float) -> int:
-    """Nearest integer, half away from zero (not banker's rounding)."""
-    return int(math.copysign(math.floor(abs(value) + 0.5), value))
 
 
 def unit_scale(quantity: Quantity, index: int, four_bytes: bool, linear: bool = False) -> float:
@@ -376,61 +371,6 @@ def parse_s1cxg(
                 f"which does not exist (M000..M{_MAX_REGISTER:03d})"
             )
     return S1cxgTable(tuple(sorted(params.items())), num_axes, robot, tuple(outputs))
-
-
-@dataclass(frozen=True, slots=True)
-class GroupValues:
-    """What the register functions read from one group, in SI units, controller order.
-
-    ``cartesian`` are (x, y, z, rx, ry, rz, re) in m and rad (base coordinates); pulses are
-    integers; speeds in rad/s (m/s), positions in rad (m); ``linear`` per axis."""
-
-    cartesian_command: Sequence[float] = ()
-    cartesian_feedback: Sequence[float] = ()
-    pulse_command: Sequence[int] = ()
-    pulse_feedback: Sequence[int] = ()
-    tcp_speed_command: float = 0.0
-    tcp_speed_feedback: float = 0.0
-    axis_speed_command: Sequence[float] = ()
-    axis_speed_feedback: Sequence[float] = ()
-    axis_position_command: Sequence[float] = ()
-    axis_position_feedback: Sequence[float] = ()
-    linear: Sequence[bool] = ()
-
-
-def output_value(o: Output, v: GroupValues) -> int:
-    """The integer an output holds for the values ``v`` (before splitting into words)."""
-    cmd = o.source is Source.COMMAND
-    q = o.quantity
-    if q in (Quantity.PULSE_1, Quantity.PULSE_2):
-        if o.forced_zero:
-            return 0
-        pulses = (v.pulse_command if cmd else v.pulse_feedback)[o.index]
-        return int(pulses / o.resolution) + o.offset
-    linear = bool(v.linear[o.index]) if v.linear and q is not Quantity.CARTESIAN else False
-    scale = unit_scale(q, o.index, o.four_bytes, linear)
-    value: float
-    if q is Quantity.CARTESIAN:
-        value = (v.cartesian_command if cmd else v.cartesian_feedback)[o.index]
-    elif q is Quantity.TCP_SPEED:
-        value = v.tcp_speed_command if cmd else v.tcp_speed_feedback
-    elif q is Quantity.AXIS_SPEED:
-        value = (v.axis_speed_command if cmd else v.axis_speed_feedback)[o.index]
-    else:
-        value = (v.axis_position_command if cmd else v.axis_position_feedback)[o.index]
-    return _round(value * scale)
-
-
-def write_outputs(
-    table: S1cxgTable, values: GroupValues, write: Callable[[int, int], None]
-) -> None:
-    """Write every output of ``table`` for ``values`` through ``write(register, word)``,
-    in table order (so a register named twice keeps the later value)."""
-    for o in table.outputs:
-        ws = words(output_value(o, values), o.four_bytes)
-        write(o.register, ws[0])
-        if o.four_bytes:
-            write(o.register + 1, ws[1])
 
 
 @dataclass(frozen=True, slots=True)

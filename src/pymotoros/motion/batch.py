@@ -4,7 +4,7 @@ tick-by-tick engine (which computes the segments waiting in its queue in one go)
 Given each segment's start and end points and its step grid (see
 :func:`pymotoros.motion.segment.plan_grid`), it returns every step's time and absolute
 pulse target. The arithmetic per element is the one of
-:func:`pymotoros.motion.interpolator._compute_segment`: coefficients in longdouble (x87) or
+:func:`pymotoros.motion.one_segment.compute_segment`: coefficients in longdouble (x87) or
 float32 (FS100), positions with :func:`~pymotoros.motion.numerics.positions_x87_checked`
 or :func:`~pymotoros.motion.numerics.positions_single`; the tests check both engines
 against each other and against an exact rational model.

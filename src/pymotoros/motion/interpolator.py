@@ -25,14 +25,12 @@ own (the queue ran dry) with few steps is done in plain Python.
 
 from __future__ import annotations
 
-import contextlib
 import functools
 import logging
 from collections.abc import Iterable, Sequence
-from dataclasses import dataclass
 from itertools import repeat
-from operator import add, sub
-from typing import ClassVar, Final
+from operator import sub
+from typing import Final
 
 import numpy as np
 import numpy.typing as npt
@@ -42,20 +40,15 @@ from pymotoros.motion.axes import GroupAxes
 from pymotoros.motion.batch import queued_targets, segment_targets
 from pymotoros.motion.constants import INT32_MAX, INT32_MIN, QUEUE_SIZE, SLOTS
 from pymotoros.motion.numerics import (
-    LD,
-    coefficients_kernel,
     coefficients_x87_exact,
     coefficients_x87_scalar,
     f32,
     f32_tuple,
-    positions_single,
-    positions_x87,
     positions_x87_scalar,
     pulse,
-    pulses,
     small_segment_x87,
-    velocities,
 )
+from pymotoros.motion.one_segment import compute_segment
 from pymotoros.motion.points import ORIGIN, GroupPoint, TrajPoint
 from pymotoros.motion.queue import Increment, IncrementQueue
 from pymotoros.motion.segment import Grid, plan_grid
@@ -203,22 +196,6 @@ class GroupInterpolator:
         "queue",
         "tool",
     )
-
-    scalar: ClassVar[bool] = True
-    """Compute a lone small segment in plain Python. The numpy kernels give the same
-    pulses: tests (``tests/motion/test_scalar_paths.py``) and ``bench/bench_controller.py
-    --reference`` turn this off, for the class, to compare the two."""
-    fused: ClassVar[bool] = True
-    """Within the plain-Python path, try :func:`small_segment_x87` first (off: the
-    two-pass coefficients-then-positions form, which is also its fallback)."""
-
-    front: ClassVar[bool] = True
-    """Compute the queue's segments one at a time, the oldest when IncMove reaches it
-    (:meth:`_compute_front`); off: all of them at once when the first is due (the path
-    before issue 13's second round; ``bench/bench_tick_spikes.py --paths``,
-    ``bench/bench_cells.py --reference`` and ``bench/bench_controller.py --reference
-    batch`` compare the two). Same pulses either way; on, no tick pays for more than one
-    segment of :data:`FRONT_MIN_ENTRIES` entries or more."""
 
     def __init__(self, axes: GroupAxes) -> None:
         self.axes = axes
@@ -397,7 +374,7 @@ class GroupInterpolator:
             self._leftover = segment.grid.leftover_ms
         else:
             # Only the blocked step is computed: the segment may be millions of steps.
-            one = _compute_segment(
+            one = compute_segment(
                 segment.start,
                 segment.end,
                 segment.leftover_before,
@@ -528,9 +505,10 @@ class GroupInterpolator:
         first = segment.grid.first_ms + period * segment.step0
         times = [first + period * k for k in range(full)]
         duration, taus = _small_grid(end.time_ms - s_ms, first - s_ms, full, period)
-        rows: list[Sequence[float]] | None = None
-        if self.fused:
-            rows = small_segment_x87(x0, v0, x1, v1, duration, taus)  # type: ignore[assignment]
+        # The fused float64 kernel where its error bounds vouch for the x87's values,
+        # else the two-pass form (coefficients, then positions); else the numpy kernels.
+        rows: list[Sequence[float]] | None
+        rows = small_segment_x87(x0, v0, x1, v1, duration, taus)  # type: ignore[assignment]
         if rows is None:
             coef = coefficients_x87_scalar(x0, v0, x1, v1, duration) or coefficients_x87_exact(
                 x0, v0, x1, v1, duration
@@ -552,7 +530,7 @@ class GroupInterpolator:
         self._uncomputed = []
         axes = self.axes
         prev = self._chain_prev
-        if len(segments) == 1 and self.scalar and self._compute_small(segments[0], prev):
+        if len(segments) == 1 and self._compute_small(segments[0], prev):
             return
         n = axes.num_axes
         count = len(segments)
@@ -581,13 +559,10 @@ class GroupInterpolator:
         :func:`queued_targets` (``tests/motion/test_front_path.py`` compares them);
         points that are not tame (NaN, infinities, huge values) take the general kernel.
         A segment of fewer than :data:`FRONT_MIN_ENTRIES` entries is computed with every
-        planned one, as with :attr:`front` off (:meth:`_compute`).
+        planned one (:meth:`_compute`).
         """
         segments = self._uncomputed
         if not segments:
-            return
-        if not self.front:
-            self._compute()
             return
         segment = segments[0]
         if segment.count < FRONT_MIN_ENTRIES:
@@ -657,150 +632,3 @@ class GroupInterpolator:
             segment.entries = entries[lo:hi]
             lo = hi
         self._chain_prev = tuple(chain[-1].tolist())
-
-
-# ================================================================== one segment on its own
-
-
-@dataclass(frozen=True, slots=True, eq=False)
-class _Segment:
-    """The computed steps of one segment, ready to be queued."""
-
-    start: GroupPoint
-    end: GroupPoint
-    grid: Grid
-    entries: list[Increment]
-    """One queue entry per step; the last one is at the end time."""
-    targets: I64Array
-    """Absolute pulse target of each entry (entries, num_axes), column j = controller slot
-    ``axes.axis_slots[j]``."""
-    coef: F32Array
-    """a1 and a2 stacked (2, num_axes), float32."""
-    taus: list[float]
-    """τ of each full step (s, float32 values)."""
-    pos: F32Array | None
-    """Interpolated float32 positions of the full steps (full_steps, num_axes), ROS order."""
-    mode: FloatMode
-
-    def state_at(self, index: int) -> GroupPoint:
-        """The group's current point once entry ``index`` has been computed."""
-        if index == len(self.entries) - 1 or self.pos is None:
-            return self.end
-        n = self.coef.shape[-1]
-        tau = np.array([[self.taus[index]]], dtype=np.float32)
-        v0 = np.array(self.start.vel[:n], dtype=np.float32)
-        vel = velocities(v0, self.coef[0], self.coef[1], tau, self.mode)[0]
-        return GroupPoint(
-            self.entries[index].time_ms,
-            tuple(self.pos[index].tolist()) + self.start.pos[n:],
-            tuple(vel.tolist()) + self.start.vel[n:],
-        )
-
-
-def _compute_segment(
-    start: GroupPoint,
-    end: GroupPoint,
-    leftover_ms: int,
-    previous: tuple[int, ...],
-    tool: int,
-    axes: GroupAxes,
-    only: int | None = None,
-) -> _Segment | None:
-    """Every step of the segment start → end, or None if end is not after start.
-
-    With ``only``, just full step ``only`` (then the end point): what
-    :meth:`GroupInterpolator._abort` needs, whatever the segment's length.
-
-    ``previous`` is prevPulsePos (8 slots, controller order); ``tool`` is latched into
-    every entry. Written for few numpy calls. The queue's segments are computed
-    together (:func:`~pymotoros.motion.batch.queued_targets`); this one-segment form is
-    what :meth:`GroupInterpolator._abort` needs to find where a blocked segment stands,
-    and the tests' literal per-segment model (same arithmetic, element by element).
-    """
-    s_ms = start.time_ms
-    if end.time_ms <= s_ms:
-        return None
-    mode = axes.float_mode
-    n = axes.num_axes
-    period = axes.period_ms
-    grid = plan_grid(s_ms, end.time_ms, leftover_ms, period)
-    if only is None:
-        full = grid.full_steps
-        steps = [grid.first_ms + period * k for k in range(full)]
-    else:
-        full = 1
-        steps = [grid.first_ms + period * only]
-    # (int ms)/1000 stored as float32. The exact quotient is never within 2⁻³⁵ of a
-    # float32 rounding boundary, so float64 division then rounding gives the x87 value.
-    duration = f32((end.time_ms - s_ms) / 1000)
-    taus = list(f32_tuple([(c - s_ms) / 1000 for c in steps], full))
-    x0, v0 = start.pos[:n], start.vel[:n]
-    x1, v1 = end.pos[:n], end.vel[:n]
-    pos: F32Array | None = None
-    errors = contextlib.nullcontext() if start.tame and end.tame else np.errstate(all="ignore")
-    with errors:
-        if mode is FloatMode.X87_EXTENDED:
-            fast = coefficients_x87_scalar(x0, v0, x1, v1, duration)
-            if fast is None:
-                rows = np.array([*x0, *v0, *x1, *v1], dtype=LD).reshape(4, n)
-                et = LD(duration)
-                tt = et * et
-                den_a = np.array([[tt], [tt * et]], dtype=LD)
-                den_b = np.array([[et], [tt]], dtype=LD)
-                coef = coefficients_kernel(rows, den_a, den_b, mode)
-            else:
-                coef = np.array(fast, dtype=np.float32).reshape(2, n)
-            if full:
-                # x0, v0, a1/2 and a2 as one longdouble array (a1/2 is exact); for a
-                # few steps the longdouble kernel is cheaper than the checked float64
-                # one the offline engine uses (same results).
-                co = coef.tolist() if fast is None else [fast[:n], fast[n:]]
-                flat = [*x0, *v0, *(c / 2 for c in co[0]), *co[1]]
-                terms = np.array(flat, dtype=np.float64).reshape(4, n).astype(LD)
-                lt = np.array(taus, dtype=np.float64).reshape(full, 1).astype(LD)
-                pos = positions_x87(terms[0], terms[1], terms[2], terms[3], lt, lt * lt)
-        else:
-            rows32 = np.array([*x0, *v0, *x1, *v1], dtype=np.float32).reshape(4, n)
-            t32 = np.float32(duration)
-            tt32 = t32 * t32
-            den_a = np.array([[tt32], [tt32 * t32]], dtype=np.float32)
-            den_b = np.array([[t32], [tt32]], dtype=np.float32)
-            coef = coefficients_kernel(rows32, den_a, den_b, mode)
-            if full:
-                tau = np.array(taus, dtype=np.float32).reshape(full, 1)
-                pos = positions_single(rows32[0], rows32[1], coef[0], coef[1], tau)
-    # Absolute targets (row 0: prevPulsePos), truncated from the exact products.
-    targets = np.empty((full + 2, n), dtype=np.int64)
-    targets[0] = axes.take(previous)
-    factors = axes.factors_ros_list
-    last = [pulse(x, f, mode) for x, f in zip(x1, factors, strict=True)]
-    if pos is not None:
-        ros = pulses(pos, axes.factors_ros, mode)
-        targets[1 : full + 1] = ros if axes.identity_columns else ros[:, axes.columns]
-    targets[full + 1] = last if axes.identity_columns else [last[j] for j in axes.columns_list]
-    entries = _make_entries([*steps, end.time_ms], targets, tool, axes)
-    return _Segment(start, end, grid, entries, targets[1:], coef, taus, pos, mode)
-
-
-def _make_entries(
-    times: list[int], chain: I64Array, tool: int | list[int], axes: GroupAxes
-) -> list[Increment]:
-    """Queue entries from absolute targets: ``chain`` row 0 is the previous target, row
-    k + 1 the target of entry k (valid slots in ascending order); ``tool`` for every
-    entry or one per entry."""
-    incs = (chain[1:] - chain[:-1]).tolist()
-    if axes.contiguous:
-        pad = (0,) * (SLOTS - axes.num_axes)
-        spread: Iterable[tuple[int, ...]] = map(add, map(tuple, incs), repeat(pad))
-    else:
-        spread = (_spread(row, axes.axis_slots) for row in incs)
-    # tuple.__new__ builds each NamedTuple without a Python-level call
-    tools = repeat(tool) if isinstance(tool, int) else tool
-    return list(map(tuple.__new__, repeat(Increment), zip(times, spread, tools, strict=False)))
-
-
-def _spread(row: list[int], slots: tuple[int, ...]) -> tuple[int, ...]:
-    out = [0] * SLOTS
-    for value, slot in zip(row, slots, strict=True):
-        out[slot] = value
-    return tuple(out)

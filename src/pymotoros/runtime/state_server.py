@@ -27,7 +27,7 @@ from typing import Final, Protocol, Unpack
 from pymotoros.controller.api import FeedbackData, MotoRosController
 from pymotoros.protocol.constants import ByteOrder
 from pymotoros.protocol.framing import encode
-from pymotoros.protocol.messages import JointFeedback, MotoJointFeedbackEx, RobotStatus
+from pymotoros.protocol.messages import JointFeedback, MotoJointFeedbackEx
 from pymotoros.protocol.state_frames import joint_feedback_frame, robot_status_frame
 from pymotoros.runtime.clock import Clock
 from pymotoros.runtime.connections import STATE_CLIENTS
@@ -133,8 +133,8 @@ class StateServer(TcpService):
 
         One pack per frame (:mod:`pymotoros.protocol.state_frames`); a frame whose values
         did not change since the last cycle (a group at rest, an unchanged status) is
-        the same bytes object again. :meth:`build_cycle_reference` builds the same bytes
-        through the message classes (the tests compare the two)."""
+        the same bytes object again. The tests compare the bytes with those the message
+        classes and ``encode`` make (``tests/oracles/state_cycle.py``)."""
         c = self._controller
         order = self._order
         memo = self._frames
@@ -177,33 +177,6 @@ class StateServer(TcpService):
         if last is None or last[0] != status:
             memo[-1] = last = (status, robot_status_frame(order, status))
         frames.append(last[1])
-        return tuple(frames)
-
-    def build_cycle_reference(self) -> tuple[bytes, ...]:
-        """:meth:`build_cycle` through validated message objects and ``encode``: the
-        definition the fast path is tested against."""
-        c = self._controller
-        order = self._order
-        feedback = []
-        for g in range(c.num_groups):
-            data = c.joint_feedback(g)
-            feedback.append(
-                JointFeedback(data.group_no, data.valid_fields, 0.0, data.pos, data.vel)
-            )
-        frames = [encode(fb, order) for fb in feedback]
-        if len(feedback) >= 2:
-            frames.append(encode(MotoJointFeedbackEx.for_groups(feedback), order))
-        s = c.robot_status()
-        status = RobotStatus(
-            s.drives_powered,
-            s.e_stopped,
-            s.error_code,
-            s.in_error,
-            s.in_motion,
-            s.mode,
-            s.motion_possible,
-        )
-        frames.append(encode(status, order))
         return tuple(frames)
 
     def broadcast_cycle(self, *, direct: bool = False) -> None:

@@ -76,7 +76,7 @@ class Role(enum.Enum):
     """State stream, nobody answers: comm TOPIC, reply INVALID."""
 
 
-class _Kind(enum.Enum):
+class Kind(enum.Enum):
     """Wire type of one field, for construction-time checks and the generic codec."""
 
     I32 = "i"
@@ -85,20 +85,20 @@ class _Kind(enum.Enum):
     JOINTS = f"{MAX_JOINTS}f"
 
 
-_I32, _U32, _F32, _JOINTS = _Kind.I32, _Kind.U32, _Kind.F32, _Kind.JOINTS
+I32, U32, F32, JOINTS = Kind.I32, Kind.U32, Kind.F32, Kind.JOINTS
 
 _T = TypeVar("_T")
 
 if TYPE_CHECKING:
 
-    def _tnew(cls: type[_T], values: Iterable[Any], /) -> _T:
+    def tnew(cls: type[_T], values: Iterable[Any], /) -> _T:
         """Typed view of ``tuple.__new__`` (see below)."""
 
 else:
     # Builds a message from its field values without validation (decode path only).
     # Typed above as returning ``cls``'s instance, so that decoders need no runtime
     # ``typing.cast`` call (a Python-level call per message on the hot path).
-    _tnew = tuple.__new__
+    tnew = tuple.__new__
 
 _AnyTuple: TypeAlias = tuple[Any, ...]
 """For ``cast``: naming the alias once avoids building ``tuple[Any, ...]`` on every call."""
@@ -126,32 +126,32 @@ _ECHO_COMMAND: Final = 2
 """The reply echoes (command, sequence): MOTION_CTRL."""
 
 
-def _structs(body_format: str) -> tuple[struct.Struct, struct.Struct]:
+def struct_pair(body_format: str) -> tuple[struct.Struct, struct.Struct]:
     """The (little-endian, big-endian) ``Struct`` pair for one body layout."""
     return struct.Struct(ByteOrder.LITTLE + body_format), struct.Struct(ByteOrder.BIG + body_format)
 
 
-def _pick(pair: tuple[struct.Struct, struct.Struct], order: ByteOrder) -> struct.Struct:
+def pick(pair: tuple[struct.Struct, struct.Struct], order: ByteOrder) -> struct.Struct:
     """Select the Struct for ``order`` (a plain ``==`` on the struct prefix: cheap)."""
     return pair[1] if order == ">" else pair[0]
 
 
-def _size_error(cls: type, body: bytes, expected: int | str) -> RemoteProtocolError:
+def size_error(cls: type, body: bytes, expected: int | str) -> RemoteProtocolError:
     return RemoteProtocolError(
         f"{cls.__name__}: body of {len(body)} bytes, expected {expected}", data=bytes(body)
     )
 
 
-def _check_int(owner: str, name: str, value: object, kind: _Kind) -> None:
+def check_int(owner: str, name: str, value: object, kind: Kind) -> None:
     if not isinstance(value, int):
         raise LocalProtocolError(f"{owner}.{name} must be an int, not {type(value).__name__}")
-    low, high = (INT32_MIN, INT32_MAX) if kind is _I32 else (0, UINT32_MAX)
+    low, high = (INT32_MIN, INT32_MAX) if kind is I32 else (0, UINT32_MAX)
     if not low <= value <= high:
-        kind_name = "int32" if kind is _I32 else "uint32"
+        kind_name = "int32" if kind is I32 else "uint32"
         raise LocalProtocolError(f"{owner}.{name} = {value} does not fit in {kind_name}")
 
 
-def _check_float(owner: str, name: str, value: object) -> None:
+def check_float(owner: str, name: str, value: object) -> None:
     if not isinstance(value, (int, float)) or isinstance(value, bool):
         raise LocalProtocolError(f"{owner}.{name} must be a float, not {type(value).__name__}")
     try:
@@ -160,66 +160,98 @@ def _check_float(owner: str, name: str, value: object) -> None:
         raise LocalProtocolError(f"{owner}.{name} = {value} does not fit in float32") from None
 
 
-_FIELD_TYPE: Final[Mapping[_Kind, type]] = MappingProxyType(
-    {_I32: int, _U32: int, _F32: float, _JOINTS: tuple}
+_FIELD_TYPE: Final[Mapping[Kind, type]] = MappingProxyType(
+    {I32: int, U32: int, F32: float, JOINTS: tuple}
 )
-"""The exact type the fast check wants per kind (a bool, an int for a float, a list or a
-subclass are valid too, but they take the field-by-field path)."""
+"""The exact type per kind the quick stage of a check vouches for (a bool, an int for a
+float, a list or a subclass are valid too: the field-by-field stage takes them)."""
 
 _JOINT_VALUE_TYPES: Final = frozenset((float, int))
 
 
-def _never(_message: object) -> bool:
-    """The fast check of a layout without ``FIELDS``: always ask the full check."""
-    return False
+def _as_is(message: _T) -> _T:
+    """The check of a layout without fields: nothing to check."""
+    return message
 
 
-def _bind_fast_check(fields: tuple[tuple[str, _Kind], ...]) -> Callable[[Any], bool]:
-    """A check that ``message`` would pass :meth:`Message._validated_fields` unchanged.
+def bind_check(cls: type[Message]) -> Callable[[Any], Any]:
+    """The one check of ``cls``'s ``FIELDS``: ``check(message)`` returns the message (joint
+    arrays as tuples) or raises :class:`LocalProtocolError` naming its first bad field.
 
-    Why: the state server builds JOINT_FEEDBACK and ROBOT_STATUS every cycle and the
-    client builds a JOINT_TRAJ_PT_FULL per point; checking their 31 floats one Python
-    call each was a tenth of a streamed move's time. Here the types are compared in one
-    ``tuple(map(type, …))`` against the layout's exact types, and the ranges are tested
-    by ``struct`` packing, which is what ``_check_float`` and ``_check_int`` test
-    (float32 overflow; int32/uint32 range for an exact ``int``). True only when every
-    field passes; on False the caller runs the field-by-field check, so a refusal keeps
-    its exact wording and an unusual valid value (a bool, a list, a numpy float) is
-    still accepted, as before.
+    Why it is quick: the state server builds JOINT_FEEDBACK and ROBOT_STATUS every cycle
+    and the client builds a JOINT_TRAJ_PT_FULL per point; checking their 31 floats one
+    Python call each was a tenth of a streamed move's time. So the types are compared in
+    one ``tuple(map(type, …))`` against the layout's exact types, and the ranges are
+    tested by ``struct`` packing, which is what :func:`check_float` and
+    :func:`check_int` test (float32 overflow; int32/uint32 range for an exact ``int``).
+    A message that passes is returned as it is. Anything else, a refusal or an unusual
+    valid value (a bool, a list, a numpy float), is walked in wire order by
+    :func:`walk_fields`, the one place the errors are worded.
     """
+    fields = cls.FIELDS
     if not fields:
-        return _never
+        return _as_is
+    owner = cls.__name__
     signature = tuple(_FIELD_TYPE[kind] for _name, kind in fields)
-    scalar_at = tuple(i for i, (_name, kind) in enumerate(fields) if kind is not _JOINTS)
-    joints_at = tuple(i for i, (_name, kind) in enumerate(fields) if kind is _JOINTS)
+    scalar_at = tuple(i for i, (_name, kind) in enumerate(fields) if kind is not JOINTS)
+    joints_at = tuple(i for i, (_name, kind) in enumerate(fields) if kind is JOINTS)
     pack_scalars = struct.Struct(
         ByteOrder.LITTLE + "".join(fields[i][1].value for i in scalar_at)
     ).pack
-    pack_joints = struct.Struct(ByteOrder.LITTLE + _JOINTS.value).pack
+    pack_joints = struct.Struct(ByteOrder.LITTLE + JOINTS.value).pack
     value_types = _JOINT_VALUE_TYPES
     size = MAX_JOINTS
-
     count = len(scalar_at)
     leading = scalar_at == tuple(range(count))  # scalars first: every layout so far
 
-    def fast_check(message: _AnyTuple) -> bool:
-        if tuple(map(type, message)) != signature:
-            return False
-        try:
-            pack_scalars(*(message[:count] if leading else [message[i] for i in scalar_at]))
-            for i in joints_at:
-                values = message[i]
-                if len(values) != size or not value_types.issuperset(map(type, values)):
-                    return False
-                pack_joints(*values)
-        except (struct.error, OverflowError):
-            return False
-        return True
+    def check(message: _AnyTuple) -> Any:
+        if tuple(map(type, message)) == signature:
+            try:
+                pack_scalars(*(message[:count] if leading else [message[i] for i in scalar_at]))
+                for i in joints_at:
+                    values = message[i]
+                    if len(values) != size or not value_types.issuperset(map(type, values)):
+                        break
+                    pack_joints(*values)
+                else:
+                    return message
+            except (struct.error, OverflowError):
+                pass
+        return walk_fields(cls, owner, fields, message)
 
-    return fast_check
+    return check
 
 
-def _pad_joints(owner: str, name: str, values: Iterable[float] | None) -> tuple[float, ...]:
+def walk_fields(
+    cls: type[_T], owner: str, fields: tuple[tuple[str, Kind], ...], message: Any
+) -> _T:
+    """Field by field in wire order: joint arrays made tuples, the first bad field
+    refused in words (:func:`check_float`, :func:`check_int`). What :func:`bind_check`'s
+    quick stage could not vouch for comes here."""
+    values = list(message)
+    changed = False
+    for index, (name, kind) in enumerate(fields):
+        value = values[index]
+        if kind is JOINTS:
+            joints = tuple(value)
+            if len(joints) != MAX_JOINTS:
+                raise LocalProtocolError(
+                    f"{owner}.{name} has {len(joints)} values; the wire carries exactly "
+                    f"{MAX_JOINTS} (use for_joints() to pad)"
+                )
+            for slot, item in enumerate(joints):
+                check_float(owner, f"{name}[{slot}]", item)
+            if joints is not value:
+                values[index] = joints
+                changed = True
+        elif kind is F32:
+            check_float(owner, name, value)
+        else:
+            check_int(owner, name, value, kind)
+    return tnew(cls, values) if changed else cast(_T, message)
+
+
+def pad_joints(owner: str, name: str, values: Iterable[float] | None) -> tuple[float, ...]:
     """Pad a short joint list with zeros to the 10 slots of the wire."""
     if values is None:
         return ZERO_JOINTS
@@ -229,22 +261,22 @@ def _pad_joints(owner: str, name: str, values: Iterable[float] | None) -> tuple[
     return padded + ZERO_JOINTS[len(padded) :]
 
 
-def _pad_arrays(
+def pad_arrays(
     owner: str,
     pos: Iterable[float] | None,
     vel: Iterable[float] | None,
     acc: Iterable[float] | None,
 ) -> tuple[tuple[float, ...], tuple[float, ...], tuple[float, ...]]:
-    """``pos``, ``vel`` and ``acc`` padded to the wire's 10 slots (:func:`_pad_joints`):
+    """``pos``, ``vel`` and ``acc`` padded to the wire's 10 slots (:func:`pad_joints`):
     the three arrays of every joint record (feedback, trajectory point, FULL_EX slot)."""
     return (
-        _pad_joints(owner, "pos", pos),
-        _pad_joints(owner, "vel", vel),
-        _pad_joints(owner, "acc", acc),
+        pad_joints(owner, "pos", pos),
+        pad_joints(owner, "vel", vel),
+        pad_joints(owner, "acc", acc),
     )
 
 
-def _bind_joint_record(
+def bind_joint_record(
     cls: type[_T], head: struct.Struct, joints: struct.Struct, size: int
 ) -> Callable[[bytes, int, int], _T]:
     """The decoder of a joint record: ``head`` (the int and float fields), then pos, vel
@@ -264,9 +296,9 @@ def _bind_joint_record(
 
     def unpack_record(buffer: bytes, start: int, end: int) -> _T:
         if end - start != size:
-            raise _size_error(cls, buffer[start:end], size)
+            raise size_error(cls, buffer[start:end], size)
         # Concatenation, not (*head, …): one tuple add instead of a list built and copied.
-        return _tnew(
+        return tnew(
             cls,
             unpack_head(buffer, start)  # noqa: RUF005
             + (
@@ -321,7 +353,7 @@ class Message:
     """Ports on which a server decodes this class from what a client sent (decode_request)."""
     REPLY_ON: ClassVar[tuple[Port, ...]] = ()
     """Ports on which a client decodes this class from what the controller sent (decode_reply)."""
-    FIELDS: ClassVar[tuple[tuple[str, _Kind], ...]] = ()
+    FIELDS: ClassVar[tuple[tuple[str, Kind], ...]] = ()
     BODY_SIZE: ClassVar[int] = 0
     """Body bytes: derived from ``FIELDS`` unless declared (the minimum for FULL_EX)."""
     FIXED_SIZE: ClassVar[bool] = True
@@ -343,29 +375,28 @@ class Message:
     generated ``__new__`` (a Python call that only packs them into the tuple)."""
     _LEADING: ClassVar[int] = -1
     """With every joint array after every scalar field, how many scalars lead; else -1."""
-    _FAST_CHECK: ClassVar[Callable[[Any], bool]]
-    """Whether a constructed message certainly passes :meth:`_validated_fields` unchanged
-    (False means "ask it", never "invalid"): see :func:`_bind_fast_check`."""
+    _CHECK: ClassVar[Callable[[Any], Any]]
+    """The class's one construction check: :func:`bind_check` of its ``FIELDS``, or
+    its own :meth:`_validated` (hand-laid layouts)."""
 
     def __init_subclass__(cls, **kwargs: Any) -> None:
         """Derive the layout from ``FIELDS`` and register the class (see the class doc)."""
         super().__init_subclass__(**kwargs)
         own = cls.__dict__
-        cls._STRUCTS = _structs("".join(kind.value for _name, kind in cls.FIELDS))
-        cls._FLAT = all(kind is not _JOINTS for _name, kind in cls.FIELDS)
+        cls._STRUCTS = struct_pair("".join(kind.value for _name, kind in cls.FIELDS))
+        cls._FLAT = all(kind is not JOINTS for _name, kind in cls.FIELDS)
         cls._DECODERS = {}
-        # A class with its own _validated is checked by it alone (__new__ asks the fast
-        # check first).
+        # A class with its own _validated (a hand-laid layout) is checked by it alone.
         own_check = cls._validated.__func__ is not Message._validated.__func__  # type: ignore[attr-defined]
-        cls._FAST_CHECK = _never if own_check else _bind_fast_check(cls.FIELDS)
+        cls._CHECK = cls._validated if own_check else bind_check(cls)
         cls._ARITY = len(getattr(cls, "_fields", ()))
         kinds = [kind for _name, kind in cls.FIELDS]
-        leading = kinds.index(_JOINTS) if _JOINTS in kinds else len(kinds)
-        cls._LEADING = leading if all(kind is _JOINTS for kind in kinds[leading:]) else -1
+        leading = kinds.index(JOINTS) if JOINTS in kinds else len(kinds)
+        cls._LEADING = leading if all(kind is JOINTS for kind in kinds[leading:]) else -1
         if "BODY_SIZE" not in own:
             cls.BODY_SIZE = cls._STRUCTS[0].size
         if "OFFSETS" not in own:
-            cls.OFFSETS = _offsets(cls.FIELDS)
+            cls.OFFSETS = field_offsets(cls.FIELDS)
         if getattr(cls, "ROLE", None) is not Role.REQUEST or "sequence" not in cls.OFFSETS:
             cls._ECHO = _ECHO_NONE
         else:
@@ -392,48 +423,17 @@ class Message:
 
         def __new__(cls, *args, **kwargs):
             if not kwargs and len(args) == cls._ARITY:  # every field given, by position:
-                message = _tnew(cls, args)  # what the NamedTuple's __new__ does
+                message = tnew(cls, args)  # what the NamedTuple's __new__ does
             else:
                 message = super().__new__(cls, *args, **kwargs)
-            return message if cls._FAST_CHECK(message) else cls._validated(message)
+            return cls._CHECK(message)
 
     @classmethod
     def _validated(cls, message: Self) -> Self:
-        """Check every field; return the message with joint arrays as tuples.
-
-        The common case (exact ``int``/``float``/``tuple`` values that all fit) is
-        answered by :func:`_bind_fast_check` in a few C calls; anything else, valid or
-        not, goes through :meth:`_validated_fields`, the one place the errors are worded.
-        """
-        if cls._FAST_CHECK(message):
-            return message
-        return cls._validated_fields(message)
-
-    @classmethod
-    def _validated_fields(cls, message: Self) -> Self:
-        """Field by field: the reference check, and the one that words every error."""
-        owner = cls.__name__
-        values = list(cast(_AnyTuple, message))
-        changed = False
-        for index, (name, kind) in enumerate(cls.FIELDS):
-            value = values[index]
-            if kind is _JOINTS:
-                joints = tuple(value)
-                if len(joints) != MAX_JOINTS:
-                    raise LocalProtocolError(
-                        f"{owner}.{name} has {len(joints)} values; the wire carries exactly "
-                        f"{MAX_JOINTS} (use for_joints() to pad)"
-                    )
-                for slot, item in enumerate(joints):
-                    _check_float(owner, f"{name}[{slot}]", item)
-                if joints is not value:
-                    values[index] = joints
-                    changed = True
-            elif kind is _F32:
-                _check_float(owner, name, value)
-            else:
-                _check_int(owner, name, value, kind)
-        return _tnew(cls, values) if changed else message
+        """Check every field; return the message with joint arrays as tuples
+        (:func:`bind_check`; a hand-laid layout overrides this)."""
+        checked: Self = cls._CHECK(message)
+        return checked
 
     def __eq__(self, other: object) -> bool:
         return type(self) is type(other) and _tuple_eq(self, other)
@@ -460,7 +460,7 @@ class Message:
             return flat
         flat = []
         for (_name, kind), value in zip(self.FIELDS, cast(_AnyTuple, self), strict=True):
-            if kind is _JOINTS:
+            if kind is JOINTS:
                 flat.extend(value)
             else:
                 flat.append(value)
@@ -468,7 +468,7 @@ class Message:
 
     def pack(self, order: ByteOrder) -> bytes:
         """The body bytes in ``order`` (no prefix, no header)."""
-        layout = _pick(self._STRUCTS, order)
+        layout = pick(self._STRUCTS, order)
         try:
             if self._FLAT:
                 fields: _AnyTuple = self  # type: ignore[assignment]  # a tuple; cast is a call
@@ -480,22 +480,22 @@ class Message:
     @classmethod
     def unpack(cls, body: bytes, order: ByteOrder) -> Self:
         """Decode exactly one body of this type; a wrong size is the peer's fault."""
-        layout = _pick(cls._STRUCTS, order)
+        layout = pick(cls._STRUCTS, order)
         if len(body) != layout.size:
-            raise _size_error(cls, body, layout.size)
+            raise size_error(cls, body, layout.size)
         raw = layout.unpack(body)
         if cls._FLAT:
-            return _tnew(cls, raw)
+            return tnew(cls, raw)
         values: list[object] = []
         index = 0
         for _name, kind in cls.FIELDS:
-            if kind is _JOINTS:
+            if kind is JOINTS:
                 values.append(raw[index : index + MAX_JOINTS])
                 index += MAX_JOINTS
             else:
                 values.append(raw[index])
                 index += 1
-        return _tnew(cls, values)
+        return tnew(cls, values)
 
     @classmethod
     def unpack_from(cls, buffer: bytes, start: int, end: int, order: ByteOrder) -> Self:
@@ -544,14 +544,14 @@ class Message:
         slices and calls its own :meth:`unpack`.
         """
         if cls._FLAT and cls.unpack.__func__ is Message.unpack.__func__:  # type: ignore[attr-defined]
-            layout = _pick(cls._STRUCTS, order)
+            layout = pick(cls._STRUCTS, order)
             size = layout.size
             unpack_fields = layout.unpack_from  # bound once: no attribute lookup per message
 
             def unpack_flat(buffer: bytes, start: int, end: int) -> Message:
                 if end - start != size:
-                    raise _size_error(cls, buffer[start:end], size)
-                return _tnew(cls, unpack_fields(buffer, start))
+                    raise size_error(cls, buffer[start:end], size)
+                return tnew(cls, unpack_fields(buffer, start))
 
             return unpack_flat
 
@@ -575,16 +575,16 @@ def _bind_arrays_last(cls: type[Message], order: ByteOrder) -> Callable[[bytes, 
     kinds = [kind for _name, kind in cls.FIELDS]
     leading = cls._LEADING
     head = struct.Struct(order + "".join(kind.value for kind in kinds[:leading]))
-    joints = struct.Struct(order + _JOINTS.value)
+    joints = struct.Struct(order + JOINTS.value)
     offsets = tuple(head.size + k * joints.size for k in range(len(kinds) - leading))
-    size = _pick(cls._STRUCTS, order).size
+    size = pick(cls._STRUCTS, order).size
     unpack_head = head.unpack_from
     unpack_joints = joints.unpack_from
 
     def unpack_arrays_last(buffer: bytes, start: int, end: int) -> Message:
         if end - start != size:
-            raise _size_error(cls, buffer[start:end], size)
-        return _tnew(
+            raise size_error(cls, buffer[start:end], size)
+        return tnew(
             cls,
             unpack_head(buffer, start)
             + tuple([unpack_joints(buffer, start + at) for at in offsets]),
@@ -593,12 +593,12 @@ def _bind_arrays_last(cls: type[Message], order: ByteOrder) -> Callable[[bytes, 
     return unpack_arrays_last
 
 
-def _offsets(fields: tuple[tuple[str, _Kind], ...]) -> Mapping[str, int]:
+def field_offsets(fields: tuple[tuple[str, Kind], ...]) -> Mapping[str, int]:
     """Body offset of each scalar field of a ``FIELDS`` layout (arrays are skipped)."""
     offsets: dict[str, int] = {}
     at = 0
     for name, kind in fields:
-        if kind is not _JOINTS:
+        if kind is not JOINTS:
             offsets[name] = at
         at += struct.calcsize(ByteOrder.LITTLE + kind.value)
     return MappingProxyType(offsets)
@@ -641,7 +641,7 @@ class UnknownMessage:
     body: bytes = field(default=b"")
 
     def __post_init__(self) -> None:
-        _check_int(type(self).__name__, "msg_type", self.msg_type, _I32)
+        check_int(type(self).__name__, "msg_type", self.msg_type, I32)
         object.__setattr__(self, "body", bytes(self.body))
 
     def pack(self, order: ByteOrder) -> bytes:
@@ -653,5 +653,5 @@ WireMessage: TypeAlias = Message | UnknownMessage
 """Anything the decoders return and ``encode`` accepts."""
 
 
-class _NoFields(NamedTuple):
+class NoFields(NamedTuple):
     """The field tuple of an empty body (PING, the GET_DH_PARAMETERS request)."""

@@ -9,13 +9,13 @@ from pymotoros.errors import LocalProtocolError
 from pymotoros.protocol.constants import MAX_DH_LINKS, MAX_GROUPS, ByteOrder, MsgType, Port
 from pymotoros.protocol.messages._base import (
     Message,
+    NoFields,
     Role,
-    _check_float,
-    _NoFields,
-    _pick,
-    _size_error,
-    _structs,
-    _tnew,
+    check_float,
+    pick,
+    size_error,
+    struct_pair,
+    tnew,
 )
 
 __all__ = [
@@ -35,7 +35,7 @@ class DhLink(NamedTuple):
     alpha: float
 
 
-class MotoGetDhParameters(Message, _NoFields):
+class MotoGetDhParameters(Message, NoFields):
     """MOTO_GET_DH_PARAMETERS (2020) request: empty body."""
 
     __slots__ = ()
@@ -47,7 +47,7 @@ class MotoGetDhParameters(Message, _NoFields):
 _FLOATS_PER_LINK: Final = len(DhLink._fields)
 """theta, d, a, alpha: float32 each (§1.4)."""
 
-_DH_STRUCTS: Final = _structs(f"{MAX_GROUPS * MAX_DH_LINKS * _FLOATS_PER_LINK}f")
+_DH_STRUCTS: Final = struct_pair(f"{MAX_GROUPS * MAX_DH_LINKS * _FLOATS_PER_LINK}f")
 
 BODY_SIZE_DH_REPLY: Final = _DH_STRUCTS[0].size
 """512: 4 groups × 8 links × {theta, d, a, alpha} float32 (§1.4)."""
@@ -90,9 +90,9 @@ class MotoGetDhParametersReply(Message, _Dh):
                 )
             for k, link in enumerate(row):
                 for name, value in zip(DhLink._fields, link, strict=True):
-                    _check_float(owner, f"groups[{g}][{k}].{name}", value)
+                    check_float(owner, f"groups[{g}][{k}].{name}", value)
             checked.append(row)
-        return _tnew(cls, (tuple(checked),))
+        return tnew(cls, (tuple(checked),))
 
     @classmethod
     def for_groups(cls, groups: Iterable[Iterable[Sequence[float]]]) -> Self:
@@ -107,15 +107,15 @@ class MotoGetDhParametersReply(Message, _Dh):
     def pack(self, order: ByteOrder) -> bytes:
         """The body: 4 groups × 8 links × (theta, d, a, alpha) as float32, unused groups zero."""
         flat = [value for links in self.groups for link in links for value in link]
-        return _pick(_DH_STRUCTS, order).pack(*flat)
+        return pick(_DH_STRUCTS, order).pack(*flat)
 
     @classmethod
     def unpack(cls, body: bytes, order: ByteOrder) -> Self:
         """Decode exactly one body of ``BODY_SIZE_DH_REPLY`` bytes; another size is the peer's
         fault."""
         if len(body) != BODY_SIZE_DH_REPLY:
-            raise _size_error(cls, body, BODY_SIZE_DH_REPLY)
-        raw = _pick(_DH_STRUCTS, order).unpack(body)
+            raise size_error(cls, body, BODY_SIZE_DH_REPLY)
+        raw = pick(_DH_STRUCTS, order).unpack(body)
         step = _FLOATS_PER_LINK
         per_group = MAX_DH_LINKS * step
         groups = tuple(
@@ -124,4 +124,4 @@ class MotoGetDhParametersReply(Message, _Dh):
             )
             for base in range(0, MAX_GROUPS * per_group, per_group)
         )
-        return _tnew(cls, (groups,))
+        return tnew(cls, (groups,))

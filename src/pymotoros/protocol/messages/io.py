@@ -12,14 +12,14 @@ from typing import ClassVar, Final, NamedTuple, Self
 
 from pymotoros.protocol.constants import ByteOrder, MsgType, Port
 from pymotoros.protocol.messages._base import (
-    _I32,
-    _U32,
+    I32,
+    U32,
+    Kind,
     Message,
     Role,
-    _Kind,
-    _pick,
-    _size_error,
-    _tnew,
+    pick,
+    size_error,
+    tnew,
 )
 from pymotoros.protocol.messages.motion import BODY_SIZE_MOTION_REPLY
 
@@ -72,7 +72,7 @@ class _ErrorReply(NamedTuple):
     subcode: int
 
 
-_I32_FIELDS_ERROR: Final = (("result", _I32), ("subcode", _I32))
+_I32_FIELDS_ERROR: Final = (("result", I32), ("subcode", I32))
 
 
 class MotoReadIoBit(Message, _Address):
@@ -82,7 +82,7 @@ class MotoReadIoBit(Message, _Address):
     MSG_TYPE: ClassVar[MsgType] = MsgType.MOTO_READ_IO_BIT
     ROLE: ClassVar[Role] = Role.REQUEST
     REQUEST_ON: ClassVar[tuple[Port, ...]] = (Port.MOTION, Port.IO)
-    FIELDS: ClassVar[tuple[tuple[str, _Kind], ...]] = (("io_address", _U32),)
+    FIELDS: ClassVar[tuple[tuple[str, Kind], ...]] = (("io_address", U32),)
 
 
 class MotoReadIoBitReply(Message, _ValueResult):
@@ -93,7 +93,7 @@ class MotoReadIoBitReply(Message, _ValueResult):
     ROLE: ClassVar[Role] = Role.REPLY
     REPLY_ON: ClassVar[tuple[Port, ...]] = (Port.MOTION, Port.IO)
     IO_RESULT: ClassVar[bool] = True
-    FIELDS: ClassVar[tuple[tuple[str, _Kind], ...]] = (("value", _U32), ("result_code", _U32))
+    FIELDS: ClassVar[tuple[tuple[str, Kind], ...]] = (("value", U32), ("result_code", U32))
 
 
 class MotoWriteIoBit(Message, _AddressValue):
@@ -103,7 +103,7 @@ class MotoWriteIoBit(Message, _AddressValue):
     MSG_TYPE: ClassVar[MsgType] = MsgType.MOTO_WRITE_IO_BIT
     ROLE: ClassVar[Role] = Role.REQUEST
     REQUEST_ON: ClassVar[tuple[Port, ...]] = (Port.MOTION, Port.IO)
-    FIELDS: ClassVar[tuple[tuple[str, _Kind], ...]] = (("io_address", _U32), ("io_value", _U32))
+    FIELDS: ClassVar[tuple[tuple[str, Kind], ...]] = (("io_address", U32), ("io_value", U32))
 
 
 class MotoWriteIoBitReply(Message, _Result):
@@ -114,7 +114,7 @@ class MotoWriteIoBitReply(Message, _Result):
     ROLE: ClassVar[Role] = Role.REPLY
     REPLY_ON: ClassVar[tuple[Port, ...]] = (Port.MOTION, Port.IO)
     IO_RESULT: ClassVar[bool] = True
-    FIELDS: ClassVar[tuple[tuple[str, _Kind], ...]] = (("result_code", _U32),)
+    FIELDS: ClassVar[tuple[tuple[str, Kind], ...]] = (("result_code", U32),)
 
 
 class MotoReadIoGroup(Message, _Address):
@@ -124,7 +124,7 @@ class MotoReadIoGroup(Message, _Address):
     MSG_TYPE: ClassVar[MsgType] = MsgType.MOTO_READ_IO_GROUP
     ROLE: ClassVar[Role] = Role.REQUEST
     REQUEST_ON: ClassVar[tuple[Port, ...]] = (Port.MOTION, Port.IO)
-    FIELDS: ClassVar[tuple[tuple[str, _Kind], ...]] = (("io_address", _U32),)
+    FIELDS: ClassVar[tuple[tuple[str, Kind], ...]] = (("io_address", U32),)
 
 
 class MotoReadIoGroupReply(Message, _ValueResult):
@@ -135,7 +135,7 @@ class MotoReadIoGroupReply(Message, _ValueResult):
     ROLE: ClassVar[Role] = Role.REPLY
     REPLY_ON: ClassVar[tuple[Port, ...]] = (Port.MOTION, Port.IO)
     IO_RESULT: ClassVar[bool] = True
-    FIELDS: ClassVar[tuple[tuple[str, _Kind], ...]] = (("value", _U32), ("result_code", _U32))
+    FIELDS: ClassVar[tuple[tuple[str, Kind], ...]] = (("value", U32), ("result_code", U32))
 
 
 class MotoWriteIoGroup(Message, _AddressValue):
@@ -145,7 +145,7 @@ class MotoWriteIoGroup(Message, _AddressValue):
     MSG_TYPE: ClassVar[MsgType] = MsgType.MOTO_WRITE_IO_GROUP
     ROLE: ClassVar[Role] = Role.REQUEST
     REQUEST_ON: ClassVar[tuple[Port, ...]] = (Port.MOTION, Port.IO)
-    FIELDS: ClassVar[tuple[tuple[str, _Kind], ...]] = (("io_address", _U32), ("io_value", _U32))
+    FIELDS: ClassVar[tuple[tuple[str, Kind], ...]] = (("io_address", U32), ("io_value", U32))
 
 
 class MotoWriteIoGroupReply(Message, _Result):
@@ -156,7 +156,7 @@ class MotoWriteIoGroupReply(Message, _Result):
     ROLE: ClassVar[Role] = Role.REPLY
     REPLY_ON: ClassVar[tuple[Port, ...]] = (Port.MOTION, Port.IO)
     IO_RESULT: ClassVar[bool] = True
-    FIELDS: ClassVar[tuple[tuple[str, _Kind], ...]] = (("result_code", _U32),)
+    FIELDS: ClassVar[tuple[tuple[str, Kind], ...]] = (("result_code", U32),)
 
 
 class MotoReadMRegister(Message, _Register):
@@ -166,7 +166,7 @@ class MotoReadMRegister(Message, _Register):
     MSG_TYPE: ClassVar[MsgType] = MsgType.MOTO_READ_MREGISTER
     ROLE: ClassVar[Role] = Role.REQUEST
     REQUEST_ON: ClassVar[tuple[Port, ...]] = (Port.IO,)
-    FIELDS: ClassVar[tuple[tuple[str, _Kind], ...]] = (("register_number", _U32),)
+    FIELDS: ClassVar[tuple[tuple[str, Kind], ...]] = (("register_number", U32),)
 
 
 class MotoReadMRegisterReply(Message, _ValueResult):
@@ -177,7 +177,7 @@ class MotoReadMRegisterReply(Message, _ValueResult):
     ROLE: ClassVar[Role] = Role.REPLY
     REPLY_ON: ClassVar[tuple[Port, ...]] = (Port.IO,)
     IO_RESULT: ClassVar[bool] = True
-    FIELDS: ClassVar[tuple[tuple[str, _Kind], ...]] = (("value", _U32), ("result_code", _U32))
+    FIELDS: ClassVar[tuple[tuple[str, Kind], ...]] = (("value", U32), ("result_code", U32))
 
 
 class MotoWriteMRegister(Message, _RegisterValue):
@@ -187,9 +187,9 @@ class MotoWriteMRegister(Message, _RegisterValue):
     MSG_TYPE: ClassVar[MsgType] = MsgType.MOTO_WRITE_MREGISTER
     ROLE: ClassVar[Role] = Role.REQUEST
     REQUEST_ON: ClassVar[tuple[Port, ...]] = (Port.IO,)
-    FIELDS: ClassVar[tuple[tuple[str, _Kind], ...]] = (
-        ("register_number", _U32),
-        ("value", _U32),
+    FIELDS: ClassVar[tuple[tuple[str, Kind], ...]] = (
+        ("register_number", U32),
+        ("value", U32),
     )
 
 
@@ -201,7 +201,7 @@ class MotoWriteMRegisterReply(Message, _Result):
     ROLE: ClassVar[Role] = Role.REPLY
     REPLY_ON: ClassVar[tuple[Port, ...]] = (Port.IO,)
     IO_RESULT: ClassVar[bool] = True
-    FIELDS: ClassVar[tuple[tuple[str, _Kind], ...]] = (("result_code", _U32),)
+    FIELDS: ClassVar[tuple[tuple[str, Kind], ...]] = (("result_code", U32),)
 
 
 _IO_ERROR_PADDING: Final = BODY_SIZE_MOTION_REPLY - 8  # after result and subcode
@@ -223,20 +223,18 @@ class IoErrorReply(Message, _ErrorReply):
     REPLY_ON: ClassVar[tuple[Port, ...]] = (Port.IO,)
     BODY_SIZE: ClassVar[int] = BODY_SIZE_MOTION_REPLY
     """Two int32 and 52 zero bytes: the size of a MOTION_REPLY (§1.6)."""
-    FIELDS: ClassVar[tuple[tuple[str, _Kind], ...]] = _I32_FIELDS_ERROR
+    FIELDS: ClassVar[tuple[tuple[str, Kind], ...]] = _I32_FIELDS_ERROR
 
     def pack(self, order: ByteOrder) -> bytes:
         """``result`` and ``subcode`` as int32, then 52 zero bytes (the size of a MOTION_REPLY)."""
-        return _pick(self._STRUCTS, order).pack(self.result, self.subcode) + bytes(
-            _IO_ERROR_PADDING
-        )
+        return pick(self._STRUCTS, order).pack(self.result, self.subcode) + bytes(_IO_ERROR_PADDING)
 
     @classmethod
     def unpack(cls, body: bytes, order: ByteOrder) -> Self:
         """60 bytes; the trailing 52 are not checked (MotoROS leaves them zero)."""
         if len(body) != BODY_SIZE_MOTION_REPLY:
-            raise _size_error(cls, body, BODY_SIZE_MOTION_REPLY)
-        return _tnew(cls, _pick(cls._STRUCTS, order).unpack_from(body))
+            raise size_error(cls, body, BODY_SIZE_MOTION_REPLY)
+        return tnew(cls, pick(cls._STRUCTS, order).unpack_from(body))
 
 
 IO_REPLIES: Final[Mapping[type[Message], type[Message]]] = MappingProxyType(

@@ -10,13 +10,13 @@ from typing import ClassVar, Final, NamedTuple
 
 from pymotoros.protocol.constants import MsgType, Port
 from pymotoros.protocol.messages._base import (
-    _I32,
-    _JOINTS,
+    I32,
+    JOINTS,
     ZERO_JOINTS,
+    Kind,
     Message,
+    NoFields,
     Role,
-    _Kind,
-    _NoFields,
 )
 
 __all__ = [
@@ -29,7 +29,7 @@ __all__ = [
 ]
 
 
-class Ping(Message, _NoFields):
+class Ping(Message, NoFields):
     """PING request (type 1, empty body); MotoROS answers with an empty PING reply."""
 
     __slots__ = ()
@@ -38,7 +38,7 @@ class Ping(Message, _NoFields):
     REQUEST_ON: ClassVar[tuple[Port, ...]] = (Port.MOTION,)
 
 
-class PingReply(Message, _NoFields):
+class PingReply(Message, NoFields):
     """The PING reply: same type 1, comm SERVICE_REPLY, reply SUCCESS, empty body."""
 
     __slots__ = ()
@@ -65,11 +65,11 @@ class MotoMotionCtrl(Message, _Ctrl):
     MSG_TYPE: ClassVar[MsgType] = MsgType.MOTO_MOTION_CTRL
     ROLE: ClassVar[Role] = Role.REQUEST
     REQUEST_ON: ClassVar[tuple[Port, ...]] = (Port.MOTION,)
-    FIELDS: ClassVar[tuple[tuple[str, _Kind], ...]] = (
-        ("group_no", _I32),
-        ("sequence", _I32),
-        ("command", _I32),
-        ("data", _JOINTS),
+    FIELDS: ClassVar[tuple[tuple[str, Kind], ...]] = (
+        ("group_no", I32),
+        ("sequence", I32),
+        ("command", I32),
+        ("data", JOINTS),
     )
 
 
@@ -96,13 +96,13 @@ class MotoMotionReply(Message, _Reply):
     ROLE: ClassVar[Role] = Role.REPLY
     REQUEST_ON: ClassVar[tuple[Port, ...]] = (Port.MOTION,)
     REPLY_ON: ClassVar[tuple[Port, ...]] = (Port.MOTION,)
-    FIELDS: ClassVar[tuple[tuple[str, _Kind], ...]] = (
-        ("group_no", _I32),
-        ("sequence", _I32),
-        ("command", _I32),
-        ("result", _I32),
-        ("subcode", _I32),
-        ("data", _JOINTS),
+    FIELDS: ClassVar[tuple[tuple[str, Kind], ...]] = (
+        ("group_no", I32),
+        ("sequence", I32),
+        ("command", I32),
+        ("result", I32),
+        ("subcode", I32),
+        ("data", JOINTS),
     )
 
 
@@ -123,8 +123,8 @@ class MotoSelectTool(Message, _Tool):
     MSG_TYPE: ClassVar[MsgType] = MsgType.MOTO_SELECT_TOOL
     ROLE: ClassVar[Role] = Role.REQUEST
     REQUEST_ON: ClassVar[tuple[Port, ...]] = (Port.MOTION,)
-    FIELDS: ClassVar[tuple[tuple[str, _Kind], ...]] = (
-        ("group_no", _I32),
-        ("tool", _I32),
-        ("sequence", _I32),
+    FIELDS: ClassVar[tuple[tuple[str, Kind], ...]] = (
+        ("group_no", I32),
+        ("tool", I32),
+        ("sequence", I32),
     )

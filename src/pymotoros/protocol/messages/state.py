@@ -15,20 +15,20 @@ from typing import ClassVar, Final, NamedTuple, Self
 from pymotoros.errors import LocalProtocolError
 from pymotoros.protocol.constants import MAX_GROUPS, ByteOrder, MsgType, Port, ValidFields
 from pymotoros.protocol.messages._base import (
-    _F32,
-    _I32,
-    _JOINTS,
+    F32,
+    I32,
+    JOINTS,
     ZERO_JOINTS,
+    Kind,
     Message,
     Role,
-    _bind_joint_record,
-    _check_int,
-    _Kind,
-    _pad_arrays,
-    _pick,
-    _size_error,
-    _structs,
-    _tnew,
+    bind_joint_record,
+    check_int,
+    pad_arrays,
+    pick,
+    size_error,
+    struct_pair,
+    tnew,
 )
 
 __all__ = [
@@ -62,12 +62,10 @@ class RobotStatus(Message, _Status):
     ROLE: ClassVar[Role] = Role.TOPIC
     REQUEST_ON: ClassVar[tuple[Port, ...]] = (Port.MOTION,)
     REPLY_ON: ClassVar[tuple[Port, ...]] = (Port.STATE,)
-    FIELDS: ClassVar[tuple[tuple[str, _Kind], ...]] = tuple(
-        (name, _I32) for name in _Status._fields
-    )
+    FIELDS: ClassVar[tuple[tuple[str, Kind], ...]] = tuple((name, I32) for name in _Status._fields)
 
 
-class _GroupRecord(NamedTuple):
+class GroupRecord(NamedTuple):
     group_no: int
     valid_fields: int
     time: float
@@ -76,13 +74,13 @@ class _GroupRecord(NamedTuple):
     acc: tuple[float, ...] = ZERO_JOINTS
 
 
-_GROUP_RECORD_FIELDS: Final[tuple[tuple[str, _Kind], ...]] = (
-    ("group_no", _I32),
-    ("valid_fields", _I32),
-    ("time", _F32),
-    ("pos", _JOINTS),
-    ("vel", _JOINTS),
-    ("acc", _JOINTS),
+GROUP_RECORD_FIELDS: Final[tuple[tuple[str, Kind], ...]] = (
+    ("group_no", I32),
+    ("valid_fields", I32),
+    ("time", F32),
+    ("pos", JOINTS),
+    ("vel", JOINTS),
+    ("acc", JOINTS),
 )
 
 # pos, vel and acc end the 132-byte group record, at offsets 12, 52 and 92 (§1.4).
@@ -94,7 +92,7 @@ _FEEDBACK_FLAGS_VEL: Final = int(ValidFields.POSITION | ValidFields.VELOCITY)
 one per group every cycle; ``IntFlag`` operators are Python calls)."""
 
 
-class JointFeedback(Message, _GroupRecord):
+class JointFeedback(Message, GroupRecord):
     """JOINT_FEEDBACK (15): one group's feedback position (rad or m) and speed.
 
     MotoROS sends ``valid_fields`` 6 (position + velocity), ``time`` 0.0 and ``acc``
@@ -107,7 +105,7 @@ class JointFeedback(Message, _GroupRecord):
     ROLE: ClassVar[Role] = Role.TOPIC
     REQUEST_ON: ClassVar[tuple[Port, ...]] = (Port.MOTION,)
     REPLY_ON: ClassVar[tuple[Port, ...]] = (Port.STATE,)
-    FIELDS: ClassVar[tuple[tuple[str, _Kind], ...]] = _GROUP_RECORD_FIELDS
+    FIELDS: ClassVar[tuple[tuple[str, Kind], ...]] = GROUP_RECORD_FIELDS
 
     @classmethod
     def for_joints(
@@ -127,7 +125,7 @@ class JointFeedback(Message, _GroupRecord):
         """
         if valid_fields is None:
             valid_fields = _FEEDBACK_FLAGS_VEL if vel is not None else _FEEDBACK_FLAGS
-        return cls(group_no, int(valid_fields), time, *_pad_arrays(cls.__name__, pos, vel, acc))
+        return cls(group_no, int(valid_fields), time, *pad_arrays(cls.__name__, pos, vel, acc))
 
     def pack(self, order: ByteOrder) -> bytes:
         """Hand-unrolled: the state server packs one per group every cycle."""
@@ -149,33 +147,32 @@ class JointFeedback(Message, _GroupRecord):
         """The only JOINT_FEEDBACK decoder: the client's per-frame work on the state port.
 
         ``next_reply``, ``decode_reply``, :meth:`unpack_from`, :meth:`unpack` and
-        FEEDBACK_EX's slots all come here: :func:`._base._bind_joint_record`.
+        FEEDBACK_EX's slots all come here: :func:`._base.bind_joint_record`.
         """
         if order == ">":
-            return _bind_joint_record(cls, _RECORD_HEAD_BE, _JOINTS_BE, BODY_SIZE_GROUP_RECORD)
-        return _bind_joint_record(cls, _RECORD_HEAD_LE, _JOINTS_LE, BODY_SIZE_GROUP_RECORD)
+            return bind_joint_record(cls, _RECORD_HEAD_BE, _JOINTS_BE, BODY_SIZE_GROUP_RECORD)
+        return bind_joint_record(cls, _RECORD_HEAD_LE, _JOINTS_LE, BODY_SIZE_GROUP_RECORD)
 
 
 _RECORD_LE, _RECORD_BE = JointFeedback._STRUCTS
-_RECORD_HEAD_LE, _RECORD_HEAD_BE = _structs("iif")  # groupNo, validFields, time
-_JOINTS_LE, _JOINTS_BE = _structs(_JOINTS.value)
+_RECORD_HEAD_LE, _RECORD_HEAD_BE = struct_pair("iif")  # groupNo, validFields, time
+_JOINTS_LE, _JOINTS_BE = struct_pair(JOINTS.value)
 
 BODY_SIZE_GROUP_RECORD: Final = JointFeedback.BODY_SIZE
 """132: groupNo, validFields, time, pos[10], vel[10], acc[10]: the JOINT_FEEDBACK body and
 the per-group record of FULL_EX / FEEDBACK_EX (§1.4)."""
 
 
-def _group_count(n: int) -> int:
+def group_count(n: int) -> int:
     """How many 132-byte records a message with ``numberOfValidGroups = n`` carries."""
     return min(max(n, 0), MAX_GROUPS)
 
 
-def _check_records(owner: str, n: int, groups: tuple[object, ...], kind: type) -> None:
-    _check_int(owner, "number_of_valid_groups", n, _I32)
-    if len(groups) != _group_count(n):
+def check_records(owner: str, n: int, groups: tuple[object, ...], kind: type) -> None:
+    check_int(owner, "number_of_valid_groups", n, I32)
+    if len(groups) != group_count(n):
         raise LocalProtocolError(
-            f"{owner}: number_of_valid_groups {n} needs {_group_count(n)} records, "
-            f"got {len(groups)}"
+            f"{owner}: number_of_valid_groups {n} needs {group_count(n)} records, got {len(groups)}"
         )
     if not all(isinstance(g, kind) for g in groups):
         raise LocalProtocolError(f"{owner}.groups must hold {kind.__name__} records")
@@ -186,7 +183,7 @@ class _FeedbackEx(NamedTuple):
     groups: tuple[JointFeedback, ...]
 
 
-_EX_COUNT_STRUCTS: Final = _structs("i")
+_EX_COUNT_STRUCTS: Final = struct_pair("i")
 
 BODY_SIZE_FEEDBACK_EX: Final = _EX_COUNT_STRUCTS[0].size + MAX_GROUPS * BODY_SIZE_GROUP_RECORD
 """532: numberOfValidGroups + always four 132-byte slots (§1.3)."""
@@ -209,8 +206,8 @@ class MotoJointFeedbackEx(Message, _FeedbackEx):
     @classmethod
     def _validated(cls, message: Self) -> Self:
         groups = tuple(message.groups)
-        _check_records(cls.__name__, message.number_of_valid_groups, groups, JointFeedback)
-        return _tnew(cls, (message.number_of_valid_groups, groups))
+        check_records(cls.__name__, message.number_of_valid_groups, groups, JointFeedback)
+        return tnew(cls, (message.number_of_valid_groups, groups))
 
     @classmethod
     def for_groups(cls, groups: Iterable[JointFeedback]) -> Self:
@@ -223,7 +220,7 @@ class MotoJointFeedbackEx(Message, _FeedbackEx):
     def pack(self, order: ByteOrder) -> bytes:
         """The count, the groups' records, then zeros up to ``BODY_SIZE_FEEDBACK_EX`` (MotoROS's
         fixed size)."""
-        head = _pick(_EX_COUNT_STRUCTS, order).pack(self.number_of_valid_groups)
+        head = pick(_EX_COUNT_STRUCTS, order).pack(self.number_of_valid_groups)
         slots = b"".join(record.pack(order) for record in self.groups)
         return head + slots + bytes(BODY_SIZE_FEEDBACK_EX - len(head) - len(slots))
 
@@ -231,12 +228,12 @@ class MotoJointFeedbackEx(Message, _FeedbackEx):
     def unpack(cls, body: bytes, order: ByteOrder) -> Self:
         """Decode exactly ``BODY_SIZE_FEEDBACK_EX`` bytes: the count, then the group records."""
         if len(body) != BODY_SIZE_FEEDBACK_EX:
-            raise _size_error(cls, body, BODY_SIZE_FEEDBACK_EX)
-        head = _pick(_EX_COUNT_STRUCTS, order)
+            raise size_error(cls, body, BODY_SIZE_FEEDBACK_EX)
+        head = pick(_EX_COUNT_STRUCTS, order)
         (n,) = head.unpack_from(body)
-        end = head.size + _group_count(n) * BODY_SIZE_GROUP_RECORD
+        end = head.size + group_count(n) * BODY_SIZE_GROUP_RECORD
         records = tuple(
             JointFeedback.unpack_from(body, start, start + BODY_SIZE_GROUP_RECORD, order)
             for start in range(head.size, end, BODY_SIZE_GROUP_RECORD)
         )
-        return _tnew(cls, (n, records))
+        return tnew(cls, (n, records))

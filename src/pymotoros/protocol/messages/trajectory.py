@@ -22,28 +22,28 @@ from pymotoros.protocol.constants import (
     ValidFields,
 )
 from pymotoros.protocol.messages._base import (
-    _F32,
-    _I32,
-    _JOINTS,
+    F32,
+    I32,
+    JOINTS,
     ZERO_JOINTS,
+    Kind,
     Message,
     Role,
-    _bind_joint_record,
-    _check_int,
-    _Kind,
-    _offsets,
-    _pad_arrays,
-    _pick,
-    _size_error,
-    _structs,
-    _tnew,
+    bind_joint_record,
+    check_int,
+    field_offsets,
+    pad_arrays,
+    pick,
+    size_error,
+    struct_pair,
+    tnew,
 )
 from pymotoros.protocol.messages.state import (
-    _GROUP_RECORD_FIELDS,
     BODY_SIZE_GROUP_RECORD,
-    _check_records,
-    _group_count,
-    _GroupRecord,
+    GROUP_RECORD_FIELDS,
+    GroupRecord,
+    check_records,
+    group_count,
 )
 
 __all__ = [
@@ -56,7 +56,7 @@ __all__ = [
 ]
 
 
-class JointTrajPtExData(Message, _GroupRecord):
+class JointTrajPtExData(Message, GroupRecord):
     """One group's record inside JOINT_TRAJ_PT_FULL_EX: a point without its own sequence.
 
     Not a message on its own (``MSG_TYPE`` is that of the carrying FULL_EX); the
@@ -66,7 +66,7 @@ class JointTrajPtExData(Message, _GroupRecord):
     __slots__ = ()
     MSG_TYPE: ClassVar[MsgType] = MsgType.MOTO_JOINT_TRAJ_PT_FULL_EX
     ROLE: ClassVar[Role] = Role.REQUEST
-    FIELDS: ClassVar[tuple[tuple[str, _Kind], ...]] = _GROUP_RECORD_FIELDS
+    FIELDS: ClassVar[tuple[tuple[str, Kind], ...]] = GROUP_RECORD_FIELDS
 
     @classmethod
     def for_joints(
@@ -82,7 +82,7 @@ class JointTrajPtExData(Message, _GroupRecord):
         """Build from joint lists of any length ≤ 10; flags default to time+pos+vel(+acc)."""
         if valid_fields is None:
             valid_fields = _point_flags(acc)
-        return cls(group_no, int(valid_fields), time, *_pad_arrays(cls.__name__, pos, vel, acc))
+        return cls(group_no, int(valid_fields), time, *pad_arrays(cls.__name__, pos, vel, acc))
 
 
 _POINT_FLAGS: Final = int(ValidFields.TIME | ValidFields.POSITION | ValidFields.VELOCITY)
@@ -120,14 +120,14 @@ class JointTrajPtFull(Message, _Point):
     MSG_TYPE: ClassVar[MsgType] = MsgType.JOINT_TRAJ_PT_FULL
     ROLE: ClassVar[Role] = Role.REQUEST
     REQUEST_ON: ClassVar[tuple[Port, ...]] = (Port.MOTION,)
-    FIELDS: ClassVar[tuple[tuple[str, _Kind], ...]] = (
-        ("group_no", _I32),
-        ("sequence", _I32),
-        ("valid_fields", _I32),
-        ("time", _F32),
-        ("pos", _JOINTS),
-        ("vel", _JOINTS),
-        ("acc", _JOINTS),
+    FIELDS: ClassVar[tuple[tuple[str, Kind], ...]] = (
+        ("group_no", I32),
+        ("sequence", I32),
+        ("valid_fields", I32),
+        ("time", F32),
+        ("pos", JOINTS),
+        ("vel", JOINTS),
+        ("acc", JOINTS),
     )
 
     @classmethod
@@ -145,7 +145,7 @@ class JointTrajPtFull(Message, _Point):
         """Build from joint lists of any length ≤ 10; flags default to time+pos+vel(+acc)."""
         if valid_fields is None:
             valid_fields = _point_flags(acc)
-        arrays = _pad_arrays(cls.__name__, pos, vel, acc)
+        arrays = pad_arrays(cls.__name__, pos, vel, acc)
         return cls(group_no, sequence, int(valid_fields), time, *arrays)
 
     def pack(self, order: ByteOrder) -> bytes:
@@ -171,27 +171,27 @@ class JointTrajPtFull(Message, _Point):
         methods are picked once here, per byte order.
         """
         if order == ">":
-            return _bind_joint_record(cls, _POINT_HEAD_BE, _JOINTS_BE, BODY_SIZE_TRAJ_PT_FULL)
-        return _bind_joint_record(cls, _POINT_HEAD_LE, _JOINTS_LE, BODY_SIZE_TRAJ_PT_FULL)
+            return bind_joint_record(cls, _POINT_HEAD_BE, _JOINTS_BE, BODY_SIZE_TRAJ_PT_FULL)
+        return bind_joint_record(cls, _POINT_HEAD_LE, _JOINTS_LE, BODY_SIZE_TRAJ_PT_FULL)
 
 
 _POINT_LE, _POINT_BE = JointTrajPtFull._STRUCTS
-_POINT_HEAD_LE, _POINT_HEAD_BE = _structs("iiif")  # groupNo, sequence, validFields, time
-_JOINTS_LE, _JOINTS_BE = _structs(_JOINTS.value)
+_POINT_HEAD_LE, _POINT_HEAD_BE = struct_pair("iiif")  # groupNo, sequence, validFields, time
+_JOINTS_LE, _JOINTS_BE = struct_pair(JOINTS.value)
 
 BODY_SIZE_TRAJ_PT_FULL: Final = JointTrajPtFull.BODY_SIZE
 """136: groupNo, sequence, validFields, time, pos[10], vel[10], acc[10] (§1.4)."""
 
-_EX_HEAD_FIELDS: Final[tuple[tuple[str, _Kind], ...]] = (
-    ("number_of_valid_groups", _I32),
-    ("sequence", _I32),
+_EX_HEAD_FIELDS: Final[tuple[tuple[str, Kind], ...]] = (
+    ("number_of_valid_groups", I32),
+    ("sequence", I32),
 )
-_EX_HEAD_STRUCTS: Final = _structs("".join(kind.value for _name, kind in _EX_HEAD_FIELDS))
+_EX_HEAD_STRUCTS: Final = struct_pair("".join(kind.value for _name, kind in _EX_HEAD_FIELDS))
 
 BODY_SIZE_FULL_EX_HEAD: Final = _EX_HEAD_STRUCTS[0].size
 """8: numberOfValidGroups + sequence in front of the FULL_EX records (§1.4)."""
 
-_EX_COUNT_STRUCTS: Final = _structs(_I32.value)
+_EX_COUNT_STRUCTS: Final = struct_pair(I32.value)
 """numberOfValidGroups alone (all that is certain to be there past the 20 bytes below)."""
 
 _FRAME_OVERHEAD: Final = PREFIX_SIZE + HEADER_SIZE
@@ -222,7 +222,7 @@ class MotoJointTrajPtFullEx(Message, _FullEx):
     BODY_SIZE: ClassVar[int] = BODY_SIZE_FULL_EX_HEAD
     """The minimum: the head with n = 0."""
     FIXED_SIZE: ClassVar[bool] = False
-    OFFSETS: ClassVar[Mapping[str, int]] = _offsets(_EX_HEAD_FIELDS)
+    OFFSETS: ClassVar[Mapping[str, int]] = field_offsets(_EX_HEAD_FIELDS)
 
     @classmethod
     def needed_body_size(cls, body: bytes, order: ByteOrder) -> int:
@@ -233,16 +233,16 @@ class MotoJointTrajPtFullEx(Message, _FullEx):
         """
         if _FRAME_OVERHEAD + len(body) < FULL_EX_SIZE_UNKNOWN_BELOW:
             return MAX_MESSAGE_SIZE - _FRAME_OVERHEAD
-        n: int = _pick(_EX_COUNT_STRUCTS, order).unpack_from(body)[0]
+        n: int = pick(_EX_COUNT_STRUCTS, order).unpack_from(body)[0]
         return BODY_SIZE_FULL_EX_HEAD + max(n, 0) * BODY_SIZE_GROUP_RECORD
 
     @classmethod
     def _validated(cls, message: Self) -> Self:
         owner = cls.__name__
         groups = tuple(message.groups)
-        _check_records(owner, message.number_of_valid_groups, groups, JointTrajPtExData)
-        _check_int(owner, "sequence", message.sequence, _I32)
-        return _tnew(cls, (message.number_of_valid_groups, message.sequence, groups))
+        check_records(owner, message.number_of_valid_groups, groups, JointTrajPtExData)
+        check_int(owner, "sequence", message.sequence, I32)
+        return tnew(cls, (message.number_of_valid_groups, message.sequence, groups))
 
     @classmethod
     def for_groups(cls, sequence: int, groups: Iterable[JointTrajPtExData]) -> Self:
@@ -254,22 +254,22 @@ class MotoJointTrajPtFullEx(Message, _FullEx):
 
     def pack(self, order: ByteOrder) -> bytes:
         """The count and sequence (int32), then one record per group, no padding."""
-        head = _pick(_EX_HEAD_STRUCTS, order).pack(self.number_of_valid_groups, self.sequence)
+        head = pick(_EX_HEAD_STRUCTS, order).pack(self.number_of_valid_groups, self.sequence)
         return head + b"".join(record.pack(order) for record in self.groups)
 
     @classmethod
     def unpack(cls, body: bytes, order: ByteOrder) -> Self:
         """Exactly 8 + 132·clamp(n, 0, 4) bytes (sizes.py trims MotoROS's padded 552)."""
-        head = _pick(_EX_HEAD_STRUCTS, order)
+        head = pick(_EX_HEAD_STRUCTS, order)
         if len(body) < head.size:
-            raise _size_error(cls, body, f"at least {head.size}")
+            raise size_error(cls, body, f"at least {head.size}")
         n, sequence = head.unpack_from(body)
-        count = _group_count(n)
+        count = group_count(n)
         expected = head.size + count * BODY_SIZE_GROUP_RECORD
         if len(body) != expected:
-            raise _size_error(cls, body, f"{expected} for numberOfValidGroups {n}")
+            raise size_error(cls, body, f"{expected} for numberOfValidGroups {n}")
         records = tuple(
             JointTrajPtExData.unpack(body[start : start + BODY_SIZE_GROUP_RECORD], order)
             for start in range(head.size, expected, BODY_SIZE_GROUP_RECORD)
         )
-        return _tnew(cls, (n, sequence, records))
+        return tnew(cls, (n, sequence, records))
