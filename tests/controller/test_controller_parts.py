@@ -18,7 +18,6 @@ from pymotoros.controller.operator_keys import OperatorKeys
 from pymotoros.controller.peripherals import Peripherals
 from pymotoros.controller.processes import Scheduler
 from pymotoros.controller.readiness import Readiness
-from pymotoros.controller.registers import RegisterOutputs
 from pymotoros.controller.replies import invalid
 from pymotoros.controller.safety.startup import MotoRosStartup
 from pymotoros.controller.scenario import ScenarioEvent, parse_scenario
@@ -241,7 +240,7 @@ def test_one_tick_runs_every_part_once_in_order() -> None:
         readiness=readiness,
         drive_power=DrivePower(ctx, last_motion_ms=lambda: 0),
         inc_move=IncMoveTask(ctx, readiness),
-        registers=RegisterOutputs(ctx.cell, ctx.io, TcpTracker(ctx.cell), ctx.clock.period_ms),
+        registers=parts.registers,
         scenarios=scenarios,
         peripherals=Peripherals(ctx.io, ctx.cell.peripherals),
         scheduler=Scheduler(ctx.clock),

@@ -354,6 +354,7 @@ def test_vectorised_outputs_are_wired_like_the_reference_rules() -> None:
     those are pinned by the examples above and, with written-out numbers, by
     :func:`test_axis_position_words_by_hand`."""
     from oracles.s1cxg import GroupValues, write_outputs
+    from pymotoros.controller.io_image import mregister_words
     from pymotoros.controller.registers import RegisterOutputs, _Plan
     from pymotoros.models.s1cxg import parse_s1cxg
 
@@ -375,7 +376,7 @@ def test_vectorised_outputs_are_wired_like_the_reference_rules() -> None:
         table |= {str(1110 + k): int(rng.integers(-50, 50)) for k in range(6)}
         vc = _moving(table)
         parsed = parse_s1cxg(table, num_axes=6)
-        outputs = RegisterOutputs(vc.cell, vc.io, vc._tcp, 4)
+        outputs = RegisterOutputs(vc.cell, mregister_words(), vc._tcp, 4)
         plan = _Plan(vc.cell, 0, parsed)
         v = outputs.values(plan, vc._servos[0], 0, vc.tick_count, True).tolist()
         n = 6

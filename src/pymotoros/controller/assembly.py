@@ -18,7 +18,7 @@ from pymotoros.controller.alarms import Alarm
 from pymotoros.controller.cell import CellConfig, InitialState
 from pymotoros.controller.context import MotoRosContext
 from pymotoros.controller.inform import Job, JobRunner, builtin_jobs, load_jobs
-from pymotoros.controller.io_image import IoImage
+from pymotoros.controller.io_image import IoImage, mregister_words
 from pymotoros.controller.machine import (
     EstopSource,
     Observer,
@@ -29,6 +29,7 @@ from pymotoros.controller.machine import (
 from pymotoros.controller.operator_keys import OperatorKeys
 from pymotoros.controller.processes import ControllerClock
 from pymotoros.controller.queues import MotionQueues
+from pymotoros.controller.registers import RegisterOutputs
 from pymotoros.controller.safety import SafetyUnit
 from pymotoros.controller.safety.fsu import IncrementLimiter
 from pymotoros.controller.safety.pfl import retreat_record_ticks
@@ -107,12 +108,14 @@ def tcp_limiter(tcp: TcpTracker, interps: Sequence[GroupInterpolator]) -> Increm
 class Assembly:
     """The shared parts of one controller, wired: its safety unit, the pendant's keys
     (also the safety unit's :class:`~pymotoros.controller.ports.OperatorPort`), the
-    kinematics of the tool point, and the workspace with its contact check."""
+    kinematics of the tool point, the S1CxG register outputs (sharing the IO image's
+    M-registers) and the workspace with its contact check."""
 
     ctx: MotoRosContext
     safety: SafetyUnit
     keys: OperatorKeys
     tcp: TcpTracker
+    registers: RegisterOutputs
     workspace: WorkspaceRuntime
 
 
@@ -129,7 +132,16 @@ def assemble(
     an operator-state change)."""
     ctrl = cell.controller
     clock = ControllerClock(ctrl.interpolation_period_ms)
-    io = IoImage(ctrl)
+    tcp = TcpTracker(cell)
+    # The register outputs write M-registers only when one is read or written: the
+    # image is built with them as the step it takes before any M-register access.
+    mregisters = mregister_words()
+    registers = RegisterOutputs(cell, mregisters, tcp, ctrl.interpolation_period_ms)
+    io = IoImage(
+        ctrl,
+        mregisters=mregisters,
+        before_mregister_access=registers.materialise if registers.active else None,
+    )
     machine = OperatorMachine(
         initial_operator_state(cell.initial),
         io,
@@ -143,7 +155,6 @@ def assemble(
         interp.tool = tool
     servos = servo_groups(cell, axes, seed)
     keys = OperatorKeys(machine, clock)
-    tcp = TcpTracker(cell)
     safety = SafetyUnit(
         io,
         axes,
@@ -169,4 +180,4 @@ def assemble(
         increment_tcp_clip=safety.fsu.tcp_clip,
     )
     workspace = WorkspaceRuntime(ctx, safety.pfl, safety.operator)
-    return Assembly(ctx, safety, keys, tcp, workspace)
+    return Assembly(ctx, safety, keys, tcp, registers, workspace)

@@ -62,7 +62,6 @@ from pymotoros.controller.peripherals import Peripherals
 from pymotoros.controller.ports import MotionLink
 from pymotoros.controller.processes import Scheduler
 from pymotoros.controller.readiness import Readiness
-from pymotoros.controller.registers import RegisterOutputs
 from pymotoros.controller.safety import DEFAULT_RETREAT_MS, PFL_STOP_MS, SafetyUnit
 from pymotoros.controller.safety.fsu import FsuRequest
 from pymotoros.controller.safety.startup import MotoRosStartup, setup_validation
@@ -137,7 +136,7 @@ class VirtualController:
             readiness=self._readiness,
             drive_power=self._power,
             inc_move=self._inc_move,
-            registers=RegisterOutputs(cell, ctx.io, self._tcp, ctx.clock.period_ms),
+            registers=parts.registers,
             scenarios=self._scenarios,
             peripherals=Peripherals(ctx.io, cell.peripherals),
             scheduler=self._scheduler,

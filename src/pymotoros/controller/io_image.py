@@ -11,10 +11,12 @@ A write that changes one of the signals the status monitor reads raises
 :attr:`IoImage.monitor_dirty`, so the 10 ms monitor can skip its work while nothing
 it reads has changed.
 
-Every read or write of an M-register, by anybody, first calls the hooks given to
-:meth:`IoImage.before_mregister_access`: the S1CxG register outputs
+Every read or write of an M-register, by anybody, first calls the
+``before_mregister_access`` port the image was built with: the S1CxG register outputs
 (:mod:`pymotoros.controller.registers`) keep the inputs of the latest tick and write
-their words only then, so a tick pays nothing for words nobody reads.
+their words only then, so a tick pays nothing for words nobody reads. Both share the
+M-register words (:func:`mregister_words`), made first by ``assembly.py``, so each part
+is given what it acts on when it is built (issue 30) and nothing is hooked in later.
 """
 
 from __future__ import annotations
@@ -33,14 +35,20 @@ from pymotoros.protocol.constants import IoResultCode
 logger = logging.getLogger(__name__)
 
 
+def mregister_words() -> array[int]:
+    """M000..M999 as zeroed unsigned 16-bit words: the store an :class:`IoImage` and the
+    register outputs share."""
+    return array("H", bytes(2 * M_REGISTER_COUNT))
+
+
 class IoImage:
     """Bits addressed as Yaskawa does (byte number × 10 + bit) and M000..M999."""
 
     __slots__ = (
+        "_before_mregister_access",
         "_bytes",
         "_controller",
         "_mreg",
-        "_mregister_hooks",
         "changes",
         "fail_reads",
         "fail_writes",
@@ -48,12 +56,24 @@ class IoImage:
         "monitored_changes",
     )
 
-    def __init__(self, controller: ControllerModel) -> None:
+    def __init__(
+        self,
+        controller: ControllerModel,
+        *,
+        mregisters: array[int] | None = None,
+        before_mregister_access: Callable[[], None] | None = None,
+    ) -> None:
+        """``mregisters``: the M000..M999 words, shared with the part that computes some
+        of them on demand (:func:`mregister_words`; a fresh zeroed set when None);
+        ``before_mregister_access``: what brings those words up to date, called before
+        any M-register is read or written."""
         self._controller = controller
         highest = max(r.last for r in controller.io_ranges)
         self._bytes = bytearray(highest // 10 + 1)
-        self._mreg = array("H", bytes(2 * M_REGISTER_COUNT))
-        self._mregister_hooks: list[Callable[[], None]] = []
+        self._mreg = mregister_words() if mregisters is None else mregisters
+        if len(self._mreg) != M_REGISTER_COUNT:
+            raise ValueError(f"mregisters: {M_REGISTER_COUNT} words, not {len(self._mreg)}")
+        self._before_mregister_access = before_mregister_access
         self.monitor_dirty = True
         """Set when a signal the status monitor reads changes; the monitor clears it."""
         self.changes = 0
@@ -92,22 +112,9 @@ class IoImage:
         self._sync_mregisters()
         return self._mreg[index]
 
-    def mregister_buffer(self) -> array[int]:
-        """M000..M999 as the live 16-bit array, up to date now (for the register output
-        functions, which write many words in one vectorised assignment). Words computed
-        on demand reach it only through the accessors: read M-registers with
-        :meth:`mregister` or :meth:`read_mregister`, not by keeping this array."""
-        self._sync_mregisters()
-        return self._mreg
-
-    def before_mregister_access(self, hook: Callable[[], None]) -> None:
-        """Call ``hook()`` before any M-register is read or written from now on: it brings
-        words computed on demand (the register outputs) into the image first."""
-        self._mregister_hooks.append(hook)
-
     def _sync_mregisters(self) -> None:
-        for hook in self._mregister_hooks:
-            hook()
+        if self._before_mregister_access is not None:
+            self._before_mregister_access()
 
     def readable_range(self, address: int) -> IoRange | None:
         """The IO range holding ``address``, or None if no readable range holds it."""

@@ -29,6 +29,7 @@ last 4 ms increment, and the feedback's averaged speed over one period.
 from __future__ import annotations
 
 import math
+from array import array
 from collections.abc import Sequence
 from typing import Final, Protocol
 
@@ -36,7 +37,6 @@ import numpy as np
 import numpy.typing as npt
 
 from pymotoros.controller.cell import CellConfig
-from pymotoros.controller.io_image import IoImage
 from pymotoros.controller.servo import ServoGroup, ServoState
 from pymotoros.controller.tool_point import TcpTracker
 from pymotoros.kinematics import matrix_to_pose
@@ -143,17 +143,22 @@ class RegisterOutputs:
     """Every group's S1CxG outputs in the M-registers, as they are after the latest tick.
 
     The tick's :meth:`step` keeps the tick's inputs and the words are computed when an
-    M-register is next read or written (:meth:`materialise`, which the IO image calls
-    first on every M-register access); every reader sees the words a controller writing
+    M-register is next read or written (:meth:`materialise`, the port the IO image is
+    built with and calls first on every M-register access, see ``assembly.py``); every
+    reader sees the words a controller writing
     them in every tick would show (tests/controller/test_register_outputs_lazy.py)."""
 
-    def __init__(self, cell: CellConfig, io: IoImage, tcp: TcpTracker, period_ms: int) -> None:
+    def __init__(
+        self, cell: CellConfig, mregisters: array[int], tcp: TcpTracker, period_ms: int
+    ) -> None:
+        """``mregisters``: the M-register words this part writes, shared with the IO
+        image (:func:`~pymotoros.controller.io_image.mregister_words`)."""
         self._plans = [
             _Plan(cell, g, table)
             for g, table in enumerate(cell.s1cxg)
             if table is not None and table.outputs
         ]
-        self._mreg = np.frombuffer(io.mregister_buffer(), dtype=np.uint16)
+        self._mreg = np.frombuffer(mregisters, dtype=np.uint16)
         self._tcp = tcp
         self._period_s = period_ms / _MS_PER_S
         self._quiet_feedback = cell.servo.noise_pulses == 0
@@ -161,8 +166,6 @@ class RegisterOutputs:
         self._groups = [plan.index for plan in self._plans]
         self._pending: _Captured | None = None
         """The latest tick's inputs, not yet written."""
-        if self._plans:
-            io.before_mregister_access(self.materialise)
 
     @property
     def active(self) -> bool:
