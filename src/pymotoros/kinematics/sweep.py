@@ -38,7 +38,7 @@ import numpy as np
 import numpy.typing as npt
 
 from pymotoros.models.travel import tick_travel_reaches
-from pymotoros.models.workspace import ContactLike
+from pymotoros.models.workspace import ContactLike, ContactSpans
 
 F64Array = npt.NDArray[np.float64]
 
@@ -145,8 +145,7 @@ def sweep(
     if ticks == 0:
         return result
     travel = _Travel(world, positions, sizes)
-    open_: dict[tuple[str, str, str], list[float | bool]] = {}
-    done: list[SweptContact] = []
+    spans = ContactSpans()
     next_obstacle = next_self = 0
     backing = _BackOut()
     while min(next_obstacle, next_self) < ticks:
@@ -162,7 +161,7 @@ def sweep(
             backing.follow(result, k, now, clearance, contacts)
             next_obstacle = travel.next_check(k, clearance, contacts)
         else:  # the obstacles were not due: keep what is open against them
-            seen.extend(_open_obstacles(open_))
+            seen.extend(_kept(spans, self_collision=False))
         if k == next_self:
             distances = world.self_distances(qs)
             hits = [c for c in distances if c.distance_m <= 0.0]
@@ -170,17 +169,17 @@ def sweep(
             own = min((c.distance_m for c in distances), default=math.inf) / 2.0
             next_self = travel.next_check(k, own, hits)
         else:
-            seen.extend(_open_self(open_))
-        _track(open_, done, seen, now, k == 0)
+            seen.extend(_kept(spans, self_collision=True))
+        spans.update(seen, now, at_start=k == 0)
     if result.starts_in_contact and not backing.came_out():
         result.receding = False  # still in every contact at the end, none shallower
-    end = float(times[-1])
-    for (group, link, obstacle), (start, depth, is_self, first) in open_.items():
-        done.append(
-            SweptContact(
-                float(start), obstacle, link, group, float(depth), bool(is_self), end, bool(first)
-            )
+    done = [
+        SweptContact(
+            s.start_s, s.obstacle, s.link, s.group, s.depth_mm, s.self_collision, s.end_s,
+            s.at_start,
         )
+        for s in spans.close_all(float(times[-1]))
+    ]  # fmt: skip
     done.sort(key=lambda c: (c.time_s, c.group, c.link, c.obstacle))
     result.contacts = done
     return result
@@ -197,12 +196,13 @@ class _Kept:
         self.self_collision = is_self
 
 
-def _open_obstacles(open_: dict[tuple[str, str, str], list[float | bool]]) -> list[ContactLike]:
-    return [_Kept(k, float(v[1]), False) for k, v in open_.items() if not v[2]]
-
-
-def _open_self(open_: dict[tuple[str, str, str], list[float | bool]]) -> list[ContactLike]:
-    return [_Kept(k, float(v[1]), True) for k, v in open_.items() if v[2]]
+def _kept(spans: ContactSpans, *, self_collision: bool) -> list[ContactLike]:
+    """The open contacts of one kind, carried over a tick at which it was not checked."""
+    return [
+        _Kept(key, span.depth_mm, self_collision)
+        for key, span in spans.open.items()
+        if span.self_collision == self_collision
+    ]
 
 
 class _Travel:
@@ -293,34 +293,6 @@ class _BackOut:
             key not in self.last or self.last[key] > d + RECEDE_TOLERANCE_M
             for key, d in self.start.items()
         )
-
-
-def _track(
-    open_: dict[tuple[str, str, str], list[float | bool]],
-    done: list[SweptContact],
-    hits: Sequence[ContactLike],
-    now_s: float,
-    first: bool,
-) -> None:
-    """Open a contact for each new one, deepen the running ones, close the gone."""
-    seen = set()
-    for c in hits:
-        key = (c.group, c.link, c.obstacle)
-        seen.add(key)
-        depth = -c.distance_m * 1000.0
-        if key in open_:
-            open_[key][1] = max(float(open_[key][1]), depth)
-        else:
-            open_[key] = [now_s, depth, c.self_collision, first]
-    for key in [k for k in open_ if k not in seen]:
-        start, depth, is_self, at_start = open_.pop(key)
-        group, link, obstacle = key
-        done.append(
-            SweptContact(
-                float(start), obstacle, link, group, float(depth), bool(is_self), now_s,
-                bool(at_start),
-            )
-        )  # fmt: skip
 
 
 __all__ = [

@@ -26,7 +26,7 @@ read the same table the same way; every mistake is a
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping, Sequence
+from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Final, Protocol
 
@@ -393,6 +393,67 @@ class ContactLike(Protocol):
     def self_collision(self) -> bool: ...
 
 
+
+@dataclass(slots=True)
+class ContactSpan:
+    """One contact over time: ``link`` of ``group`` touches ``obstacle`` (for a
+    self-collision: the other link) from ``start_s`` to ``end_s``, at most ``depth_mm``
+    deep; ``at_start``: it was there at the first probe (where the motion starts)."""
+
+    group: str
+    link: str
+    obstacle: str
+    self_collision: bool
+    start_s: float
+    depth_mm: float
+    at_start: bool
+    end_s: float = 0.0
+
+
+class ContactSpans:
+    """Contacts reported by successive probes of a motion, as spans: a contact opens at
+    the first probe that reports it, deepens while reported and closes at the first
+    probe that does not. The planner's sweep (kinematics) and the offline check
+    (trajectory) both read their probes this way, so one place says when a contact
+    starts, how deep it gets and when it ends."""
+
+    __slots__ = ("closed", "open")
+
+    def __init__(self) -> None:
+        self.open: dict[tuple[str, str, str], ContactSpan] = {}
+        """The contacts the latest probe reported, by (group, link, obstacle)."""
+        self.closed: list[ContactSpan] = []
+        """The contacts that have ended, in the order they ended."""
+
+    def update(self, hits: Iterable[ContactLike], now_s: float, *, at_start: bool = False) -> None:
+        """The probe at ``now_s`` reported ``hits``: open the new contacts, deepen the
+        running ones, close those it did not report."""
+        seen = set()
+        for c in hits:
+            key = (c.group, c.link, c.obstacle)
+            seen.add(key)
+            depth = -c.distance_m * 1000.0
+            span = self.open.get(key)
+            if span is None:
+                self.open[key] = ContactSpan(
+                    c.group, c.link, c.obstacle, bool(c.self_collision), now_s, depth, at_start
+                )
+            elif depth > span.depth_mm:
+                span.depth_mm = depth
+        for key in [k for k in self.open if k not in seen]:
+            span = self.open.pop(key)
+            span.end_s = now_s
+            self.closed.append(span)
+
+    def close_all(self, end_s: float) -> list[ContactSpan]:
+        """Every span: the ended ones, then those still open, ending at ``end_s``."""
+        for span in self.open.values():
+            span.end_s = end_s
+            self.closed.append(span)
+        self.open.clear()
+        return self.closed
+
+
 __all__ = [
     "DEFAULT_TOOL_RADIUS_M",
     "EMPTY_WORKSPACE",
@@ -400,6 +461,8 @@ __all__ = [
     "Box",
     "Capsule",
     "ContactLike",
+    "ContactSpan",
+    "ContactSpans",
     "Cylinder",
     "Obstacle",
     "Shape",

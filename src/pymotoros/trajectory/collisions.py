@@ -26,7 +26,7 @@ import numpy.typing as npt
 
 from pymotoros.models.cell import CellModels
 from pymotoros.models.travel import tick_travel_reaches
-from pymotoros.models.workspace import ContactLike
+from pymotoros.models.workspace import ContactLike, ContactSpans
 from pymotoros.motion import GroupAxes, to_pulses
 from pymotoros.trajectory.files import Trajectory
 
@@ -162,9 +162,7 @@ def find_collisions(
     ``world`` holds the cell's robot groups (in cell order) and obstacles."""
     times, paths = joint_paths(traj, cell, per_group)
     travel = _Travel(world, paths)
-    open_obstacles: dict[tuple[str, str, str], list[Any]] = {}
-    open_self: dict[tuple[str, str, str], list[Any]] = {}
-    done: list[Collision] = []
+    obstacle_spans, self_spans = ContactSpans(), ContactSpans()
     n = len(times)
     next_obstacle = next_self = 0
     while min(next_obstacle, next_self) < n:
@@ -173,7 +171,7 @@ def find_collisions(
         now = float(times[k])
         if k == next_obstacle:
             clearance, contacts = world.probe(qs)
-            _track(open_obstacles, done, contacts, now)
+            obstacle_spans.update(contacts, now)
             next_obstacle = (
                 k + 1
                 if contacts or clearance <= MIN_STEP_M
@@ -181,16 +179,18 @@ def find_collisions(
             )
         if k == next_self:
             self_clearance, self_hits = _self_probe(world, qs)
-            _track(open_self, done, self_hits, now)
+            self_spans.update(self_hits, now)
             next_self = (
                 k + 1
                 if self_hits or self_clearance <= MIN_STEP_M
                 else travel.next_check(k, self_clearance, for_self=True)
             )
     end = float(times[-1]) if n else 0.0
-    for open_ in (open_obstacles, open_self):
-        for (group, link, obstacle), (start, depth, is_self) in open_.items():
-            done.append(Collision(start, obstacle, link, group, depth, is_self, end))
+    done = [
+        Collision(s.start_s, s.obstacle, s.link, s.group, s.depth_mm, s.self_collision, s.end_s)
+        for spans in (obstacle_spans, self_spans)
+        for s in spans.close_all(end)
+    ]
     done.sort(key=lambda c: (c.time_s, c.group, c.link, c.obstacle))
     return done
 
@@ -199,28 +199,6 @@ def _self_probe(world: CollisionModel, qs: Sequence[F64Array]) -> tuple[float, l
     distances = world.self_distances(qs)
     hits = [c for c in distances if c.distance_m <= 0.0]
     return min((c.distance_m for c in distances), default=np.inf), hits
-
-
-def _track(
-    open_: dict[tuple[str, str, str], list[Any]],
-    done: list[Collision],
-    hits: Sequence[ContactLike],
-    now_s: float,
-) -> None:
-    """Open a collision for each new contact, deepen the running ones, close the gone."""
-    seen = set()
-    for c in hits:
-        key = (c.group, c.link, c.obstacle)
-        seen.add(key)
-        depth = -c.distance_m * 1000.0
-        if key in open_:
-            open_[key][1] = max(open_[key][1], depth)
-        else:
-            open_[key] = [now_s, depth, c.self_collision]
-    for key in [k for k in open_ if k not in seen]:
-        start, depth, is_self = open_.pop(key)
-        group, link, obstacle = key
-        done.append(Collision(start, obstacle, link, group, depth, is_self, now_s))
 
 
 __all__ = ["Collision", "CollisionModel", "ContactLike", "find_collisions", "joint_paths"]
